@@ -1,0 +1,1 @@
+"""credal-fusion service: FastAPI app, routes, sessions, stores, CLI."""

@@ -1,0 +1,35 @@
+"""Belief functions on finite frames (ALGORITHMS.md §1).
+
+Frames, sparse mass functions, Pl / Bel / BetP, the conjunctive and Dempster
+rules, discounting, the GBT with its exact O(N²) pignistic probabilities, and
+multi-valued mappings between frames.
+"""
+
+from core.belief.combination import conflict, conjunctive, conjunctive_all, dempster
+from core.belief.frame import MAX_FRAME_SIZE, Frame, popcount
+from core.belief.gbt import (
+    gbt_betp,
+    gbt_betp_rows,
+    gbt_mass,
+    pairwise_evidence_betp_rows,
+)
+from core.belief.mapping import Relation
+from core.belief.mass import CONFLICT_TOLERANCE, MASS_TOLERANCE, MassFunction
+
+__all__ = [
+    "CONFLICT_TOLERANCE",
+    "MASS_TOLERANCE",
+    "MAX_FRAME_SIZE",
+    "Frame",
+    "MassFunction",
+    "Relation",
+    "conflict",
+    "conjunctive",
+    "conjunctive_all",
+    "dempster",
+    "gbt_betp",
+    "gbt_betp_rows",
+    "gbt_mass",
+    "pairwise_evidence_betp_rows",
+    "popcount",
+]

@@ -1,0 +1,39 @@
+"""The one exception tree of ``core``.
+
+Every error the core raises on purpose derives from :class:`CredalError`.
+Errors caused by the caller's input also derive from :class:`InvalidInput`
+(and from :class:`ValueError`), so a service can map them to a 4xx answer and
+everything else to a 5xx.
+"""
+
+from __future__ import annotations
+
+
+class CredalError(Exception):
+    """Base class of every error raised on purpose by ``core``."""
+
+
+class InvalidInput(CredalError, ValueError):  # noqa: N818 - reads better as a category
+    """The caller's input is invalid; the message names the field and the problem."""
+
+
+class FrameError(InvalidInput):
+    """A frame of discernment is invalid, or a label / subset is outside it."""
+
+
+class MassError(InvalidInput):
+    """A mass function is invalid (negative, non-finite, or not summing to 1)."""
+
+
+class TotalConflict(CredalError):  # noqa: N818 - the name of the state in the papers
+    """Dempster's rule is undefined: the conflict m(∅) is 1.
+
+    Attributes
+    ----------
+    conflict : float
+        The conflict mass that made normalisation impossible.
+    """
+
+    def __init__(self, conflict: float, message: str | None = None) -> None:
+        self.conflict = conflict
+        super().__init__(message or f"total conflict: m(∅) = {conflict!r}, normalisation undefined")
