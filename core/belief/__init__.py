@@ -15,14 +15,18 @@ from core.belief.gbt import (
 )
 from core.belief.mapping import Relation
 from core.belief.mass import CONFLICT_TOLERANCE, MASS_TOLERANCE, MassFunction
+from core.errors import FrameError, MassError, TotalConflict
 
 __all__ = [
     "CONFLICT_TOLERANCE",
     "MASS_TOLERANCE",
     "MAX_FRAME_SIZE",
     "Frame",
+    "FrameError",
+    "MassError",
     "MassFunction",
     "Relation",
+    "TotalConflict",
     "conflict",
     "conjunctive",
     "conjunctive_all",
