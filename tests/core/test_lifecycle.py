@@ -1,0 +1,61 @@
+"""Track score and gate-emptiness termination, worked by hand."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from core.errors import InvalidInput
+from core.lifecycle import ScoreModel, gate_emptiness_factor, gate_volume, unit_ball_volume
+
+
+def test_thresholds_follow_wald() -> None:
+    # α = 0.01, β = 0.1: confirm at ln(0.9 / 0.01) = ln 90, delete at ln(0.1 / 0.99).
+    score = ScoreModel(false_confirmation=0.01, true_deletion=0.1)
+    assert score.confirm_threshold == pytest.approx(4.499809670330265)
+    assert score.delete_threshold == pytest.approx(-2.2925347571405443)
+    assert score.confirm_threshold > 0.0 > score.delete_threshold
+
+
+def test_initial_score_and_increments() -> None:
+    score = ScoreModel(p_detect=0.9, false_target_density=1e-4, new_target_density=1e-5)
+    assert score.initial == pytest.approx(math.log(0.1))
+    assert score.miss_increment == pytest.approx(math.log(0.1))
+    # q = 2, |S| = 4 (√|S| = 2), D = 1:
+    # ΔL = ln(0.9 / (2π · 1e-4 · 2)) − 0.5 = ln(716.197...) − 0.5 = 6.57395... − 0.5.
+    delta = score.hit_increment(np.array([1.0]), np.array([math.log(4.0)]), dim=2)
+    assert delta[0] == pytest.approx(math.log(0.9 / (2 * math.pi * 1e-4 * 2.0)) - 0.5)
+    assert delta[0] == pytest.approx(6.0739, abs=1e-4)
+
+
+def test_unit_ball_volumes() -> None:
+    assert_allclose([unit_ball_volume(q) for q in (1, 2, 3)], [2.0, math.pi, 4 * math.pi / 3])
+
+
+def test_gate_emptiness_probability() -> None:
+    # q = 2, γ = 9 (3σ), |S| = 16: A_G = π · 9 · 4 = 36π ≈ 113.1 m².
+    volume = gate_volume(9.0, np.array([math.log(16.0)]), dim=2)
+    assert volume[0] == pytest.approx(36 * math.pi)
+    factor = gate_emptiness_factor(2e-3, 1e-3, volume)
+    assert factor[0] == pytest.approx(1 - 3e-3 * 36 * math.pi)
+    # Two such scans: P = 0.6607² ≈ 0.4365 < 0.5 → terminate on the second.
+    assert factor[0] > 0.5 > factor[0] ** 2
+    # A huge gate clips at 0 instead of going negative.
+    assert gate_emptiness_factor(1.0, 1.0, np.array([10.0]))[0] == 0.0
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "message"),
+    [
+        ("p_detect", 1.0, "p_detect must be in \\(0, 1\\)"),
+        ("false_confirmation", 0.0, "false_confirmation must be in \\(0, 1\\)"),
+        ("false_target_density", -1.0, "false_target_density must be a positive number"),
+        ("new_target_density", float("nan"), "new_target_density must be a positive number"),
+    ],
+)
+def test_invalid_score_parameters(field: str, value: float, message: str) -> None:
+    with pytest.raises(InvalidInput, match=message):
+        ScoreModel(**{field: value})
