@@ -134,7 +134,7 @@ class ScoreModel:
 
 def unit_ball_volume(dim: int) -> float:
     """c_q = π^{q/2} / Γ(q/2 + 1)."""
-    return math.pi ** (dim / 2.0) / math.gamma(dim / 2.0 + 1.0)
+    return float(math.pi ** (dim / 2.0) / math.gamma(dim / 2.0 + 1.0))
 
 
 def gate_volume(gate: float, log_det_innovation: FloatArray, dim: int) -> FloatArray:
