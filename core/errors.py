@@ -25,6 +25,14 @@ class MassError(InvalidInput):
     """A mass function is invalid (negative, non-finite, or not summing to 1)."""
 
 
+class CovarianceError(InvalidInput):
+    """A covariance matrix is not symmetric positive definite (or has the wrong shape)."""
+
+
+class OptionError(InvalidInput):
+    """A method option is unknown, missing, or out of its range; the message names it."""
+
+
 class TotalConflict(CredalError):  # noqa: N818 - the name of the state in the papers
     """Dempster's rule is undefined: the conflict m(∅) is 1.
 

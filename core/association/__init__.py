@@ -1,0 +1,37 @@
+"""Track-to-track and measurement-to-track association (ALGORITHMS.md §3).
+
+One module per method — :mod:`~core.association.gnn`,
+:mod:`~core.association.denoeux`, :mod:`~core.association.hachour`,
+:mod:`~core.association.mercier`, :mod:`~core.association.dang_han` — one
+result type (:class:`AssociationResult`) and one entry point
+(:func:`associate`). Gated pairs only (:mod:`core.distance`); the assignment is
+solved per connected cluster (:mod:`~core.association.assignment`).
+"""
+
+from core.association.assignment import Matching, max_gain_matching, solve_dense
+from core.association.associate import (
+    LOCAL_TRACKING_DEFAULT,
+    METHODS,
+    TRACK_TO_TRACK_DEFAULT,
+    associate,
+    associate_measurements,
+)
+from core.association.classes import class_conflict
+from core.association.problem import AssociationProblem
+from core.association.result import AssociationResult, Diagnostics, ScoreMatrix
+
+__all__ = [
+    "LOCAL_TRACKING_DEFAULT",
+    "METHODS",
+    "TRACK_TO_TRACK_DEFAULT",
+    "AssociationProblem",
+    "AssociationResult",
+    "Diagnostics",
+    "Matching",
+    "ScoreMatrix",
+    "associate",
+    "associate_measurements",
+    "class_conflict",
+    "max_gain_matching",
+    "solve_dense",
+]

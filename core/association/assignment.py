@@ -1,0 +1,158 @@
+"""Maximum-weight partial matching on a sparse bipartite graph, cluster by cluster.
+
+Every method of ALGORITHMS.md §3 that solves an assignment reduces to: given
+candidate pairs (ℓ, t) with a *gain* g > 0 (what matching ℓ with t adds to
+the objective compared with leaving both unmatched), pick a partial matching
+maximising Σ g. Pairs with g ≤ 0 never help and are dropped first.
+
+That problem separates over the connected components of the candidate graph.
+Components that are a single pair or a star (one row or one column) are
+solved in closed form for all components at once (the best pair); the others
+each get a dense linear assignment on their own rows × columns, with 0 for
+absent pairs (a zero-gain pair is the same as no pair, so the full rectangular
+assignment and the partial matching have the same optimum).
+
+Solvers: ``"lapjv"`` (Jonker–Volgenant from the ``lapx`` package, the
+default: faster, see ``bench/association.py``) and ``"scipy"``
+(``scipy.optimize.linear_sum_assignment``, the reference). Both are
+deterministic; on exact ties they may pick different optimal matchings.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal, get_args
+
+import lap
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from core.arrays import FloatArray, IntArray
+from core.errors import InvalidInput
+
+Solver = Literal["lapjv", "scipy"]
+SOLVERS: tuple[str, ...] = get_args(Solver)
+
+
+@dataclass(frozen=True, eq=False)
+class Matching:
+    """A partial matching, sorted by row.
+
+    Attributes
+    ----------
+    rows, cols : ndarray of int64
+        Matched pairs.
+    clusters : int
+        Connected components of the graph of positive-gain pairs.
+    largest_cluster : int
+        Rows + columns of the largest component.
+    """
+
+    rows: IntArray
+    cols: IntArray
+    clusters: int
+    largest_cluster: int
+
+
+def solve_dense(gain: FloatArray, solver: Solver = "lapjv") -> tuple[IntArray, IntArray]:
+    """Maximum-gain partial matching of a dense gain matrix (pairs with gain ≤ 0 dropped)."""
+    if gain.size == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty.copy()
+    if solver == "scipy":
+        rows, cols = linear_sum_assignment(gain, maximize=True)
+    elif solver == "lapjv":
+        rows, cols = lap.lapjvx(-gain, extend_cost=True, return_cost=False)
+    else:
+        raise InvalidInput(f"solver must be one of {list(SOLVERS)}, got {solver!r}")
+    rows = np.asarray(rows, dtype=np.int64)
+    cols = np.asarray(cols, dtype=np.int64)
+    keep = gain[rows, cols] > 0.0
+    rows, cols = rows[keep], cols[keep]
+    order = np.argsort(rows, kind="stable")
+    return rows[order], cols[order]
+
+
+def max_gain_matching(
+    rows: IntArray,
+    cols: IntArray,
+    gain: FloatArray,
+    n_rows: int,
+    n_cols: int,
+    *,
+    solver: Solver = "lapjv",
+    cluster: bool = True,
+) -> Matching:
+    """Maximum-gain partial matching over sparse candidate pairs.
+
+    Parameters
+    ----------
+    rows, cols : ndarray of int, shape (P,)
+        Candidate pairs (no pair twice).
+    gain : ndarray, shape (P,)
+        Finite gains; pairs with gain ≤ 0 are never matched.
+    n_rows, n_cols : int
+        Sizes of the two sides.
+    solver : {"lapjv", "scipy"}
+    cluster : bool
+        Solve each connected component on its own (default). ``False``
+        solves one dense n_rows × n_cols problem (reference for tests).
+    """
+    if solver not in SOLVERS:
+        raise InvalidInput(f"solver must be one of {list(SOLVERS)}, got {solver!r}")
+    keep = gain > 0.0
+    rows, cols, gain = rows[keep], cols[keep], gain[keep]
+    empty = np.zeros(0, dtype=np.int64)
+    if len(rows) == 0:
+        return Matching(empty, empty.copy(), 0, 0)
+    if not cluster:
+        dense = np.zeros((n_rows, n_cols))
+        dense[rows, cols] = gain
+        matched_rows, matched_cols = solve_dense(dense, solver)
+        return Matching(matched_rows, matched_cols, 1, n_rows + n_cols)
+
+    graph = coo_matrix(
+        (np.ones(len(rows)), (rows, cols + n_rows)), shape=(n_rows + n_cols, n_rows + n_cols)
+    )
+    _, labels = connected_components(graph, directed=False)
+    edge_label = labels[rows]
+    used_labels, edge_component = np.unique(edge_label, return_inverse=True)
+    n_components = len(used_labels)
+    node_label = np.concatenate([labels[:n_rows], labels[n_rows:]])
+    node_component = np.searchsorted(used_labels, node_label)
+    in_graph = np.zeros(n_rows + n_cols, dtype=bool)
+    in_graph[rows] = True
+    in_graph[cols + n_rows] = True
+    row_count = np.bincount(node_component[:n_rows][in_graph[:n_rows]], minlength=n_components)
+    col_count = np.bincount(node_component[n_rows:][in_graph[n_rows:]], minlength=n_components)
+    largest = int((row_count + col_count).max())
+
+    star = (row_count == 1) | (col_count == 1)
+    star_edges = star[edge_component]
+    # Stars: the best pair of each component (ties: lowest row, then column).
+    order = np.lexsort((cols, rows, -gain, edge_component))
+    order = order[star_edges[order]]
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = edge_component[order][1:] != edge_component[order][:-1]
+    chosen_rows = [rows[order[first]]]
+    chosen_cols = [cols[order[first]]]
+
+    general = np.flatnonzero(~star_edges)
+    if len(general):
+        by_component = general[np.argsort(edge_component[general], kind="stable")]
+        components = edge_component[by_component]
+        bounds = np.flatnonzero(np.diff(components)) + 1
+        for edges in np.split(by_component, bounds):
+            local_rows, row_index = np.unique(rows[edges], return_inverse=True)
+            local_cols, col_index = np.unique(cols[edges], return_inverse=True)
+            dense = np.zeros((len(local_rows), len(local_cols)))
+            dense[row_index, col_index] = gain[edges]
+            matched_rows, matched_cols = solve_dense(dense, solver)
+            chosen_rows.append(local_rows[matched_rows])
+            chosen_cols.append(local_cols[matched_cols])
+    all_rows = np.concatenate(chosen_rows)
+    all_cols = np.concatenate(chosen_cols)
+    order = np.argsort(all_rows, kind="stable")
+    return Matching(all_rows[order], all_cols[order], n_components, largest)

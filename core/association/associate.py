@@ -1,0 +1,140 @@
+"""The entry point: :func:`associate` dispatches to one method module.
+
+Defaults (ALGORITHMS.md §3.7): track-to-track association uses ``denoeux``
+with ``gate_probability`` 0.999, α = 1 and the ``sum`` covariance;
+local tracking (measurement-to-track) uses ``gnn`` with ``gate_probability``
+0.999 (:func:`associate_measurements`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+from numpy.typing import ArrayLike
+
+from core.association.assignment import SOLVERS, Solver
+from core.association.classes import check_classes
+from core.association.dang_han import DangHanOptions, associate_dang_han
+from core.association.denoeux import DenoeuxOptions, associate_denoeux
+from core.association.gnn import GnnOptions, associate_gnn
+from core.association.hachour import HachourOptions, associate_hachour
+from core.association.mercier import associate_mercier, mercier_options
+from core.association.problem import AssociationProblem
+from core.association.result import AssociationResult
+from core.belief import MassFunction
+from core.distance import DistanceModel, Estimates
+from core.errors import InvalidInput
+
+Side = Estimates | tuple[ArrayLike, ArrayLike | None]
+
+METHODS: dict[
+    str, tuple[Callable[[Mapping[str, object]], Any], Callable[..., AssociationResult]]
+] = {
+    "gnn": (GnnOptions.of, associate_gnn),
+    "denoeux": (DenoeuxOptions.of, associate_denoeux),
+    "hachour": (HachourOptions.of, associate_hachour),
+    "mercier": (mercier_options, associate_mercier),
+    "dang_han": (DangHanOptions.of, associate_dang_han),
+}
+
+TRACK_TO_TRACK_DEFAULT = ("denoeux", {"gate_probability": 0.999, "alpha": 1.0}, "sum")
+LOCAL_TRACKING_DEFAULT = ("gnn", {"gate_probability": 0.999}, "innovation")
+
+
+def _side(side: Side, name: str) -> Estimates:
+    if isinstance(side, Estimates):
+        return side
+    if not isinstance(side, tuple) or len(side) != 2:
+        raise InvalidInput(f"{name} must be Estimates or a (states, covariances) pair")
+    states, covariances = side
+    return Estimates.of(states, covariances, name=name)
+
+
+def associate(
+    known: Side,
+    incoming: Side,
+    method: str = TRACK_TO_TRACK_DEFAULT[0],
+    options: Mapping[str, object] | None = None,
+    distance: str | DistanceModel = TRACK_TO_TRACK_DEFAULT[2],
+    known_classes: Sequence[MassFunction] | None = None,
+    incoming_classes: Sequence[MassFunction] | None = None,
+    *,
+    solver: Solver = "lapjv",
+    cluster: bool = True,
+) -> AssociationResult:
+    """Associate known items (rows) with incoming items (columns).
+
+    Parameters
+    ----------
+    known, incoming : Estimates or (states N × q, covariances N × q × q)
+        For measurement-to-track use ``distance="innovation"``: known =
+        (ẑ, S), incoming = (z, None); or :func:`associate_measurements`.
+    method : {"gnn", "denoeux", "hachour", "mercier", "dang_han"}
+        Default ``denoeux`` (§3.7).
+    options : mapping
+        The method's options, by their API names (see each method module).
+        ``denoeux`` without options uses ``gate_probability`` 0.999, α = 1.
+    distance : {"sum", "mean", "innovation"} or DistanceModel
+        Default ``sum`` (§3.7); a :class:`DistanceModel` selects the modified
+        distance of [HZ] §4.1 and the position components of the gate.
+    known_classes, incoming_classes : sequences of MassFunction, optional
+        One class mass function per item on a common frame (§3.6).
+    solver : {"lapjv", "scipy"}
+        Linear-assignment solver (lapjv is faster; scipy is the reference).
+    cluster : bool
+        Solve independent clusters separately (default; False for testing).
+
+    Raises
+    ------
+    InvalidInput
+        Unknown method, invalid option (:class:`~core.errors.OptionError`),
+        bad shapes, non-finite numbers, invalid covariances
+        (:class:`~core.errors.CovarianceError`).
+    """
+    if method not in METHODS:
+        raise InvalidInput(f"unknown association method {method!r}; choose one of {list(METHODS)}")
+    if solver not in SOLVERS:
+        raise InvalidInput(f"solver must be one of {list(SOLVERS)}, got {solver!r}")
+    parse, run = METHODS[method]
+    parsed = parse(dict(options or {}))
+    model = DistanceModel.of(distance)
+    known_side = _side(known, "known")
+    incoming_side = _side(incoming, "incoming")
+    check_classes(known_classes, incoming_classes, len(known_side), len(incoming_side))
+    problem = AssociationProblem(
+        known=known_side,
+        incoming=incoming_side,
+        distance=model,
+        known_classes=known_classes,
+        incoming_classes=incoming_classes,
+        solver=solver,
+        cluster=cluster,
+    )
+    return run(problem, parsed)
+
+
+def associate_measurements(
+    predicted_measurements: ArrayLike,
+    innovation_covariances: ArrayLike,
+    measurements: ArrayLike,
+    method: str = LOCAL_TRACKING_DEFAULT[0],
+    options: Mapping[str, object] | None = None,
+    *,
+    modified: DistanceModel | None = None,
+    solver: Solver = "lapjv",
+) -> AssociationResult:
+    """Measurement-to-track association ([MTT] eq 15): rows are tracks (ẑ, S), columns z.
+
+    ``D = (z − ẑ)ᵀ S⁻¹ (z − ẑ)``. Default ``gnn`` with ``gate_probability``
+    0.999 (§3.7). ``modified`` may pass a DistanceModel with covariance
+    ``"innovation"`` and a ModifiedScale for the [HZ] §4.1 distance.
+    """
+    known = Estimates.of(predicted_measurements, innovation_covariances, name="tracks")
+    incoming = Estimates.of(
+        measurements, None, name="measurements", dimension=known.dimension if len(known) else None
+    )
+    model = modified if modified is not None else DistanceModel(covariance="innovation")
+    if model.covariance != "innovation":
+        raise InvalidInput("measurement-to-track association needs the 'innovation' covariance")
+    return associate(known, incoming, method, options, model, solver=solver)

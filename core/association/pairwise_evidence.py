@@ -1,0 +1,210 @@
+"""Pairwise evidence of the Royère / Mercier / Dang–Han family ([DH] §3, ALGORITHMS.md §3.4).
+
+For an item i and a candidate partner j, a mass function on {Y_j, ¬Y_j}
+("i comes from j" or not): ``a`` on Y_j, ``b`` on ¬Y_j, ``c = 1 − a − b`` on Θ.
+
+Evidence models (option ``evidence``; ``f`` is pluggable as the spec asks):
+
+- ``"fuzzy"`` (default) — **Reading of [DH] eq 23–27** (garbled in the seed):
+  from the fuzzy similarity ``s = exp(−D/2)``, ``a = α max(0, 2s − 1)``,
+  ``b = α max(0, 1 − 2s)``.
+- ``"likelihood"`` — the generic form of §3.4 with f = s:
+  ``a = α s``, ``b = α (1 − s)``, ``c = 1 − α``.
+
+Class information (§3.6) is a second source on the same pair with mass K on
+¬Y_j and 1 − K on Θ; Dempster's rule gives
+``a' = a(1−K)/(1−aK)``, ``b' = (b + cK)/(1−aK)``, ``c' = c(1−K)/(1−aK)``
+(the contour function of Y_j is multiplied by 1 − K, up to normalisation).
+If ``aK = 1`` the two sources are in total conflict on that pair; the class
+veto wins (the pair is refuted: a' = c' = 0, b' = 1).
+
+The frame of each item is its candidates within the gate (option
+``gate_probability``): **Reading** — [DH] §2 builds its matrices over the
+*validated* measurements inside the tracking gate, which also keeps large
+problems sparse. ``gate_probability = 1`` puts every item in every frame.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from core.arrays import BoolArray, FloatArray, IntArray
+from core.association.options import Options, choice, number
+from core.association.problem import AssociationProblem
+from core.association.rows import RaggedRows
+from core.belief import pairwise_evidence_betp_rows
+from core.distance import CandidatePairs, threshold_from_probability
+
+Evidence = tuple[FloatArray, FloatArray, FloatArray]
+EvidenceModel = Callable[[FloatArray, float], Evidence]
+
+
+def fuzzy_evidence(distance: FloatArray, alpha: float) -> Evidence:
+    """[DH] eq 23–27 as read in ALGORITHMS.md §3.4: s = e^{−D/2}, a = α(2s−1)⁺, b = α(1−2s)⁺."""
+    similarity = np.exp(-0.5 * distance)
+    support = alpha * np.maximum(0.0, 2.0 * similarity - 1.0)
+    refute = alpha * np.maximum(0.0, 1.0 - 2.0 * similarity)
+    return support, refute, np.maximum(0.0, 1.0 - support - refute)
+
+
+def likelihood_evidence(distance: FloatArray, alpha: float) -> Evidence:
+    """Generic §3.4 form with f = e^{−D/2}: a = α f, b = α (1 − f), c = 1 − α."""
+    similarity = np.exp(-0.5 * distance)
+    support = alpha * similarity
+    refute = alpha * (1.0 - similarity)
+    return support, refute, np.maximum(0.0, 1.0 - support - refute)
+
+
+EVIDENCE_MODELS: dict[str, EvidenceModel] = {
+    "fuzzy": fuzzy_evidence,
+    "likelihood": likelihood_evidence,
+}
+
+
+def with_class_evidence(evidence: Evidence, class_plausibility: FloatArray) -> Evidence:
+    """Dempster combination with the class source (module docstring)."""
+    support, refute, ignorance = evidence
+    conflict = 1.0 - class_plausibility  # K
+    normaliser = 1.0 - support * conflict
+    total = normaliser <= 0.0
+    safe = np.where(total, 1.0, normaliser)
+    new_support = np.where(total, 0.0, support * class_plausibility / safe)
+    new_refute = np.where(total, 1.0, (refute + ignorance * conflict) / safe)
+    new_ignorance = np.where(total, 0.0, ignorance * class_plausibility / safe)
+    new_ignorance = np.clip(new_ignorance, 0.0, 1.0)
+    new_refute = np.clip(1.0 - new_support - new_ignorance, 0.0, 1.0)
+    return new_support, new_refute, new_ignorance
+
+
+def leave_one_out_products(factors: FloatArray) -> FloatArray:
+    """``out[..., j] = Π_{k≠j} factors[..., k]`` by prefix/suffix products (no division)."""
+    ones = np.ones((*factors.shape[:-1], 1))
+    prefix = np.cumprod(np.concatenate([ones, factors[..., :-1]], axis=-1), axis=-1)
+    suffix = np.cumprod(np.concatenate([ones, factors[..., :0:-1]], axis=-1), axis=-1)[..., ::-1]
+    return np.asarray(prefix * suffix, dtype=np.float64)
+
+
+def singleton_belief_rows(
+    support: FloatArray, refute: FloatArray, ignorance: FloatArray
+) -> tuple[FloatArray, BoolArray]:
+    """Normalised masses of the singletons of the combined mass ([DH] eq 19), row by row.
+
+    ``m(Y_j) = a_j Π_{k≠j}(1 − a_k)``, ``m(*) = Π_k b_k``, divided by
+    ``1 − m(∅) = Σ_j a_j Π_{k≠j}(1 − a_k) + Π_k (b_k + c_k)`` (Dempster's rule).
+    For singletons m = Bel. Columns Y_1..Y_n then ``*``; the second array
+    tells which rows are defined (not in total conflict).
+    """
+    singles = support * leave_one_out_products(1.0 - support)
+    star = np.prod(refute, axis=-1)
+    normaliser = singles.sum(axis=-1) + np.prod(refute + ignorance, axis=-1)
+    defined = normaliser > 0.0
+    safe = np.where(defined, normaliser, 1.0)[:, None]
+    belief = np.concatenate([singles, star[:, None]], axis=1) / safe
+    belief[~defined] = 0.0
+    return belief, defined
+
+
+def score_rows(
+    items: IntArray,
+    n_items: int,
+    evidence: Evidence,
+    score: str,
+) -> tuple[FloatArray, FloatArray, BoolArray]:
+    """Score every pair from its item's point of view.
+
+    Parameters
+    ----------
+    items : ndarray of int, shape (P,)
+        The item (row of the decision) of each pair; its frame is the pairs
+        that share the item, plus ``*``.
+    n_items : int
+    evidence : (a, b, c) per pair
+    score : {"betp", "belief"}
+        Exact BetP of the combined mass (``pairwise_evidence_betp_rows``, §1.1)
+        or the normalised singleton masses of [DH] eq 19.
+
+    Returns
+    -------
+    values : ndarray, shape (P,)
+        Score of Y_j for each pair.
+    star : ndarray, shape (n_items,)
+        Score of ``*`` per item (1 for an item without candidates).
+    defined : ndarray of bool, shape (n_items,)
+        False where the item's combined mass is in total conflict (scores 0).
+    """
+    support, refute, ignorance = evidence
+    values = np.zeros(len(items))
+    star = np.ones(n_items)
+    defined = np.ones(n_items, dtype=bool)
+    ragged = RaggedRows.of(items, n_items)
+    for block, pair_index in ragged.blocks():
+        inside = pair_index >= 0
+        safe_index = np.maximum(pair_index, 0)
+        # padding is a certain refutation (a = c = 0, b = 1): neutral in every product
+        a = np.where(inside, support[safe_index], 0.0)
+        b = np.where(inside, refute[safe_index], 1.0)
+        c = np.where(inside, ignorance[safe_index], 0.0)
+        if score == "betp":
+            result, block_defined = pairwise_evidence_betp_rows(a, b, c)
+        else:
+            result, block_defined = singleton_belief_rows(a, b, c)
+        values[pair_index[inside]] = result[:, :-1][inside]
+        star[block] = result[:, -1]
+        defined[block] = block_defined
+    return values, star, defined
+
+
+DEFAULT_ALPHA = 0.9
+DEFAULT_GATE_PROBABILITY = 0.999
+EVIDENCE_OPTIONS = ("alpha", "gate_probability", "evidence")
+
+
+@dataclass(frozen=True)
+class EvidenceOptions:
+    """Options shared by ``mercier`` and ``dang_han``.
+
+    Attributes
+    ----------
+    alpha : float in (0, 1]
+        Reliability α of each pairwise source (default 0.9, §3.4).
+    gate_probability : float in (0, 1]
+        The frame of each item holds the candidates with D ≤ chi2.ppf(p, q)
+        (doubled for ``mean``); 1 keeps every pair. Default 0.999.
+    evidence : {"fuzzy", "likelihood"} or an EvidenceModel callable
+    """
+
+    alpha: float = DEFAULT_ALPHA
+    gate_probability: float = DEFAULT_GATE_PROBABILITY
+    evidence: str | EvidenceModel = "fuzzy"
+
+    @classmethod
+    def parse(cls, method: str, options: Options) -> EvidenceOptions:
+        alpha = number(method, options, "alpha", DEFAULT_ALPHA, low=0.0, high=1.0)
+        probability = number(
+            method, options, "gate_probability", DEFAULT_GATE_PROBABILITY, low=0.0, high=1.0
+        )
+        assert alpha is not None and probability is not None
+        evidence = options.get("evidence", "fuzzy")
+        if not callable(evidence):
+            evidence = choice(method, options, "evidence", "fuzzy", tuple(EVIDENCE_MODELS))
+        return cls(alpha, probability, evidence)
+
+    def gate(self, problem: AssociationProblem) -> float:
+        """The frame's distance gate (inf for gate_probability = 1)."""
+        if self.gate_probability >= 1.0:
+            return np.inf
+        return threshold_from_probability(
+            self.gate_probability, problem.dimension, problem.distance
+        )
+
+    def pair_evidence(self, problem: AssociationProblem, pairs: CandidatePairs) -> Evidence:
+        """(a, b, c) of every pair, with the class source combined in when present."""
+        model = self.evidence if callable(self.evidence) else EVIDENCE_MODELS[self.evidence]
+        evidence = model(pairs.distance, self.alpha)
+        class_plausibility = problem.class_plausibility(pairs)
+        if class_plausibility is not None:
+            evidence = with_class_evidence(evidence, class_plausibility)
+        return evidence
