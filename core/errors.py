@@ -45,3 +45,25 @@ class TotalConflict(CredalError):  # noqa: N818 - the name of the state in the p
     def __init__(self, conflict: float, message: str | None = None) -> None:
         self.conflict = conflict
         super().__init__(message or f"total conflict: m(∅) = {conflict!r}, normalisation undefined")
+
+
+class StaleReport(CredalError):  # noqa: N818 - a state of the input, named as the API says
+    """A report is not newer than the sensor's previous one (ALGORITHMS.md §6.4).
+
+    Attributes
+    ----------
+    sensor : str
+    time : float
+        The refused report's time.
+    last_time : float
+        The time of the sensor's previous accepted report.
+    """
+
+    def __init__(self, sensor: str, time: float, last_time: float) -> None:
+        self.sensor = sensor
+        self.time = time
+        self.last_time = last_time
+        super().__init__(
+            f"report of sensor {sensor!r} at time {time!r} is not newer than its previous "
+            f"report at time {last_time!r}"
+        )

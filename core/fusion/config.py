@@ -1,0 +1,154 @@
+"""The validated configuration of a fusion session (DESIGN.md "Session config").
+
+Plain frozen dataclasses: ``app`` translates the wire model into these; the
+core never sees pydantic.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+from core.belief import Frame
+from core.errors import InvalidInput
+from core.fusion.motion import MotionModel
+from core.fusion.state import StateFusion
+from core.geometry import Coverage, FieldOfView
+from core.lifecycle import ScoreModel
+
+
+@dataclass(frozen=True)
+class SensorSpec:
+    """One sensor of the session.
+
+    Attributes
+    ----------
+    id : the sensor's name in reports.
+    reliability : λ for discounting its class evidence ([MTT] eq 7).
+    p_detect : P_D, used by the track score.
+    fov : its field of view, or None if it sees everywhere.
+    """
+
+    id: str
+    reliability: float = 1.0
+    p_detect: float = 0.9
+    fov: FieldOfView | None = None
+
+    def __post_init__(self) -> None:
+        if not self.id:
+            raise InvalidInput("sensor id must not be empty")
+        if not (math.isfinite(self.reliability) and 0.0 <= self.reliability <= 1.0):
+            raise InvalidInput(f"sensor {self.id!r}: reliability must be in [0, 1]")
+        if not (math.isfinite(self.p_detect) and 0.0 < self.p_detect < 1.0):
+            raise InvalidInput(f"sensor {self.id!r}: p_detect must be in (0, 1)")
+
+
+@dataclass(frozen=True)
+class TrackManagement:
+    """Track life cycle at the fused level (ALGORITHMS.md §4, §6 step 5).
+
+    Densities are per unit of position space (area in 2-D) per report:
+    the score and the gate volume are computed on the position components.
+    """
+
+    false_confirmation: float = 1e-3
+    true_deletion: float = 1e-2
+    false_target_density: float = 1e-6
+    new_target_density: float = 1e-6
+    termination_probability: float = 0.5
+    gate_probability: float = 0.999
+    min_points: int | None = None
+    phantom_max_distance: float = 500.0
+    phantom_min_speed: float = 1.0
+    occlusion_radius: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("termination_probability", "gate_probability"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 < value < 1.0):
+                raise InvalidInput(f"{name} must be in (0, 1), got {value!r}")
+        for name in ("phantom_max_distance", "phantom_min_speed"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise InvalidInput(f"{name} must be a positive number, got {value!r}")
+        if not (math.isfinite(self.occlusion_radius) and self.occlusion_radius >= 0.0):
+            raise InvalidInput(f"occlusion_radius must be >= 0, got {self.occlusion_radius!r}")
+        if self.min_points is not None and self.min_points < 1:
+            raise InvalidInput(f"min_points must be >= 1, got {self.min_points}")
+
+    def score_model(self, p_detect: float) -> ScoreModel:
+        """The SPRT score of a sensor with detection probability ``p_detect``."""
+        return ScoreModel(
+            p_detect=p_detect,
+            false_target_density=self.false_target_density,
+            new_target_density=self.new_target_density,
+            false_confirmation=self.false_confirmation,
+            true_deletion=self.true_deletion,
+        )
+
+    @property
+    def thresholds(self) -> ScoreModel:
+        """The SPRT thresholds (they depend on α and β only, not on P_D)."""
+        return self.score_model(p_detect=0.5)
+
+    @property
+    def phantom_lifetime(self) -> float:
+        """Longest time in a blind zone: the maximum distance at the minimum speed ([HZ] §5.1)."""
+        return self.phantom_max_distance / self.phantom_min_speed
+
+
+@dataclass(frozen=True)
+class FusionConfig:
+    """Everything the session engine needs, validated.
+
+    Attributes
+    ----------
+    motion : the fused tracks' motion model (it carries the state layout).
+    sensors : the session's sensors, in a fixed order.
+    classes : the class frame, or None for a session without classification.
+    association_method, association_options, distance : track-to-track association
+        (defaults of ALGORITHMS.md §3.7: ``denoeux``, gate probability 0.999, α = 1, ``sum``).
+    state_fusion : how the sensors' latest estimates are combined.
+    management : the track life cycle.
+    """
+
+    motion: MotionModel
+    sensors: tuple[SensorSpec, ...]
+    classes: Frame | None = None
+    association_method: str = "denoeux"
+    association_options: Mapping[str, object] = field(
+        default_factory=lambda: MappingProxyType({"gate_probability": 0.999, "alpha": 1.0})
+    )
+    distance: str = "sum"
+    state_fusion: StateFusion = StateFusion.COVARIANCE_INTERSECTION
+    management: TrackManagement = field(default_factory=TrackManagement)
+
+    def __post_init__(self) -> None:
+        if not self.sensors:
+            raise InvalidInput("a session needs at least one sensor")
+        ids = [sensor.id for sensor in self.sensors]
+        repeated = sorted({sensor for sensor in ids if ids.count(sensor) > 1})
+        if repeated:
+            raise InvalidInput(f"sensor ids repeat: {repeated}")
+        object.__setattr__(
+            self, "association_options", MappingProxyType(dict(self.association_options))
+        )
+
+    @property
+    def dim(self) -> int:
+        return self.motion.layout.dim
+
+    def sensor(self, sensor_id: str) -> SensorSpec:
+        """The sensor called ``sensor_id``."""
+        for sensor in self.sensors:
+            if sensor.id == sensor_id:
+                return sensor
+        raise InvalidInput(
+            f"unknown sensor {sensor_id!r}; the session has {[s.id for s in self.sensors]}"
+        )
+
+    @property
+    def coverage(self) -> Coverage:
+        return Coverage(tuple(sensor.fov for sensor in self.sensors))

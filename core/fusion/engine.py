@@ -1,0 +1,549 @@
+"""The session engine: one deterministic state machine per fusion scene.
+
+Built from a :class:`~core.fusion.config.FusionConfig`, it takes one input
+at a time and returns the fused result of that step (DESIGN.md "The session
+engine"; ALGORITHMS.md §6). Same configuration + same inputs in the same
+order → bit-identical outputs. Its whole state exports to plain data
+(:meth:`SessionEngine.export`) and restores exactly (:meth:`SessionEngine.restore`).
+
+One track-list step ([T2T] Fig 1-2, generalised to N sensors and to time):
+
+1. check the report (sensor known, newer than that sensor's previous report,
+   numbers finite, shapes right) — nothing changes on a refused report;
+2. predict the live fused tracks to the report time: each track's state is
+   the fusion of every sensor's latest estimate predicted to that time;
+3. associate the report's tracks with them by the session's method, with
+   class information when both sides carry it (§3.6);
+4. each associated report track becomes its sensor's latest estimate of the
+   fused track; unassociated ones start tentative tracks; fused tracks the
+   sensor should have seen (inside its field of view, not occluded) and did
+   not count a miss;
+5. life cycle: confirm (score, second sensor, ``min_points``), coast, phantom
+   in blind zones or occlusion, terminate (score, gate emptiness, out of
+   range, phantom expiry); a newly confirmed track that matches a phantom
+   hands its estimates to the phantom, which keeps its id ([HZ] §5.1);
+6. class fusion per track from the sensors' latest class evidence.
+
+**Readings.** The time of a step's result is the fusion time (the latest
+report time seen): a late report (older than the fusion time, newer than
+its sensor's previous report, §6.4) is associated at its own time and then
+simply becomes that sensor's latest estimate. The score and the gate volume
+use the position components, so the densities of
+:class:`~core.fusion.config.TrackManagement` are per unit of position space.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from scipy.stats import chi2
+
+from core.arrays import BoolArray, FloatArray
+from core.association import AssociationResult, associate
+from core.belief import MassFunction
+from core.errors import InvalidInput, StaleReport, TotalConflict
+from core.fusion.classes import ClassAssessment, accumulate_likelihoods, fuse_sensor_classes
+from core.fusion.config import FusionConfig, SensorSpec
+from core.fusion.reports import (
+    AssociationView,
+    FusedTrackView,
+    ReportedTrack,
+    Source,
+    StepResult,
+    TrackReport,
+)
+from core.fusion.state import fuse_estimates
+from core.fusion.track import FusedTrack, SensorEstimate
+from core.geometry import Sector, Visibility, occluded
+from core.lifecycle import StatusReason, TrackStatus, gate_emptiness_factor, gate_volume
+
+EXPORT_VERSION = 1
+LIVE = (TrackStatus.TENTATIVE, TrackStatus.CONFIRMED, TrackStatus.COASTING)
+
+
+class SessionEngine:
+    """The fused picture of one session and the rules that update it."""
+
+    def __init__(self, config: FusionConfig) -> None:
+        self.config = config
+        self.seq = 0
+        self.time: float | None = None
+        self.next_number = 1
+        self.last_report: dict[str, float] = {}
+        self.tracks: list[FusedTrack] = []
+        layout = config.motion.layout
+        self._position = np.asarray(layout.position, dtype=np.int64)
+        self._gate = float(chi2.ppf(config.management.gate_probability, len(layout.position)))
+
+    # ------------------------------------------------------------ the step
+    def apply(self, report: TrackReport, *, explain: bool = False) -> StepResult:
+        """Apply one sensor's track list; returns the step's fused result.
+
+        Raises
+        ------
+        InvalidInput
+            Unknown sensor, bad numbers or shapes, duplicate ids, class evidence
+            that does not fit the session's class frame. The state is unchanged.
+        StaleReport
+            The report is not newer than the sensor's previous report.
+        """
+        sensor = self._check(report)
+        t = float(report.time)
+        live = [track for track in self.tracks if track.status in LIVE]
+        states, covariances = self._fused_at(live, t)
+        result = self._associate(live, states, covariances, report)
+        terminated: list[FusedTrack] = []
+        confirmed: list[FusedTrack] = []
+
+        for row, col in zip(result.pair_known, result.pair_incoming, strict=True):
+            fused = live[row]
+            was_tentative = fused.status is TrackStatus.TENTATIVE
+            self._hit(
+                fused, report.tracks[col], states[row], covariances[row], report, sensor.p_detect
+            )
+            if was_tentative and fused.status is TrackStatus.CONFIRMED:
+                confirmed.append(fused)
+        seen = (
+            self._seen_by(sensor.id, states[result.missed], live)
+            if len(result.missed)
+            else np.zeros(0, bool)
+        )
+        for row, visible in zip(result.missed, seen, strict=True):
+            if visible:
+                self._miss(live[row], covariances[row], sensor.p_detect)
+        created = [
+            self._start(reported, report) for reported in (report.tracks[i] for i in result.new)
+        ]
+        self.tracks.extend(created)
+        confirmed.extend(track for track in created if track.status is TrackStatus.CONFIRMED)
+
+        self.time = t if self.time is None else max(self.time, t)
+        self.last_report[report.sensor] = t
+        self.seq += 1
+        self._manage(self.time, terminated)
+        self._hand_over_to_phantoms(confirmed, terminated)
+        return self._result(report, result, live, terminated, explain)
+
+    # ------------------------------------------------------------ checks
+    def _check(self, report: TrackReport) -> SensorSpec:
+        sensor = self.config.sensor(report.sensor)
+        if not math.isfinite(report.time):
+            raise InvalidInput(f"time must be finite, got {report.time!r}")
+        last = self.last_report.get(report.sensor)
+        if last is not None and report.time <= last:
+            raise StaleReport(report.sensor, report.time, last)
+        ids = [track.id for track in report.tracks]
+        repeated = sorted({track_id for track_id in ids if ids.count(track_id) > 1})
+        if repeated:
+            raise InvalidInput(f"tracks: ids repeat: {repeated}")
+        dim = self.config.dim
+        for index, track in enumerate(report.tracks):
+            where = f"tracks[{index}] (id {track.id!r})"
+            if track.state.shape != (dim,) or track.covariance.shape != (dim, dim):
+                raise InvalidInput(
+                    f"{where}: state must have {dim} components and covariance {dim}×{dim}, "
+                    f"got {track.state.shape} and {track.covariance.shape}"
+                )
+            if not (np.all(np.isfinite(track.state)) and np.all(np.isfinite(track.covariance))):
+                raise InvalidInput(f"{where}: state and covariance must be finite")
+            if not np.allclose(track.covariance, track.covariance.T, rtol=1e-9, atol=1e-12):
+                raise InvalidInput(f"{where}: covariance is not symmetric")
+            if np.linalg.eigvalsh(track.covariance)[0] <= 0.0:
+                raise InvalidInput(f"{where}: covariance is not positive definite")
+            self._check_classes(track, where)
+        return sensor
+
+    def _check_classes(self, track: ReportedTrack, where: str) -> None:
+        frame = self.config.classes
+        if track.class_mass is not None and track.class_likelihoods is not None:
+            raise InvalidInput(f"{where}: give a class mass or class likelihoods, not both")
+        if frame is None:
+            if track.class_mass is not None or track.class_likelihoods is not None:
+                raise InvalidInput(
+                    f"{where}: the session has no classes, but the track carries class evidence"
+                )
+            return
+        if track.class_mass is not None and track.class_mass.frame != frame:
+            raise InvalidInput(
+                f"{where}: class mass is not on the session's classes {list(frame.labels)}"
+            )
+        if track.class_likelihoods is not None:
+            likelihoods = track.class_likelihoods
+            if likelihoods.shape != (len(frame),):
+                raise InvalidInput(f"{where}: need one likelihood per class ({len(frame)})")
+            if (
+                not np.all(np.isfinite(likelihoods))
+                or likelihoods.min() < 0.0
+                or likelihoods.max() > 1.0
+            ):
+                raise InvalidInput(f"{where}: class likelihoods must lie in [0, 1]")
+
+    # ------------------------------------------------------- prediction
+    def _fused_at(self, tracks: list[FusedTrack], time: float) -> tuple[FloatArray, FloatArray]:
+        """The fused state of every track at ``time``: its sensors' estimates predicted and fused."""
+        dim = self.config.dim
+        if not tracks:
+            return np.zeros((0, dim)), np.zeros((0, dim, dim))
+        width = max(len(track.estimates) for track in tracks)
+        states = np.zeros((len(tracks), width, dim))
+        covariances = np.broadcast_to(np.eye(dim), (len(tracks), width, dim, dim)).copy()
+        present = np.zeros((len(tracks), width), dtype=bool)
+        times = np.zeros((len(tracks), width))
+        for row, track in enumerate(tracks):
+            for slot, estimate in enumerate(track.estimates.values()):
+                states[row, slot] = estimate.state
+                covariances[row, slot] = estimate.covariance
+                present[row, slot] = True
+                times[row, slot] = estimate.time
+        predicted, predicted_cov = self.config.motion.predict(states, covariances, time - times)
+        fused, fused_cov, _ = fuse_estimates(
+            predicted, predicted_cov, present, times, self.config.state_fusion
+        )
+        return fused, fused_cov
+
+    # ------------------------------------------------------- association
+    def _associate(
+        self,
+        live: list[FusedTrack],
+        states: FloatArray,
+        covariances: FloatArray,
+        report: TrackReport,
+    ) -> AssociationResult:
+        incoming_states = np.array([track.state for track in report.tracks]).reshape(
+            -1, self.config.dim
+        )
+        incoming_covariances = np.array([track.covariance for track in report.tracks]).reshape(
+            -1, self.config.dim, self.config.dim
+        )
+        known_classes, incoming_classes = self._association_classes(live, report)
+        return associate(
+            (states, covariances),
+            (incoming_states, incoming_covariances),
+            self.config.association_method,
+            self.config.association_options,
+            self.config.distance,
+            known_classes,
+            incoming_classes,
+        )
+
+    def _association_classes(
+        self, live: list[FusedTrack], report: TrackReport
+    ) -> tuple[list[MassFunction] | None, list[MassFunction] | None]:
+        """Class masses of both sides when the report carries class evidence (§3.6)."""
+        frame = self.config.classes
+        if frame is None or not any(
+            t.class_mass is not None or t.class_likelihoods is not None for t in report.tracks
+        ):
+            return None, None
+        vacuous = MassFunction.vacuous(frame)
+        incoming = []
+        for track in report.tracks:
+            if track.class_mass is not None:
+                incoming.append(_normalised_or_vacuous(track.class_mass))
+            elif track.class_likelihoods is not None:
+                try:
+                    incoming.append(accumulate_likelihoods(None, frame, track.class_likelihoods)[0])
+                except TotalConflict:
+                    incoming.append(vacuous)
+            else:
+                incoming.append(vacuous)
+        known = []
+        for fused in live:
+            assessment = self._classify(fused)
+            known.append(
+                vacuous if assessment is None or assessment.mass is None else assessment.mass
+            )
+        return known, incoming
+
+    # ------------------------------------------------------- life cycle
+    def _hit(
+        self,
+        fused: FusedTrack,
+        reported: ReportedTrack,
+        predicted_state: FloatArray,
+        predicted_covariance: FloatArray,
+        report: TrackReport,
+        p_detect: float,
+    ) -> None:
+        position = self._position
+        innovation = reported.state[position] - predicted_state[position]
+        combined = (
+            predicted_covariance[np.ix_(position, position)]
+            + reported.covariance[np.ix_(position, position)]
+        )
+        distance = float(innovation @ np.linalg.solve(combined, innovation))
+        log_det = float(np.linalg.slogdet(combined)[1])
+        score = self.config.management.score_model(p_detect)
+        fused.score += float(
+            score.hit_increment(np.array([distance]), np.array([log_det]), len(position))[0]
+        )
+        fused.hits += 1
+        previous = fused.estimates.get(report.sensor)
+        fused.estimates[report.sensor] = SensorEstimate(
+            track=reported.id,
+            time=report.time,
+            state=reported.state.copy(),
+            covariance=reported.covariance.copy(),
+            class_mass=self._class_evidence(reported, previous),
+        )
+        fused.empty_gate_probability = 1.0
+        if fused.status is TrackStatus.COASTING:
+            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
+        elif fused.status is TrackStatus.TENTATIVE:
+            self._maybe_confirm(fused)
+
+    def _maybe_confirm(self, fused: FusedTrack) -> None:
+        management = self.config.management
+        if len(fused.estimates) >= 2:
+            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.SECOND_SENSOR
+        elif management.min_points is not None and fused.hits >= management.min_points:
+            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.MIN_POINTS
+        elif fused.score >= management.thresholds.confirm_threshold:
+            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.SCORE_CONFIRMED
+
+    def _class_evidence(
+        self, reported: ReportedTrack, previous: SensorEstimate | None
+    ) -> MassFunction | None:
+        """A mass report replaces the sensor's mass; likelihoods accumulate on it (§5)."""
+        if reported.class_mass is not None:
+            return reported.class_mass
+        if reported.class_likelihoods is not None and self.config.classes is not None:
+            before = None if previous is None else previous.class_mass
+            try:
+                return accumulate_likelihoods(
+                    before, self.config.classes, reported.class_likelihoods
+                )[0]
+            except TotalConflict:
+                # The new evidence contradicts the sensor's past totally: start again from it.
+                return accumulate_likelihoods(
+                    None, self.config.classes, reported.class_likelihoods
+                )[0]
+        return None if previous is None else previous.class_mass
+
+    def _miss(self, fused: FusedTrack, predicted_covariance: FloatArray, p_detect: float) -> None:
+        management = self.config.management
+        score = management.score_model(p_detect)
+        fused.score += score.miss_increment
+        if fused.status is TrackStatus.CONFIRMED:
+            fused.status, fused.reason = TrackStatus.COASTING, StatusReason.MISSED
+        if fused.status is TrackStatus.COASTING:
+            position = self._position
+            newest = max(fused.estimates.values(), key=lambda estimate: estimate.time)
+            gate_covariance = (
+                predicted_covariance[np.ix_(position, position)]
+                + newest.covariance[np.ix_(position, position)]
+            )
+            volume = gate_volume(
+                self._gate, np.array([np.linalg.slogdet(gate_covariance)[1]]), len(position)
+            )
+            factor = gate_emptiness_factor(
+                management.false_target_density, management.new_target_density, volume
+            )
+            fused.empty_gate_probability *= float(factor[0])
+
+    def _seen_by(self, sensor_id: str, states: FloatArray, live: list[FusedTrack]) -> BoolArray:
+        """Which predicted positions sensor ``sensor_id`` should have reported (FOV, not occluded)."""
+        sensor = self.config.sensor(sensor_id)
+        positions = states[:, self._position[:2]] if len(self._position) >= 2 else None
+        if sensor.fov is None or positions is None:
+            return np.ones(len(states), dtype=bool)
+        seen = sensor.fov.contains(positions)
+        radius = self.config.management.occlusion_radius
+        if radius > 0.0 and isinstance(sensor.fov, Sector) and len(live) > 1:
+            others, _ = self._fused_at(live, self._latest_time(live))
+            seen &= ~occluded(sensor.fov.origin, positions, others[:, self._position[:2]], radius)
+        return seen
+
+    @staticmethod
+    def _latest_time(tracks: list[FusedTrack]) -> float:
+        return max(track.last_time for track in tracks)
+
+    def _start(self, reported: ReportedTrack, report: TrackReport) -> FusedTrack:
+        sensor = self.config.sensor(report.sensor)
+        fused = FusedTrack(
+            id=f"F{self.next_number}",
+            status=TrackStatus.TENTATIVE,
+            reason=StatusReason.INITIATED,
+            score=self.config.management.score_model(sensor.p_detect).initial,
+        )
+        self.next_number += 1
+        fused.estimates[report.sensor] = SensorEstimate(
+            track=reported.id,
+            time=report.time,
+            state=reported.state.copy(),
+            covariance=reported.covariance.copy(),
+            class_mass=self._class_evidence(reported, None),
+        )
+        self._maybe_confirm(fused)
+        return fused
+
+    def _manage(self, time: float, terminated: list[FusedTrack]) -> None:
+        """Deletion, gate emptiness, blind zones, occlusion, out of range, phantom expiry."""
+        management = self.config.management
+        delete_below = management.thresholds.delete_threshold
+        candidates = [track for track in self.tracks if track.status is not TrackStatus.TERMINATED]
+        if not candidates:
+            return
+        states, _ = self._fused_at(candidates, time)
+        if len(self._position) >= 2:
+            visibility = self.config.coverage.visibility(states[:, self._position[:2]])
+        else:
+            visibility = np.full(len(candidates), int(Visibility.VISIBLE))
+        for track, where in zip(candidates, visibility, strict=True):
+            reason: StatusReason | None = None
+            if where == Visibility.OUT_OF_RANGE:
+                reason = StatusReason.OUT_OF_RANGE
+            elif track.status is TrackStatus.PHANTOM:
+                assert track.phantom_since is not None
+                if time - track.phantom_since > management.phantom_lifetime:
+                    reason = StatusReason.PHANTOM_EXPIRED
+            elif where == Visibility.BLIND_ZONE:
+                if track.status is TrackStatus.TENTATIVE:
+                    reason = StatusReason.BLIND_ZONE
+                else:
+                    track.status, track.reason = TrackStatus.PHANTOM, StatusReason.BLIND_ZONE
+                    track.phantom_since = time
+            elif track.score <= delete_below:
+                reason = StatusReason.SCORE_DELETED
+            elif (
+                track.status is TrackStatus.COASTING
+                and track.empty_gate_probability < management.termination_probability
+            ):
+                reason = StatusReason.GATE_EMPTINESS
+            if reason is not None:
+                track.status, track.reason = TrackStatus.TERMINATED, reason
+                terminated.append(track)
+
+    def _hand_over_to_phantoms(self, fresh: list[FusedTrack], terminated: list[FusedTrack]) -> None:
+        """A track confirmed in this step that matches a phantom gives it its estimates ([HZ] §5.1)."""
+        phantoms = [track for track in self.tracks if track.status is TrackStatus.PHANTOM]
+        if not phantoms or not fresh or self.time is None:
+            return
+        phantom_states, phantom_covariances = self._fused_at(phantoms, self.time)
+        fresh_states, fresh_covariances = self._fused_at(fresh, self.time)
+        decision = associate(
+            (phantom_states, phantom_covariances),
+            (fresh_states, fresh_covariances),
+            "gnn",
+            {"gate_probability": self.config.management.gate_probability},
+            "sum",
+        )
+        for row, col in zip(decision.pair_known, decision.pair_incoming, strict=True):
+            phantom, newcomer = phantoms[row], fresh[col]
+            phantom.estimates.update(newcomer.estimates)
+            phantom.status, phantom.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
+            phantom.phantom_since = None
+            phantom.score = max(phantom.score, newcomer.score)
+            phantom.hits += newcomer.hits
+            newcomer.status, newcomer.reason = (
+                TrackStatus.TERMINATED,
+                StatusReason.MERGED_INTO_PHANTOM,
+            )
+            terminated.append(newcomer)
+
+    # ------------------------------------------------------------ output
+    def _classify(self, fused: FusedTrack) -> ClassAssessment | None:
+        masses = {s: e.class_mass for s, e in fused.estimates.items() if e.class_mass is not None}
+        reliabilities = {sensor.id: sensor.reliability for sensor in self.config.sensors}
+        return fuse_sensor_classes(masses, reliabilities)
+
+    def _result(
+        self,
+        report: TrackReport,
+        decision: AssociationResult,
+        live: list[FusedTrack],
+        terminated: list[FusedTrack],
+        explain: bool,
+    ) -> StepResult:
+        assert self.time is not None
+        shown = sorted(
+            (
+                track
+                for track in self.tracks
+                if track.status is not TrackStatus.TERMINATED or track in terminated
+            ),
+            key=lambda track: track.number,
+        )
+        states, covariances = self._fused_at(shown, self.time)
+        views = []
+        for track, state, covariance in zip(shown, states, covariances, strict=True):
+            if track.status is not TrackStatus.TERMINATED:
+                track.remember(self.time, state)
+            sources = tuple(
+                Source(sensor, estimate.track, estimate.time)
+                for sensor, estimate in sorted(track.estimates.items())
+            )
+            views.append(
+                FusedTrackView(
+                    id=track.id,
+                    status=track.status,
+                    reason=track.reason,
+                    state=state,
+                    covariance=covariance,
+                    sources=sources,
+                    classification=self._classify(track),
+                    score=track.score,
+                )
+            )
+        self.tracks = [track for track in self.tracks if track.status is not TrackStatus.TERMINATED]
+        association = AssociationView(
+            method=decision.method,
+            pairs=tuple(
+                (live[row].id, report.tracks[col].id, float(score))
+                for row, col, score in zip(
+                    decision.pair_known, decision.pair_incoming, decision.pair_score, strict=True
+                )
+            ),
+            new=tuple(track.id for track in (report.tracks[i] for i in decision.new)),
+            missed=tuple(live[row].id for row in decision.missed),
+            matrix=(
+                (
+                    tuple(track.id for track in live),
+                    tuple(track.id for track in report.tracks),
+                    decision.scores.dense(),
+                )
+                if explain
+                else None
+            ),
+        )
+        return StepResult(
+            seq=self.seq,
+            time=self.time,
+            sensor=report.sensor,
+            tracks=tuple(views),
+            association=association,
+        )
+
+    # ------------------------------------------------------ persistence
+    def export(self) -> dict[str, Any]:
+        """The whole state as plain data (JSON-ready; floats round-trip exactly)."""
+        return {
+            "version": EXPORT_VERSION,
+            "seq": self.seq,
+            "time": self.time,
+            "next_number": self.next_number,
+            "last_report": dict(sorted(self.last_report.items())),
+            "tracks": [track.to_plain() for track in self.tracks],
+        }
+
+    @classmethod
+    def restore(cls, config: FusionConfig, state: dict[str, Any]) -> SessionEngine:
+        """Rebuild an engine from :meth:`export`'s output and the same configuration."""
+        if state.get("version") != EXPORT_VERSION:
+            raise InvalidInput(f"unknown engine export version {state.get('version')!r}")
+        engine = cls(config)
+        engine.seq = int(state["seq"])
+        engine.time = None if state["time"] is None else float(state["time"])
+        engine.next_number = int(state["next_number"])
+        engine.last_report = {str(k): float(v) for k, v in state["last_report"].items()}
+        engine.tracks = [FusedTrack.from_plain(plain, config.classes) for plain in state["tracks"]]
+        return engine
+
+
+def _normalised_or_vacuous(mass: MassFunction) -> MassFunction:
+    try:
+        return mass.normalized()
+    except TotalConflict:
+        return MassFunction.vacuous(mass.frame)

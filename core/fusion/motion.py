@@ -1,0 +1,98 @@
+"""The fused tracks' motion model on the session's state layout.
+
+A session names which state components are positions and which are their
+velocities (DESIGN.md "Session config"). Between reports the fused tracks
+are predicted with, per position axis, the discretised continuous white-noise
+acceleration model of spectral density ``q`` (Bar-Shalom, Li & Kirubarajan
+§6.2.2): ``F = [[1, Δt], [0, 1]]``, ``Q = q [[Δt³/3, Δt²/2], [Δt²/2, Δt]]``.
+``constant_position`` uses ``F = I`` and ``Q = q Δt`` on the positions.
+Components that are neither positions nor velocities are kept constant.
+
+Prediction backwards in time (a late report, ALGORITHMS.md §6.4) uses
+``F(Δt)`` with Δt < 0 and adds ``Q(|Δt|)``: the uncertainty grows in both
+directions.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+import numpy as np
+
+from core.arrays import FloatArray
+from core.errors import InvalidInput
+
+
+class MotionKind(enum.StrEnum):
+    """Motion models by their API names."""
+
+    CONSTANT_VELOCITY = "constant_velocity"
+    CONSTANT_POSITION = "constant_position"
+
+
+@dataclass(frozen=True)
+class StateLayout:
+    """Dimension of the state and the indices of its positions and velocities."""
+
+    dim: int
+    position: tuple[int, ...]
+    velocity: tuple[int, ...] = ()
+
+    def __post_init__(self) -> None:
+        indices = (*self.position, *self.velocity)
+        if self.dim < 1:
+            raise InvalidInput(f"state dim must be >= 1, got {self.dim}")
+        if not self.position:
+            raise InvalidInput("state layout needs at least one position component")
+        if any(not 0 <= index < self.dim for index in indices):
+            raise InvalidInput(f"state components {list(indices)} must lie in [0, {self.dim})")
+        if len(set(indices)) != len(indices):
+            raise InvalidInput(f"state components repeat: {list(indices)}")
+        if self.velocity and len(self.velocity) != len(self.position):
+            raise InvalidInput("give one velocity component per position component, or none")
+
+
+@dataclass(frozen=True)
+class MotionModel:
+    """Predicts states and covariances of the session's layout."""
+
+    layout: StateLayout
+    kind: MotionKind = MotionKind.CONSTANT_VELOCITY
+    q: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.q) and self.q > 0.0):
+            raise InvalidInput(f"motion q must be a positive number, got {self.q!r}")
+        if self.kind is MotionKind.CONSTANT_VELOCITY and not self.layout.velocity:
+            raise InvalidInput(
+                "constant_velocity motion needs velocity components in the state layout"
+            )
+
+    def matrices(self, dt: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """F and Q for every Δt (shape (T,) → (T, d, d) each)."""
+        dt = np.asarray(dt, dtype=np.float64)
+        span = np.abs(dt)
+        d = self.layout.dim
+        transition = np.broadcast_to(np.eye(d), (*dt.shape, d, d)).copy()
+        noise = np.zeros((*dt.shape, d, d))
+        for axis, p in enumerate(self.layout.position):
+            if self.kind is MotionKind.CONSTANT_VELOCITY:
+                v = self.layout.velocity[axis]
+                transition[..., p, v] = dt
+                noise[..., p, p] = self.q * span**3 / 3.0
+                noise[..., p, v] = noise[..., v, p] = self.q * span**2 / 2.0
+                noise[..., v, v] = self.q * span
+            else:
+                noise[..., p, p] = self.q * span
+        return transition, noise
+
+    def predict(
+        self, states: FloatArray, covariances: FloatArray, dt: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """x ← F x, P ← F P Fᵀ + Q for every estimate, each with its own Δt."""
+        transition, noise = self.matrices(dt)
+        predicted = np.einsum("...ij,...j->...i", transition, states)
+        covariance = transition @ covariances @ np.swapaxes(transition, -1, -2) + noise
+        covariance = (covariance + np.swapaxes(covariance, -1, -2)) / 2.0
+        return np.asarray(predicted, dtype=np.float64), np.asarray(covariance, dtype=np.float64)

@@ -1,0 +1,84 @@
+"""What goes into and comes out of one fusion step."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from core.arrays import FloatArray
+from core.belief import MassFunction
+from core.fusion.classes import ClassAssessment
+from core.lifecycle import StatusReason, TrackStatus
+
+
+@dataclass(frozen=True)
+class ReportedTrack:
+    """One track of a sensor's track list.
+
+    ``class_mass`` is the sensor's own class belief; ``class_likelihoods``
+    one step of class evidence (per class of the session frame, in [0, 1]).
+    At most one of the two.
+    """
+
+    id: str
+    state: FloatArray
+    covariance: FloatArray
+    class_mass: MassFunction | None = None
+    class_likelihoods: FloatArray | None = None
+
+
+@dataclass(frozen=True)
+class TrackReport:
+    """A sensor's track list at one time."""
+
+    sensor: str
+    time: float
+    tracks: tuple[ReportedTrack, ...]
+
+
+@dataclass(frozen=True)
+class Source:
+    """A sensor track that contributes to a fused track."""
+
+    sensor: str
+    track: str
+    time: float
+
+
+@dataclass(frozen=True)
+class FusedTrackView:
+    """One fused track as a step reports it (ALGORITHMS.md §6 "Fused output")."""
+
+    id: str
+    status: TrackStatus
+    reason: StatusReason
+    state: FloatArray
+    covariance: FloatArray
+    sources: tuple[Source, ...]
+    classification: ClassAssessment | None
+    score: float
+
+
+@dataclass(frozen=True)
+class AssociationView:
+    """The association decision of a step, by ids.
+
+    ``matrix`` (rows: fused ids, cols: report track ids, values) is filled
+    only when an explanation is asked for.
+    """
+
+    method: str
+    pairs: tuple[tuple[str, str, float], ...]
+    new: tuple[str, ...]
+    missed: tuple[str, ...]
+    matrix: tuple[tuple[str, ...], tuple[str, ...], FloatArray] | None = None
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """The result of applying one input: every live fused track at ``time``."""
+
+    seq: int
+    time: float
+    sensor: str
+    tracks: tuple[FusedTrackView, ...]
+    association: AssociationView

@@ -1,0 +1,132 @@
+"""A fused track's state: the latest estimate of every sensor that reports it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from core.arrays import FloatArray
+from core.belief import Frame, MassFunction
+from core.lifecycle import StatusReason, TrackStatus
+
+HISTORY_LENGTH = 100
+"""Fused states kept per track for ``GET /tracks/{id}``."""
+
+
+@dataclass
+class SensorEstimate:
+    """A sensor's latest estimate of a fused track, with its class evidence."""
+
+    track: str
+    time: float
+    state: FloatArray
+    covariance: FloatArray
+    class_mass: MassFunction | None = None
+
+    def to_plain(self) -> dict[str, Any]:
+        return {
+            "track": self.track,
+            "time": self.time,
+            "state": self.state.tolist(),
+            "covariance": self.covariance.tolist(),
+            "class_mass": None if self.class_mass is None else mass_to_plain(self.class_mass),
+        }
+
+    @classmethod
+    def from_plain(cls, plain: dict[str, Any], frame: Frame | None) -> SensorEstimate:
+        mass = plain["class_mass"]
+        return cls(
+            track=str(plain["track"]),
+            time=float(plain["time"]),
+            state=np.asarray(plain["state"], dtype=np.float64),
+            covariance=np.asarray(plain["covariance"], dtype=np.float64),
+            class_mass=None if mass is None or frame is None else mass_from_plain(mass, frame),
+        )
+
+
+@dataclass
+class FusedTrack:
+    """One object of the fused picture.
+
+    Attributes
+    ----------
+    id : stable fused id ("F1", "F2", ...).
+    status, reason : where the track is in its life and why it got there.
+    score : SPRT log-likelihood ratio (``core.lifecycle``).
+    hits : reports associated with it.
+    estimates : the latest estimate of each contributing sensor, by sensor id.
+    empty_gate_probability : [HZ] §4.2 product while coasting (1 otherwise).
+    phantom_since : when it entered a blind zone or occlusion (None otherwise).
+    history : recent (time, fused state) pairs, oldest first.
+    """
+
+    id: str
+    status: TrackStatus
+    reason: StatusReason
+    score: float
+    hits: int = 1
+    estimates: dict[str, SensorEstimate] = field(default_factory=dict)
+    empty_gate_probability: float = 1.0
+    phantom_since: float | None = None
+    history: list[tuple[float, list[float]]] = field(default_factory=list)
+
+    @property
+    def number(self) -> int:
+        """The integer part of the id, for a stable order."""
+        return int(self.id[1:])
+
+    @property
+    def last_time(self) -> float:
+        return max(estimate.time for estimate in self.estimates.values())
+
+    def remember(self, time: float, state: FloatArray) -> None:
+        """Append a fused state to the bounded history (replacing one at the same time)."""
+        if self.history and self.history[-1][0] == time:
+            self.history.pop()
+        self.history.append((time, state.tolist()))
+        del self.history[:-HISTORY_LENGTH]
+
+    def to_plain(self) -> dict[str, Any]:
+        return {
+            "id": self.id,
+            "status": self.status.value,
+            "reason": self.reason.value,
+            "score": self.score,
+            "hits": self.hits,
+            "estimates": {sensor: e.to_plain() for sensor, e in self.estimates.items()},
+            "empty_gate_probability": self.empty_gate_probability,
+            "phantom_since": self.phantom_since,
+            "history": [[time, state] for time, state in self.history],
+        }
+
+    @classmethod
+    def from_plain(cls, plain: dict[str, Any], frame: Frame | None) -> FusedTrack:
+        return cls(
+            id=str(plain["id"]),
+            status=TrackStatus(plain["status"]),
+            reason=StatusReason(plain["reason"]),
+            score=float(plain["score"]),
+            hits=int(plain["hits"]),
+            estimates={
+                str(sensor): SensorEstimate.from_plain(estimate, frame)
+                for sensor, estimate in plain["estimates"].items()
+            },
+            empty_gate_probability=float(plain["empty_gate_probability"]),
+            phantom_since=None if plain["phantom_since"] is None else float(plain["phantom_since"]),
+            history=[(float(time), [float(x) for x in state]) for time, state in plain["history"]],
+        )
+
+
+def mass_to_plain(mass: MassFunction) -> dict[str, list[Any]]:
+    """A mass function as two JSON lists (masks, masses): exact round trip."""
+    return {"masks": mass.masks.tolist(), "masses": mass.masses.tolist()}
+
+
+def mass_from_plain(plain: dict[str, list[Any]], frame: Frame) -> MassFunction:
+    return MassFunction(
+        frame,
+        np.asarray(plain["masks"], dtype=np.int64),
+        np.asarray(plain["masses"], dtype=np.float64),
+    )
