@@ -37,3 +37,19 @@ class TotalConflict(CredalError):  # noqa: N818 - the name of the state in the p
     def __init__(self, conflict: float, message: str | None = None) -> None:
         self.conflict = conflict
         super().__init__(message or f"total conflict: m(∅) = {conflict!r}, normalisation undefined")
+
+
+class ModelConfigError(InvalidInput):
+    """A motion / measurement model or a model bank configuration is invalid."""
+
+
+class TrackingError(InvalidInput):
+    """Arrays handed to the tracker have the wrong shape or are not finite."""
+
+
+class ClassificationError(InvalidInput):
+    """A classifier option or its inputs (behaviours, relation, evidence) are invalid."""
+
+
+class ScenarioError(InvalidInput):
+    """A scenario generator was asked for something it cannot simulate."""
