@@ -67,3 +67,19 @@ class StaleReport(CredalError):  # noqa: N818 - a state of the input, named as t
             f"report of sensor {sensor!r} at time {time!r} is not newer than its previous "
             f"report at time {last_time!r}"
         )
+
+
+class ModelConfigError(InvalidInput):
+    """A motion / measurement model or a model bank configuration is invalid."""
+
+
+class TrackingError(InvalidInput):
+    """Arrays handed to the tracker have the wrong shape or are not finite."""
+
+
+class ClassificationError(InvalidInput):
+    """A classifier option or its inputs (behaviours, relation, evidence) are invalid."""
+
+
+class ScenarioError(InvalidInput):
+    """A scenario generator was asked for something it cannot simulate."""

@@ -1,0 +1,31 @@
+"""Local tracking from detections (ALGORITHMS.md §4): models, presets, the batched IMM."""
+
+from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState, IMMUpdate, IMMUpdater
+from core.tracking.initiator import two_point_initiation
+from core.tracking.models import (
+    LinearMeasurementModel,
+    ModelBank,
+    MotionModel,
+    acceleration_input,
+    constant_velocity,
+    input_matrix,
+    mode_transition_matrix,
+    speed_model,
+)
+
+__all__ = [
+    "IMMPrediction",
+    "IMMPredictor",
+    "IMMState",
+    "IMMUpdate",
+    "IMMUpdater",
+    "LinearMeasurementModel",
+    "ModelBank",
+    "MotionModel",
+    "acceleration_input",
+    "constant_velocity",
+    "input_matrix",
+    "mode_transition_matrix",
+    "speed_model",
+    "two_point_initiation",
+]
