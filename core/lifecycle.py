@@ -60,6 +60,7 @@ class StatusReason(enum.StrEnum):
     GATE_EMPTINESS = "gate_emptiness"
     PHANTOM_EXPIRED = "phantom_expired"
     MERGED_INTO_PHANTOM = "merged_into_phantom"
+    DUPLICATE = "duplicate"
 
 
 def _check_probability(value: float, name: str, *, open_interval: bool = True) -> None:

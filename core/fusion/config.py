@@ -54,9 +54,9 @@ class TrackManagement:
     """
 
     false_confirmation: float = 1e-3
-    true_deletion: float = 1e-2
+    true_deletion: float = 1e-3
     false_target_density: float = 1e-6
-    new_target_density: float = 1e-6
+    new_target_density: float = 1e-5
     termination_probability: float = 0.5
     gate_probability: float = 0.999
     min_points: int | None = None
@@ -110,6 +110,10 @@ class FusionConfig:
     classes : the class frame, or None for a session without classification.
     association_method, association_options, distance : track-to-track association
         (defaults of ALGORITHMS.md §3.7: ``denoeux``, gate probability 0.999, α = 1, ``sum``).
+    track_continuity : a report track that keeps the id under which its sensor
+        last reported a live fused track stays with it while it passes a loose χ²
+        gate (``sum`` distance, see ``engine.CONTINUITY_GATE_PROBABILITY``); only the rest
+        goes to the association method. Off, every report is associated afresh.
     state_fusion : how the sensors' latest estimates are combined.
     management : the track life cycle.
     """
@@ -122,6 +126,7 @@ class FusionConfig:
         default_factory=lambda: MappingProxyType({"gate_probability": 0.999, "alpha": 1.0})
     )
     distance: str = "sum"
+    track_continuity: bool = True
     state_fusion: StateFusion = StateFusion.COVARIANCE_INTERSECTION
     management: TrackManagement = field(default_factory=TrackManagement)
 

@@ -35,13 +35,14 @@ use the position components, so the densities of
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from scipy.stats import chi2
 
-from core.arrays import BoolArray, FloatArray
-from core.association import AssociationResult, associate
+from core.arrays import BoolArray, FloatArray, IntArray
+from core.association import associate
 from core.belief import MassFunction
 from core.errors import InvalidInput, StaleReport, TotalConflict
 from core.fusion.classes import ClassAssessment, accumulate_likelihoods, fuse_sensor_classes
@@ -61,6 +62,28 @@ from core.lifecycle import StatusReason, TrackStatus, gate_emptiness_factor, gat
 
 EXPORT_VERSION = 1
 LIVE = (TrackStatus.TENTATIVE, TrackStatus.CONFIRMED, TrackStatus.COASTING)
+CONTINUITY_GATE_PROBABILITY = 1.0 - 1e-9
+"""Gate of track continuity: a sensor's own track id is strong evidence, so the
+gate only catches a sensor that reuses an id for another object (not the
+1-in-1000 noise excursion a 0.999 gate rejects at every thousandth report)."""
+
+
+@dataclass(frozen=True)
+class Decision:
+    """One step's association by row (live fused track) and column (report track) index.
+
+    ``pairs`` holds (row, col, score, basis): basis ``"continuity"`` (the sensor
+    kept its track id; no method score) or ``"association"`` (the method's
+    score). ``scores`` is the method's matrix over ``matrix_rows × matrix_cols``.
+    """
+
+    method: str
+    pairs: list[tuple[int, int, float | None, str]]
+    new: list[int]
+    missed: list[int]
+    matrix_rows: IntArray
+    matrix_cols: IntArray
+    scores: FloatArray
 
 
 class SessionEngine:
@@ -93,11 +116,11 @@ class SessionEngine:
         t = float(report.time)
         live = [track for track in self.tracks if track.status in LIVE]
         states, covariances = self._fused_at(live, t)
-        result = self._associate(live, states, covariances, report)
+        decision = self._associate(live, states, covariances, report)
         terminated: list[FusedTrack] = []
         confirmed: list[FusedTrack] = []
 
-        for row, col in zip(result.pair_known, result.pair_incoming, strict=True):
+        for row, col, _, _ in decision.pairs:
             fused = live[row]
             was_tentative = fused.status is TrackStatus.TENTATIVE
             self._hit(
@@ -105,16 +128,13 @@ class SessionEngine:
             )
             if was_tentative and fused.status is TrackStatus.CONFIRMED:
                 confirmed.append(fused)
-        seen = (
-            self._seen_by(sensor.id, states[result.missed], live)
-            if len(result.missed)
-            else np.zeros(0, bool)
-        )
-        for row, visible in zip(result.missed, seen, strict=True):
+        missed = np.asarray(decision.missed, dtype=np.int64)
+        seen = self._seen_by(sensor.id, states[missed], live) if len(missed) else np.zeros(0, bool)
+        for row, visible in zip(missed, seen, strict=True):
             if visible:
                 self._miss(live[row], covariances[row], sensor.p_detect)
         created = [
-            self._start(reported, report) for reported in (report.tracks[i] for i in result.new)
+            self._start(reported, report) for reported in (report.tracks[i] for i in decision.new)
         ]
         self.tracks.extend(created)
         confirmed.extend(track for track in created if track.status is TrackStatus.CONFIRMED)
@@ -124,7 +144,8 @@ class SessionEngine:
         self.seq += 1
         self._manage(self.time, terminated)
         self._hand_over_to_phantoms(confirmed, terminated)
-        return self._result(report, result, live, terminated, explain)
+        self._absorb_duplicates(terminated)
+        return self._result(report, decision, live, terminated, explain)
 
     # ------------------------------------------------------------ checks
     def _check(self, report: TrackReport) -> SensorSpec:
@@ -210,23 +231,86 @@ class SessionEngine:
         states: FloatArray,
         covariances: FloatArray,
         report: TrackReport,
-    ) -> AssociationResult:
-        incoming_states = np.array([track.state for track in report.tracks]).reshape(
-            -1, self.config.dim
-        )
+    ) -> Decision:
+        """Continuity first (when on), then the session's method on what is left."""
+        dim = self.config.dim
+        incoming_states = np.array([track.state for track in report.tracks]).reshape(-1, dim)
         incoming_covariances = np.array([track.covariance for track in report.tracks]).reshape(
-            -1, self.config.dim, self.config.dim
+            -1, dim, dim
+        )
+        kept = self._continuity(live, states, covariances, report)
+        rows = np.array(
+            [row for row in range(len(live)) if row not in kept.values()], dtype=np.int64
+        )
+        cols = np.array(
+            [col for col in range(len(report.tracks)) if col not in kept], dtype=np.int64
         )
         known_classes, incoming_classes = self._association_classes(live, report)
-        return associate(
-            (states, covariances),
-            (incoming_states, incoming_covariances),
+        result = associate(
+            (states[rows], covariances[rows]),
+            (incoming_states[cols], incoming_covariances[cols]),
             self.config.association_method,
             self.config.association_options,
             self.config.distance,
-            known_classes,
-            incoming_classes,
+            None if known_classes is None else [known_classes[row] for row in rows],
+            None if incoming_classes is None else [incoming_classes[col] for col in cols],
         )
+        pairs: list[tuple[int, int, float | None, str]] = [
+            (row, col, None, "continuity") for col, row in kept.items()
+        ]
+        pairs += [
+            (int(rows[k]), int(cols[i]), float(score), "association")
+            for k, i, score in zip(
+                result.pair_known, result.pair_incoming, result.pair_score, strict=True
+            )
+        ]
+        pairs.sort(key=lambda pair: (pair[0], pair[1]))
+        return Decision(
+            method=result.method,
+            pairs=pairs,
+            new=[int(cols[i]) for i in result.new],
+            missed=[int(rows[k]) for k in result.missed],
+            matrix_rows=rows,
+            matrix_cols=cols,
+            scores=result.scores.dense()
+            if len(rows) and len(cols)
+            else np.zeros((len(rows), len(cols))),
+        )
+
+    def _continuity(
+        self,
+        live: list[FusedTrack],
+        states: FloatArray,
+        covariances: FloatArray,
+        report: TrackReport,
+    ) -> dict[int, int]:
+        """Report tracks the sensor keeps reporting under the id it gave a fused track.
+
+        ``{report column: fused row}`` for every report track whose (sensor, id)
+        is the latest estimate of a live fused track and still passes the χ²
+        gate (:data:`CONTINUITY_GATE_PROBABILITY`) on the ``sum`` distance;
+        empty when continuity is off.
+        """
+        if not self.config.track_continuity:
+            return {}
+        bound = {
+            fused.estimates[report.sensor].track: row
+            for row, fused in enumerate(live)
+            if report.sensor in fused.estimates
+        }
+        kept: dict[int, int] = {}
+        gate = float(chi2.ppf(CONTINUITY_GATE_PROBABILITY, self.config.dim))
+        for col, reported in enumerate(report.tracks):
+            row = bound.get(reported.id)
+            if row is None:
+                continue
+            innovation = reported.state - states[row]
+            distance = float(
+                innovation @ np.linalg.solve(covariances[row] + reported.covariance, innovation)
+            )
+            if distance <= gate:
+                kept[col] = row
+        return kept
 
     def _association_classes(
         self, live: list[FusedTrack], report: TrackReport
@@ -419,28 +503,60 @@ class SessionEngine:
     def _hand_over_to_phantoms(self, fresh: list[FusedTrack], terminated: list[FusedTrack]) -> None:
         """A track confirmed in this step that matches a phantom gives it its estimates ([HZ] §5.1)."""
         phantoms = [track for track in self.tracks if track.status is TrackStatus.PHANTOM]
-        if not phantoms or not fresh or self.time is None:
+        self._merge(phantoms, fresh, StatusReason.MERGED_INTO_PHANTOM, terminated)
+
+    def _absorb_duplicates(self, terminated: list[FusedTrack]) -> None:
+        """A tentative track that duplicates an established track of other sensors joins it.
+
+        A sensor's first report of an object is associated by the method's gate;
+        when that first decision misses (a 1 − gate_probability event per true
+        pair), the sensor starts a second fused track of the same object. Such a
+        tentative track, gated against a confirmed or coasting track that has
+        no estimate from its sensors, is merged into it.
+        """
+        tentative = [track for track in self.tracks if track.status is TrackStatus.TENTATIVE]
+        established = [
+            track
+            for track in self.tracks
+            if track.status in (TrackStatus.CONFIRMED, TrackStatus.COASTING)
+        ]
+        self._merge(established, tentative, StatusReason.DUPLICATE, terminated)
+
+    def _merge(
+        self,
+        keepers: list[FusedTrack],
+        newcomers: list[FusedTrack],
+        reason: StatusReason,
+        terminated: list[FusedTrack],
+    ) -> None:
+        """Gate ``newcomers`` against ``keepers`` (GNN, ``sum`` distance); merge disjoint pairs.
+
+        The keeper keeps its id, takes the newcomer's estimates and becomes
+        (or stays) confirmed; the newcomer is terminated with ``reason``.
+        """
+        if not keepers or not newcomers or self.time is None:
             return
-        phantom_states, phantom_covariances = self._fused_at(phantoms, self.time)
-        fresh_states, fresh_covariances = self._fused_at(fresh, self.time)
+        keeper_states, keeper_covariances = self._fused_at(keepers, self.time)
+        newcomer_states, newcomer_covariances = self._fused_at(newcomers, self.time)
         decision = associate(
-            (phantom_states, phantom_covariances),
-            (fresh_states, fresh_covariances),
+            (keeper_states, keeper_covariances),
+            (newcomer_states, newcomer_covariances),
             "gnn",
             {"gate_probability": self.config.management.gate_probability},
             "sum",
         )
         for row, col in zip(decision.pair_known, decision.pair_incoming, strict=True):
-            phantom, newcomer = phantoms[row], fresh[col]
-            phantom.estimates.update(newcomer.estimates)
-            phantom.status, phantom.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
-            phantom.phantom_since = None
-            phantom.score = max(phantom.score, newcomer.score)
-            phantom.hits += newcomer.hits
-            newcomer.status, newcomer.reason = (
-                TrackStatus.TERMINATED,
-                StatusReason.MERGED_INTO_PHANTOM,
-            )
+            keeper, newcomer = keepers[row], newcomers[col]
+            if set(keeper.estimates) & set(newcomer.estimates):
+                continue  # a sensor that reports both as distinct objects knows better
+            keeper.estimates.update(newcomer.estimates)
+            if keeper.status is not TrackStatus.CONFIRMED:
+                keeper.status, keeper.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
+            keeper.phantom_since = None
+            keeper.empty_gate_probability = 1.0
+            keeper.score = max(keeper.score, newcomer.score)
+            keeper.hits += newcomer.hits
+            newcomer.status, newcomer.reason = TrackStatus.TERMINATED, reason
             terminated.append(newcomer)
 
     # ------------------------------------------------------------ output
@@ -452,7 +568,7 @@ class SessionEngine:
     def _result(
         self,
         report: TrackReport,
-        decision: AssociationResult,
+        decision: Decision,
         live: list[FusedTrack],
         terminated: list[FusedTrack],
         explain: bool,
@@ -491,18 +607,16 @@ class SessionEngine:
         association = AssociationView(
             method=decision.method,
             pairs=tuple(
-                (live[row].id, report.tracks[col].id, float(score))
-                for row, col, score in zip(
-                    decision.pair_known, decision.pair_incoming, decision.pair_score, strict=True
-                )
+                (live[row].id, report.tracks[col].id, score, basis)
+                for row, col, score, basis in decision.pairs
             ),
-            new=tuple(track.id for track in (report.tracks[i] for i in decision.new)),
+            new=tuple(report.tracks[col].id for col in decision.new),
             missed=tuple(live[row].id for row in decision.missed),
             matrix=(
                 (
-                    tuple(track.id for track in live),
-                    tuple(track.id for track in report.tracks),
-                    decision.scores.dense(),
+                    tuple(live[row].id for row in decision.matrix_rows),
+                    tuple(report.tracks[col].id for col in decision.matrix_cols),
+                    decision.scores,
                 )
                 if explain
                 else None

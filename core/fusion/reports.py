@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from core.arrays import FloatArray
 from core.belief import MassFunction
@@ -62,12 +63,15 @@ class FusedTrackView:
 class AssociationView:
     """The association decision of a step, by ids.
 
-    ``matrix`` (rows: fused ids, cols: report track ids, values) is filled
-    only when an explanation is asked for.
+    ``pairs`` are (fused id, report track id, score, basis): basis
+    ``"continuity"`` when the sensor kept reporting the track under the id it
+    gave it (score None), ``"association"`` when the method decided (its score).
+    ``matrix`` (rows: fused ids, cols: report track ids, values: the method's
+    scores over what it decided) is filled only when an explanation is asked for.
     """
 
     method: str
-    pairs: tuple[tuple[str, str, float], ...]
+    pairs: tuple[tuple[str, str, float | None, str], ...]
     new: tuple[str, ...]
     missed: tuple[str, ...]
     matrix: tuple[tuple[str, ...], tuple[str, ...], FloatArray] | None = None
@@ -82,3 +86,61 @@ class StepResult:
     sensor: str
     tracks: tuple[FusedTrackView, ...]
     association: AssociationView
+
+
+def step_to_plain(step: StepResult) -> dict[str, Any]:
+    """A step result as plain JSON-ready data, with the wire contract's field names."""
+    return {
+        "seq": step.seq,
+        "time": step.time,
+        "sensor": step.sensor,
+        "tracks": [_track_to_plain(track) for track in step.tracks],
+        "association": {
+            "method": step.association.method,
+            "pairs": [
+                {"fused": fused, "track": track, "score": score, "basis": basis}
+                for fused, track, score, basis in step.association.pairs
+            ],
+            "new": list(step.association.new),
+            "missed": list(step.association.missed),
+            "matrix": None
+            if step.association.matrix is None
+            else {
+                "rows": list(step.association.matrix[0]),
+                "cols": list(step.association.matrix[1]),
+                "values": step.association.matrix[2].tolist(),
+            },
+        },
+    }
+
+
+def _track_to_plain(track: FusedTrackView) -> dict[str, Any]:
+    return {
+        "id": track.id,
+        "status": track.status.value,
+        "state": track.state.tolist(),
+        "covariance": track.covariance.tolist(),
+        "sources": [{"sensor": s.sensor, "track": s.track, "time": s.time} for s in track.sources],
+        "classification": None
+        if track.classification is None
+        else _class_to_plain(track.classification),
+        "score": track.score,
+        "reason": track.reason.value,
+    }
+
+
+def _class_to_plain(assessment: ClassAssessment) -> dict[str, Any]:
+    if assessment.mass is None:
+        return {"state": assessment.state.value, "conflict": assessment.conflict, "decision": None}
+    labels = assessment.mass.frame.labels
+    return {
+        "state": assessment.state.value,
+        "mass": [
+            {"set": list(subset), "mass": mass} for subset, mass in assessment.mass.focal_sets()
+        ],
+        "pignistic": dict(zip(labels, assessment.pignistic.tolist(), strict=True)),
+        "belief": dict(zip(labels, assessment.belief.tolist(), strict=True)),
+        "plausibility": dict(zip(labels, assessment.plausibility.tolist(), strict=True)),
+        "conflict": assessment.conflict,
+        "decision": assessment.decision,
+    }
