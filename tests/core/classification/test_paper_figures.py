@@ -109,3 +109,17 @@ def test_fig_20_literal_total_conflict_on_another_noise_realisation() -> None:
     assert all(status == "total_conflict" for status in statuses[first:])
     assert all(c.pignistic is None for c in replay.credal[first:])
     assert replay.credal[first - 1].decision() == "sportsman"
+
+
+def test_fig_22_23_walking_again_after_the_stop() -> None:
+    # λ = 0.9 both ways. Walking is a shared behaviour: cumulative discounting forgets the
+    # rambler evidence and drifts back to doubt (Fig 22); instantaneous keeps it (Fig 23).
+    scenario = pedestrian_scenario(seed=0, walk_again_at=240)
+    preset = pedestrian()
+    cumulative, instantaneous = (
+        replay_single_target(scenario, 1, preset, {"discount": discount, "reliability": 0.9})
+        for discount in ("cumulative", "instantaneous")
+    )
+    assert cumulative.pignistic()[cumulative.index(239), RAMBLER] > 0.99  # still stopped
+    assert abs(cumulative.pignistic()[cumulative.index(299), RAMBLER] - 0.5) < 0.05
+    assert instantaneous.pignistic()[instantaneous.index(299), RAMBLER] > 0.99
