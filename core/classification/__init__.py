@@ -1,5 +1,18 @@
-"""Kinematic classification of tracks ([MTT] §5)."""
+"""Kinematic classification of tracks: credal ([MTT] §5.2) and Bayesian baseline (§5.1)."""
 
+from core.classification.bayesian import (
+    BayesianClassification,
+    BayesianClassifier,
+    class_given_behaviour,
+)
 from core.classification.behaviours import BehaviourModels
+from core.classification.credal import CredalClassification, CredalClassifier
 
-__all__ = ["BehaviourModels"]
+__all__ = [
+    "BayesianClassification",
+    "BayesianClassifier",
+    "BehaviourModels",
+    "CredalClassification",
+    "CredalClassifier",
+    "class_given_behaviour",
+]

@@ -14,8 +14,9 @@ Conventions shared by the generators:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TypeAlias
 
 import numpy as np
 
@@ -25,6 +26,15 @@ from core.tracking.models import POSITION_INDICES, input_matrix
 
 CLUTTER = -1
 """Target id of a clutter (false alarm) detection."""
+
+Region: TypeAlias = tuple[tuple[float, float], tuple[float, float]]
+"""An axis-aligned rectangle ``((x_min, x_max), (y_min, y_max))``."""
+
+
+def inside(region: Region, position: FloatArray) -> bool:
+    """Whether ``position`` (x, y) lies in ``region`` (bounds included)."""
+    (x0, x1), (y0, y1) = region
+    return bool(x0 <= position[0] <= x1 and y0 <= position[1] <= y1)
 
 
 @dataclass(frozen=True)
@@ -118,6 +128,10 @@ class Scenario:
         In time order; several scans per step when several sensors observe.
     measurement_noise : ndarray, shape (2, 2)
         The R used to simulate the detections.
+    sensor_regions : dict
+        What each simulated sensor sees, as an axis-aligned rectangle
+        ``{sensor: ((x_min, x_max), (y_min, y_max))}``; empty when one sensor
+        sees everything.
     """
 
     name: str
@@ -128,6 +142,7 @@ class Scenario:
     manoeuvres: tuple[Manoeuvre, ...]
     scans: tuple[Scan, ...]
     measurement_noise: FloatArray
+    sensor_regions: Mapping[str, Region] = field(default_factory=dict)
 
     def truth(self, target_id: int) -> TargetTruth:
         """The truth of one target."""
@@ -183,7 +198,7 @@ def observe(
     sensor: str = "sensor",
     p_detect: float = 1.0,
     clutter_rate: float = 0.0,
-    region: tuple[tuple[float, float], tuple[float, float]] | None = None,
+    region: Region | None = None,
     visible: Callable[[FloatArray], bool] | None = None,
 ) -> list[Scan]:
     """Simulate one sensor: noisy positions with probability ``p_detect``, plus clutter.
@@ -199,7 +214,9 @@ def observe(
     """
     if clutter_rate > 0.0 and region is None:
         raise ScenarioError("clutter needs a region")
-    chol = np.linalg.cholesky(measurement_noise)
+    # Square root of a positive semi-definite R (R = 0 gives noise-free detections).
+    eigenvalues, eigenvectors = np.linalg.eigh(np.asarray(measurement_noise, dtype=np.float64))
+    chol = eigenvectors * np.sqrt(np.clip(eigenvalues, 0.0, None))
     pos = list(POSITION_INDICES)
     scans: list[Scan] = []
     for step in range(n_steps):

@@ -244,11 +244,19 @@ class IMMPredictor:
         # An unreachable mode (c̄_j = 0) keeps its own state: its weight is zero anyway.
         identity = np.broadcast_to(np.eye(self.bank.n_models), mixing.shape)
         mixing = np.where(reachable[:, None, :], mixing, identity)
-        means = np.einsum("tij,tin->tjn", mixing, state.means)
-        spread = state.means[:, :, None, :] - means[:, None, :, :]  # (T, i, j, n)
-        covariances = np.einsum("tij,tikl->tjkl", mixing, state.covariances) + np.einsum(
-            "tijk,tijl->tjkl", mixing[..., None] * spread, spread
-        )
+        # Σ_i ω_ij (P_i + (x_i − x⁰_j)(x_i − x⁰_j)ᵀ) = Σ_i ω_ij (P_i + y_i y_iᵀ) − ȳ_j ȳ_jᵀ with
+        # y = x − c centred on the track's combined mean c: the spreads are small, so the
+        # expansion loses nothing, and every sum over i is one batched matmul.
+        tracks, models, n = state.means.shape
+        weights_t = np.swapaxes(mixing, 1, 2)  # (T, j, i)
+        centre = np.einsum("ti,tin->tn", state.mode_probabilities, state.means)
+        centred = state.means - centre[:, None, :]
+        mixed_centred = weights_t @ centred  # ȳ_j, (T, j, n)
+        second_moment = state.covariances + centred[:, :, :, None] * centred[:, :, None, :]
+        covariances = (weights_t @ second_moment.reshape(tracks, models, n * n)).reshape(
+            tracks, models, n, n
+        ) - mixed_centred[:, :, :, None] * mixed_centred[:, :, None, :]
+        means = mixed_centred + centre[:, None, :]
         return means, covariances, log_predicted
 
     def predict(self, state: IMMState) -> IMMPrediction:
@@ -322,7 +330,7 @@ class IMMUpdater:
         s_inv = np.linalg.inv(s)
         p_ht = prediction.covariances @ self._h_t  # (T, r, n, q)
         gain = p_ht @ s_inv
-        means = prediction.means + np.einsum("trnq,trq->trn", gain, innovations)
+        means = prediction.means + (gain @ innovations[..., None])[..., 0]
         i_kh = self._identity - gain @ self._h
         covariances = i_kh @ prediction.covariances @ np.swapaxes(i_kh, -1, -2) + (
             gain @ self._r @ np.swapaxes(gain, -1, -2)
@@ -330,7 +338,7 @@ class IMMUpdater:
         covariances = 0.5 * (covariances + np.swapaxes(covariances, -1, -2))
 
         # [MTT] eq 18 in the log domain.
-        distances = np.einsum("trp,trpq,trq->tr", innovations, s_inv, innovations)
+        distances = np.sum((s_inv @ innovations[..., None])[..., 0] * innovations, axis=-1)
         _, log_det = np.linalg.slogdet(s)
         log_likelihoods = -0.5 * (distances + log_det + q * _LOG_2PI)
 

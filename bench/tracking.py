@@ -1,0 +1,118 @@
+"""One IMM step (predict + update) with the 13-model aircraft bank: batched vs filterpy.
+
+For 10, 100 and 1000 tracks, times one step of :mod:`core.tracking.imm` on all
+tracks at once and, in the same run, filterpy's ``IMMEstimator`` looped over
+the same tracks with the same measurements. Prints the machine. Floor
+(ALGORITHMS.md / issue 4): 1000 tracks ≤ 50 ms per step.
+
+Run: ``.venv/bin/python bench/tracking.py`` (or ``make bench``).
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import statistics
+import time
+from collections.abc import Callable
+
+import numpy as np
+from filterpy.kalman import IMMEstimator, KalmanFilter
+
+from core.tracking import IMMPredictor, IMMState, IMMUpdater, ModelBank, two_point_initiation
+from core.tracking.presets import aircraft
+
+SEED = 20260101
+TRACK_COUNTS = (10, 100, 1000)
+FLOOR_MS = 50.0
+
+
+def _cpu_model() -> str:
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as cpuinfo:
+            for line in cpuinfo:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def _median_ms(run: Callable[[], object], repeats: int) -> float:
+    samples = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run()
+        samples.append((time.perf_counter() - start) * 1e3)
+    return statistics.median(samples)
+
+
+def _filterpy_estimators(bank: ModelBank, state: IMMState) -> list[IMMEstimator]:
+    estimators = []
+    for t in range(state.n_tracks):
+        filters = []
+        for j, model in enumerate(bank.models):
+            kf = KalmanFilter(dim_x=4, dim_z=2)
+            kf.x = state.means[t, j].reshape(4, 1).copy()
+            kf.P = state.covariances[t, j].copy()
+            kf.F = model.transition.copy()
+            kf.Q = model.process_noise.copy()
+            kf.B = model.input_offset.reshape(4, 1).copy()
+            kf.H = bank.measurement.matrix.copy()
+            kf.R = bank.measurement.noise_covariance.copy()
+            filters.append(kf)
+        estimators.append(
+            IMMEstimator(filters, state.mode_probabilities[t].copy(), bank.mode_transition.copy())
+        )
+    return estimators
+
+
+def main() -> None:
+    bank = aircraft().bank
+    predictor, updater = IMMPredictor(bank), IMMUpdater(bank)
+    rng = np.random.default_rng(SEED)
+    print(f"machine: {os.cpu_count()} logical cores, {_cpu_model()}")
+    print(f"python {platform.python_version()}, numpy {np.__version__}; seed {SEED}")
+    print("one IMM step (mixing + predict + update), 13-model aircraft bank, median ms")
+    print(f"{'tracks':>7} {'batched':>10} {'filterpy':>10} {'ratio':>8} {'per track (µs)':>15}")
+    batched_1000 = float("nan")
+    for tracks in TRACK_COUNTS:
+        first = rng.uniform(-5e4, 5e4, (tracks, 2))
+        second = first + rng.uniform(-250, 250, (tracks, 2))
+        state = two_point_initiation(bank, first, second, 1.0)
+        # Warm the filter up a few steps so the mode probabilities are not uniform.
+        for _ in range(5):
+            z = state.combined()[0][:, [0, 2]] + rng.normal(0, 0.45, (tracks, 2))
+            state = updater.update(predictor.predict(state), z).state
+        z = state.combined()[0][:, [0, 2]] + rng.normal(0, 0.45, (tracks, 2))
+        current = state
+
+        def batched_step(current: IMMState = current, z: np.ndarray = z) -> object:
+            return updater.update(predictor.predict(current), z)
+
+        batched = _median_ms(batched_step, repeats=30 if tracks < 1000 else 15)
+        estimators = _filterpy_estimators(bank, state)
+        columns = [z[t].reshape(2, 1) for t in range(tracks)]
+
+        def filterpy_step(
+            estimators: list[IMMEstimator] = estimators, columns: list[np.ndarray] = columns
+        ) -> object:
+            unit = np.ones((1, 1))
+            for estimator, measurement in zip(estimators, columns, strict=True):
+                estimator.predict(u=unit)
+                estimator.update(measurement)
+            return estimators
+
+        looped = _median_ms(filterpy_step, repeats=5 if tracks < 1000 else 3)
+        if tracks == 1000:
+            batched_1000 = batched
+        print(
+            f"{tracks:>7} {batched:>10.2f} {looped:>10.1f} {looped / batched:>7.0f}x "
+            f"{1e3 * batched / tracks:>15.1f}"
+        )
+    verdict = "meets" if batched_1000 <= FLOOR_MS else "MISSES"
+    print(f"floor: 1000 tracks <= {FLOOR_MS:.0f} ms per step -> {verdict} ({batched_1000:.2f} ms)")
+
+
+if __name__ == "__main__":
+    main()

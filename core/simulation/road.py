@@ -1,0 +1,156 @@
+"""Road scenes of [HZ] §6: ``accelerating`` (Fig 5) and ``overtaking`` (Fig 6).
+
+Coordinates are relative to our vehicle: x lateral (m, right positive), y
+ahead (m). ΔT = 0.1 s. Truth by [MTT] eq 24 (piecewise constant
+accelerations) with a small process noise; detections with R = 0.1 I.
+
+``accelerating``
+    One forward sensor seeing ``x ∈ [−10, 10]``, ``y ∈ [0, 80]``. Vehicle 1
+    (left lane, x = −1.75) pulls away gradually (+1 m/s); vehicle 2 (right
+    lane, x = +1.75) pulls away at +0.5 m/s, then from step 40 accelerates
+    at ``acceleration`` m/s² (6 by default, "deliberately chosen to exceed
+    the expected maximum acceleration for the tracker"). Poisson clutter of
+    mean ``clutter_rate`` (3, as in [HZ]) per frame, uniform over the sensor's
+    area.
+``overtaking``
+    A rear sensor sees ``y ∈ [−40, −5]`` and a front sensor ``y ∈ [5, 60]``
+    (both ``x ∈ [−10, 10]``); ``|y| < 5`` beside us is the blind zone.
+    Vehicle 1 (x = −3.5) overtakes at +4 m/s from y = −30: it leaves the rear
+    sensor, crosses the blind zone (2.5 s) and re-appears in the front
+    sensor. Vehicle 2 (x = 0) is ahead at y = 40 and we close in on it at
+    1 m/s. Each sensor has its own scans and Poisson clutter.
+
+**Reading:** [HZ] gives no numbers but the clutter rate; positions, speeds,
+sensor extents and ΔT are ours. The rectangles are simple coverage areas
+for simulation (``Scenario.sensor_regions``), not the service's fields of view.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from core.arrays import FloatArray
+from core.simulation.scenario import (
+    Manoeuvre,
+    Region,
+    Scan,
+    Scenario,
+    TargetTruth,
+    inside,
+    observe,
+    propagate,
+)
+
+TIME_INTERVAL = 0.1
+MEASUREMENT_VARIANCE = 0.1
+PROCESS_NOISE = 0.01
+
+
+def _coverage(region: Region) -> Callable[[FloatArray], bool]:
+    def visible(position: FloatArray) -> bool:
+        return inside(region, position)
+
+    return visible
+
+
+def accelerating_scenario(
+    seed: int = 0,
+    *,
+    n_steps: int = 80,
+    acceleration: float = 6.0,
+    clutter_rate: float = 3.0,
+) -> Scenario:
+    """Build ``accelerating`` (see the module docstring)."""
+    rng = np.random.default_rng(seed)
+    region: Region = ((-10.0, 10.0), (0.0, 80.0))
+    window = Manoeuvre(2, 40, n_steps - 1, "accelerate", (0.0, acceleration))
+    inputs = np.zeros((n_steps, 2))
+    inputs[window.first_step :] = window.value
+    truths = (
+        TargetTruth(
+            1,
+            0,
+            propagate(
+                (-1.75, 0.0, 15.0, 1.0), np.zeros((n_steps, 2)), TIME_INTERVAL, PROCESS_NOISE, rng
+            ),
+        ),
+        TargetTruth(
+            2, 0, propagate((1.75, 0.0, 15.0, 0.5), inputs, TIME_INTERVAL, PROCESS_NOISE, rng)
+        ),
+    )
+    noise = MEASUREMENT_VARIANCE * np.eye(2)
+    scans = observe(
+        truths,
+        n_steps,
+        TIME_INTERVAL,
+        noise,
+        rng,
+        sensor="front",
+        clutter_rate=clutter_rate,
+        region=region,
+        visible=lambda position: inside(region, position),
+    )
+    return Scenario(
+        name="accelerating",
+        seed=seed,
+        time_interval=TIME_INTERVAL,
+        n_steps=n_steps,
+        truths=truths,
+        manoeuvres=(window,),
+        scans=tuple(scans),
+        measurement_noise=noise,
+        sensor_regions={"front": region},
+    )
+
+
+def overtaking_scenario(
+    seed: int = 0,
+    *,
+    n_steps: int = 120,
+    clutter_rate: float = 1.0,
+) -> Scenario:
+    """Build ``overtaking`` (see the module docstring)."""
+    rng = np.random.default_rng(seed)
+    regions: dict[str, Region] = {
+        "rear": ((-10.0, 10.0), (-40.0, -5.0)),
+        "front": ((-10.0, 10.0), (5.0, 60.0)),
+    }
+    zeros = np.zeros((n_steps, 2))
+    truths = (
+        TargetTruth(
+            1, 0, propagate((-3.5, 0.0, -30.0, 4.0), zeros, TIME_INTERVAL, PROCESS_NOISE, rng)
+        ),
+        TargetTruth(
+            2, 0, propagate((0.0, 0.0, 40.0, -1.0), zeros, TIME_INTERVAL, PROCESS_NOISE, rng)
+        ),
+    )
+    noise = MEASUREMENT_VARIANCE * np.eye(2)
+    per_sensor: list[list[Scan]] = []
+    for sensor, region in regions.items():
+        per_sensor.append(
+            observe(
+                truths,
+                n_steps,
+                TIME_INTERVAL,
+                noise,
+                rng,
+                sensor=sensor,
+                clutter_rate=clutter_rate,
+                region=region,
+                visible=_coverage(region),
+            )
+        )
+    scans = tuple(scan for step_scans in zip(*per_sensor, strict=True) for scan in step_scans)
+    return Scenario(
+        name="overtaking",
+        seed=seed,
+        time_interval=TIME_INTERVAL,
+        n_steps=n_steps,
+        truths=truths,
+        manoeuvres=(),
+        scans=scans,
+        measurement_noise=noise,
+        sensor_regions=regions,
+    )
