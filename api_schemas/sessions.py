@@ -1,0 +1,63 @@
+"""Session lifecycle: creation answer, summary, listing."""
+
+from __future__ import annotations
+
+from datetime import datetime
+
+from api_schemas.base import FiniteFloat, Identifier, WireModel
+from api_schemas.config import SessionConfig
+
+
+class SessionCreated(WireModel):
+    """``201`` of ``POST /v1/sessions``: the id, the bearer token (shown once), the resolved config."""
+
+    id: str
+    token: str
+    config: SessionConfig
+    created_at: datetime
+
+
+class SensorActivity(WireModel):
+    """What the session has received from one sensor."""
+
+    id: Identifier
+    inputs: int
+    last_time: FiniteFloat | None
+
+
+class TrackCounts(WireModel):
+    """Fused tracks by status."""
+
+    tentative: int
+    confirmed: int
+    coasting: int
+    phantom: int
+    terminated: int
+
+
+class SessionSummary(WireModel):
+    """``GET /v1/sessions/{sid}``."""
+
+    id: str
+    name: str | None
+    created_at: datetime
+    config: SessionConfig
+    seq: int
+    time: FiniteFloat | None
+    sensors: list[SensorActivity]
+    tracks: TrackCounts
+
+
+class SessionListItem(WireModel):
+    """One entry of ``GET /v1/sessions``."""
+
+    id: str
+    name: str | None
+    created_at: datetime
+    seq: int
+
+
+class SessionList(WireModel):
+    """``GET /v1/sessions`` (admin)."""
+
+    sessions: list[SessionListItem]
