@@ -24,6 +24,9 @@ lint: $(STAMP)
 test: lint
 	$(BIN)/python -m pytest -q
 
+openapi: $(STAMP)
+	$(BIN)/python -m app.openapi openapi.json
+
 bench: $(STAMP)
 	@for b in bench/*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done
 
