@@ -26,6 +26,7 @@ test: lint
 
 openapi: $(STAMP)
 	$(BIN)/python -m app.openapi openapi.json
+	$(BIN)/python -m app.asyncapi docs/asyncapi.yaml
 
 bench: $(STAMP)
 	@for b in bench/*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done
