@@ -8,6 +8,7 @@ edge instead of reaching the algorithms.
 
 from __future__ import annotations
 
+from datetime import datetime
 from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field, StringConstraints
@@ -30,6 +31,9 @@ Label = Annotated[str, StringConstraints(min_length=1, max_length=64)]
 
 Identifier = Annotated[str, StringConstraints(min_length=1, max_length=64)]
 """A sensor, track or session identifier."""
+
+Timestamp = Annotated[datetime, Field(strict=False)]
+"""A UTC timestamp (ISO 8601 on the wire; parsed from text even in strict models)."""
 
 MAX_CLASSES = 20
 """Class frames have at most 20 labels (ALGORITHMS.md §1)."""

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from datetime import datetime
 from typing import Annotated, Literal
 
 from pydantic import Field
 
-from api_schemas.base import WireModel
+from api_schemas.base import Timestamp, WireModel
 from api_schemas.reports import DetectionReport, TrackReport
 
 
@@ -16,7 +15,7 @@ class TracksEvent(WireModel):
 
     type: Literal["tracks"]
     seq: int
-    received_at: datetime
+    received_at: Timestamp
     report: TrackReport
 
 
@@ -25,7 +24,7 @@ class DetectionsEvent(WireModel):
 
     type: Literal["detections"]
     seq: int
-    received_at: datetime
+    received_at: Timestamp
     report: DetectionReport
 
 

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-from datetime import datetime
-
-from api_schemas.base import FiniteFloat, Identifier, WireModel
+from api_schemas.base import FiniteFloat, Identifier, Timestamp, WireModel
 from api_schemas.config import SessionConfig
 
 
@@ -14,7 +12,7 @@ class SessionCreated(WireModel):
     id: str
     token: str
     config: SessionConfig
-    created_at: datetime
+    created_at: Timestamp
 
 
 class SensorActivity(WireModel):
@@ -40,7 +38,7 @@ class SessionSummary(WireModel):
 
     id: str
     name: str | None
-    created_at: datetime
+    created_at: Timestamp
     config: SessionConfig
     seq: int
     time: FiniteFloat | None
@@ -53,7 +51,7 @@ class SessionListItem(WireModel):
 
     id: str
     name: str | None
-    created_at: datetime
+    created_at: Timestamp
     seq: int
 
 
