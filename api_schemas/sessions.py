@@ -34,16 +34,17 @@ class TrackCounts(WireModel):
 
 
 class SessionSummary(WireModel):
-    """``GET /v1/sessions/{sid}``."""
+    """``GET /v1/sessions/{sid}``: config, sensors, counts, session time and latest seq."""
 
     id: str
     name: str | None
     created_at: Timestamp
+    last_input_at: Timestamp | None
     config: SessionConfig
     seq: int
     time: FiniteFloat | None
     sensors: list[SensorActivity]
-    tracks: TrackCounts
+    counts: TrackCounts
 
 
 class SessionListItem(WireModel):
