@@ -24,6 +24,10 @@ lint: $(STAMP)
 test: lint
 	$(BIN)/python -m pytest -q
 
+openapi: $(STAMP)
+	$(BIN)/python -m app.openapi openapi.json
+	$(BIN)/python -m app.asyncapi docs/asyncapi.yaml
+
 bench: $(STAMP)
 	@for b in bench/*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done
 

@@ -7,13 +7,36 @@ from collections.abc import Sequence
 
 import uvicorn
 
+from app.main import create_app
 from app.settings import get_settings
+from app.stores import parse_store_url
 
 
 def _serve(args: argparse.Namespace) -> int:
-    print(f"credal-fusion on http://{args.host}:{args.port}  (API docs: /docs)", flush=True)
-    uvicorn.run("app.main:create_app", factory=True, host=args.host, port=args.port)
+    parse_store_url(args.store)
+    settings = get_settings().model_copy(
+        update={"host": args.host, "port": args.port, "store": args.store}
+    )
+    print(
+        f"credal-fusion on http://{args.host}:{args.port}  (API docs: /docs, store: {args.store})",
+        flush=True,
+    )
+    uvicorn.run(
+        create_app(settings),
+        host=args.host,
+        port=args.port,
+        ws_max_size=settings.max_body_bytes,
+        proxy_headers=False,
+    )
     return 0
+
+
+def _store_url(text: str) -> str:
+    try:
+        parse_store_url(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+    return text
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -24,6 +47,12 @@ def build_parser() -> argparse.ArgumentParser:
     serve = commands.add_parser("serve", help="start the HTTP/WebSocket service")
     serve.add_argument("--host", default=settings.host)
     serve.add_argument("--port", type=int, default=settings.port)
+    serve.add_argument(
+        "--store",
+        type=_store_url,
+        default=settings.store,
+        help="memory | sqlite[:PATH] (default: %(default)s, or CREDAL_STORE)",
+    )
     serve.set_defaults(handler=_serve)
     return parser
 

@@ -2,18 +2,56 @@
 
 from __future__ import annotations
 
-from fastapi import FastAPI
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
 
-from app.routes import health
+from fastapi import FastAPI
+from fastapi.routing import APIRoute
+
+from app.errors import install_error_handlers
+from app.limits import BodySizeLimit
+from app.metrics import HttpMetrics, ServiceMetrics
+from app.openapi import install_openapi
+from app.routes import health, metrics, sessions
+from app.settings import Settings, get_settings
+from app.stores import open_store
 from core import __version__
 
 
-def create_app() -> FastAPI:
-    """Build the service application."""
+def operation_id(route: APIRoute) -> str:
+    """Operation ids are the route functions' names (they become SDK method names)."""
+    return route.name
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """Build the service application (the store opens in the lifespan, not here)."""
+    settings = settings or get_settings()
+    service_metrics = ServiceMetrics.create()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        store = open_store(settings.store)
+        app.state.store = store
+        service_metrics.sessions.set(store.count_sessions())
+        try:
+            yield
+        finally:
+            store.close()
+
     app = FastAPI(
         title="credal-fusion",
         version=__version__,
         description="Multi-sensor track fusion with belief-function association and classification.",
+        lifespan=lifespan,
+        generate_unique_id_function=operation_id,
     )
+    app.state.settings = settings
+    app.state.metrics = service_metrics
+    install_error_handlers(app)
     app.include_router(health.router)
+    app.include_router(metrics.router)
+    app.include_router(sessions.router)
+    app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
+    app.add_middleware(HttpMetrics, metrics=service_metrics)
+    install_openapi(app)
     return app

@@ -1,10 +1,19 @@
-"""Service settings, read from the environment with the ``CREDAL_`` prefix."""
+"""Service settings, read from the environment with the ``CREDAL_`` prefix.
+
+Each limit is named after its setting; a breach answers a 4xx whose
+``limit`` member is that name (``max_body_bytes`` ↔ ``CREDAL_MAX_BODY_BYTES``).
+"""
 
 from __future__ import annotations
 
 from functools import lru_cache
 
+from pydantic import Field, SecretStr
 from pydantic_settings import BaseSettings, SettingsConfigDict
+
+from api_schemas.base import MAX_CLASSES
+
+DEFAULT_STORE = "sqlite:data/credal-fusion.db"
 
 
 class Settings(BaseSettings):
@@ -14,6 +23,18 @@ class Settings(BaseSettings):
 
     host: str = "127.0.0.1"
     port: int = 8000
+    store: str = Field(DEFAULT_STORE, description="memory | sqlite[:PATH]")
+    admin_token: SecretStr | None = Field(
+        None, description="opens every session and the admin routes"
+    )
+
+    max_body_bytes: int = Field(4 * 1024 * 1024, ge=1024)
+    max_tracks_per_input: int = Field(2000, ge=1, description="tracks or detections in one input")
+    max_sensors: int = Field(64, ge=1)
+    max_classes: int = Field(MAX_CLASSES, ge=1, le=MAX_CLASSES)
+    max_sessions: int = Field(1000, ge=1)
+    session_idle_seconds: float = Field(3600.0, ge=0.0, description="0: sessions never expire")
+    snapshot_every: int = Field(100, ge=1, description="snapshot the engine every N inputs")
 
 
 @lru_cache

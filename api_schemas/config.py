@@ -1,0 +1,256 @@
+"""Session configuration: ``POST /v1/sessions`` body and the resolved config it returns.
+
+Everything is optional but the state layout. Unknown keys are an error at
+every level. The resolved configuration (``SessionCreated.config``) is the
+same model with every default filled in, so posting it back creates an
+identical session.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal, Self
+
+from pydantic import Field, StringConstraints, model_validator
+
+from api_schemas.association import (
+    AssociationMethod,
+    AssociationOptions,
+    LocalAssociationMethod,
+    resolve_options,
+)
+from api_schemas.base import (
+    MAX_CLASSES,
+    FiniteFloat,
+    Identifier,
+    Label,
+    Matrix,
+    OpenUnitFloat,
+    PositiveFloat,
+    UnitFloat,
+    WireModel,
+)
+from api_schemas.issues import FieldIssue, raise_issues
+from api_schemas.linalg import check_covariance
+
+MAX_STATE_DIM = 64
+
+StateIndex = Annotated[int, Field(ge=0, lt=MAX_STATE_DIM)]
+Point = Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)]
+StateFusionMethod = Literal["covariance_intersection", "independent", "latest"]
+TrackingPreset = Literal["aircraft", "pedestrian"]
+
+
+class StateLayout(WireModel):
+    """The state vector: its dimension and which components are positions and velocities."""
+
+    dim: Annotated[int, Field(ge=1, le=MAX_STATE_DIM)]
+    position: Annotated[list[StateIndex], Field(min_length=1, max_length=3)]
+    velocity: Annotated[list[StateIndex], Field(max_length=3)] = Field(default_factory=list)
+
+    @model_validator(mode="after")
+    def _indices_consistent(self) -> Self:
+        issues: list[FieldIssue] = []
+        seen: set[int] = set()
+        for field, indices in (("position", self.position), ("velocity", self.velocity)):
+            for index, component in enumerate(indices):
+                if component >= self.dim:
+                    issues.append(
+                        FieldIssue(
+                            (field, index),
+                            f"component {component} is outside the state (dim {self.dim})",
+                            component,
+                        )
+                    )
+                elif component in seen:
+                    issues.append(
+                        FieldIssue(
+                            (field, index), f"component {component} is listed twice", component
+                        )
+                    )
+                seen.add(component)
+        if self.velocity and len(self.velocity) != len(self.position):
+            issues.append(
+                FieldIssue(
+                    ("velocity",),
+                    f"{len(self.velocity)} velocity components for {len(self.position)} position components",
+                    self.velocity,
+                )
+            )
+        if issues:
+            raise_issues("StateLayout", issues)
+        return self
+
+
+class MotionModel(WireModel):
+    """The fused tracks' motion model used to predict them between reports."""
+
+    model: Literal["constant_velocity", "constant_position"] = "constant_velocity"
+    q: PositiveFloat = 1.0
+
+
+class SectorFieldOfView(WireModel):
+    """A sensor's field of view as a sector: origin, heading, half-angle, range interval."""
+
+    kind: Literal["sector"]
+    origin: Point
+    heading_deg: FiniteFloat
+    half_angle_deg: Annotated[float, Field(allow_inf_nan=False, gt=0.0, le=180.0)]
+    range: Annotated[
+        list[Annotated[float, Field(allow_inf_nan=False, ge=0.0)]],
+        Field(min_length=2, max_length=2),
+    ]
+
+    @model_validator(mode="after")
+    def _range_ordered(self) -> Self:
+        if self.range[0] >= self.range[1]:
+            raise_issues(
+                "SectorFieldOfView",
+                [FieldIssue(("range",), "range must be [min, max] with min < max", self.range)],
+            )
+        return self
+
+
+class PolygonFieldOfView(WireModel):
+    """A sensor's field of view as a simple polygon (vertices in order)."""
+
+    kind: Literal["polygon"]
+    vertices: Annotated[list[Point], Field(min_length=3, max_length=1000)]
+
+
+FieldOfView = Annotated[SectorFieldOfView | PolygonFieldOfView, Field(discriminator="kind")]
+
+
+class MeasurementModel(WireModel):
+    """A detecting sensor's measurement noise: ``r`` over the position components."""
+
+    r: Matrix
+
+    @model_validator(mode="after")
+    def _r_is_covariance(self) -> Self:
+        try:
+            check_covariance(self.r)
+        except ValueError as error:
+            raise_issues("MeasurementModel", [FieldIssue(("r",), str(error), self.r)])
+        return self
+
+
+class SensorConfig(WireModel):
+    """One sensor: identity, reliability (class-evidence discounting), P_D, field of view, noise."""
+
+    id: Identifier
+    reliability: UnitFloat = 1.0
+    p_detect: OpenUnitFloat = 0.9
+    fov: FieldOfView | None = None
+    measurement: MeasurementModel | None = None
+
+
+class AssociationConfig(WireModel):
+    """Track-to-track association: a method and its options (defaults filled in)."""
+
+    method: AssociationMethod = "denoeux"
+    options: AssociationOptions = Field(default_factory=AssociationOptions)
+
+    @model_validator(mode="after")
+    def _options_apply(self) -> Self:
+        self.options = resolve_options(self.method, self.options, local=False)
+        return self
+
+
+class LocalAssociationConfig(WireModel):
+    """Measurement-to-track association of local tracking (detections)."""
+
+    method: LocalAssociationMethod = "gnn"
+    options: AssociationOptions = Field(default_factory=AssociationOptions)
+
+    @model_validator(mode="after")
+    def _options_apply(self) -> Self:
+        self.options = resolve_options(self.method, self.options, local=True)
+        return self
+
+
+class StateFusionConfig(WireModel):
+    """How the latest estimates of the sensors reporting one fused track are combined."""
+
+    state: StateFusionMethod = "covariance_intersection"
+
+
+class TrackThresholds(WireModel):
+    """Track management (ALGORITHMS.md §4): score thresholds and termination."""
+
+    false_confirmation: OpenUnitFloat = 1e-3
+    true_deletion: OpenUnitFloat = 1e-2
+    termination_probability: OpenUnitFloat = 0.5
+    min_points: Annotated[int, Field(ge=1, le=100)] | None = None
+
+
+class TrackingConfig(WireModel):
+    """Local tracking of detecting sensors and track management."""
+
+    preset: TrackingPreset | None = None
+    association: LocalAssociationConfig = Field(default_factory=LocalAssociationConfig)
+    thresholds: TrackThresholds = Field(default_factory=TrackThresholds)
+
+
+class TimeConfig(WireModel):
+    """The session clock."""
+
+    unit: Literal["s"] = "s"
+
+
+class SessionConfig(WireModel):
+    """A fusion session's configuration."""
+
+    name: Annotated[str, StringConstraints(min_length=1, max_length=100)] | None = None
+    state: StateLayout
+    motion: MotionModel = Field(default_factory=MotionModel)
+    classes: Annotated[list[Label], Field(max_length=MAX_CLASSES)] = Field(default_factory=list)
+    sensors: list[SensorConfig] = Field(default_factory=list)
+    association: AssociationConfig = Field(default_factory=AssociationConfig)
+    fusion: StateFusionConfig = Field(default_factory=StateFusionConfig)
+    tracking: TrackingConfig = Field(default_factory=TrackingConfig)
+    time: TimeConfig = Field(default_factory=TimeConfig)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Self:
+        issues: list[FieldIssue] = []
+        for index, label in enumerate(self.classes):
+            if label in self.classes[:index]:
+                issues.append(
+                    FieldIssue(("classes", index), f"class {label!r} is listed twice", label)
+                )
+        sensor_ids: set[str] = set()
+        measured = len(self.state.position)
+        for index, sensor in enumerate(self.sensors):
+            if sensor.id in sensor_ids:
+                issues.append(
+                    FieldIssue(
+                        ("sensors", index, "id"),
+                        f"sensor id {sensor.id!r} is used twice",
+                        sensor.id,
+                    )
+                )
+            sensor_ids.add(sensor.id)
+            if sensor.measurement is not None and len(sensor.measurement.r) != measured:
+                size = len(sensor.measurement.r)
+                issues.append(
+                    FieldIssue(
+                        ("sensors", index, "measurement", "r"),
+                        f"r is {size}x{size}, expected {measured}x{measured} (one row per position component)",
+                        sensor.measurement.r,
+                    )
+                )
+        if self.motion.model == "constant_velocity" and not self.state.velocity:
+            issues.append(
+                FieldIssue(
+                    ("state", "velocity"),
+                    "the constant_velocity motion model needs the velocity components",
+                    self.state.velocity,
+                )
+            )
+        if issues:
+            raise_issues("SessionConfig", issues)
+        return self
+
+    def sensor(self, sensor_id: str) -> SensorConfig | None:
+        """The configured sensor with this id, if any."""
+        return next((sensor for sensor in self.sensors if sensor.id == sensor_id), None)

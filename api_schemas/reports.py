@@ -1,0 +1,89 @@
+"""Sensor inputs: a track list (``POST …/tracks``) and detections (``POST …/detections``).
+
+Checks that need only the body live here (square symmetric positive-definite
+covariances of the right size, distinct track ids, valid class evidence).
+Checks against the session configuration (state dimension, known sensor,
+class labels in the frame) are in :mod:`api_schemas.consistency`.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Self
+
+from pydantic import Field, model_validator
+
+from api_schemas.base import FiniteFloat, Identifier, Matrix, Vector, WireModel
+from api_schemas.classification import ClassEvidence
+from api_schemas.issues import FieldIssue, raise_issues
+from api_schemas.linalg import check_covariance
+
+MAX_ITEMS = 100_000
+"""Hard ceiling on items per input; the service's configured limit is lower."""
+
+StateVector = Annotated[Vector, Field(min_length=1, max_length=64)]
+
+
+class SensorTrack(WireModel):
+    """One track of a sensor's track list: local id, state, covariance, optional class evidence."""
+
+    id: Identifier
+    state: StateVector
+    covariance: Matrix
+    classification: ClassEvidence | None = None
+
+    @model_validator(mode="after")
+    def _covariance_matches_state(self) -> Self:
+        try:
+            check_covariance(self.covariance, len(self.state))
+        except ValueError as error:
+            raise_issues("SensorTrack", [FieldIssue(("covariance",), str(error), self.covariance)])
+        return self
+
+
+class TrackReport(WireModel):
+    """A sensor's track list at one time (seconds on the session clock)."""
+
+    sensor: Identifier
+    time: FiniteFloat
+    tracks: Annotated[list[SensorTrack], Field(max_length=MAX_ITEMS)]
+
+    @model_validator(mode="after")
+    def _distinct_ids(self) -> Self:
+        seen: set[str] = set()
+        issues: list[FieldIssue] = []
+        for index, track in enumerate(self.tracks):
+            if track.id in seen:
+                issues.append(
+                    FieldIssue(
+                        ("tracks", index, "id"), f"track id {track.id!r} appears twice", track.id
+                    )
+                )
+            seen.add(track.id)
+        if issues:
+            raise_issues("TrackReport", issues)
+        return self
+
+
+class Detection(WireModel):
+    """One detection: the measured position ``z``, optionally its own noise ``r`` and class evidence."""
+
+    z: Annotated[Vector, Field(min_length=1, max_length=3)]
+    r: Matrix | None = None
+    classification: ClassEvidence | None = None
+
+    @model_validator(mode="after")
+    def _r_matches_z(self) -> Self:
+        if self.r is not None:
+            try:
+                check_covariance(self.r, len(self.z))
+            except ValueError as error:
+                raise_issues("Detection", [FieldIssue(("r",), str(error), self.r)])
+        return self
+
+
+class DetectionReport(WireModel):
+    """A sensor's detections at one time."""
+
+    sensor: Identifier
+    time: FiniteFloat
+    detections: Annotated[list[Detection], Field(max_length=MAX_ITEMS)]

@@ -1,0 +1,66 @@
+"""WebSocket messages (``/v1/sessions/{sid}/stream`` and ``/subscribe``), documented in docs/asyncapi.yaml.
+
+Every message is a JSON object with a required ``type`` tag. The client sends
+``tracks`` and ``detections`` (the REST bodies plus ``type`` and an optional
+``ref`` echoed in the answer); the server sends ``result``, ``error`` and ``ack``.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field, StringConstraints, TypeAdapter
+
+from api_schemas.base import WireModel
+from api_schemas.problem import Problem
+from api_schemas.reports import DetectionReport, TrackReport
+from api_schemas.results import StepResult
+
+ClientRef = Annotated[str, StringConstraints(min_length=1, max_length=128)]
+
+
+class TracksMessage(TrackReport):
+    """Client → server: a track list."""
+
+    type: Literal["tracks"]
+    ref: ClientRef | None = None
+
+
+class DetectionsMessage(DetectionReport):
+    """Client → server: a detection batch."""
+
+    type: Literal["detections"]
+    ref: ClientRef | None = None
+
+
+class ResultMessage(WireModel):
+    """Server → client: the fused result of an input (``ref`` echoes the input's)."""
+
+    type: Literal["result"]
+    ref: str | None
+    result: StepResult
+
+
+class ErrorMessage(WireModel):
+    """Server → client: a message was rejected; the connection stays open."""
+
+    type: Literal["error"]
+    ref: str | None
+    problem: Problem
+
+
+class AckMessage(WireModel):
+    """Server → client: the connection is ready; ``seq`` is the session's latest sequence number."""
+
+    type: Literal["ack"]
+    ref: str | None
+    seq: int
+
+
+ClientMessage = Annotated[TracksMessage | DetectionsMessage, Field(discriminator="type")]
+ServerMessage = Annotated[ResultMessage | ErrorMessage | AckMessage, Field(discriminator="type")]
+
+client_message_adapter: TypeAdapter[TracksMessage | DetectionsMessage] = TypeAdapter(ClientMessage)
+server_message_adapter: TypeAdapter[ResultMessage | ErrorMessage | AckMessage] = TypeAdapter(
+    ServerMessage
+)

@@ -1,0 +1,184 @@
+"""``docs/asyncapi.yaml``: the WebSocket protocol, generated from the message models.
+
+OpenAPI cannot describe WebSockets; this AsyncAPI 3.0 document does, with
+the payload schemas taken from :mod:`api_schemas.ws` so that it cannot
+disagree with what the service validates. ``make openapi`` rewrites it and a
+test fails when the committed file drifts.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel
+from pydantic.json_schema import models_json_schema
+
+from api_schemas.ws import AckMessage, DetectionsMessage, ErrorMessage, ResultMessage, TracksMessage
+from core import __version__
+
+DEFAULT_PATH = Path("docs") / "asyncapi.yaml"
+SCHEMA_REF = "#/components/schemas/{model}"
+
+Direction = Literal["client", "server"]
+
+MESSAGES: dict[str, tuple[type[BaseModel], Direction, str]] = {
+    "tracks": (
+        TracksMessage,
+        "client",
+        "A sensor's track list; answered by one `result` (or `error`).",
+    ),
+    "detections": (
+        DetectionsMessage,
+        "client",
+        "A sensor's detections; answered by one `result` (or `error`).",
+    ),
+    "result": (
+        ResultMessage,
+        "server",
+        "The fused result of one input; `ref` echoes the input's `ref`.",
+    ),
+    "error": (
+        ErrorMessage,
+        "server",
+        "A rejected message (RFC 9457 problem); the connection stays open.",
+    ),
+    "ack": (
+        AckMessage,
+        "server",
+        "Sent once when the connection is ready, with the session's latest `seq`.",
+    ),
+}
+"""Message name (its ``type`` tag) → model, who sends it, what it means."""
+
+DESCRIPTION = """\
+Every message is one JSON object (a text frame) with a required `type` tag.
+
+`stream`: the client sends `tracks` and `detections` messages (the REST bodies
+plus `type` and an optional `ref`); the server answers each with exactly one
+`result` or `error`, in the order the inputs were sent. A bad message gets an
+`error` that names the problem (field paths in `problem.errors`) and the
+client's `ref`; the connection stays open.
+
+`subscribe`: the server sends every `result` of the session, in order. A
+subscriber that cannot keep up is not queued without bound: it skips to the
+latest result (`seq` shows the gap).
+
+Both channels need the session's bearer token (or the admin token) in the
+`Authorization` header of the upgrade request. The server sends WebSocket
+pings; a peer that does not answer is disconnected.
+"""
+
+
+def _message(name: str) -> dict[str, Any]:
+    model, direction, summary = MESSAGES[name]
+    return {
+        "name": name,
+        "title": model.__name__,
+        "summary": summary,
+        "contentType": "application/json",
+        "payload": {"$ref": SCHEMA_REF.format(model=model.__name__)},
+        "x-direction": direction,
+    }
+
+
+def _refs(names: Sequence[str], prefix: str) -> list[dict[str, str]]:
+    return [{"$ref": f"{prefix}/{name}"} for name in names]
+
+
+def _channel(address: str, description: str, names: Sequence[str]) -> dict[str, Any]:
+    return {
+        "address": address,
+        "description": description,
+        "parameters": {"sid": {"description": "The session id."}},
+        "messages": {name: {"$ref": f"#/components/messages/{name}"} for name in names},
+    }
+
+
+def payload_schemas() -> dict[str, Any]:
+    """JSON schemas of every message model (client ones as validated, server ones as serialised)."""
+    models = [
+        (model, "validation" if direction == "client" else "serialization")
+        for model, direction, _ in MESSAGES.values()
+    ]
+    _, top = models_json_schema(models, ref_template=SCHEMA_REF)  # type: ignore[arg-type]
+    schemas: dict[str, Any] = top.get("$defs", {})
+    return schemas
+
+
+def build_asyncapi() -> dict[str, Any]:
+    """The AsyncAPI 3.0 document as plain data."""
+    stream_messages = ["tracks", "detections", "result", "error", "ack"]
+    subscribe_messages = ["result", "error", "ack"]
+    return {
+        "asyncapi": "3.0.0",
+        "info": {
+            "title": "credal-fusion WebSocket protocol",
+            "version": __version__,
+            "description": DESCRIPTION,
+        },
+        "defaultContentType": "application/json",
+        "servers": {
+            "local": {
+                "host": "127.0.0.1:8000",
+                "protocol": "ws",
+                "description": "`make run`",
+                "security": [{"$ref": "#/components/securitySchemes/bearer"}],
+            }
+        },
+        "channels": {
+            "stream": _channel(
+                "/v1/sessions/{sid}/stream",
+                "Send inputs, receive one result per input.",
+                stream_messages,
+            ),
+            "subscribe": _channel(
+                "/v1/sessions/{sid}/subscribe", "Receive every fused result.", subscribe_messages
+            ),
+        },
+        "operations": {
+            "send_inputs": {
+                "action": "send",
+                "channel": {"$ref": "#/channels/stream"},
+                "messages": _refs(["tracks", "detections"], "#/channels/stream/messages"),
+            },
+            "receive_step_results": {
+                "action": "receive",
+                "channel": {"$ref": "#/channels/stream"},
+                "messages": _refs(["result", "error", "ack"], "#/channels/stream/messages"),
+            },
+            "receive_subscription": {
+                "action": "receive",
+                "channel": {"$ref": "#/channels/subscribe"},
+                "messages": _refs(subscribe_messages, "#/channels/subscribe/messages"),
+            },
+        },
+        "components": {
+            "messages": {name: _message(name) for name in MESSAGES},
+            "schemas": payload_schemas(),
+            "securitySchemes": {"bearer": {"type": "http", "scheme": "bearer"}},
+        },
+    }
+
+
+def render_asyncapi() -> str:
+    """The document as deterministic YAML text."""
+    text: str = yaml.safe_dump(build_asyncapi(), sort_keys=True, allow_unicode=True, width=100)
+    return text
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Write the document: ``python -m app.asyncapi [PATH]`` (default ``docs/asyncapi.yaml``)."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    target = Path(args[0]) if args else DEFAULT_PATH
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_text(render_asyncapi(), encoding="utf-8")
+    print(f"wrote {target}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

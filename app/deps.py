@@ -1,0 +1,85 @@
+"""FastAPI dependencies, as ``Annotated`` aliases used in route signatures."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import Depends, Path, Request
+from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
+
+from app.errors import Forbidden, SessionNotFound, Unauthorized
+from app.metrics import ServiceMetrics
+from app.security import Principal, is_admin_token, token_matches
+from app.settings import Settings
+from app.stores import SessionRecord, Store
+
+bearer_scheme = HTTPBearer(
+    auto_error=False,
+    description="The session's token (returned once by POST /v1/sessions) or the admin token.",
+)
+
+
+def get_app_settings(request: Request) -> Settings:
+    """The settings the application was built with."""
+    settings: Settings = request.app.state.settings
+    return settings
+
+
+def get_store(request: Request) -> Store:
+    """The application's store."""
+    store: Store = request.app.state.store
+    return store
+
+
+def get_metrics(request: Request) -> ServiceMetrics:
+    """The application's metrics."""
+    metrics: ServiceMetrics = request.app.state.metrics
+    return metrics
+
+
+SettingsDep = Annotated[Settings, Depends(get_app_settings)]
+StoreDep = Annotated[Store, Depends(get_store)]
+MetricsDep = Annotated[ServiceMetrics, Depends(get_metrics)]
+Credentials = Annotated[HTTPAuthorizationCredentials | None, Depends(bearer_scheme)]
+SessionId = Annotated[str, Path(min_length=1, max_length=64, description="The session id.")]
+
+
+def bearer_token(credentials: Credentials) -> str:
+    """The request's bearer token; 401 when there is none."""
+    if credentials is None or not credentials.credentials:
+        raise Unauthorized("send 'Authorization: Bearer <token>'")
+    return credentials.credentials
+
+
+BearerToken = Annotated[str, Depends(bearer_token)]
+
+
+def _admin_token(settings: Settings) -> str | None:
+    return settings.admin_token.get_secret_value() if settings.admin_token is not None else None
+
+
+def require_admin(token: BearerToken, settings: SettingsDep) -> Principal:
+    """Admin routes: only the admin token (403 for any other token)."""
+    if not is_admin_token(token, _admin_token(settings)):
+        raise Forbidden("this route needs the admin token")
+    return Principal(admin=True)
+
+
+def authorize_session(
+    sid: SessionId, token: BearerToken, settings: SettingsDep, store: StoreDep
+) -> SessionRecord:
+    """The session ``sid`` if the token opens it: its own token or the admin token.
+
+    401 without a token, 404 for an unknown session, 403 for a token that is
+    neither this session's nor the admin's (another session's token included).
+    """
+    record = store.get_session(sid)
+    if record is None:
+        raise SessionNotFound(sid)
+    if token_matches(token, record.token_hash) or is_admin_token(token, _admin_token(settings)):
+        return record
+    raise Forbidden(f"this token does not open session {sid!r}")
+
+
+AdminDep = Annotated[Principal, Depends(require_admin)]
+AuthorizedSession = Annotated[SessionRecord, Depends(authorize_session)]

@@ -1,0 +1,314 @@
+"""Every error answer of the service, as RFC 9457 ``application/problem+json``.
+
+The service raises :class:`ServiceError` subclasses (or lets request
+validation, core ``InvalidInput`` and Starlette HTTP errors happen);
+:func:`install_error_handlers` maps each to a problem document with a
+machine-readable ``type`` (``urn:credal-fusion:problem:<slug>``), a ``title``,
+the ``status``, a human ``detail`` and the request path as ``instance``.
+Validation problems add ``errors``: every invalid field with its location.
+Anything unexpected becomes a 500 whose detail carries only a reference id
+that is also logged with the traceback.
+"""
+
+from __future__ import annotations
+
+import logging
+import uuid
+from collections.abc import Iterable, Mapping, Sequence
+from http import HTTPStatus
+from typing import Any, ClassVar
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from api_schemas.issues import FieldIssue
+from api_schemas.problem import FieldError, Problem
+from core.errors import InvalidInput
+
+PROBLEM_MEDIA_TYPE = "application/problem+json"
+PROBLEM_TYPE_PREFIX = "urn:credal-fusion:problem:"
+MAX_ERRORS_IN_DETAIL = 3
+
+logger = logging.getLogger("credal_fusion.errors")
+
+
+def problem_type(slug: str) -> str:
+    """The ``type`` URI of a problem kind."""
+    return PROBLEM_TYPE_PREFIX + slug
+
+
+class ProblemResponse(JSONResponse):
+    """A JSON response with the problem+json media type."""
+
+    media_type = PROBLEM_MEDIA_TYPE
+
+
+class ServiceError(Exception):
+    """Base of the errors the service raises on purpose; each knows its status and slug."""
+
+    status: ClassVar[int] = HTTPStatus.INTERNAL_SERVER_ERROR
+    slug: ClassVar[str] = "internal-error"
+    title: ClassVar[str] = "Internal server error"
+
+    def __init__(self, detail: str, **extensions: Any) -> None:
+        super().__init__(detail)
+        self.detail = detail
+        self.extensions = extensions
+
+    @property
+    def status_code(self) -> int:
+        """The HTTP status of this error."""
+        return int(self.status)
+
+    def headers(self) -> dict[str, str]:
+        """Extra response headers."""
+        return {}
+
+
+class SessionNotFound(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """No live session has this id."""
+
+    status = HTTPStatus.NOT_FOUND
+    slug = "session-not-found"
+    title = "Session not found"
+
+    def __init__(self, session_id: str) -> None:
+        super().__init__(f"no session {session_id!r}", session=session_id)
+
+
+class Unauthorized(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """No usable bearer token was given."""
+
+    status = HTTPStatus.UNAUTHORIZED
+    slug = "unauthorized"
+    title = "Missing or malformed bearer token"
+
+    def headers(self) -> dict[str, str]:
+        return {"WWW-Authenticate": 'Bearer realm="credal-fusion"'}
+
+
+class Forbidden(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """The bearer token does not open this resource."""
+
+    status = HTTPStatus.FORBIDDEN
+    slug = "forbidden"
+    title = "Token does not grant access"
+
+
+class Conflict(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """The request conflicts with the session's state (for instance a duplicate sequence number)."""
+
+    status = HTTPStatus.CONFLICT
+    slug = "conflict"
+    title = "Conflict with the session state"
+
+
+class StaleReport(Conflict):
+    """A report older than the session accepts for its sensor; says both times."""
+
+    slug = "stale-report"
+    title = "Stale report"
+
+    def __init__(self, sensor: str, time: float, last_time: float) -> None:
+        super().__init__(
+            f"report of sensor {sensor!r} at time {time!r} is older than its last accepted time {last_time!r}",
+            sensor=sensor,
+            time=time,
+            last_time=last_time,
+        )
+
+
+class LimitExceeded(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """A configured limit was exceeded; ``limit`` names the setting (``CREDAL_<LIMIT>``)."""
+
+    status = HTTPStatus.UNPROCESSABLE_ENTITY
+    slug = "limit-exceeded"
+    title = "Limit exceeded"
+
+    def __init__(
+        self,
+        limit: str,
+        maximum: float,
+        actual: float | None = None,
+        *,
+        what: str | None = None,
+        status: int | None = None,
+    ) -> None:
+        subject = what or limit
+        detail = f"{subject}: limit {limit} is {maximum}" + (
+            "" if actual is None else f", got {actual}"
+        )
+        super().__init__(detail, limit=limit, maximum=maximum, actual=actual)
+        self._status = int(status) if status is not None else int(type(self).status)
+
+    @property
+    def status_code(self) -> int:
+        return self._status
+
+
+def _pointer(loc: Sequence[str | int], error_type: str) -> str:
+    """A JSON pointer (as a URI fragment) into the body; ``#`` for the whole body."""
+    if error_type == "json_invalid":
+        return "#"
+    parts = list(loc[1:]) if loc and loc[0] == "body" else list(loc)
+    escaped = [str(part).replace("~", "~0").replace("/", "~1") for part in parts]
+    return "#/" + "/".join(escaped) if escaped else "#"
+
+
+def field_errors(errors: Iterable[Mapping[str, Any]]) -> list[FieldError]:
+    """Pydantic/FastAPI error dicts as :class:`FieldError` entries (the input value is never echoed)."""
+    return [
+        FieldError(
+            loc=list(error.get("loc", ())),
+            pointer=_pointer(list(error.get("loc", ())), str(error.get("type", ""))),
+            detail=str(error.get("msg", "invalid")),
+            type=str(error.get("type", "value_error")),
+        )
+        for error in errors
+    ]
+
+
+def request_validation_error(
+    issues: Sequence[FieldIssue], *, prefix: str = "body"
+) -> RequestValidationError:
+    """A request validation error for ``issues`` found after parsing (locations under ``prefix``)."""
+    return RequestValidationError(
+        [
+            {"loc": (prefix, *issue.loc), "msg": issue.message, "type": issue.kind}
+            for issue in issues
+        ]
+    )
+
+
+def problem_response(
+    request: Request | None,
+    *,
+    status: int,
+    slug: str,
+    title: str,
+    detail: str,
+    errors: list[FieldError] | None = None,
+    headers: Mapping[str, str] | None = None,
+    instance: str | None = None,
+    **extensions: Any,
+) -> ProblemResponse:
+    """Build a problem+json response (``instance`` defaults to the request path)."""
+    problem = Problem(
+        type=problem_type(slug),
+        title=title,
+        status=status,
+        detail=detail,
+        instance=instance if instance is not None or request is None else request.url.path,
+        errors=errors,
+        **extensions,
+    )
+    return ProblemResponse(
+        problem.model_dump(mode="json", exclude_none=True),
+        status_code=status,
+        headers=dict(headers or {}),
+    )
+
+
+def _validation_detail(errors: list[FieldError]) -> str:
+    shown = "; ".join(
+        f"{error.pointer if error.pointer != '#' else 'body'}: {error.detail}"
+        for error in errors[:MAX_ERRORS_IN_DETAIL]
+    )
+    more = len(errors) - MAX_ERRORS_IN_DETAIL
+    suffix = f"; and {more} more" if more > 0 else ""
+    noun = "field" if len(errors) == 1 else "fields"
+    return f"{len(errors)} invalid {noun}: {shown}{suffix}"
+
+
+async def _on_validation_error(request: Request, error: Exception) -> ProblemResponse:
+    assert isinstance(error, RequestValidationError)
+    errors = field_errors(error.errors())
+    return problem_response(
+        request,
+        status=HTTPStatus.UNPROCESSABLE_ENTITY,
+        slug="validation-error",
+        title="Invalid request",
+        detail=_validation_detail(errors),
+        errors=errors,
+    )
+
+
+async def _on_service_error(request: Request, error: Exception) -> ProblemResponse:
+    assert isinstance(error, ServiceError)
+    return problem_response(
+        request,
+        status=error.status_code,
+        slug=error.slug,
+        title=error.title,
+        detail=error.detail,
+        headers=error.headers(),
+        **error.extensions,
+    )
+
+
+async def _on_invalid_input(request: Request, error: Exception) -> ProblemResponse:
+    return problem_response(
+        request,
+        status=HTTPStatus.UNPROCESSABLE_ENTITY,
+        slug="invalid-input",
+        title="Invalid input",
+        detail=str(error),
+    )
+
+
+async def _on_http_error(request: Request, error: Exception) -> ProblemResponse:
+    assert isinstance(error, StarletteHTTPException)
+    status = HTTPStatus(error.status_code)
+    return problem_response(
+        request,
+        status=error.status_code,
+        slug=status.phrase.lower().replace(" ", "-"),
+        title=status.phrase,
+        detail=str(error.detail),
+        headers=error.headers,
+    )
+
+
+async def _on_unexpected_error(request: Request, error: Exception) -> ProblemResponse:
+    reference = uuid.uuid4().hex
+    logger.error(
+        "unexpected error (reference %s) on %s", reference, request.url.path, exc_info=error
+    )
+    return problem_response(
+        request,
+        status=HTTPStatus.INTERNAL_SERVER_ERROR,
+        slug="internal-error",
+        title="Internal server error",
+        detail=f"unexpected error; the server log has the details under reference {reference}",
+        reference=reference,
+    )
+
+
+def install_error_handlers(app: FastAPI) -> None:
+    """Register every problem+json handler on ``app``."""
+    app.add_exception_handler(RequestValidationError, _on_validation_error)
+    app.add_exception_handler(ServiceError, _on_service_error)
+    app.add_exception_handler(InvalidInput, _on_invalid_input)
+    app.add_exception_handler(StarletteHTTPException, _on_http_error)
+    app.add_exception_handler(Exception, _on_unexpected_error)
+
+
+PROBLEM_STATUSES: dict[int, str] = {
+    400: "Malformed request",
+    401: "Missing or malformed bearer token",
+    403: "The token does not grant access",
+    404: "Not found",
+    409: "Conflict with the session state",
+    413: "Body too large",
+    422: "Invalid request (every invalid field is listed in `errors`) or a limit exceeded",
+    429: "Too many sessions",
+}
+
+
+def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
+    """OpenAPI ``responses`` entries documenting problem+json answers for ``statuses``."""
+    return {
+        status: {"model": Problem, "description": PROBLEM_STATUSES[status]} for status in statuses
+    }

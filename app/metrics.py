@@ -1,0 +1,125 @@
+"""Prometheus metrics: one registry per application, an ASGI middleware for HTTP.
+
+``requests`` and ``latency`` are labelled by the route *template*
+(``/v1/sessions/{sid}``), never by the raw path, so cardinality stays bounded.
+``sessions``, ``inputs`` and ``fusion_step`` are fed by the session code.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+from prometheus_client import (
+    CONTENT_TYPE_LATEST,
+    CollectorRegistry,
+    Counter,
+    Gauge,
+    Histogram,
+    generate_latest,
+)
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+UNMATCHED_ROUTE = "unmatched"
+LATENCY_BUCKETS = (
+    0.0005,
+    0.001,
+    0.0025,
+    0.005,
+    0.01,
+    0.025,
+    0.05,
+    0.1,
+    0.25,
+    0.5,
+    1.0,
+    2.5,
+    5.0,
+    10.0,
+)
+
+
+@dataclass(frozen=True)
+class ServiceMetrics:
+    """The service's metrics, registered in their own registry."""
+
+    registry: CollectorRegistry
+    requests: Counter
+    latency: Histogram
+    sessions: Gauge
+    inputs: Counter
+    fusion_step: Histogram
+
+    @classmethod
+    def create(cls) -> ServiceMetrics:
+        """A fresh registry with every metric of the service."""
+        registry = CollectorRegistry(auto_describe=True)
+        return cls(
+            registry=registry,
+            requests=Counter(
+                "credal_http_requests",
+                "HTTP requests by method, route template and status.",
+                ("method", "route", "status"),
+                registry=registry,
+            ),
+            latency=Histogram(
+                "credal_http_request_duration_seconds",
+                "HTTP request latency by method and route template.",
+                ("method", "route"),
+                buckets=LATENCY_BUCKETS,
+                registry=registry,
+            ),
+            sessions=Gauge("credal_sessions", "Live sessions.", registry=registry),
+            inputs=Counter(
+                "credal_inputs",
+                "Accepted inputs by kind (tracks, detections).",
+                ("kind",),
+                registry=registry,
+            ),
+            fusion_step=Histogram(
+                "credal_fusion_step_seconds",
+                "Time to apply one input to a session engine.",
+                ("kind",),
+                buckets=LATENCY_BUCKETS,
+                registry=registry,
+            ),
+        )
+
+    def exposition(self) -> tuple[bytes, str]:
+        """The text exposition of every metric and its content type."""
+        return generate_latest(self.registry), CONTENT_TYPE_LATEST
+
+
+def _route_template(scope: Scope) -> str:
+    route = scope.get("route")
+    path = getattr(route, "path", None)
+    return path if isinstance(path, str) else UNMATCHED_ROUTE
+
+
+class HttpMetrics:
+    """ASGI middleware counting requests and timing them by route template."""
+
+    def __init__(self, app: ASGIApp, metrics: ServiceMetrics) -> None:
+        self.app = app
+        self.metrics = metrics
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        started = time.perf_counter()
+        status = 500
+
+        async def send_with_status(message: Message) -> None:
+            nonlocal status
+            if message["type"] == "http.response.start":
+                status = int(message["status"])
+            await send(message)
+
+        try:
+            await self.app(scope, receive, send_with_status)
+        finally:
+            route = _route_template(scope)
+            method = str(scope.get("method", ""))
+            self.metrics.requests.labels(method, route, str(status)).inc()
+            self.metrics.latency.labels(method, route).observe(time.perf_counter() - started)

@@ -1,0 +1,25 @@
+"""Prometheus exposition."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Response
+
+from app.deps import MetricsDep
+
+router = APIRouter(tags=["health"])
+
+
+@router.get(
+    "/metrics",
+    response_class=Response,
+    responses={
+        200: {
+            "content": {"text/plain": {"schema": {"type": "string"}}},
+            "description": "Prometheus text",
+        }
+    },
+)
+def get_metrics(metrics: MetricsDep) -> Response:
+    """Prometheus metrics of the service (text exposition format)."""
+    body, content_type = metrics.exposition()
+    return Response(content=body, media_type=content_type)

@@ -1,0 +1,49 @@
+"""Bearer tokens: one per session (returned once at creation) and the admin token.
+
+Tokens are 256-bit ``secrets.token_urlsafe`` strings; only their SHA-256 is
+stored (a fast hash is enough for high-entropy secrets: there is no password
+to guess). Every comparison is between two hashes with
+``hmac.compare_digest``, so it takes the same time wherever they differ.
+A session's token opens that session only; the admin token
+(``CREDAL_ADMIN_TOKEN``) opens every session and the admin routes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import secrets
+from dataclasses import dataclass
+
+TOKEN_BYTES = 32
+HASH_PREFIX = "sha256:"
+
+
+def issue_token() -> str:
+    """A new random bearer token."""
+    return secrets.token_urlsafe(TOKEN_BYTES)
+
+
+def hash_token(token: str) -> str:
+    """The stored form of a token."""
+    return HASH_PREFIX + hashlib.sha256(token.encode("utf-8")).hexdigest()
+
+
+def token_matches(token: str, stored_hash: str) -> bool:
+    """Whether ``token`` hashes to ``stored_hash`` (constant-time comparison)."""
+    return hmac.compare_digest(hash_token(token).encode("ascii"), stored_hash.encode("ascii"))
+
+
+def is_admin_token(token: str, admin_token: str | None) -> bool:
+    """Whether ``token`` is the admin token (never true when no admin token is configured)."""
+    if not admin_token:
+        return False
+    return token_matches(token, hash_token(admin_token))
+
+
+@dataclass(frozen=True)
+class Principal:
+    """Who a request acts as: the admin, or the holder of one session's token."""
+
+    admin: bool
+    session_id: str | None = None

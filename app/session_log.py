@@ -1,0 +1,39 @@
+"""The log form of accepted inputs: ``{"type": "tracks"|"detections", "report": {...}}``.
+
+The store keeps this JSON per sequence number; ``GET …/events`` and replay
+turn it back into the typed events of :mod:`api_schemas.events`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from api_schemas.events import DetectionsEvent, TracksEvent
+from api_schemas.reports import DetectionReport, TrackReport
+from app.stores import LogEntry
+
+
+def log_input(report: TrackReport | DetectionReport) -> dict[str, Any]:
+    """The JSON logged for an accepted input."""
+    kind = "tracks" if isinstance(report, TrackReport) else "detections"
+    return {"type": kind, "report": report.model_dump(mode="json", exclude_none=True)}
+
+
+def event_from_entry(entry: LogEntry) -> TracksEvent | DetectionsEvent:
+    """A logged input as its typed event."""
+    kind = entry.input["type"]
+    if kind == "tracks":
+        return TracksEvent(
+            type="tracks",
+            seq=entry.seq,
+            received_at=entry.received_at,
+            report=TrackReport.model_validate(entry.input["report"]),
+        )
+    if kind == "detections":
+        return DetectionsEvent(
+            type="detections",
+            seq=entry.seq,
+            received_at=entry.received_at,
+            report=DetectionReport.model_validate(entry.input["report"]),
+        )
+    raise ValueError(f"log entry {entry.seq}: unknown input type {kind!r}")

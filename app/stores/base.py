@@ -1,0 +1,195 @@
+"""What a store keeps per session, and the protocol every store implements.
+
+Per session: the configuration (JSON), the bearer token's hash, the creation
+time, a deleted flag, the append-only log of accepted inputs (sequence number,
+reception time, the input as JSON) and periodic snapshots of the engine state
+(sequence number + the engine's ``export()`` as JSON: numpy arrays become
+nested lists through :func:`to_plain`; nothing is ever pickled).
+
+Sequence numbers start at 1 and are contiguous: :meth:`Store.append` accepts
+only ``last_seq + 1`` and raises :class:`SequenceConflict` otherwise, so two
+writers can never both log the same step.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from datetime import datetime
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from app.errors import Conflict, SessionNotFound
+
+JsonObject = dict[str, Any]
+
+
+class SequenceConflict(Conflict):
+    """An append whose sequence number is not the next one of the session."""
+
+    slug = "sequence-conflict"
+
+    def __init__(self, session_id: str, seq: int, expected: int) -> None:
+        super().__init__(
+            f"session {session_id!r}: input seq {seq} rejected, the next seq is {expected}",
+            session=session_id,
+            seq=seq,
+            expected=expected,
+        )
+        self.expected = expected
+
+
+class SessionExists(Conflict):
+    """A session with this id is already stored."""
+
+    slug = "session-exists"
+
+    def __init__(self, session_id: str) -> None:
+        super().__init__(f"session {session_id!r} already exists", session=session_id)
+
+
+@dataclass(frozen=True)
+class SessionRecord:
+    """A stored session's identity (no log, no state)."""
+
+    id: str
+    config: JsonObject
+    token_hash: str
+    created_at: datetime
+    deleted: bool = False
+
+
+@dataclass(frozen=True)
+class LogEntry:
+    """One accepted input."""
+
+    seq: int
+    received_at: datetime
+    input: JsonObject
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """The engine state after input ``seq``."""
+
+    seq: int
+    taken_at: datetime
+    state: JsonObject
+
+
+@dataclass(frozen=True)
+class SessionLoad:
+    """Everything needed to rebuild a session: its record, latest snapshot, log after it."""
+
+    session: SessionRecord
+    snapshot: Snapshot | None
+    entries: list[LogEntry]
+
+    @property
+    def last_seq(self) -> int:
+        """The session's latest sequence number."""
+        if self.entries:
+            return self.entries[-1].seq
+        return self.snapshot.seq if self.snapshot is not None else 0
+
+
+@runtime_checkable
+class Store(Protocol):
+    """Durable (or not) keeping of sessions, their input logs and snapshots. Thread-safe."""
+
+    def create_session(self, record: SessionRecord) -> None:
+        """Store a new session; :class:`SessionExists` if the id is taken."""
+        ...
+
+    def get_session(self, session_id: str) -> SessionRecord | None:
+        """The live (not deleted) session with this id, if any."""
+        ...
+
+    def list_sessions(self) -> list[SessionRecord]:
+        """Every live session, oldest first."""
+        ...
+
+    def count_sessions(self) -> int:
+        """How many live sessions there are."""
+        ...
+
+    def delete_session(self, session_id: str) -> bool:
+        """Mark the session deleted; ``False`` if there was no live session."""
+        ...
+
+    def append(
+        self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
+    ) -> LogEntry:
+        """Log an accepted input; returns only once it is durably committed."""
+        ...
+
+    def last_seq(self, session_id: str) -> int:
+        """The session's latest sequence number (0 before the first input)."""
+        ...
+
+    def entries(self, session_id: str, after: int = 0, limit: int | None = None) -> list[LogEntry]:
+        """Logged inputs with ``seq > after``, oldest first, at most ``limit``."""
+        ...
+
+    def save_snapshot(self, session_id: str, snapshot: Snapshot) -> None:
+        """Keep a snapshot (older ones may be pruned, the latest is always kept)."""
+        ...
+
+    def load(self, session_id: str) -> SessionLoad:
+        """The latest snapshot and the log after it; :class:`SessionNotFound` if absent."""
+        ...
+
+    def close(self) -> None:
+        """Release resources; the store is unusable afterwards."""
+        ...
+
+
+def to_plain(value: Any, path: str = "$") -> Any:
+    """``value`` as plain JSON data: numpy arrays → nested lists, numpy scalars → numbers.
+
+    Anything that is not a dict with string keys, a list/tuple, a string, a
+    number, a bool or ``None`` is refused with a :class:`TypeError` naming its path.
+    """
+    if value is None or isinstance(value, bool | str | int):
+        return value
+    if isinstance(value, float):
+        return value
+    if isinstance(value, np.ndarray):
+        return to_plain(value.tolist(), path)
+    if isinstance(value, np.generic):
+        return to_plain(value.item(), path)
+    if isinstance(value, Mapping):
+        plain: JsonObject = {}
+        for key, item in value.items():
+            if not isinstance(key, str):
+                raise TypeError(f"{path}: key {key!r} is not a string")
+            plain[key] = to_plain(item, f"{path}.{key}")
+        return plain
+    if isinstance(value, Sequence):
+        return [to_plain(item, f"{path}[{index}]") for index, item in enumerate(value)]
+    raise TypeError(f"{path}: {type(value).__name__} is not plain data")
+
+
+def dumps(value: Any) -> str:
+    """Canonical JSON text of plain data (non-finite floats are kept as JSON extensions)."""
+    return json.dumps(to_plain(value), separators=(",", ":"), sort_keys=True, allow_nan=True)
+
+
+def loads(text: str) -> Any:
+    """Parse JSON text written by :func:`dumps`."""
+    return json.loads(text)
+
+
+def check_seq(session_id: str, seq: int, last: int) -> None:
+    """Raise :class:`SequenceConflict` unless ``seq`` follows ``last``."""
+    if seq != last + 1:
+        raise SequenceConflict(session_id, seq, last + 1)
+
+
+def require(record: SessionRecord | None, session_id: str) -> SessionRecord:
+    """The record, or :class:`SessionNotFound`."""
+    if record is None:
+        raise SessionNotFound(session_id)
+    return record

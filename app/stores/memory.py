@@ -1,0 +1,122 @@
+"""The ``memory`` store: dictionaries under a lock; nothing survives the process."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from datetime import datetime
+from typing import Any
+
+from app.stores.base import (
+    LogEntry,
+    SessionExists,
+    SessionLoad,
+    SessionRecord,
+    Snapshot,
+    check_seq,
+    dumps,
+    loads,
+    require,
+)
+
+
+@dataclass
+class _SessionData:
+    record: SessionRecord
+    log: list[LogEntry] = field(default_factory=list)
+    snapshot: Snapshot | None = None
+
+
+class MemoryStore:
+    """A :class:`~app.stores.base.Store` in memory. Inputs are copied through JSON like the sqlite store."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._sessions: dict[str, _SessionData] = {}
+
+    def _live(self, session_id: str) -> _SessionData | None:
+        data = self._sessions.get(session_id)
+        return data if data is not None and not data.record.deleted else None
+
+    def create_session(self, record: SessionRecord) -> None:
+        with self._lock:
+            if record.id in self._sessions:
+                raise SessionExists(record.id)
+            self._sessions[record.id] = _SessionData(
+                replace(record, config=loads(dumps(record.config)))
+            )
+
+    def get_session(self, session_id: str) -> SessionRecord | None:
+        with self._lock:
+            data = self._live(session_id)
+            return data.record if data is not None else None
+
+    def list_sessions(self) -> list[SessionRecord]:
+        with self._lock:
+            records = [data.record for data in self._sessions.values() if not data.record.deleted]
+        return sorted(records, key=lambda record: (record.created_at, record.id))
+
+    def count_sessions(self) -> int:
+        with self._lock:
+            return sum(1 for data in self._sessions.values() if not data.record.deleted)
+
+    def delete_session(self, session_id: str) -> bool:
+        with self._lock:
+            data = self._live(session_id)
+            if data is None:
+                return False
+            data.record = replace(data.record, deleted=True)
+            return True
+
+    def append(
+        self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
+    ) -> LogEntry:
+        entry = LogEntry(seq=seq, received_at=received_at, input=loads(dumps(entry_input)))
+        with self._lock:
+            data = self._require(session_id)
+            check_seq(session_id, seq, self._last_seq(data))
+            data.log.append(entry)
+        return entry
+
+    def _require(self, session_id: str) -> _SessionData:
+        data = self._live(session_id)
+        require(data.record if data is not None else None, session_id)
+        assert data is not None
+        return data
+
+    @staticmethod
+    def _last_seq(data: _SessionData) -> int:
+        if data.log:
+            return data.log[-1].seq
+        return data.snapshot.seq if data.snapshot is not None else 0
+
+    def last_seq(self, session_id: str) -> int:
+        with self._lock:
+            return self._last_seq(self._require(session_id))
+
+    def entries(self, session_id: str, after: int = 0, limit: int | None = None) -> list[LogEntry]:
+        with self._lock:
+            selected = [entry for entry in self._require(session_id).log if entry.seq > after]
+        return selected if limit is None else selected[:limit]
+
+    def save_snapshot(self, session_id: str, snapshot: Snapshot) -> None:
+        copied = replace(snapshot, state=loads(dumps(snapshot.state)))
+        with self._lock:
+            data = self._require(session_id)
+            if data.snapshot is None or snapshot.seq >= data.snapshot.seq:
+                data.snapshot = copied
+
+    def load(self, session_id: str) -> SessionLoad:
+        with self._lock:
+            data = self._require(session_id)
+            after = data.snapshot.seq if data.snapshot is not None else 0
+            return SessionLoad(
+                session=data.record,
+                snapshot=data.snapshot,
+                entries=[entry for entry in data.log if entry.seq > after],
+            )
+
+    def close(self) -> None:
+        with self._lock:
+            self._sessions.clear()

@@ -1,0 +1,272 @@
+"""The ``sqlite`` store: one file (``./data`` by default), WAL journal, durable commits.
+
+Durability: the database runs in WAL mode with ``synchronous=FULL``, so
+every commit fsyncs the write-ahead log before ``COMMIT`` returns; an input
+is acknowledged only after :meth:`SqliteStore.append` has returned, hence a
+crash — of the process or of the machine — loses no acknowledged input.
+(``NORMAL`` would survive a process crash but could lose the last commits
+on power loss; one fsync per input is the price of the guarantee.)
+
+Threads: each thread gets its own connection (sqlite3 connections are not
+shared across threads); writes are serialised by a process lock and
+``BEGIN IMMEDIATE`` (which also guards against another process on the same
+file), and the sequence-number check runs inside that transaction.
+"""
+
+from __future__ import annotations
+
+import sqlite3
+import threading
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from datetime import datetime
+from pathlib import Path
+from typing import Any, Literal
+
+from app.stores.base import (
+    LogEntry,
+    SessionExists,
+    SessionLoad,
+    SessionRecord,
+    Snapshot,
+    check_seq,
+    dumps,
+    loads,
+    require,
+)
+
+SCHEMA_VERSION = 1
+SNAPSHOTS_KEPT = 2
+BUSY_TIMEOUT_MS = 30_000
+Synchronous = Literal["FULL", "NORMAL"]
+
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS sessions (
+    id TEXT PRIMARY KEY,
+    config TEXT NOT NULL,
+    token_hash TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    deleted INTEGER NOT NULL DEFAULT 0
+);
+CREATE TABLE IF NOT EXISTS inputs (
+    session_id TEXT NOT NULL REFERENCES sessions(id),
+    seq INTEGER NOT NULL,
+    received_at TEXT NOT NULL,
+    input TEXT NOT NULL,
+    PRIMARY KEY (session_id, seq)
+) WITHOUT ROWID;
+CREATE TABLE IF NOT EXISTS snapshots (
+    session_id TEXT NOT NULL REFERENCES sessions(id),
+    seq INTEGER NOT NULL,
+    taken_at TEXT NOT NULL,
+    state TEXT NOT NULL,
+    PRIMARY KEY (session_id, seq)
+) WITHOUT ROWID;
+"""
+
+
+def _record(row: sqlite3.Row) -> SessionRecord:
+    return SessionRecord(
+        id=row["id"],
+        config=loads(row["config"]),
+        token_hash=row["token_hash"],
+        created_at=datetime.fromisoformat(row["created_at"]),
+        deleted=bool(row["deleted"]),
+    )
+
+
+def _entry(row: sqlite3.Row) -> LogEntry:
+    return LogEntry(
+        seq=row["seq"],
+        received_at=datetime.fromisoformat(row["received_at"]),
+        input=loads(row["input"]),
+    )
+
+
+class SqliteStore:
+    """A :class:`~app.stores.base.Store` in one SQLite file."""
+
+    def __init__(self, path: Path | str, synchronous: Synchronous = "FULL") -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._synchronous = synchronous
+        self._local = threading.local()
+        self._connections: list[sqlite3.Connection] = []
+        self._connections_lock = threading.Lock()
+        self._write_lock = threading.Lock()
+        self._closed = False
+        with self._write() as connection:
+            for statement in SCHEMA.split(";"):
+                if statement.strip():
+                    connection.execute(statement)
+            version = connection.execute("PRAGMA user_version").fetchone()[0]
+            if version == 0:
+                connection.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+            elif version != SCHEMA_VERSION:
+                raise RuntimeError(
+                    f"{self.path}: schema version {version}, this service knows {SCHEMA_VERSION}"
+                )
+
+    def _connection(self) -> sqlite3.Connection:
+        if self._closed:
+            raise RuntimeError("the store is closed")
+        connection: sqlite3.Connection | None = getattr(self._local, "connection", None)
+        if connection is None:
+            connection = sqlite3.connect(
+                self.path,
+                isolation_level=None,
+                check_same_thread=False,
+                timeout=BUSY_TIMEOUT_MS / 1000,
+            )
+            connection.row_factory = sqlite3.Row
+            connection.execute("PRAGMA journal_mode = WAL")
+            connection.execute(f"PRAGMA synchronous = {self._synchronous}")
+            connection.execute("PRAGMA foreign_keys = ON")
+            connection.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
+            self._local.connection = connection
+            with self._connections_lock:
+                self._connections.append(connection)
+        return connection
+
+    @contextmanager
+    def _write(self) -> Iterator[sqlite3.Connection]:
+        with self._write_lock:
+            connection = self._connection()
+            connection.execute("BEGIN IMMEDIATE")
+            try:
+                yield connection
+            except BaseException:
+                connection.execute("ROLLBACK")
+                raise
+            connection.execute("COMMIT")
+
+    def _live_record(self, connection: sqlite3.Connection, session_id: str) -> SessionRecord | None:
+        row = connection.execute(
+            "SELECT * FROM sessions WHERE id = ? AND deleted = 0", (session_id,)
+        ).fetchone()
+        return _record(row) if row is not None else None
+
+    @staticmethod
+    def _last_seq(connection: sqlite3.Connection, session_id: str) -> int:
+        row = connection.execute(
+            "SELECT max(seq) FROM (SELECT max(seq) AS seq FROM inputs WHERE session_id = ?"
+            " UNION ALL SELECT max(seq) FROM snapshots WHERE session_id = ?)",
+            (session_id, session_id),
+        ).fetchone()
+        return int(row[0]) if row[0] is not None else 0
+
+    def create_session(self, record: SessionRecord) -> None:
+        with self._write() as connection:
+            exists = connection.execute(
+                "SELECT 1 FROM sessions WHERE id = ?", (record.id,)
+            ).fetchone()
+            if exists is not None:
+                raise SessionExists(record.id)
+            connection.execute(
+                "INSERT INTO sessions (id, config, token_hash, created_at, deleted) VALUES (?, ?, ?, ?, ?)",
+                (
+                    record.id,
+                    dumps(record.config),
+                    record.token_hash,
+                    record.created_at.isoformat(),
+                    int(record.deleted),
+                ),
+            )
+
+    def get_session(self, session_id: str) -> SessionRecord | None:
+        return self._live_record(self._connection(), session_id)
+
+    def list_sessions(self) -> list[SessionRecord]:
+        rows = self._connection().execute(
+            "SELECT * FROM sessions WHERE deleted = 0 ORDER BY created_at, id"
+        )
+        return [_record(row) for row in rows]
+
+    def count_sessions(self) -> int:
+        row = (
+            self._connection().execute("SELECT count(*) FROM sessions WHERE deleted = 0").fetchone()
+        )
+        return int(row[0])
+
+    def delete_session(self, session_id: str) -> bool:
+        with self._write() as connection:
+            cursor = connection.execute(
+                "UPDATE sessions SET deleted = 1 WHERE id = ? AND deleted = 0", (session_id,)
+            )
+            return cursor.rowcount > 0
+
+    def append(
+        self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
+    ) -> LogEntry:
+        text = dumps(entry_input)
+        with self._write() as connection:
+            require(self._live_record(connection, session_id), session_id)
+            check_seq(session_id, seq, self._last_seq(connection, session_id))
+            connection.execute(
+                "INSERT INTO inputs (session_id, seq, received_at, input) VALUES (?, ?, ?, ?)",
+                (session_id, seq, received_at.isoformat(), text),
+            )
+        return LogEntry(seq=seq, received_at=received_at, input=loads(text))
+
+    def last_seq(self, session_id: str) -> int:
+        connection = self._connection()
+        require(self._live_record(connection, session_id), session_id)
+        return self._last_seq(connection, session_id)
+
+    def entries(self, session_id: str, after: int = 0, limit: int | None = None) -> list[LogEntry]:
+        connection = self._connection()
+        require(self._live_record(connection, session_id), session_id)
+        rows = connection.execute(
+            "SELECT seq, received_at, input FROM inputs WHERE session_id = ? AND seq > ? ORDER BY seq LIMIT ?",
+            (session_id, after, -1 if limit is None else limit),
+        )
+        return [_entry(row) for row in rows]
+
+    def save_snapshot(self, session_id: str, snapshot: Snapshot) -> None:
+        text = dumps(snapshot.state)
+        with self._write() as connection:
+            require(self._live_record(connection, session_id), session_id)
+            connection.execute(
+                "INSERT OR REPLACE INTO snapshots (session_id, seq, taken_at, state) VALUES (?, ?, ?, ?)",
+                (session_id, snapshot.seq, snapshot.taken_at.isoformat(), text),
+            )
+            connection.execute(
+                "DELETE FROM snapshots WHERE session_id = ? AND seq NOT IN"
+                " (SELECT seq FROM snapshots WHERE session_id = ? ORDER BY seq DESC LIMIT ?)",
+                (session_id, session_id, SNAPSHOTS_KEPT),
+            )
+
+    def load(self, session_id: str) -> SessionLoad:
+        connection = self._connection()
+        connection.execute("BEGIN")
+        try:
+            record = require(self._live_record(connection, session_id), session_id)
+            row = connection.execute(
+                "SELECT seq, taken_at, state FROM snapshots WHERE session_id = ? ORDER BY seq DESC LIMIT 1",
+                (session_id,),
+            ).fetchone()
+            snapshot = (
+                Snapshot(
+                    seq=row["seq"],
+                    taken_at=datetime.fromisoformat(row["taken_at"]),
+                    state=loads(row["state"]),
+                )
+                if row is not None
+                else None
+            )
+            after = snapshot.seq if snapshot is not None else 0
+            rows = connection.execute(
+                "SELECT seq, received_at, input FROM inputs WHERE session_id = ? AND seq > ? ORDER BY seq",
+                (session_id, after),
+            )
+            entries = [_entry(entry) for entry in rows]
+        finally:
+            connection.execute("COMMIT")
+        return SessionLoad(session=record, snapshot=snapshot, entries=entries)
+
+    def close(self) -> None:
+        with self._connections_lock:
+            self._closed = True
+            for connection in self._connections:
+                connection.close()
+            self._connections.clear()

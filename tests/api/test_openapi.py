@@ -1,0 +1,54 @@
+"""The committed openapi.json is exactly what the app generates; its conventions hold."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from app.main import create_app
+from app.openapi import render_openapi
+from tests.api.conftest import make_settings
+
+COMMITTED = Path(__file__).resolve().parents[2] / "openapi.json"
+
+
+def generated() -> str:
+    return render_openapi(create_app(make_settings()))
+
+
+def test_committed_openapi_matches_the_app() -> None:
+    assert COMMITTED.exists(), "openapi.json is missing: run `make openapi`"
+    assert COMMITTED.read_text(encoding="utf-8") == generated(), (
+        "openapi.json drifted: run `make openapi`"
+    )
+
+
+def test_rendering_is_deterministic() -> None:
+    assert generated() == generated()
+
+
+def operations(document: dict[str, Any]) -> list[dict[str, Any]]:
+    return [
+        operation for path_item in document["paths"].values() for operation in path_item.values()
+    ]
+
+
+def test_operation_ids_are_readable_and_unique() -> None:
+    document = json.loads(generated())
+    ids = [operation["operationId"] for operation in operations(document)]
+    assert len(ids) == len(set(ids))
+    assert all(identifier.isidentifier() and identifier.islower() for identifier in ids)
+    assert {"create_session", "list_sessions", "delete_session", "get_health"} <= set(ids)
+
+
+def test_errors_are_documented_as_problem_json() -> None:
+    document = json.loads(generated())
+    for operation in operations(document):
+        for status, response in operation["responses"].items():
+            if status.startswith(("4", "5")):
+                assert list(response["content"]) == ["application/problem+json"], (
+                    operation["operationId"],
+                    status,
+                )
+    assert "HTTPValidationError" not in json.dumps(document)

@@ -1,0 +1,236 @@
+"""Stores: the protocol on both implementations, and sqlite on a real file (reopen, SIGKILL, threads)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import threading
+from collections.abc import Iterator
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from app.errors import SessionNotFound
+from app.stores import (
+    MemoryStore,
+    SequenceConflict,
+    SessionExists,
+    SessionRecord,
+    Snapshot,
+    SqliteStore,
+    Store,
+    StoreSpec,
+    open_store,
+    parse_store_url,
+    to_plain,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def now() -> datetime:
+    return datetime.now(UTC)
+
+
+def record(session_id: str = "s1") -> SessionRecord:
+    return SessionRecord(
+        id=session_id, config={"state": {"dim": 4}}, token_hash="sha256:ab", created_at=now()
+    )
+
+
+@pytest.fixture(params=["memory", "sqlite"])
+def store(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Store]:
+    opened: Store = (
+        MemoryStore() if request.param == "memory" else SqliteStore(tmp_path / "store.db")
+    )
+    yield opened
+    opened.close()
+
+
+def test_append_then_load(store: Store) -> None:
+    store.create_session(record())
+    for seq in range(1, 6):
+        store.append("s1", seq, {"type": "tracks", "n": seq}, now())
+    loaded = store.load("s1")
+    assert loaded.snapshot is None
+    assert [entry.seq for entry in loaded.entries] == [1, 2, 3, 4, 5]
+    assert loaded.entries[2].input == {"type": "tracks", "n": 3}
+    assert loaded.last_seq == store.last_seq("s1") == 5
+    assert [entry.seq for entry in store.entries("s1", after=3)] == [4, 5]
+    assert [entry.seq for entry in store.entries("s1", after=0, limit=2)] == [1, 2]
+
+
+def test_snapshot_then_log_after_it(store: Store) -> None:
+    store.create_session(record())
+    for seq in range(1, 4):
+        store.append("s1", seq, {"n": seq}, now())
+    state = {"tracks": np.arange(6.0).reshape(2, 3), "count": np.int64(3), "ids": ("F1", "F2")}
+    store.save_snapshot("s1", Snapshot(seq=3, taken_at=now(), state=state))
+    store.append("s1", 4, {"n": 4}, now())
+    loaded = store.load("s1")
+    assert loaded.snapshot is not None and loaded.snapshot.seq == 3
+    assert loaded.snapshot.state == {
+        "tracks": [[0.0, 1.0, 2.0], [3.0, 4.0, 5.0]],
+        "count": 3,
+        "ids": ["F1", "F2"],
+    }
+    assert [entry.seq for entry in loaded.entries] == [4]
+    assert loaded.last_seq == 4
+
+
+def test_sequence_must_be_contiguous(store: Store) -> None:
+    store.create_session(record())
+    store.append("s1", 1, {"n": 1}, now())
+    with pytest.raises(SequenceConflict) as duplicate:
+        store.append("s1", 1, {"n": "again"}, now())
+    assert duplicate.value.expected == 2
+    with pytest.raises(SequenceConflict):
+        store.append("s1", 3, {"n": 3}, now())
+    assert [entry.input for entry in store.entries("s1")] == [{"n": 1}]
+
+
+def test_sessions_list_delete_and_errors(store: Store) -> None:
+    store.create_session(record("a"))
+    store.create_session(record("b"))
+    with pytest.raises(SessionExists):
+        store.create_session(record("a"))
+    assert [entry.id for entry in store.list_sessions()] == ["a", "b"]
+    assert store.delete_session("a") and not store.delete_session("a")
+    assert store.get_session("a") is None and store.count_sessions() == 1
+    with pytest.raises(SessionNotFound):
+        store.append("a", 1, {}, now())
+    with pytest.raises(SessionNotFound):
+        store.load("missing")
+
+
+def test_stored_inputs_are_copies(store: Store) -> None:
+    store.create_session(record())
+    payload = {"tracks": [1, 2]}
+    store.append("s1", 1, payload, now())
+    payload["tracks"].append(3)
+    assert store.entries("s1")[0].input == {"tracks": [1, 2]}
+
+
+def test_to_plain_refuses_objects() -> None:
+    with pytest.raises(TypeError, match=r"\$\.engine"):
+        to_plain({"engine": object()})
+    assert to_plain({"x": np.float32(0.5), "flag": np.bool_(True)}) == {"x": 0.5, "flag": True}
+
+
+def test_store_urls(tmp_path: Path) -> None:
+    assert parse_store_url("memory") == StoreSpec("memory")
+    assert parse_store_url("sqlite") == StoreSpec("sqlite", Path("data/credal-fusion.db"))
+    assert parse_store_url("sqlite:run/x.db") == StoreSpec("sqlite", Path("run/x.db"))
+    assert parse_store_url("sqlite:///tmp/x.db") == StoreSpec("sqlite", Path("/tmp/x.db"))
+    for bad in ("postgres://x", "sqlite:", "redis://localhost"):
+        with pytest.raises(ValueError):
+            parse_store_url(bad)
+    opened = open_store(f"sqlite:{tmp_path / 'nested' / 'dir' / 'x.db'}")
+    assert isinstance(opened, SqliteStore) and opened.path.exists()
+    opened.close()
+
+
+def test_sqlite_restores_after_reopen(tmp_path: Path) -> None:
+    path = tmp_path / "reopen.db"
+    first = SqliteStore(path)
+    first.create_session(record())
+    for seq in range(1, 11):
+        first.append("s1", seq, {"n": seq}, now())
+    first.save_snapshot("s1", Snapshot(seq=6, taken_at=now(), state={"x": [1.5, 2.5]}))
+    first.close()
+    second = SqliteStore(path)
+    loaded = second.load("s1")
+    assert loaded.snapshot is not None and loaded.snapshot.state == {"x": [1.5, 2.5]}
+    assert [entry.input["n"] for entry in loaded.entries] == [7, 8, 9, 10]
+    assert [entry.seq for entry in second.entries("s1")] == list(range(1, 11))
+    second.close()
+
+
+def test_sqlite_uses_wal_and_full_sync(tmp_path: Path) -> None:
+    store = SqliteStore(tmp_path / "pragmas.db")
+    connection = store._connection()
+    assert connection.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+    assert connection.execute("PRAGMA synchronous").fetchone()[0] == 2  # FULL
+    store.close()
+
+
+WRITER = textwrap.dedent(
+    """
+    import sys
+    from datetime import UTC, datetime
+    from app.stores import SessionRecord, SqliteStore
+
+    store = SqliteStore(sys.argv[1])
+    store.create_session(SessionRecord("s1", {}, "sha256:00", datetime.now(UTC)))
+    for seq in range(1, 100_001):
+        store.append("s1", seq, {"n": seq, "pad": "x" * 200}, datetime.now(UTC))
+        print(seq, flush=True)
+    """
+)
+
+
+def test_sqlite_keeps_every_acknowledged_input_after_sigkill(tmp_path: Path) -> None:
+    path = tmp_path / "killed.db"
+    child = subprocess.Popen(
+        [sys.executable, "-c", WRITER, str(path)],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert child.stdout is not None
+    acknowledged = 0
+    try:
+        for line in child.stdout:
+            acknowledged = int(line)
+            if acknowledged >= 150:
+                break
+    finally:
+        os.kill(child.pid, signal.SIGKILL)
+        child.wait()
+        child.stdout.close()
+    assert child.returncode == -signal.SIGKILL
+    assert acknowledged >= 150
+    reopened = SqliteStore(path)
+    entries = reopened.entries("s1")
+    seqs = [entry.seq for entry in entries]
+    assert seqs == list(range(1, len(seqs) + 1))
+    assert len(seqs) >= acknowledged
+    assert all(entry.input["n"] == entry.seq for entry in entries)
+    reopened.append("s1", len(seqs) + 1, {"n": "after restart"}, now())
+    reopened.close()
+
+
+@pytest.mark.parametrize("kind", ["memory", "sqlite"])
+def test_concurrent_appends_keep_seq_contiguous(kind: str, tmp_path: Path) -> None:
+    store: Store = MemoryStore() if kind == "memory" else SqliteStore(tmp_path / "threads.db")
+    store.create_session(record())
+    writers, per_writer = 8, 20
+    conflicts: list[int] = []
+    start = threading.Barrier(writers)
+
+    def write(writer: int) -> None:
+        start.wait()
+        for index in range(per_writer):
+            while True:
+                seq = store.last_seq("s1") + 1
+                try:
+                    store.append("s1", seq, {"writer": writer, "index": index}, now())
+                    break
+                except SequenceConflict:
+                    conflicts.append(writer)
+
+    threads = [threading.Thread(target=write, args=(writer,)) for writer in range(writers)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    entries = store.entries("s1")
+    assert [entry.seq for entry in entries] == list(range(1, writers * per_writer + 1))
+    written = sorted((entry.input["writer"], entry.input["index"]) for entry in entries)
+    assert written == [(writer, index) for writer in range(writers) for index in range(per_writer)]
+    store.close()

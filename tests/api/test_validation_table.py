@@ -1,0 +1,373 @@
+"""Bad bodies are rejected with 422 problem+json naming the field, through FastAPI in process."""
+
+from __future__ import annotations
+
+import copy
+import json
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from typing import Any
+
+import pytest
+from fastapi.testclient import TestClient
+
+from tests.api.examples import DETECTION_REPORT, SESSION_CONFIG, TRACK_REPORT
+from tests.api.validation_app import build_validation_app
+
+Body = dict[str, Any]
+
+
+@dataclass(frozen=True)
+class BadBody:
+    """One row: the route, the body (JSON text or an edit of a valid body), the field expected in ``errors``."""
+
+    name: str
+    route: str
+    loc: tuple[str | int, ...]
+    edit: Callable[[Body], object] | None = None
+    raw: str | None = None
+
+
+def edited(template: Body, change: Callable[[Body], object]) -> Body:
+    body = copy.deepcopy(template)
+    change(body)
+    return body
+
+
+def track(body: Body) -> Body:
+    first: Body = body["tracks"][0]
+    return first
+
+
+def set_key(key: str, value: object) -> Callable[[Body], object]:
+    return lambda body: body.__setitem__(key, value)
+
+
+def set_track(key: str, value: object) -> Callable[[Body], object]:
+    return lambda body: track(body).__setitem__(key, value)
+
+
+def set_mass(masses: list[Body]) -> Callable[[Body], object]:
+    return lambda body: track(body).__setitem__("classification", {"mass": masses})
+
+
+def set_state(key: str, value: object) -> Callable[[Body], object]:
+    return lambda body: body["state"].__setitem__(key, value)
+
+
+def set_sensor(key: str, value: object) -> Callable[[Body], object]:
+    return lambda body: body["sensors"][0].__setitem__(key, value)
+
+
+def add_duplicate_track(body: Body) -> None:
+    body["tracks"].append(copy.deepcopy(track(body)))
+
+
+def add_duplicate_sensor(body: Body) -> None:
+    body["sensors"].append(copy.deepcopy(body["sensors"][0]))
+
+
+REPORT_TEXT = json.dumps(TRACK_REPORT)
+IDENTITY_4 = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
+ASSOCIATE = {
+    "known": [TRACK_REPORT["tracks"][0]],
+    "incoming": [],
+    "classes": ["liner", "bomber", "fighter"],
+}
+
+ROWS = [
+    # --- non-finite numbers sent as raw JSON tokens
+    BadBody(
+        "NaN time",
+        "/tracks",
+        ("body", "time"),
+        raw=REPORT_TEXT.replace('"time": 12.5', '"time": NaN'),
+    ),
+    BadBody(
+        "Infinity in state",
+        "/tracks",
+        ("body", "tracks", 0, "state", 0),
+        raw=REPORT_TEXT.replace('"state": [100.0', '"state": [Infinity'),
+    ),
+    BadBody(
+        "-Infinity in covariance",
+        "/tracks",
+        ("body", "tracks", 0, "covariance", 0, 0),
+        raw=REPORT_TEXT.replace('"covariance": [[4', '"covariance": [[-Infinity'),
+    ),
+    BadBody(
+        "NaN mass",
+        "/tracks",
+        ("body", "tracks", 0, "classification", "mass", 0, "mass"),
+        raw=REPORT_TEXT.replace('"mass": 0.6', '"mass": NaN'),
+    ),
+    BadBody("not JSON", "/tracks", ("body",), raw='{"sensor": "radar-1", '),
+    # --- track lists: dimensions, matrices, ids, types
+    BadBody(
+        "covariance 3x3 for a 4-state",
+        "/tracks",
+        ("body", "tracks", 0, "covariance"),
+        set_track("covariance", [[1, 0, 0], [0, 1, 0], [0, 0, 1]]),
+    ),
+    BadBody(
+        "ragged covariance",
+        "/tracks",
+        ("body", "tracks", 0, "covariance"),
+        set_track("covariance", [[1, 0], [0]]),
+    ),
+    BadBody(
+        "non-symmetric covariance",
+        "/tracks",
+        ("body", "tracks", 0, "covariance"),
+        set_track("covariance", [[4, 1, 0, 0], [0, 1, 0, 0], [0, 0, 4, 0], [0, 0, 0, 1]]),
+    ),
+    BadBody(
+        "covariance not positive definite",
+        "/tracks",
+        ("body", "tracks", 0, "covariance"),
+        set_track("covariance", [[1, 2, 0, 0], [2, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]),
+    ),
+    BadBody(
+        "singular covariance",
+        "/tracks",
+        ("body", "tracks", 0, "covariance"),
+        set_track("covariance", [[0, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]),
+    ),
+    BadBody(
+        "state dim differs from the session's",
+        "/tracks",
+        ("body", "tracks", 0, "state"),
+        lambda body: track(body).update(state=[1.0, 2.0], covariance=[[1, 0], [0, 1]]),
+    ),
+    BadBody("duplicate track ids", "/tracks", ("body", "tracks", 1, "id"), add_duplicate_track),
+    BadBody("track id is a number", "/tracks", ("body", "tracks", 0, "id"), set_track("id", 17)),
+    BadBody(
+        "state is a string",
+        "/tracks",
+        ("body", "tracks", 0, "state"),
+        set_track("state", "100,3,250,-1"),
+    ),
+    BadBody("time is a string", "/tracks", ("body", "time"), set_key("time", "12.5")),
+    BadBody(
+        "unknown key in a track",
+        "/tracks",
+        ("body", "tracks", 0, "velocity"),
+        set_track("velocity", [1, 2]),
+    ),
+    BadBody("unknown sensor", "/tracks", ("body", "sensor"), set_key("sensor", "sonar-9")),
+    BadBody("missing tracks", "/tracks", ("body", "tracks"), lambda body: body.pop("tracks")),
+    # --- class evidence
+    BadBody(
+        "masses sum to 0.9",
+        "/tracks",
+        ("body", "tracks", 0, "classification"),
+        set_mass([{"set": ["bomber"], "mass": 0.5}, {"set": ["liner"], "mass": 0.4}]),
+    ),
+    BadBody(
+        "negative mass",
+        "/tracks",
+        ("body", "tracks", 0, "classification", "mass", 0, "mass"),
+        set_mass([{"set": ["bomber"], "mass": -0.5}, {"set": ["liner"], "mass": 1.5}]),
+    ),
+    BadBody(
+        "unknown class in a focal set",
+        "/tracks",
+        ("body", "tracks", 0, "classification", "mass", 0, "set", 1),
+        set_mass([{"set": ["bomber", "zeppelin"], "mass": 1.0}]),
+    ),
+    BadBody(
+        "duplicate focal sets",
+        "/tracks",
+        ("body", "tracks", 0, "classification"),
+        set_mass(
+            [{"set": ["bomber", "liner"], "mass": 0.5}, {"set": ["liner", "bomber"], "mass": 0.5}]
+        ),
+    ),
+    BadBody(
+        "empty focal set",
+        "/tracks",
+        ("body", "tracks", 0, "classification", "mass", 0, "set"),
+        set_mass([{"set": [], "mass": 1.0}]),
+    ),
+    BadBody(
+        "both mass and likelihoods",
+        "/tracks",
+        ("body", "tracks", 0, "classification"),
+        set_track(
+            "classification",
+            {"mass": [{"set": ["liner"], "mass": 1.0}], "likelihoods": {"liner": 0.5}},
+        ),
+    ),
+    BadBody(
+        "likelihood above 1",
+        "/tracks",
+        ("body", "tracks", 0, "classification", "likelihoods", "bomber"),
+        set_track("classification", {"likelihoods": {"bomber": 1.5}}),
+    ),
+    BadBody(
+        "likelihood of an unknown class",
+        "/tracks",
+        ("body", "tracks", 0, "classification", "likelihoods", "zeppelin"),
+        set_track("classification", {"likelihoods": {"zeppelin": 0.5}}),
+    ),
+    # --- detections
+    BadBody(
+        "z has 3 components for 2 positions",
+        "/detections",
+        ("body", "detections", 0, "z"),
+        lambda body: body["detections"][0].__setitem__("z", [1.0, 2.0, 3.0]),
+    ),
+    BadBody(
+        "detection r not positive definite",
+        "/detections",
+        ("body", "detections", 1, "r"),
+        lambda body: body["detections"][1].__setitem__("r", [[1, 0], [0, -1]]),
+    ),
+    # --- session configs
+    BadBody(
+        "unknown top-level config key", "/sessions", ("body", "colour"), set_key("colour", "red")
+    ),
+    BadBody(
+        "unknown sensor key", "/sessions", ("body", "sensors", 0, "gain"), set_sensor("gain", 2.0)
+    ),
+    BadBody("missing state layout", "/sessions", ("body", "state"), lambda body: body.pop("state")),
+    BadBody("dim is a string", "/sessions", ("body", "state", "dim"), set_state("dim", "4")),
+    BadBody(
+        "position index outside the state",
+        "/sessions",
+        ("body", "state", "position", 1),
+        set_state("position", [0, 7]),
+    ),
+    BadBody(
+        "21 classes",
+        "/sessions",
+        ("body", "classes"),
+        set_key("classes", [f"c{index}" for index in range(21)]),
+    ),
+    BadBody(
+        "duplicate class",
+        "/sessions",
+        ("body", "classes", 1),
+        set_key("classes", ["liner", "liner"]),
+    ),
+    BadBody(
+        "unknown association method",
+        "/sessions",
+        ("body", "association", "method"),
+        set_key("association", {"method": "nearest"}),
+    ),
+    BadBody(
+        "option of another method",
+        "/sessions",
+        ("body", "association", "options", "gamma"),
+        set_key("association", {"method": "gnn", "options": {"gamma": 0.1}}),
+    ),
+    BadBody(
+        "unknown association option",
+        "/sessions",
+        ("body", "association", "options", "temperature"),
+        set_key("association", {"method": "gnn", "options": {"temperature": 3}}),
+    ),
+    BadBody(
+        "sensor r sized for 3 positions",
+        "/sessions",
+        ("body", "sensors", 0, "measurement", "r"),
+        set_sensor("measurement", {"r": [[1, 0, 0], [0, 1, 0], [0, 0, 1]]}),
+    ),
+    BadBody(
+        "sensor r not symmetric",
+        "/sessions",
+        ("body", "sensors", 0, "measurement", "r"),
+        set_sensor("measurement", {"r": [[1, 0.5], [0, 1]]}),
+    ),
+    BadBody(
+        "p_detect above 1",
+        "/sessions",
+        ("body", "sensors", 0, "p_detect"),
+        set_sensor("p_detect", 1.5),
+    ),
+    BadBody(
+        "unknown fov kind",
+        "/sessions",
+        ("body", "sensors", 0, "fov"),
+        set_sensor("fov", {"kind": "cone"}),
+    ),
+    BadBody(
+        "duplicate sensor ids", "/sessions", ("body", "sensors", 1, "id"), add_duplicate_sensor
+    ),
+    BadBody(
+        "unknown state fusion",
+        "/sessions",
+        ("body", "fusion", "state"),
+        set_key("fusion", {"state": "average"}),
+    ),
+    BadBody(
+        "NaN reliability",
+        "/sessions",
+        ("body", "sensors", 0, "reliability"),
+        raw=json.dumps(SESSION_CONFIG).replace('"reliability": 0.9', '"reliability": NaN'),
+    ),
+    # --- stateless association and WebSocket messages
+    BadBody("unknown method", "/associate", ("body", "method"), set_key("method", "jpda")),
+    BadBody(
+        "mixed state dims",
+        "/associate",
+        ("body", "incoming", 0, "state"),
+        set_key("incoming", [{"id": "x", "state": [1.0, 2.0], "covariance": [[1, 0], [0, 1]]}]),
+    ),
+    BadBody("message without type", "/message", ("body",), lambda body: body.pop("type")),
+    BadBody("message of unknown type", "/message", ("body",), set_key("type", "hello")),
+]
+
+TEMPLATES: dict[str, Body] = {
+    "/tracks": TRACK_REPORT,
+    "/detections": DETECTION_REPORT,
+    "/sessions": SESSION_CONFIG,
+    "/associate": ASSOCIATE,
+    "/message": {"type": "tracks", "ref": "r-1", **TRACK_REPORT},
+}
+
+
+@pytest.fixture(scope="module")
+def validation_client() -> Iterator[TestClient]:
+    with TestClient(build_validation_app(), raise_server_exceptions=False) as test_client:
+        yield test_client
+
+
+def test_the_table_is_large_enough() -> None:
+    assert len(ROWS) >= 25
+    assert len({row.name for row in ROWS}) == len(ROWS)
+
+
+@pytest.mark.parametrize("route", sorted(TEMPLATES))
+def test_templates_are_valid(validation_client: TestClient, route: str) -> None:
+    response = validation_client.post(route, json=TEMPLATES[route])
+    assert response.status_code == 200, response.text
+
+
+@pytest.mark.parametrize("row", ROWS, ids=[row.name for row in ROWS])
+def test_bad_body_is_422_problem_naming_the_field(
+    validation_client: TestClient, row: BadBody
+) -> None:
+    if row.raw is not None:
+        text = row.raw
+        assert text != json.dumps(TEMPLATES[row.route]), "the raw edit did not apply"
+    else:
+        assert row.edit is not None
+        text = json.dumps(edited(TEMPLATES[row.route], row.edit))
+    response = validation_client.post(
+        row.route, content=text, headers={"Content-Type": "application/json"}
+    )
+    assert response.status_code == 422, response.text
+    assert response.headers["content-type"].startswith("application/problem+json")
+    problem = response.json()
+    assert problem["type"] == "urn:credal-fusion:problem:validation-error"
+    assert problem["status"] == 422
+    assert problem["instance"] == row.route
+    locations = [tuple(error["loc"]) for error in problem["errors"]]
+    assert any(location[: len(row.loc)] == row.loc for location in locations), (
+        row.loc,
+        problem["errors"],
+    )
+    assert all(error["pointer"].startswith("#") and error["detail"] for error in problem["errors"])
+    assert "invalid field" in problem["detail"]
