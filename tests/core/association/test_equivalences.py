@@ -24,8 +24,10 @@ def uncontested(seed: int, threshold: float):
     known = Estimates.of(rng.uniform(0, 30, size=(n, 2)), np.tile(np.eye(2), (n, 1, 1)))
     incoming = Estimates.of(
         np.concatenate(
-            [known.states[: min(n, m)] + rng.normal(0, 2.0, size=(min(n, m), 2)),
-             rng.uniform(0, 30, size=(m - min(n, m), 2))]
+            [
+                known.states[: min(n, m)] + rng.normal(0, 2.0, size=(min(n, m), 2)),
+                rng.uniform(0, 30, size=(m - min(n, m), 2)),
+            ]
         ),
         np.tile(0.5 * np.eye(2), (m, 1, 1)),
     )
@@ -47,7 +49,9 @@ def test_denoeux_decides_like_gnn_when_uncontested(seed, threshold):
     )
     assert decided(gnn) == decided(denoeux)
     # both equal the pairs under the threshold
-    assert decided(gnn) == {(int(i), int(j)) for i, j in zip(*np.nonzero(d < threshold), strict=True)}
+    assert decided(gnn) == {
+        (int(i), int(j)) for i, j in zip(*np.nonzero(d < threshold), strict=True)
+    }
 
 
 def test_contested_case_gnn_and_denoeux_differ():
