@@ -91,6 +91,11 @@ def fuzzy(d: float, alpha: float) -> tuple[float, float, float]:
     return a, b, 1 - a - b
 
 
+def likelihood(d: float, alpha: float) -> tuple[float, float, float]:
+    s = math.exp(-d / 2)
+    return alpha * s, alpha * (1 - s), 1 - alpha
+
+
 def combined_pairwise(partners, evidence) -> dict:
     """Conjunctive combination of the pairwise sources of one item, by enumeration."""
     elements = [*partners, STAR]

@@ -21,6 +21,7 @@ from brute_force import (
     distances,
     fuzzy,
     gbt,
+    likelihood,
 )
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
@@ -136,7 +137,7 @@ def test_hachour_brute_force(seed, likelihood, maximise):
     assert decided(default) == best
 
 
-def pairwise_scores(d, alpha, gate, score, direction="incoming"):
+def pairwise_scores(d, alpha, gate, score, direction="incoming", evidence=fuzzy):
     """Per item: scores of its frame members (within the gate) and of *, by enumeration."""
     matrix = d if direction == "incoming" else d.T  # rows: the other side, cols: items
     n, m = matrix.shape
@@ -144,7 +145,9 @@ def pairwise_scores(d, alpha, gate, score, direction="incoming"):
     star = np.zeros(m)
     for t in range(m):
         partners = [ell for ell in range(n) if matrix[ell, t] <= gate]
-        mass = combined_pairwise(partners, {ell: fuzzy(matrix[ell, t], alpha) for ell in partners})
+        mass = combined_pairwise(
+            partners, {ell: evidence(matrix[ell, t], alpha) for ell in partners}
+        )
         elements = [*partners, STAR]
         if score == "betp":
             result = betp(mass, elements)
@@ -162,12 +165,14 @@ def pairwise_scores(d, alpha, gate, score, direction="incoming"):
     seed=st.integers(0, 2**32 - 1),
     alpha=st.sampled_from([0.9, 0.5]),
     gate_probability=st.sampled_from([0.9, 1.0]),
+    evidence=st.sampled_from(["fuzzy", "likelihood"]),
 )
-def test_mercier_brute_force(seed, alpha, gate_probability):
+def test_mercier_brute_force(seed, alpha, gate_probability, evidence):
     known, incoming = instance(seed)
     d, _ = reference_distances(known, incoming)
     gate = chi2.ppf(gate_probability, 2) if gate_probability < 1 else math.inf
-    scores, star = pairwise_scores(d, alpha, gate, "betp")
+    model = {"fuzzy": fuzzy, "likelihood": likelihood}[evidence]
+    scores, star = pairwise_scores(d, alpha, gate, "betp", "incoming", model)
     n, m = d.shape
 
     def objective(mt):
@@ -177,7 +182,10 @@ def test_mercier_brute_force(seed, alpha, gate_probability):
     best, top, second = best_matching(n, m, objective)
     assume(top - second > TIE)
     result = associate(
-        known, incoming, "mercier", {"alpha": alpha, "gate_probability": gate_probability}
+        known,
+        incoming,
+        "mercier",
+        {"alpha": alpha, "gate_probability": gate_probability, "evidence": evidence},
     )
     assert decided(result) == best
     np.testing.assert_allclose(result.scores.dense(), scores, atol=1e-12)
@@ -185,13 +193,18 @@ def test_mercier_brute_force(seed, alpha, gate_probability):
 
 
 @SETTINGS
-@given(seed=st.integers(0, 2**32 - 1), score=st.sampled_from(["belief", "betp"]))
-def test_dang_han_brute_force(seed, score):
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    score=st.sampled_from(["belief", "betp"]),
+    evidence=st.sampled_from(["fuzzy", "likelihood"]),
+)
+def test_dang_han_brute_force(seed, score, evidence):
     known, incoming = instance(seed)
     d, _ = reference_distances(known, incoming)
     gate = chi2.ppf(0.999, 2)
-    forward, forward_star = pairwise_scores(d, 0.9, gate, score, "incoming")
-    backward, backward_star = pairwise_scores(d, 0.9, gate, score, "known")
+    model = {"fuzzy": fuzzy, "likelihood": likelihood}[evidence]
+    forward, forward_star = pairwise_scores(d, 0.9, gate, score, "incoming", model)
+    backward, backward_star = pairwise_scores(d, 0.9, gate, score, "known", model)
     n, m = d.shape
 
     def choose(values, star, t):
@@ -208,9 +221,10 @@ def test_dang_han_brute_force(seed, score):
     expected = {
         (ell, t) for ell, t in enumerate(known_choice) if t >= 0 and incoming_choice[t] == ell
     }
-    result = associate(known, incoming, "dang_han", {"score": score})
+    result = associate(known, incoming, "dang_han", {"score": score, "evidence": evidence})
     assert decided(result) == expected
     np.testing.assert_allclose(result.scores.dense(), forward, atol=1e-12)
+    np.testing.assert_allclose(result.scores.new, forward_star, atol=1e-12)
 
 
 def objective_value(result):

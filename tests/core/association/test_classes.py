@@ -113,3 +113,40 @@ def test_class_errors():
     other = MassFunction.vacuous(Frame(["a", "b"]))
     with pytest.raises(InvalidInput, match="same class frame"):
         associate(known, incoming, "hachour", known_classes=known_classes, incoming_classes=[other])
+
+
+@pytest.mark.parametrize(
+    ("method", "options"),
+    [
+        ("denoeux", {}),
+        ("hachour", {}),
+        ("mercier", {"alpha": 1.0}),
+        ("dang_han", {"alpha": 1.0}),
+        ("dang_han", {"alpha": 1.0, "score": "betp"}),
+    ],
+)
+def test_total_class_conflict_vetoes_a_perfect_kinematic_match(method, options):
+    # identical states (D = 0; with α = 1 the pairwise source is certain: a = 1) but
+    # certain, disjoint classes: K = 1, pl_class = 0. Dempster's rule is undefined for
+    # that pair (aK = 1): the class veto wins and nothing is matched.
+    certain_fighter = mass((["fighter"], 1.0))
+    certain_liner = mass((["liner"], 1.0))
+    state = (np.zeros((1, 1)), np.full((1, 1, 1), 0.01))
+    result = associate(
+        state,
+        state,
+        method,
+        options,
+        known_classes=[certain_liner],
+        incoming_classes=[certain_fighter],
+    )
+    assert result.pairs == []
+    same = associate(
+        state,
+        state,
+        method,
+        options,
+        known_classes=[certain_liner],
+        incoming_classes=[certain_liner],
+    )
+    assert same.assignment() == {0: 0}
