@@ -16,6 +16,7 @@ from core.association.associate import (
     associate,
     associate_measurements,
 )
+from core.association.cheap_jpda import JpdaWeights, cheap_jpda_weights
 from core.association.classes import class_conflict
 from core.association.problem import AssociationProblem
 from core.association.result import AssociationResult, Diagnostics, ScoreMatrix
@@ -27,10 +28,12 @@ __all__ = [
     "AssociationProblem",
     "AssociationResult",
     "Diagnostics",
+    "JpdaWeights",
     "Matching",
     "ScoreMatrix",
     "associate",
     "associate_measurements",
+    "cheap_jpda_weights",
     "class_conflict",
     "max_gain_matching",
     "solve_dense",

@@ -201,6 +201,11 @@ def _candidate_index_pairs(
     columns: Sequence[int] | slice = (
         list(model.positions) if model.positions is not None else slice(None)
     )
+    both = np.concatenate([known.states[:, columns], incoming.states[:, columns]])
+    if float(np.linalg.norm(both.max(axis=0) - both.min(axis=0))) <= radius:
+        # every pair is within the radius (dense layout): enumerate, no tree
+        rows, cols = np.divmod(np.arange(n * m, dtype=np.int64), m)
+        return rows, cols
     known_tree = cKDTree(known.states[:, columns])
     incoming_tree = cKDTree(incoming.states[:, columns])
     close = known_tree.sparse_distance_matrix(incoming_tree, radius, output_type="ndarray")
