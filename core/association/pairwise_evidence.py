@@ -36,6 +36,7 @@ from core.association.options import Options, choice, number
 from core.association.problem import AssociationProblem
 from core.association.rows import RaggedRows
 from core.belief import pairwise_evidence_betp_rows
+from core.belief.gbt import leave_one_out_products
 from core.distance import CandidatePairs, threshold_from_probability
 
 Evidence = tuple[FloatArray, FloatArray, FloatArray]
@@ -77,14 +78,6 @@ def with_class_evidence(evidence: Evidence, class_plausibility: FloatArray) -> E
     new_ignorance = np.clip(new_ignorance, 0.0, 1.0)
     new_refute = np.clip(1.0 - new_support - new_ignorance, 0.0, 1.0)
     return new_support, new_refute, new_ignorance
-
-
-def leave_one_out_products(factors: FloatArray) -> FloatArray:
-    """``out[..., j] = Π_{k≠j} factors[..., k]`` by prefix/suffix products (no division)."""
-    ones = np.ones((*factors.shape[:-1], 1))
-    prefix = np.cumprod(np.concatenate([ones, factors[..., :-1]], axis=-1), axis=-1)
-    suffix = np.cumprod(np.concatenate([ones, factors[..., :0:-1]], axis=-1), axis=-1)[..., ::-1]
-    return np.asarray(prefix * suffix, dtype=np.float64)
 
 
 def singleton_belief_rows(

@@ -42,7 +42,7 @@ def _gauss_legendre_01(n_nodes: int) -> tuple[FloatArray, FloatArray]:
     return (nodes + 1.0) / 2.0, weights / 2.0
 
 
-def _leave_one_out_products(factors: FloatArray) -> FloatArray:
+def leave_one_out_products(factors: FloatArray) -> FloatArray:
     """``out[..., j] = Π_{k≠j} factors[..., k]`` by prefix/suffix products (no division)."""
     ones = np.ones((*factors.shape[:-1], 1))
     prefix = np.cumprod(np.concatenate([ones, factors[..., :-1]], axis=-1), axis=-1)
@@ -116,7 +116,7 @@ def gbt_betp_rows(plausibility: FloatArray) -> tuple[FloatArray, BoolArray]:
     pc = np.take_along_axis(p, columns, axis=1)  # zero padding: factor 1, numerator 0
     nodes, weights = _gauss_legendre_01((width + 1) // 2)  # degree width − 1
     factors = 1.0 - pc[:, None, :] + pc[:, None, :] * nodes[None, :, None]
-    integrals = np.einsum("l,bln->bn", weights, _leave_one_out_products(factors))
+    integrals = np.einsum("l,bln->bn", weights, leave_one_out_products(factors))
     numerators = pc * integrals
     normaliser = numerators.sum(axis=1)  # = 1 − Π(1 − p), no cancellation
     defined = normaliser > 0.0
@@ -182,9 +182,9 @@ def pairwise_evidence_betp_rows(
     nodes, weights = _gauss_legendre_01((width + 2) // 2)  # degree width
     factors = bc[:, None, :] + cc[:, None, :] * nodes[None, :, None]  # (B, L, w)
     full = np.prod(factors, axis=2)  # (B, L)
-    loo = _leave_one_out_products(factors)  # (B, L, w)
+    loo = leave_one_out_products(factors)  # (B, L, w)
     star = full @ weights
-    at_one = _leave_one_out_products(bc + cc)  # Π_{k≠j}(b_k + c_k)
+    at_one = leave_one_out_products(bc + cc)  # Π_{k≠j}(b_k + c_k)
     singles = ac * at_one
     shared = cc * np.einsum("l,bln->bn", weights * nodes, loo)
     full_at_one = np.prod(bc + cc, axis=1)

@@ -13,7 +13,13 @@ import math
 
 import numpy as np
 import pytest
-from brute_force import (
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+from scipy.stats import chi2
+
+from core.association import associate
+
+from .brute_force import (
     STAR,
     best_matching,
     betp,
@@ -23,11 +29,6 @@ from brute_force import (
     gbt,
     likelihood,
 )
-from hypothesis import HealthCheck, assume, given, settings
-from hypothesis import strategies as st
-from scipy.stats import chi2
-
-from core.association import associate
 
 SETTINGS = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 TIE = 1e-9
