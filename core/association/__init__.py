@@ -10,6 +10,7 @@ solved per connected cluster (:mod:`~core.association.assignment`).
 
 from core.association.assignment import Matching, max_gain_matching, solve_dense
 from core.association.associate import (
+    DEFAULT_DISTANCE,
     LOCAL_TRACKING_DEFAULT,
     METHODS,
     TRACK_TO_TRACK_DEFAULT,
@@ -22,6 +23,7 @@ from core.association.problem import AssociationProblem
 from core.association.result import AssociationResult, Diagnostics, ScoreMatrix
 
 __all__ = [
+    "DEFAULT_DISTANCE",
     "LOCAL_TRACKING_DEFAULT",
     "METHODS",
     "TRACK_TO_TRACK_DEFAULT",

@@ -39,6 +39,17 @@ METHODS: dict[
 }
 
 TRACK_TO_TRACK_DEFAULT = ("denoeux", {"gate_probability": 0.999, "alpha": 1.0}, "sum")
+
+DEFAULT_DISTANCE: dict[str, str] = {
+    "gnn": "mean",
+    "denoeux": "sum",
+    "hachour": "mean",
+    "mercier": "mean",
+    "dang_han": "mean",
+}
+"""Track-to-track distance of each method when the caller names none: the
+``mean`` covariance of [T2T] eq 1-2 for the methods compared there, ``sum``
+for the session default ``denoeux`` (ALGORITHMS.md §3.7)."""
 LOCAL_TRACKING_DEFAULT = ("gnn", {"gate_probability": 0.999}, "innovation")
 
 

@@ -11,11 +11,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
+from core.association import DEFAULT_DISTANCE
 from core.belief import Frame
 from core.errors import InvalidInput
 from core.fusion.motion import MotionModel
 from core.fusion.state import StateFusion
-from core.geometry import Coverage, FieldOfView
+from core.geometry import Coverage, FieldOfView, PolygonView
 from core.lifecycle import ScoreModel
 
 
@@ -109,13 +110,16 @@ class FusionConfig:
     sensors : the session's sensors, in a fixed order.
     classes : the class frame, or None for a session without classification.
     association_method, association_options, distance : track-to-track association
-        (defaults of ALGORITHMS.md §3.7: ``denoeux``, gate probability 0.999, α = 1, ``sum``).
+        (defaults of ALGORITHMS.md §3.7: ``denoeux``, gate probability 0.999, α = 1, ``sum``);
+        ``distance=None`` takes the method's own (``core.association.DEFAULT_DISTANCE``).
     track_continuity : a report track that keeps the id under which its sensor
         last reported a live fused track stays with it while it passes a loose χ²
         gate (``sum`` distance, see ``engine.CONTINUITY_GATE_PROBABILITY``); only the rest
         goes to the association method. Off, every report is associated afresh.
     state_fusion : how the sensors' latest estimates are combined.
     management : the track life cycle.
+    region : the surveillance region; by default the union of the sensors'
+        ranges (``core.geometry``): outside it a track is out of range.
     """
 
     motion: MotionModel
@@ -125,10 +129,11 @@ class FusionConfig:
     association_options: Mapping[str, object] = field(
         default_factory=lambda: MappingProxyType({"gate_probability": 0.999, "alpha": 1.0})
     )
-    distance: str = "sum"
+    distance: str | None = None
     track_continuity: bool = True
     state_fusion: StateFusion = StateFusion.COVARIANCE_INTERSECTION
     management: TrackManagement = field(default_factory=TrackManagement)
+    region: PolygonView | None = None
 
     def __post_init__(self) -> None:
         if not self.sensors:
@@ -140,6 +145,9 @@ class FusionConfig:
         object.__setattr__(
             self, "association_options", MappingProxyType(dict(self.association_options))
         )
+        if self.distance is None:
+            method_distance = DEFAULT_DISTANCE.get(self.association_method, "sum")
+            object.__setattr__(self, "distance", method_distance)
 
     @property
     def dim(self) -> int:
@@ -156,4 +164,4 @@ class FusionConfig:
 
     @property
     def coverage(self) -> Coverage:
-        return Coverage(tuple(sensor.fov for sensor in self.sensors))
+        return Coverage(tuple(sensor.fov for sensor in self.sensors), self.region)

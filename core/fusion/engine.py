@@ -251,7 +251,7 @@ class SessionEngine:
             (incoming_states[cols], incoming_covariances[cols]),
             self.config.association_method,
             self.config.association_options,
-            self.config.distance,
+            self.config.distance or "sum",
             None if known_classes is None else [known_classes[row] for row in rows],
             None if incoming_classes is None else [incoming_classes[col] for col in cols],
         )

@@ -82,8 +82,12 @@ def optimal_ci_weight(first: FloatArray, second: FloatArray) -> FloatArray:
         high = np.where(rising, middle, high)
         low = np.where(rising, low, middle)
     omega = (low + high) / 2.0
-    omega = np.where(at_low >= 0.0, 0.0, omega)  # minimum at the boundary
-    return np.asarray(np.where(at_high <= 0.0, 1.0, omega), dtype=np.float64)
+    # Boundary minima; where tr P(ω) is flat (P₁ = P₂) every ω is optimal: take ½.
+    scale = np.sum(weights_c, axis=-1) * (1.0 + np.max(np.abs(slope), axis=-1)) * 1e-12
+    flat = (np.abs(at_low) <= scale) & (np.abs(at_high) <= scale)
+    omega = np.where(at_low > scale, 0.0, omega)
+    omega = np.where(at_high < -scale, 1.0, omega)
+    return np.asarray(np.where(flat, 0.5, omega), dtype=np.float64)
 
 
 def fast_ci_weights(covariances: FloatArray, present: BoolArray) -> FloatArray:

@@ -61,9 +61,23 @@ class TrackListScenario:
     reports: tuple[SensorTrackList, ...]
 
 
-def estimate_covariance(position_sigma: float, velocity_sigma: float) -> FloatArray:
-    """Diagonal covariance of a ``[x, ẋ, y, ẏ]`` estimate."""
-    return np.diag([position_sigma**2, velocity_sigma**2, position_sigma**2, velocity_sigma**2])
+def estimate_covariance(
+    position_sigma: float, velocity_sigma: float, elongation: float = 1.0
+) -> FloatArray:
+    """Diagonal covariance of a ``[x, ẋ, y, ẏ]`` estimate.
+
+    ``elongation`` stretches x by that factor and shrinks y by it (an elongated
+    error ellipse, as a radar's range/bearing errors give); 1 is round.
+    """
+    sx, sy = elongation, 1.0 / elongation
+    return np.diag(
+        [
+            (position_sigma * sx) ** 2,
+            (velocity_sigma * sx) ** 2,
+            (position_sigma * sy) ** 2,
+            (velocity_sigma * sy) ** 2,
+        ]
+    )
 
 
 def _constant_velocity(start: FloatArray, n_steps: int, time_interval: float) -> FloatArray:
@@ -91,9 +105,10 @@ def _report(
     truths: tuple[TargetTruth, ...],
     covariance: FloatArray,
     p_detect: float,
+    noise: float = 1.0,
 ) -> SensorTrackList:
     present = [truth for truth in truths if truth.alive(step) and rng.random() < p_detect]
-    root = np.linalg.cholesky(covariance)
+    root = noise * np.linalg.cholesky(covariance)
     states = np.array(
         [_at(truth.state_at(step), lag) + root @ rng.standard_normal(4) for truth in present]
     )
@@ -111,12 +126,26 @@ def _report(
 def t2t_four(
     seed: int = 0,
     position_sigma: float = 0.5,
+    noise: float = 1.0,
+    elongation: float = 1.0,
     separation: float = 10.0,
     n_steps: int = 20,
     time_interval: float = 1.0,
 ) -> TrackListScenario:
-    """Four targets in a square of side ``separation`` (m), flying east at 10 m/s; two sensors."""
-    if not (position_sigma > 0.0 and separation > 0.0 and n_steps > 0 and time_interval > 0.0):
+    """Four targets in a square of side ``separation`` (m), flying east at 10 m/s; two sensors.
+
+    The sensors report the covariance of ``position_sigma`` (velocity σ half of
+    it); their actual errors are ``noise`` times that ([T2T] §4 varies the
+    noise realisations under fixed reported covariances). With ``elongation``
+    > 1, s1's errors are stretched along x and s2's along y.
+    """
+    if not (
+        position_sigma > 0.0
+        and noise >= 0.0
+        and separation > 0.0
+        and n_steps > 0
+        and time_interval > 0.0
+    ):
         raise ScenarioError("t2t_four needs positive noise, separation, steps and interval")
     rng = np.random.default_rng(seed)
     corners = [(0.0, 0.0), (separation, 0.0), (0.0, separation), (separation, separation)]
@@ -124,13 +153,18 @@ def t2t_four(
         TargetTruth(k, 0, _constant_velocity(np.array([x, 10.0, y, 0.0]), n_steps, time_interval))
         for k, (x, y) in enumerate(corners)
     )
-    covariance = estimate_covariance(position_sigma, position_sigma / 2.0)
+    covariances = {
+        "s1": estimate_covariance(position_sigma, position_sigma / 2.0, elongation),
+        "s2": estimate_covariance(position_sigma, position_sigma / 2.0, 1.0 / elongation),
+    }
     reports = []
     for step in range(n_steps):
         for offset, sensor in enumerate(("s1", "s2")):
             time = step * time_interval + offset * 1e-3 * time_interval
             lag = time - step * time_interval
-            reports.append(_report(rng, sensor, time, step, lag, truths, covariance, 1.0))
+            reports.append(
+                _report(rng, sensor, time, step, lag, truths, covariances[sensor], 1.0, noise)
+            )
     return TrackListScenario("t2t-four", seed, ("s1", "s2"), truths, tuple(reports))
 
 
