@@ -35,6 +35,7 @@ use the position components, so the densities of
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import dataclass
 from typing import Any
 
@@ -44,6 +45,8 @@ from scipy.stats import chi2
 from core.arrays import BoolArray, FloatArray, IntArray
 from core.association import associate
 from core.belief import MassFunction
+from core.distance import Estimates
+from core.distance.cholesky import quadratic_form_and_log_det
 from core.errors import InvalidInput, StaleReport, TotalConflict
 from core.fusion.classes import ClassAssessment, accumulate_likelihoods, fuse_sensor_classes
 from core.fusion.config import FusionConfig, SensorSpec
@@ -112,20 +115,21 @@ class SessionEngine:
         StaleReport
             The report is not newer than the sensor's previous report.
         """
-        sensor = self._check(report)
+        sensor, incoming = self._check(report)
         t = float(report.time)
         live = [track for track in self.tracks if track.status in LIVE]
         states, covariances = self._fused_at(live, t)
-        decision = self._associate(live, states, covariances, report)
+        decision = self._associate(live, states, covariances, report, incoming)
         terminated: list[FusedTrack] = []
         confirmed: list[FusedTrack] = []
 
-        for row, col, _, _ in decision.pairs:
+        rows = np.array([pair[0] for pair in decision.pairs], dtype=np.int64)
+        cols = np.array([pair[1] for pair in decision.pairs], dtype=np.int64)
+        increments = self._hit_increments(states[rows], covariances[rows], incoming, cols, sensor)
+        for row, col, increment in zip(rows, cols, increments, strict=True):
             fused = live[row]
             was_tentative = fused.status is TrackStatus.TENTATIVE
-            self._hit(
-                fused, report.tracks[col], states[row], covariances[row], report, sensor.p_detect
-            )
+            self._hit(fused, report.tracks[col], float(increment), report)
             if was_tentative and fused.status is TrackStatus.CONFIRMED:
                 confirmed.append(fused)
         missed = np.asarray(decision.missed, dtype=np.int64)
@@ -148,33 +152,34 @@ class SessionEngine:
         return self._result(report, decision, live, terminated, explain)
 
     # ------------------------------------------------------------ checks
-    def _check(self, report: TrackReport) -> SensorSpec:
+    def _check(self, report: TrackReport) -> tuple[SensorSpec, Estimates]:
+        """Validate a report without changing anything; returns its sensor and its estimates."""
         sensor = self.config.sensor(report.sensor)
         if not math.isfinite(report.time):
             raise InvalidInput(f"time must be finite, got {report.time!r}")
         last = self.last_report.get(report.sensor)
         if last is not None and report.time <= last:
             raise StaleReport(report.sensor, report.time, last)
-        ids = [track.id for track in report.tracks]
-        repeated = sorted({track_id for track_id in ids if ids.count(track_id) > 1})
+        repeated = sorted(
+            track_id for track_id, n in Counter(t.id for t in report.tracks).items() if n > 1
+        )
         if repeated:
             raise InvalidInput(f"tracks: ids repeat: {repeated}")
         dim = self.config.dim
         for index, track in enumerate(report.tracks):
-            where = f"tracks[{index}] (id {track.id!r})"
             if track.state.shape != (dim,) or track.covariance.shape != (dim, dim):
                 raise InvalidInput(
-                    f"{where}: state must have {dim} components and covariance {dim}×{dim}, "
-                    f"got {track.state.shape} and {track.covariance.shape}"
+                    f"tracks[{index}] (id {track.id!r}): state must have {dim} components and "
+                    f"covariance {dim}×{dim}, got {track.state.shape} and {track.covariance.shape}"
                 )
-            if not (np.all(np.isfinite(track.state)) and np.all(np.isfinite(track.covariance))):
-                raise InvalidInput(f"{where}: state and covariance must be finite")
-            if not np.allclose(track.covariance, track.covariance.T, rtol=1e-9, atol=1e-12):
-                raise InvalidInput(f"{where}: covariance is not symmetric")
-            if np.linalg.eigvalsh(track.covariance)[0] <= 0.0:
-                raise InvalidInput(f"{where}: covariance is not positive definite")
-            self._check_classes(track, where)
-        return sensor
+            self._check_classes(track, f"tracks[{index}] (id {track.id!r})")
+        estimates = Estimates.of(
+            np.array([track.state for track in report.tracks]).reshape(-1, dim),
+            np.array([track.covariance for track in report.tracks]).reshape(-1, dim, dim),
+            name="tracks",
+            dimension=dim,
+        )
+        return sensor, estimates
 
     def _check_classes(self, track: ReportedTrack, where: str) -> None:
         frame = self.config.classes
@@ -231,17 +236,14 @@ class SessionEngine:
         states: FloatArray,
         covariances: FloatArray,
         report: TrackReport,
+        incoming: Estimates,
     ) -> Decision:
         """Continuity first (when on), then the session's method on what is left."""
-        dim = self.config.dim
-        incoming_states = np.array([track.state for track in report.tracks]).reshape(-1, dim)
-        incoming_covariances = np.array([track.covariance for track in report.tracks]).reshape(
-            -1, dim, dim
-        )
-        kept = self._continuity(live, states, covariances, report)
-        rows = np.array(
-            [row for row in range(len(live)) if row not in kept.values()], dtype=np.int64
-        )
+        incoming_states, incoming_covariances = incoming.states, incoming.covariances
+        assert incoming_covariances is not None
+        kept = self._continuity(live, states, covariances, report, incoming)
+        kept_rows = set(kept.values())
+        rows = np.array([row for row in range(len(live)) if row not in kept_rows], dtype=np.int64)
         cols = np.array(
             [col for col in range(len(report.tracks)) if col not in kept], dtype=np.int64
         )
@@ -283,6 +285,7 @@ class SessionEngine:
         states: FloatArray,
         covariances: FloatArray,
         report: TrackReport,
+        incoming: Estimates,
     ) -> dict[int, int]:
         """Report tracks the sensor keeps reporting under the id it gave a fused track.
 
@@ -298,19 +301,17 @@ class SessionEngine:
             for row, fused in enumerate(live)
             if report.sensor in fused.estimates
         }
-        kept: dict[int, int] = {}
+        pairs = [(col, bound[t.id]) for col, t in enumerate(report.tracks) if t.id in bound]
+        if not pairs:
+            return {}
+        cols = np.array([col for col, _ in pairs], dtype=np.int64)
+        rows = np.array([row for _, row in pairs], dtype=np.int64)
+        assert incoming.covariances is not None
+        distance, _ = _mahalanobis(
+            incoming.states[cols] - states[rows], incoming.covariances[cols] + covariances[rows]
+        )
         gate = float(chi2.ppf(CONTINUITY_GATE_PROBABILITY, self.config.dim))
-        for col, reported in enumerate(report.tracks):
-            row = bound.get(reported.id)
-            if row is None:
-                continue
-            innovation = reported.state - states[row]
-            distance = float(
-                innovation @ np.linalg.solve(covariances[row] + reported.covariance, innovation)
-            )
-            if distance <= gate:
-                kept[col] = row
-        return kept
+        return {int(c): int(r) for c, r, d in zip(cols, rows, distance, strict=True) if d <= gate}
 
     def _association_classes(
         self, live: list[FusedTrack], report: TrackReport
@@ -342,27 +343,29 @@ class SessionEngine:
         return known, incoming
 
     # ------------------------------------------------------- life cycle
-    def _hit(
+    def _hit_increments(
         self,
-        fused: FusedTrack,
-        reported: ReportedTrack,
-        predicted_state: FloatArray,
-        predicted_covariance: FloatArray,
-        report: TrackReport,
-        p_detect: float,
-    ) -> None:
+        states: FloatArray,
+        covariances: FloatArray,
+        incoming: Estimates,
+        cols: IntArray,
+        sensor: SensorSpec,
+    ) -> FloatArray:
+        """Score increments ΔL of every associated pair, on the position components."""
+        if len(cols) == 0:
+            return np.zeros(0)
+        assert incoming.covariances is not None
         position = self._position
-        innovation = reported.state[position] - predicted_state[position]
-        combined = (
-            predicted_covariance[np.ix_(position, position)]
-            + reported.covariance[np.ix_(position, position)]
-        )
-        distance = float(innovation @ np.linalg.solve(combined, innovation))
-        log_det = float(np.linalg.slogdet(combined)[1])
-        score = self.config.management.score_model(p_detect)
-        fused.score += float(
-            score.hit_increment(np.array([distance]), np.array([log_det]), len(position))[0]
-        )
+        combined = (covariances + incoming.covariances[cols])[:, position][:, :, position]
+        innovation = incoming.states[cols][:, position] - states[:, position]
+        distance, log_det = _mahalanobis(innovation, combined)
+        score = self.config.management.score_model(sensor.p_detect)
+        return score.hit_increment(distance, log_det, len(self._position))
+
+    def _hit(
+        self, fused: FusedTrack, reported: ReportedTrack, increment: float, report: TrackReport
+    ) -> None:
+        fused.score += increment
         fused.hits += 1
         previous = fused.estimates.get(report.sensor)
         fused.estimates[report.sensor] = SensorEstimate(
@@ -654,6 +657,11 @@ class SessionEngine:
         engine.last_report = {str(k): float(v) for k, v in state["last_report"].items()}
         engine.tracks = [FusedTrack.from_plain(plain, config.classes) for plain in state["tracks"]]
         return engine
+
+
+def _mahalanobis(differences: FloatArray, covariances: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """D = Δᵀ C⁻¹ Δ and log|C| of every row (batched Cholesky of ``core.distance``)."""
+    return quadratic_form_and_log_det(differences.T, np.moveaxis(covariances, 0, -1))
 
 
 def _normalised_or_vacuous(mass: MassFunction) -> MassFunction:

@@ -263,7 +263,7 @@ def test_late_report_is_used_and_stale_report_is_refused_without_change() -> Non
         ),
         (
             TrackReport("s1", 1.0, (ReportedTrack("a", np.array([0, np.inf, 0, 0]), np.eye(4)),)),
-            "must be finite",
+            "tracks\\[0\\].state is not finite",
         ),
     ],
 )
