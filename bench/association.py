@@ -17,17 +17,19 @@ Run: ``python bench/association.py`` (or ``make bench``).
 
 from __future__ import annotations
 
-import os
-import platform
-import statistics
 import sys
-import time
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from core.association import associate, solve_dense
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from machine import describe_machine
+from machine import median_ms as bench_median_ms
+
 from core.distance import DistanceModel, Estimates
 
 POSITIONS = (0, 2)  # state (x, vx, y, vy)
@@ -42,20 +44,6 @@ METHODS: list[tuple[str, str, dict[str, object]]] = [
     ("dang_han", "dang_han", {}),
 ]
 FLOORS = {("hachour", "spread", 1000): 50.0, ("hachour", "spread", 10_000): 500.0}
-
-
-def machine() -> str:
-    model = platform.processor() or "unknown CPU"
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as cpuinfo:
-            for line in cpuinfo:
-                if line.startswith("model name"):
-                    model = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    return f"{cores} cores, {model}, Python {sys.version.split()[0]}, numpy {np.__version__}"
 
 
 def layout(n: int, kind: str, seed: int = 0) -> tuple[Estimates, Estimates]:
@@ -76,21 +64,13 @@ def layout(n: int, kind: str, seed: int = 0) -> tuple[Estimates, Estimates]:
     return known, incoming
 
 
-def median_ms(call: Callable[[], object], budget: float = 1.5, most: int = 7) -> float:
-    call()  # warm-up (imports, caches)
-    times: list[float] = []
-    spent = 0.0
-    while len(times) < most and (spent < budget or len(times) < 1):
-        start = time.perf_counter()
-        call()
-        elapsed = time.perf_counter() - start
-        times.append(elapsed)
-        spent += elapsed
-    return 1e3 * statistics.median(times)
+def median_ms(call: Callable[[], object]) -> float:
+    """At least one timed run, up to 7 within 1.5 s (dense n = 1000 runs take seconds)."""
+    return bench_median_ms(call, repeat=7, budget_s=1.5, minimum=1)
 
 
 def main() -> int:
-    print(f"machine: {machine()}")
+    print(describe_machine())
     distance = DistanceModel(covariance="sum", positions=POSITIONS)
     cases = [("spread", n) for n in (10, 100, 1000, 10_000)] + [
         ("dense", n) for n in (10, 100, 1000)

@@ -28,12 +28,17 @@ def describe_machine() -> str:
     )
 
 
-def median_ms(call: Callable[[], object], *, repeat: int = 15, budget_s: float = 2.0) -> float:
-    """Median wall time of ``call`` in milliseconds (at least 3 runs, at most ``repeat``)."""
+def median_ms(
+    call: Callable[[], object], *, repeat: int = 15, budget_s: float = 2.0, minimum: int = 3
+) -> float:
+    """Median wall time of ``call`` in ms: at least ``minimum`` runs, then more while the
+    budget lasts, at most ``repeat`` (after one warm-up call)."""
     call()  # warm-up: caches, lazy imports
     times: list[float] = []
     started = time.perf_counter()
-    while len(times) < repeat and (len(times) < 3 or time.perf_counter() - started < budget_s):
+    while len(times) < repeat and (
+        len(times) < minimum or time.perf_counter() - started < budget_s
+    ):
         t0 = time.perf_counter()
         call()
         times.append((time.perf_counter() - t0) * 1e3)
