@@ -199,12 +199,16 @@ class _RedisSubscription(Subscription):
     async def start(self) -> None:
         pubsub = self._client.pubsub()
         self._pubsub = pubsub
-        await pubsub.subscribe(self._channel)
-        async with asyncio.timeout(SUBSCRIBE_TIMEOUT_S):
-            while True:  # the server confirms: from now on, every publish reaches us
-                message = await pubsub.get_message(timeout=SUBSCRIBE_TIMEOUT_S)
-                if message is not None and message["type"] == "subscribe":
-                    break
+        try:
+            await pubsub.subscribe(self._channel)
+            async with asyncio.timeout(SUBSCRIBE_TIMEOUT_S):
+                while True:  # the server confirms: from now on, every publish reaches us
+                    message = await pubsub.get_message(timeout=SUBSCRIBE_TIMEOUT_S)
+                    if message is not None and message["type"] == "subscribe":
+                        break
+        except BaseException:
+            await self.aclose()
+            raise
         self._reader = asyncio.create_task(self._read(pubsub), name=f"fanout:{self._channel}")
 
     async def _read(self, pubsub: PubSub) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import threading
 from datetime import UTC, datetime
 
 import pytest
@@ -140,3 +141,39 @@ def test_a_deleted_session_refuses_every_access() -> None:
             with pytest.raises(SessionNotFound):
                 access()
         assert store.list_sessions() == [] and store.count_sessions() == 0
+
+
+def test_eight_instances_appending_at_once_keep_seq_contiguous() -> None:
+    """8 threads, each with its own RedisStore (its own connections), race on one session."""
+    writers, per_writer = 8, 25
+    with redis_prefix("race") as prefix:
+        stores = [RedisStore(REDIS_URL, prefix=prefix) for _ in range(writers)]
+        stores[0].create_session(record())
+        start = threading.Barrier(writers)
+        conflicts = [0] * writers
+
+        def write(writer: int) -> None:
+            store = stores[writer]
+            start.wait()
+            for index in range(per_writer):
+                while True:
+                    try:
+                        store.append(
+                            "s1", store.last_seq("s1") + 1, {"w": writer, "i": index}, now()
+                        )
+                        break
+                    except SequenceConflict:
+                        conflicts[writer] += 1
+
+        threads = [threading.Thread(target=write, args=(writer,)) for writer in range(writers)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        entries = stores[-1].entries("s1")
+        assert [entry.seq for entry in entries] == list(range(1, writers * per_writer + 1))
+        logged = sorted((entry.input["w"], entry.input["i"]) for entry in entries)
+        assert logged == [(w, i) for w in range(writers) for i in range(per_writer)]
+        assert stores[0].client.xlen(stores[0].keys.log("s1")) == writers * per_writer
+        for store in stores:
+            store.close()
