@@ -51,7 +51,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--store",
         type=_store_url,
         default=settings.store,
-        help="memory | sqlite[:PATH] (default: %(default)s, or CREDAL_STORE)",
+        help="memory | sqlite[:PATH] | redis[s]://HOST:PORT/DB (default: %(default)s, or CREDAL_STORE)",
     )
     serve.set_defaults(handler=_serve)
     return parser

@@ -30,7 +30,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        store = open_store(settings.store)
+        store = open_store(settings.store, redis_prefix=settings.redis_prefix)
         app.state.store = store
         service_metrics.sessions.set(store.count_sessions())
         try:

@@ -12,6 +12,7 @@ from pydantic import Field, SecretStr
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from api_schemas.base import MAX_CLASSES
+from app.stores.redis_keys import DEFAULT_PREFIX
 
 DEFAULT_STORE = "sqlite:data/credal-fusion.db"
 
@@ -23,7 +24,12 @@ class Settings(BaseSettings):
 
     host: str = "127.0.0.1"
     port: int = 8000
-    store: str = Field(DEFAULT_STORE, description="memory | sqlite[:PATH]")
+    store: str = Field(
+        DEFAULT_STORE, description="memory | sqlite[:PATH] | redis[s]://HOST:PORT/DB"
+    )
+    redis_prefix: str = Field(
+        DEFAULT_PREFIX, min_length=1, description="start of every Redis key and channel name"
+    )
     admin_token: SecretStr | None = Field(
         None, description="opens every session and the admin routes"
     )

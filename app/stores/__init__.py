@@ -1,4 +1,4 @@
-"""Session stores: the protocol and its ``memory`` and ``sqlite`` implementations."""
+"""Session stores: the protocol and its ``memory``, ``sqlite`` and ``redis`` implementations."""
 
 from app.stores.base import (
     LogEntry,
@@ -11,12 +11,14 @@ from app.stores.base import (
     to_plain,
 )
 from app.stores.memory import MemoryStore
+from app.stores.redis import RedisStore
 from app.stores.sqlite import SqliteStore
 from app.stores.url import StoreSpec, open_store, parse_store_url
 
 __all__ = [
     "LogEntry",
     "MemoryStore",
+    "RedisStore",
     "SequenceConflict",
     "SessionExists",
     "SessionLoad",

@@ -1,4 +1,4 @@
-"""Stores: the protocol on both implementations, and sqlite on a real file (reopen, SIGKILL, threads)."""
+"""Stores: the protocol on every implementation (redis: the real server), sqlite on a real file."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import sys
 import textwrap
 import threading
 from collections.abc import Iterator
+from contextlib import ExitStack
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -18,6 +19,7 @@ import pytest
 from app.errors import SessionNotFound
 from app.stores import (
     MemoryStore,
+    RedisStore,
     SequenceConflict,
     SessionExists,
     SessionRecord,
@@ -29,6 +31,7 @@ from app.stores import (
     parse_store_url,
     to_plain,
 )
+from tests.api.redis_support import REDIS_URL, redis_prefix, redis_store
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -43,13 +46,25 @@ def record(session_id: str = "s1") -> SessionRecord:
     )
 
 
-@pytest.fixture(params=["memory", "sqlite"])
+STORE_KINDS = ["memory", "sqlite", "redis"]
+
+
+def open_kind(kind: str, tmp_path: Path, resources: ExitStack) -> Store:
+    """A fresh, empty store of this kind, cleaned up by ``resources``."""
+    if kind == "memory":
+        opened: Store = MemoryStore()
+    elif kind == "sqlite":
+        opened = SqliteStore(tmp_path / "store.db")
+    else:
+        return resources.enter_context(redis_store(kind))
+    resources.callback(opened.close)
+    return opened
+
+
+@pytest.fixture(params=STORE_KINDS)
 def store(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Store]:
-    opened: Store = (
-        MemoryStore() if request.param == "memory" else SqliteStore(tmp_path / "store.db")
-    )
-    yield opened
-    opened.close()
+    with ExitStack() as resources:
+        yield open_kind(request.param, tmp_path, resources)
 
 
 def test_append_then_load(store: Store) -> None:
@@ -127,12 +142,26 @@ def test_store_urls(tmp_path: Path) -> None:
     assert parse_store_url("sqlite") == StoreSpec("sqlite", Path("data/credal-fusion.db"))
     assert parse_store_url("sqlite:run/x.db") == StoreSpec("sqlite", Path("run/x.db"))
     assert parse_store_url("sqlite:///tmp/x.db") == StoreSpec("sqlite", Path("/tmp/x.db"))
-    for bad in ("postgres://x", "sqlite:", "redis://localhost"):
+    assert parse_store_url("redis://localhost") == StoreSpec("redis", url="redis://localhost")
+    assert parse_store_url("rediss://:pw@cache:6380/2").url == "rediss://:pw@cache:6380/2"
+    assert parse_store_url("redis") == StoreSpec("redis", url="redis://127.0.0.1:6379/0")
+    for bad in (
+        "postgres://x",
+        "sqlite:",
+        "redis://",
+        "redis://host:port/0",
+        "redis://host:6379/zero",
+        "redis:host",
+    ):
         with pytest.raises(ValueError):
             parse_store_url(bad)
     opened = open_store(f"sqlite:{tmp_path / 'nested' / 'dir' / 'x.db'}")
     assert isinstance(opened, SqliteStore) and opened.path.exists()
     opened.close()
+    with redis_prefix("url") as prefix:
+        shared = open_store(REDIS_URL, redis_prefix=prefix)
+        assert isinstance(shared, RedisStore) and shared.prefix == prefix
+        shared.close()
 
 
 def test_sqlite_restores_after_reopen(tmp_path: Path) -> None:
@@ -205,9 +234,14 @@ def test_sqlite_keeps_every_acknowledged_input_after_sigkill(tmp_path: Path) -> 
     reopened.close()
 
 
-@pytest.mark.parametrize("kind", ["memory", "sqlite"])
+@pytest.mark.parametrize("kind", STORE_KINDS)
 def test_concurrent_appends_keep_seq_contiguous(kind: str, tmp_path: Path) -> None:
-    store: Store = MemoryStore() if kind == "memory" else SqliteStore(tmp_path / "threads.db")
+    with ExitStack() as resources:
+        concurrent_appends(open_kind(kind, tmp_path, resources))
+
+
+def concurrent_appends(store: Store) -> None:
+    """8 threads append to one session, each retrying on SequenceConflict."""
     store.create_session(record())
     writers, per_writer = 8, 20
     conflicts: list[int] = []
@@ -233,4 +267,3 @@ def test_concurrent_appends_keep_seq_contiguous(kind: str, tmp_path: Path) -> No
     assert [entry.seq for entry in entries] == list(range(1, writers * per_writer + 1))
     written = sorted((entry.input["writer"], entry.input["index"]) for entry in entries)
     assert written == [(writer, index) for writer in range(writers) for index in range(per_writer)]
-    store.close()
