@@ -67,3 +67,19 @@ def run_tracker(scenario: Scenario, config: LocalTrackerConfig) -> TrackerRun:
                 if track_id is not None:
                     run.owners[track_id][target] += 1
     return run
+
+
+def false_assignment_rate(run: TrackerRun, targets: tuple[int, ...]) -> tuple[int, int]:
+    """(false, total) assignments after initiation ([MTT] §6.2.1's false decision rate).
+
+    A target's track is the one most of its detections went to; a detection
+    assigned to any other track (or to none) after the first two scans
+    (two-point initiation) is a false assignment.
+    """
+    false = total = 0
+    for target in targets:
+        own = run.track_of(target)
+        for _, track in run.assigned[target][2:]:
+            total += 1
+            false += track != own
+    return false, total
