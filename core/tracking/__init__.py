@@ -1,7 +1,7 @@
-"""Local tracking from detections (ALGORITHMS.md §4): models, presets, the batched IMM."""
+"""Local tracking from detections (ALGORITHMS.md §4): models, presets, the batched IMM, the tracker."""
 
 from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState, IMMUpdate, IMMUpdater
-from core.tracking.initiator import two_point_initiation
+from core.tracking.initiator import pair_seeds, single_point_initiation, two_point_initiation
 from core.tracking.models import (
     LinearMeasurementModel,
     ModelBank,
@@ -26,6 +26,8 @@ __all__ = [
     "constant_velocity",
     "input_matrix",
     "mode_transition_matrix",
+    "pair_seeds",
+    "single_point_initiation",
     "speed_model",
     "two_point_initiation",
 ]

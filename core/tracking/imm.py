@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.arrays import BoolArray, FloatArray
+from core.arrays import BoolArray, FloatArray, IntArray
 from core.errors import TrackingError
 from core.numerics import logsumexp, safe_log
 from core.tracking.models import ModelBank
@@ -103,7 +103,7 @@ class IMMState:
         """The IMM output estimate ``(x̄ (T, n), P̄ (T, n, n))`` weighted by μ."""
         return _combine(self.mode_probabilities, self.means, self.covariances)
 
-    def select(self, tracks: FloatArray | BoolArray | list[int]) -> IMMState:
+    def select(self, tracks: IntArray | BoolArray | list[int]) -> IMMState:
         """The state of some tracks (index array or boolean mask)."""
         index = np.asarray(tracks)
         return IMMState(
@@ -299,6 +299,7 @@ class IMMUpdater:
         prediction: IMMPrediction,
         measurements: FloatArray,
         detected: BoolArray | None = None,
+        measurement_noises: FloatArray | None = None,
     ) -> IMMUpdate:
         """Update T tracks, each with one measurement (or none).
 
@@ -311,6 +312,11 @@ class IMMUpdater:
             False for tracks with no measurement this scan: their posterior is
             the prediction and their mode probabilities the predicted c̄.
             Default: every track is detected.
+        measurement_noises : ndarray, shape (T, q, q), optional
+            Per-track measurement noise R_t of the assigned measurement
+            (a sensor that reports a covariance with each detection):
+            ``S_j = H P_j Hᵀ + R_t`` and the Joseph term uses R_t. Default:
+            the bank's shared R.
         """
         z = np.asarray(measurements, dtype=np.float64)
         tracks, q = prediction.measurement_means.shape[0], self.bank.measurement.dim
@@ -327,13 +333,22 @@ class IMMUpdater:
         innovations = z_used[:, None, :] - prediction.measurement_means
         innovations[~hit] = 0.0
         s = prediction.innovation_covariances
+        noise: FloatArray = self._r
+        if measurement_noises is not None:
+            noise = np.asarray(measurement_noises, dtype=np.float64)
+            if noise.shape != (tracks, q, q) or not np.all(np.isfinite(noise)):
+                raise TrackingError(
+                    f"measurement_noises must be finite with shape ({tracks}, {q}, {q})"
+                )
+            noise = noise[:, None, :, :]
+            s = s - self._r + noise
         s_inv = np.linalg.inv(s)
         p_ht = prediction.covariances @ self._h_t  # (T, r, n, q)
         gain = p_ht @ s_inv
         means = prediction.means + (gain @ innovations[..., None])[..., 0]
         i_kh = self._identity - gain @ self._h
         covariances = i_kh @ prediction.covariances @ np.swapaxes(i_kh, -1, -2) + (
-            gain @ self._r @ np.swapaxes(gain, -1, -2)
+            gain @ noise @ np.swapaxes(gain, -1, -2)
         )
         covariances = 0.5 * (covariances + np.swapaxes(covariances, -1, -2))
 

@@ -1,0 +1,254 @@
+"""The validated configuration of one sensor system's :class:`~core.tracking.tracker.LocalTracker`.
+
+Plain frozen dataclasses, no web types (ALGORITHMS.md §4). Every option the
+papers leave open is a named field here; the defaults are the ones of
+ALGORITHMS.md §3.7 and §4.
+
+Readings
+--------
+``initiation``
+    ``"two_point"`` (default): an unassigned detection becomes a *seed*; a
+    seed joined by an unassigned detection of the next scan within
+    ``max_speed · Δt`` (plus the gate on R) starts a tentative track by
+    :func:`~core.tracking.initiator.two_point_initiation`, scored from
+    ``L₀ = ln(β_NT/β_FT)``. ``"single_point"``: every unassigned detection
+    starts a tentative track at once, position from z (covariance R), velocity
+    0 with standard deviation ``initial_velocity_std`` per axis (for the
+    heading convention of the pedestrian models: heading 0 with variance
+    ``initial_velocity_std²``); the large velocity variance makes the first
+    gate wide and the first hit increment small, and the SPRT does the rest.
+``imm_distance``
+    ``"closest_model"`` (default): each (track, detection) pair is gated and
+    scored with the model j of the track's bank that gives the smallest
+    ``D_j = (z − ẑ_j)ᵀ S_j⁻¹ (z − ẑ_j)`` (and its S_j in the score);
+    ``"combined"``: the model-combined ẑ, S of [MTT] §4.
+``distance``
+    ``"plain"`` ([MTT] eq 15) or ``"modified"`` ([HZ] §4.1 with the Reading of
+    :mod:`core.distance.modified`), S_ss the steady state of the bank's first
+    model (the constant-velocity model of both presets) with the bank's R.
+``fields_of_view``
+    The fields of view of the system's sensors by name; a scan names its
+    sensor. Tracks that scan's sensor should have seen (inside its field of
+    view, not occluded) and that got no detection count a miss. The
+    surveillance region is ``region`` or, by default, the union of the
+    sensors' ranges (:mod:`core.geometry`). No fields of view: one sensor
+    that sees everything.
+``score_margin``
+    The SPRT of [MTT] §4.3 as written never deletes a track that has lived a
+    while: with β_FT = 1e-6 each hit adds about +11, so after 100 hits the
+    delete threshold is hundreds of misses away. Blackman & Popoli delete on
+    a fixed drop below the track's best score; we clamp the score at
+    ``confirm threshold + score_margin`` (default margin 0), so a confirmed
+    track is deleted after ``⌈(confirm − delete + margin) / |ln(1 − P_D)|⌉``
+    consecutive misses (5 with the defaults). ``None`` keeps the raw SPRT.
+``phantom_max_distance``, ``phantom_min_speed``
+    A phantom ([HZ] §5.1) lives at most ``max_distance / min_speed`` seconds.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Literal
+
+import numpy as np
+
+from core.classification.behaviours import LIKELIHOOD_SCALES, LikelihoodScale
+from core.classification.credal import ACCUMULATIONS, DISCOUNTS, Accumulation, Discount
+from core.errors import TrackingError
+from core.geometry import Coverage, FieldOfView, PolygonView
+from core.lifecycle import ScoreModel
+from core.tracking.models import LinearMeasurementModel, ModelBank
+from core.tracking.presets import TrackingPreset, preset
+
+ImmDistance = Literal["closest_model", "combined"]
+DistanceKind = Literal["plain", "modified"]
+Initiation = Literal["two_point", "single_point"]
+
+IMM_DISTANCES: tuple[ImmDistance, ...] = ("closest_model", "combined")
+DISTANCE_KINDS: tuple[DistanceKind, ...] = ("plain", "modified")
+INITIATIONS: tuple[Initiation, ...] = ("two_point", "single_point")
+
+CHEAP_JPDA = "cheap_jpda"
+"""The name of the cheap JPDA baseline ([DH] §2) among the association methods."""
+
+
+@dataclass(frozen=True)
+class ClassificationOptions:
+    """Credal kinematic classification of the tracks ([MTT] §5.2, ALGORITHMS.md §5).
+
+    Attributes
+    ----------
+    likelihood_scale : "max" | "clip"
+    discount : "none" | "instantaneous" | "cumulative"
+    reliability : λ, or None for the default of ``discount``
+    accumulation : "classes" | "behaviours"
+    """
+
+    likelihood_scale: LikelihoodScale = "max"
+    discount: Discount = "none"
+    reliability: float | None = None
+    accumulation: Accumulation = "classes"
+
+    def __post_init__(self) -> None:
+        if self.likelihood_scale not in LIKELIHOOD_SCALES:
+            raise TrackingError(f"likelihood_scale must be one of {LIKELIHOOD_SCALES}")
+        if self.discount not in DISCOUNTS:
+            raise TrackingError(f"discount must be one of {DISCOUNTS}")
+        if self.accumulation not in ACCUMULATIONS:
+            raise TrackingError(f"accumulation must be one of {ACCUMULATIONS}")
+        if self.reliability is not None and not (0.0 <= self.reliability <= 1.0):
+            raise TrackingError(f"reliability must be in [0, 1], got {self.reliability!r}")
+
+
+@dataclass(frozen=True)
+class LocalTrackerConfig:
+    """Everything a :class:`~core.tracking.tracker.LocalTracker` needs (module Readings).
+
+    Attributes
+    ----------
+    preset : name of a preset (``"aircraft"``, ``"pedestrian"``) giving the model
+        bank, behaviours and classes.
+    time_interval : ΔT of the bank (s); scans come at multiples of it.
+    preset_options : other keyword options of the preset (``stay``, ``noise_intensity``, ...).
+    bank : an explicit model bank; replaces the preset's (and then there is no
+        classification: behaviours belong to the preset's models).
+    measurement_noise : R (q × q) replacing the bank's; detections may also
+        carry their own covariance in :meth:`LocalTracker.step`.
+    association_method : ``gnn`` (default), ``denoeux``, ``hachour``,
+        ``mercier``, ``dang_han`` or ``cheap_jpda``.
+    association_options : the method's options; ``cheap_jpda`` takes
+        ``bias`` (B of [DH] eq 16, default 0) and ``gate_probability``.
+    imm_distance, distance : see the module Readings.
+    modified_beta, modified_k, modified_alpha : β, k, α of the modified distance.
+    score : the SPRT parameters (P_D, β_FT, β_NT, α, β) of :class:`ScoreModel`.
+    score_margin : the score is clamped at ``confirm threshold + score_margin``
+        (None: no clamp; see the Readings).
+    termination_probability : gate-emptiness threshold ([HZ] §4.2); 0 disables it.
+    min_points : confirm a tentative track after this many detections (None: score only).
+    initiation, max_speed, initial_velocity_std : see the module Readings.
+    fields_of_view : the system's sensors and their fields of view.
+    region : the surveillance region (default: union of the sensors' ranges).
+    occlusion_radius : radius of a known track as an occluder ([HZ] §2.1); 0: no occlusion.
+    phantom_max_distance, phantom_min_speed : phantom expiry ([HZ] §5.1).
+    phantoms : the blind-zone strategy on (default) or off (a track in a blind
+        zone then coasts and is terminated by score / gate emptiness).
+    classification : credal options, or None for no classification; ignored
+        when the bank has no classes.
+    id_prefix : track ids are ``f"{id_prefix}{n}"``, n = 1, 2, ...
+    """
+
+    preset: str = "aircraft"
+    time_interval: float = 1.0
+    preset_options: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
+    bank: ModelBank | None = None
+    measurement_noise: tuple[tuple[float, ...], ...] | None = None
+    association_method: str = "gnn"
+    association_options: Mapping[str, object] = field(
+        default_factory=lambda: MappingProxyType({"gate_probability": 0.999})
+    )
+    imm_distance: ImmDistance = "closest_model"
+    distance: DistanceKind = "plain"
+    modified_beta: float = 10.0
+    modified_k: float = 1.0
+    modified_alpha: float = 4.0
+    score: ScoreModel = field(default_factory=ScoreModel)
+    score_margin: float | None = 0.0
+    termination_probability: float = 0.5
+    min_points: int | None = None
+    initiation: Initiation = "two_point"
+    max_speed: float = 1000.0
+    initial_velocity_std: float = 300.0
+    fields_of_view: Mapping[str, FieldOfView | None] = field(
+        default_factory=lambda: MappingProxyType({"sensor": None})
+    )
+    region: PolygonView | None = None
+    occlusion_radius: float = 0.0
+    phantom_max_distance: float = 500.0
+    phantom_min_speed: float = 1.0
+    phantoms: bool = True
+    classification: ClassificationOptions | None = field(default_factory=ClassificationOptions)
+    id_prefix: str = "L"
+
+    def __post_init__(self) -> None:
+        if self.imm_distance not in IMM_DISTANCES:
+            raise TrackingError(f"imm_distance must be one of {IMM_DISTANCES}")
+        if self.distance not in DISTANCE_KINDS:
+            raise TrackingError(f"distance must be one of {DISTANCE_KINDS}")
+        if self.initiation not in INITIATIONS:
+            raise TrackingError(f"initiation must be one of {INITIATIONS}")
+        if not (
+            math.isfinite(self.termination_probability)
+            and 0.0 <= self.termination_probability < 1.0
+        ):
+            raise TrackingError("termination_probability must be in [0, 1)")
+        if "time_interval" in self.preset_options:
+            raise TrackingError("give time_interval as the config field, not a preset option")
+        for name in (
+            "time_interval",
+            "modified_beta",
+            "modified_k",
+            "modified_alpha",
+            "max_speed",
+            "initial_velocity_std",
+            "phantom_max_distance",
+            "phantom_min_speed",
+        ):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise TrackingError(f"{name} must be a positive number, got {value!r}")
+        if self.score_margin is not None and not (
+            math.isfinite(self.score_margin) and self.score_margin >= 0.0
+        ):
+            raise TrackingError("score_margin must be >= 0 or None")
+        if not (math.isfinite(self.occlusion_radius) and self.occlusion_radius >= 0.0):
+            raise TrackingError("occlusion_radius must be >= 0")
+        if self.min_points is not None and self.min_points < 1:
+            raise TrackingError("min_points must be >= 1")
+        if not self.fields_of_view:
+            raise TrackingError("fields_of_view needs at least one sensor")
+
+    def tracking_preset(self) -> TrackingPreset | None:
+        """The preset, or None when an explicit bank replaces it."""
+        return (
+            None
+            if self.bank is not None
+            else preset(self.preset, time_interval=self.time_interval, **dict(self.preset_options))
+        )
+
+    def model_bank(self) -> ModelBank:
+        """The bank the tracker runs, with ``measurement_noise`` applied."""
+        chosen = self.bank
+        if chosen is None:
+            found = self.tracking_preset()
+            assert found is not None
+            chosen = found.bank
+        if self.measurement_noise is None:
+            return chosen
+        noise = np.array(self.measurement_noise, dtype=np.float64)
+        measurement = LinearMeasurementModel(chosen.measurement.matrix, noise)
+        return ModelBank(chosen.models, measurement, chosen.mode_transition)
+
+    @property
+    def coverage(self) -> Coverage:
+        """The system's coverage: one view per sensor, in configuration order."""
+        return Coverage(tuple(self.fields_of_view.values()), self.region)
+
+    @property
+    def sensors(self) -> tuple[str, ...]:
+        """Sensor names, in configuration order."""
+        return tuple(self.fields_of_view)
+
+    @property
+    def score_ceiling(self) -> float:
+        """Largest track score (``inf`` without a margin)."""
+        if self.score_margin is None:
+            return math.inf
+        return self.score.confirm_threshold + self.score_margin
+
+    @property
+    def phantom_lifetime(self) -> float:
+        """Longest stay in a blind zone: maximum distance at the minimum speed ([HZ] §5.1)."""
+        return self.phantom_max_distance / self.phantom_min_speed

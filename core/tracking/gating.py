@@ -1,0 +1,163 @@
+"""Measurement-to-track gating of IMM tracks, for any association method (ALGORITHMS.md §4).
+
+An IMM track predicts one ẑ_j, S_j per model j. The pair (track t,
+detection i) is gated and scored ([MTT] eq 15) with
+
+- ``"closest_model"`` (default): the model with the smallest
+  ``D_j = (z_i − ẑ_j)ᵀ S_j⁻¹ (z_i − ẑ_j)``, so that a manoeuvre the bank
+  contains never falls outside the gate of the combined prediction;
+- ``"combined"``: the model-combined ẑ, S of [MTT] §4.
+
+:class:`TrackGatingProblem` is an :class:`~core.association.AssociationProblem`
+whose candidate pairs are computed that way (on the T × r model rows, with the
+KD-tree gate of :func:`core.distance.gated_pairs`, then reduced to the closest
+model per pair), so every association method of §3 runs on it unchanged.
+
+Detections that carry their own covariance R_i use ``C = H P_j Hᵀ + R_i``
+(the ``sum`` covariance of :mod:`core.distance.pairwise` with the known side
+``H P_j Hᵀ``); otherwise ``C = S_j`` (``innovation``). The modified distance of
+[HZ] §4.1 scales each model row by its size against the steady state of the
+same kind (S_ss, or H P_ss Hᵀ for the ``sum`` form). The plain D of every
+kept pair is kept too: the track score uses it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from core.arrays import FloatArray, IntArray
+from core.association.problem import AssociationProblem
+from core.distance import CandidatePairs, DistanceModel, Estimates, ModifiedScale, gated_pairs
+from core.tracking.config import ImmDistance
+from core.tracking.imm import IMMPrediction
+
+
+@dataclass(frozen=True, eq=False)
+class GatedPairs:
+    """Candidate pairs reduced to one model per (track, detection).
+
+    Attributes
+    ----------
+    pairs : CandidatePairs
+        Rows are tracks, columns detections; ``distance`` is the distance the
+        association decides on (modified when configured), ``log_det`` is
+        log|C| of the chosen model.
+    plain_distance : ndarray, shape (P,)
+        The unmodified D of each pair ([MTT] eq 15), for the track score.
+    models : ndarray of int64, shape (P,)
+        The model of each pair (−1 with the ``combined`` distance).
+    """
+
+    pairs: CandidatePairs
+    plain_distance: FloatArray
+    models: IntArray
+
+
+def gate_pairs(
+    prediction: IMMPrediction,
+    measurements: FloatArray,
+    measurement_covariances: FloatArray | None,
+    noise: FloatArray,
+    gate: float,
+    imm_distance: ImmDistance,
+    modified: ModifiedScale | None,
+) -> GatedPairs:
+    """Every (track, detection) pair with D ≤ ``gate`` (module docstring).
+
+    Parameters
+    ----------
+    prediction : IMMPrediction of T tracks
+    measurements : ndarray, shape (m, q)
+    measurement_covariances : ndarray, shape (m, q, q), or None (the bank's R)
+    noise : ndarray, shape (q, q)
+        The bank's R (subtracted from S for the ``sum`` form).
+    gate : float
+    imm_distance : "closest_model" | "combined"
+    modified : ModifiedScale or None
+    """
+    tracks, models = prediction.log_mode_probabilities.shape
+    q = measurements.shape[1]
+    if imm_distance == "combined":
+        centres, spreads = prediction.combined_measurement()
+        per_row = 1
+    else:
+        centres = prediction.measurement_means.reshape(tracks * models, q)
+        spreads = prediction.innovation_covariances.reshape(tracks * models, q, q)
+        per_row = models
+    own_noise = measurement_covariances is not None
+    known_cov = spreads - noise if own_noise else spreads
+    known = Estimates(centres, known_cov, "tracks")
+    incoming = Estimates(measurements, measurement_covariances, "detections")
+    model = DistanceModel(covariance="sum" if own_noise else "innovation", modified=modified)
+    found = gated_pairs(known, incoming, gate, model)
+    rows, cols = found.rows, found.cols
+    plain = found.distance
+    if modified is not None and len(rows):
+        plain = found.distance / modified.ratio(known_cov)[rows]
+    if per_row > 1 and len(rows):
+        track = rows // per_row
+        order = np.lexsort((found.distance, cols, track))
+        track, cols_sorted = track[order], cols[order]
+        first = np.ones(len(order), dtype=bool)
+        first[1:] = (track[1:] != track[:-1]) | (cols_sorted[1:] != cols_sorted[:-1])
+        keep = order[first]
+        chosen_models = (rows[keep] % per_row).astype(np.int64)
+        reduced = CandidatePairs(
+            track[first].astype(np.int64),
+            cols_sorted[first].astype(np.int64),
+            found.distance[keep],
+            found.log_det[keep],
+            tracks,
+            len(measurements),
+            q,
+        )
+        return GatedPairs(reduced, plain[keep], chosen_models)
+    chosen = np.zeros(len(rows), dtype=np.int64) if per_row > 1 else np.full(len(rows), -1)
+    reduced = CandidatePairs(
+        rows // per_row, cols, found.distance, found.log_det, tracks, len(measurements), q
+    )
+    return GatedPairs(reduced, plain, chosen.astype(np.int64))
+
+
+@dataclass(frozen=True, eq=False)
+class TrackGatingProblem(AssociationProblem):
+    """An association problem whose pairs come from :func:`gate_pairs`.
+
+    ``known`` holds the model-combined ẑ, S of each track (for the methods
+    that only need sizes); :meth:`pairs` gates against the configured model
+    rows and remembers its last answer in :attr:`last`.
+    """
+
+    prediction: IMMPrediction | None = None
+    measurement_covariances: FloatArray | None = None
+    noise: FloatArray | None = None
+    imm_distance: ImmDistance = "closest_model"
+    modified: ModifiedScale | None = None
+    last: dict[str, GatedPairs] = field(default_factory=dict)
+
+    def pairs(self, gate: float) -> CandidatePairs:
+        """Candidate pairs with D ≤ gate (closest model or combined)."""
+        assert self.prediction is not None and self.noise is not None
+        found = gate_pairs(
+            self.prediction,
+            self.incoming.states,
+            self.measurement_covariances,
+            self.noise,
+            gate,
+            self.imm_distance,
+            self.modified,
+        )
+        self.last["pairs"] = found
+        return found.pairs
+
+    def smallest_log_det(self) -> float:
+        """A lower bound of log|C| over every model row."""
+        assert self.prediction is not None and self.noise is not None
+        if self.n_known == 0:
+            return -np.inf
+        spreads = self.prediction.innovation_covariances
+        if self.measurement_covariances is not None:
+            spreads = spreads - self.noise  # |H P Hᵀ + R_i| ≥ |H P Hᵀ|
+        return float(np.linalg.slogdet(spreads)[1].min())

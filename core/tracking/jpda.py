@@ -1,0 +1,153 @@
+"""The cheap JPDA baseline of [DH] §2 (Fitzgerald), as an IMM update (ALGORITHMS.md §3.5).
+
+Soft association weights ([DH] eq 16)::
+
+    β_tj = G_tj / (S_t + S_j − G_tj + B),   S_t = Σ_j G_tj,   S_j = Σ_t G_tj,
+
+with G_tj the Gaussian likelihood of detection j for track t inside the gate
+(0 outside) and B the bias (clutter density term, option ``bias``, ≥ 0).
+The probability that none of the detections is the track's is
+``β_t0 = 1 − Σ_j β_tj`` (clipped at 0).
+
+Each model m of the track is updated with the combined innovation
+([DH] eq 5–11, the PDA update)::
+
+    ν_m = Σ_j β_tj ν_jm,  ν_jm = z_j − ẑ_m,  K_m = P_m Hᵀ S_m⁻¹
+    x_m ← x_m + K_m ν_m
+    P_m ← β_t0 P_m + (1 − β_t0)(I − K_m H) P_m + K_m (Σ_j β_tj ν_jm ν_jmᵀ − ν_m ν_mᵀ) K_mᵀ
+
+**Reading (IMM).** [DH] uses one Kalman filter per track. With an IMM the
+weights are computed once per track (G from the distance the tracker gates
+with: closest model or combined, :mod:`core.tracking.gating`) and shared by
+the models; the mode likelihood is the β-weighted mixture of the model's
+likelihoods of the gated detections,
+``Λ_m = Σ_j β_tj N(ν_jm; 0, S_m) / Σ_j β_tj`` (log domain). A track with no
+gated detection coasts.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from core.arrays import FloatArray, IntArray
+from core.errors import TrackingError
+from core.numerics import logsumexp, safe_log
+from core.tracking.imm import IMMPrediction, IMMState, IMMUpdate
+from core.tracking.models import ModelBank
+
+_LOG_2PI = math.log(2.0 * math.pi)
+
+
+def cheap_jpda_weights(likelihoods: FloatArray, bias: float) -> tuple[FloatArray, FloatArray]:
+    """Fitzgerald's weights ``β_tj`` and ``β_t0`` ([DH] eq 16; module docstring).
+
+    Parameters
+    ----------
+    likelihoods : ndarray, shape (T, m)
+        G_tj ≥ 0 (0 outside the gate).
+    bias : float
+        B ≥ 0.
+
+    Returns
+    -------
+    weights : ndarray, shape (T, m)
+    missed : ndarray, shape (T,)
+        β_t0 = max(0, 1 − Σ_j β_tj).
+    """
+    g = np.asarray(likelihoods, dtype=np.float64)
+    if g.ndim != 2 or np.any(~np.isfinite(g)) or np.any(g < 0.0):
+        raise TrackingError("cheap JPDA likelihoods must be a finite non-negative (T, m) matrix")
+    if not (math.isfinite(bias) and bias >= 0.0):
+        raise TrackingError(f"cheap JPDA bias must be >= 0, got {bias!r}")
+    per_track = g.sum(axis=1, keepdims=True)
+    per_detection = g.sum(axis=0, keepdims=True)
+    denominator = per_track + per_detection - g + bias
+    positive = g > 0.0
+    weights = np.where(positive, g / np.where(positive, denominator, 1.0), 0.0)
+    missed = np.clip(1.0 - weights.sum(axis=1), 0.0, 1.0)
+    return np.asarray(weights, dtype=np.float64), np.asarray(missed, dtype=np.float64)
+
+
+def pda_update(
+    bank: ModelBank,
+    prediction: IMMPrediction,
+    measurements: FloatArray,
+    rows: IntArray,
+    cols: IntArray,
+    weights: FloatArray,
+) -> IMMUpdate:
+    """PDA update of every model of T tracks with sparse weights (module docstring).
+
+    Parameters
+    ----------
+    bank : ModelBank
+    prediction : IMMPrediction of T tracks
+    measurements : ndarray, shape (m, q)
+    rows, cols : ndarray of int64, shape (P,)
+        Track and detection of each weighted pair.
+    weights : ndarray, shape (P,)
+        β_tj of each pair (> 0).
+    """
+    tracks, models = prediction.log_mode_probabilities.shape
+    q = bank.measurement.dim
+    h = bank.measurement.matrix
+    weight_total = np.bincount(rows, weights=weights, minlength=tracks)
+    hit = weight_total > 0.0
+    missed = np.clip(1.0 - weight_total, 0.0, 1.0)
+
+    s = prediction.innovation_covariances  # (T, r, q, q)
+    s_inv = np.linalg.inv(s)
+    gain = prediction.covariances @ h.T @ s_inv  # (T, r, n, q)
+    pair_innovations = (
+        measurements[cols][:, None, :] - prediction.measurement_means[rows]
+    )  # (P, r, q)
+    weighted = weights[:, None, None] * pair_innovations
+    combined = np.zeros((tracks, models, q))
+    np.add.at(combined, rows, weighted)
+    spread = np.zeros((tracks, models, q, q))
+    np.add.at(spread, rows, weighted[..., :, None] * pair_innovations[..., None, :])
+    spread -= combined[..., :, None] * combined[..., None, :]
+
+    means = prediction.means + (gain @ combined[..., None])[..., 0]
+    updated = prediction.covariances - gain @ s @ np.swapaxes(gain, -1, -2)
+    beta0 = missed[:, None, None, None]
+    covariances = (
+        beta0 * prediction.covariances
+        + (1.0 - beta0) * updated
+        + gain @ spread @ np.swapaxes(gain, -1, -2)
+    )
+    covariances = 0.5 * (covariances + np.swapaxes(covariances, -1, -2))
+
+    # Mode likelihoods: β-weighted mixture of N(ν_jm; 0, S_m), in the log domain.
+    solved = np.einsum("prkl,prl->prk", s_inv[rows], pair_innovations)
+    distances = np.sum(solved * pair_innovations, axis=-1)  # (P, r)
+    _, log_det = np.linalg.slogdet(s)  # (T, r)
+    pair_log = safe_log(weights)[:, None] - 0.5 * (distances + log_det[rows] + q * _LOG_2PI)
+    peak = np.full((tracks, models), -np.inf)
+    np.maximum.at(peak, rows, pair_log)
+    finite_peak = np.where(np.isfinite(peak), peak, 0.0)
+    total = np.zeros((tracks, models))
+    np.add.at(total, rows, np.exp(pair_log - finite_peak[rows]))
+    log_likelihoods = finite_peak + safe_log(total)
+    log_likelihoods = np.where(
+        hit[:, None], log_likelihoods - safe_log(np.where(hit, weight_total, 1.0))[:, None], np.nan
+    )
+    joint = prediction.log_mode_probabilities + np.where(hit[:, None], log_likelihoods, 0.0)
+    log_norm = logsumexp(joint, axis=1)
+    usable = hit & np.isfinite(log_norm)
+    log_mu = np.where(
+        usable[:, None],
+        joint - np.where(usable, log_norm, 0.0)[:, None],
+        prediction.log_mode_probabilities,
+    )
+    means = np.where(hit[:, None, None], means, prediction.means)
+    covariances = np.where(hit[:, None, None, None], covariances, prediction.covariances)
+    return IMMUpdate(
+        state=IMMState(means, covariances, log_mu),
+        detected=hit,
+        innovations=np.where(hit[:, None, None], combined, np.nan),
+        innovation_covariances=s,
+        log_likelihoods=log_likelihoods,
+    )

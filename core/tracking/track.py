@@ -1,0 +1,132 @@
+"""What a :class:`~core.tracking.tracker.LocalTracker` step returns: local tracks as plain values.
+
+Every track carries its status and the reason of its last status change
+(:class:`~core.lifecycle.StatusReason`), its combined IMM estimate, its SPRT
+score and, when the tracker classifies, its class mass and BetP.
+``to_plain()`` gives lists, floats, ints, str and None only; non-finite floats
+are written as the strings ``"inf"``, ``"-inf"``, ``"nan"`` (:func:`plain_floats`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from core.arrays import FloatArray
+from core.belief import MassFunction
+from core.lifecycle import StatusReason, TrackStatus
+
+
+def plain_float(value: float) -> float | str:
+    """A float, or its name when it is not finite (plain JSON has no inf / nan)."""
+    return value if math.isfinite(value) else str(value)
+
+
+def plain_floats(values: FloatArray | float) -> Any:
+    """Nested lists of floats (:func:`plain_float` for the non-finite ones)."""
+    array = np.asarray(values, dtype=np.float64)
+    if np.all(np.isfinite(array)):
+        return array.tolist()
+    return np.vectorize(plain_float, otypes=[object])(array).tolist()
+
+
+def float_array(values: Any) -> FloatArray:
+    """The inverse of :func:`plain_floats` (``"inf"`` and friends parse as floats)."""
+    return np.asarray(np.array(values, dtype=np.float64), dtype=np.float64)
+
+
+def mass_to_plain(mass: MassFunction) -> dict[str, Any]:
+    """Focal masks and masses as lists."""
+    return {"masks": mass.masks.tolist(), "masses": mass.masses.tolist()}
+
+
+@dataclass(frozen=True, eq=False)
+class LocalTrack:
+    """One track of a sensor system at the end of a step.
+
+    Attributes
+    ----------
+    id : str
+    status : TrackStatus
+    reason : StatusReason
+        Why the status last changed.
+    state, covariance : ndarray, shapes (n,), (n, n)
+        The combined IMM estimate ([MTT] §3).
+    mode_probabilities : ndarray, shape (r,)
+    score : float
+        SPRT log-likelihood ratio ([MTT] §4.3).
+    hits : int
+        Detections the track was updated with (its initiation points included).
+    class_mass : MassFunction or None
+        Cumulative class mass ([MTT] §5.2); None without classification.
+    pignistic : ndarray or None
+        BetP of each class; None without classification or in ``total_conflict``.
+    """
+
+    id: str
+    status: TrackStatus
+    reason: StatusReason
+    state: FloatArray
+    covariance: FloatArray
+    mode_probabilities: FloatArray
+    score: float
+    hits: int
+    class_mass: MassFunction | None = None
+    pignistic: FloatArray | None = None
+
+    def to_plain(self) -> dict[str, Any]:
+        """Plain data (see the module docstring)."""
+        return {
+            "id": self.id,
+            "status": self.status.value,
+            "reason": self.reason.value,
+            "state": plain_floats(self.state),
+            "covariance": plain_floats(self.covariance),
+            "mode_probabilities": plain_floats(self.mode_probabilities),
+            "score": plain_float(self.score),
+            "hits": self.hits,
+            "class_mass": None if self.class_mass is None else mass_to_plain(self.class_mass),
+            "pignistic": None if self.pignistic is None else plain_floats(self.pignistic),
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class TrackerStep:
+    """The result of one scan.
+
+    Attributes
+    ----------
+    time : float
+    sensor : str
+    tracks : tuple of LocalTrack
+        Every track alive after the scan and every track terminated during
+        it (status ``terminated`` with its reason), by id number.
+    assignment : tuple of (str or None)
+        Per detection, in input order: the id of the track it updated or
+        started (after any phantom hand-over), or None (a seed of two-point
+        initiation, or a detection the association left out).
+    """
+
+    time: float
+    sensor: str
+    tracks: tuple[LocalTrack, ...]
+    assignment: tuple[str | None, ...]
+
+    def track(self, track_id: str) -> LocalTrack:
+        """The track with that id (KeyError when absent)."""
+        for candidate in self.tracks:
+            if candidate.id == track_id:
+                return candidate
+        raise KeyError(track_id)
+
+    def to_plain(self) -> dict[str, Any]:
+        """Plain data (see the module docstring)."""
+        return {
+            "time": plain_float(self.time),
+            "sensor": self.sensor,
+            "tracks": [track.to_plain() for track in self.tracks],
+            "assignment": list(self.assignment),
+        }

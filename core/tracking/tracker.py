@@ -1,0 +1,758 @@
+"""One sensor system's multi-target tracker: detections in, local tracks out ([MTT] Fig 6).
+
+:class:`LocalTracker` runs, for each scan of one of its sensors, with every
+array batched over tracks (and over the models of the IMM):
+
+1. **predict** every live track to the scan time (:class:`IMMPredictor`;
+   several ΔT at once when scans were skipped, none for a second sensor at
+   the same time);
+2. **visibility** of each predicted position ([HZ] §2.1): inside the scan
+   sensor's field of view and not occluded by a known track (then a missing
+   detection is a miss), in a blind zone, or out of range of every sensor;
+3. **association** of detections with the non-phantom tracks by any method
+   of :mod:`core.association` on the closest-model or combined distance, plain
+   or modified (:mod:`core.tracking.gating`), or the ``cheap_jpda`` baseline
+   (:mod:`core.tracking.jpda`);
+4. **update** (:class:`IMMUpdater`, or the PDA update) and credal
+   **classification** of the updated tracks ([MTT] §5.2);
+5. **track score** ([MTT] §4.3): a hit adds ``ln[P_D / ((2π)^{q/2} β_FT √|S|)] − D/2``
+   (D, S of the pair's model), a miss ``ln(1 − P_D)``; a confirmed track that
+   misses coasts; the empty-gate probability ([HZ] §4.2) multiplies
+   ``1 − (ρ_FA + ρ_NT) A_G`` per scan while coasting, A_G from the combined S;
+6. **life cycle**, by the table of [HZ] §5.1, first reason found wins:
+   out of range → terminated; phantom older than
+   ``phantom_max_distance / phantom_min_speed`` → terminated; undetected in a
+   blind zone or occluded → phantom (a tentative track is terminated); score
+   ≤ delete threshold → terminated; coasting with empty-gate probability <
+   ``termination_probability`` → terminated; tentative with score ≥ confirm
+   threshold (or ``min_points`` hits) → confirmed;
+7. **hand-over** ([HZ] §5.1): a track confirmed in this scan is compared with
+   the phantoms (GNN, ``sum`` distance on the full state, the association
+   gate probability); a matching phantom takes its estimate and keeps its
+   identity, and the newcomer is terminated (``merged_into_phantom``);
+8. **initiation** from the detections nobody used (two-point or single-point,
+   :mod:`core.tracking.config`).
+
+Phantoms are never matched with detections. Every status change records its
+reason. The tracker is deterministic and its whole state exports to plain data
+(:meth:`LocalTracker.export`) that :meth:`LocalTracker.restore` continues
+exactly.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.stats import chi2
+
+from core.arrays import BoolArray, FloatArray, IntArray
+from core.association import associate
+from core.association.associate import METHODS
+from core.belief import MassFunction
+from core.classification import CredalClassification, CredalClassifier
+from core.distance import DistanceModel, Estimates, ModifiedScale, steady_state_covariance
+from core.distance.estimates import check_covariances
+from core.errors import TrackingError
+from core.geometry import Sector, Visibility, occluded
+from core.lifecycle import StatusReason, TrackStatus, gate_emptiness_factor, gate_volume
+from core.tracking.config import CHEAP_JPDA, LocalTrackerConfig
+from core.tracking.gating import TrackGatingProblem, gate_pairs
+from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState, IMMUpdate, IMMUpdater
+from core.tracking.initiator import pair_seeds, single_point_initiation, two_point_initiation
+from core.tracking.jpda import cheap_jpda_weights, pda_update
+from core.tracking.presets import TrackingPreset
+from core.tracking.track import LocalTrack, TrackerStep, float_array, mass_to_plain, plain_floats
+
+EXPORT_VERSION = 1
+STATUSES: tuple[TrackStatus, ...] = tuple(TrackStatus)
+REASONS: tuple[StatusReason, ...] = tuple(StatusReason)
+TENTATIVE = STATUSES.index(TrackStatus.TENTATIVE)
+CONFIRMED = STATUSES.index(TrackStatus.CONFIRMED)
+COASTING = STATUSES.index(TrackStatus.COASTING)
+PHANTOM = STATUSES.index(TrackStatus.PHANTOM)
+TERMINATED = STATUSES.index(TrackStatus.TERMINATED)
+TIME_TOLERANCE = 1e-9
+"""Relative tolerance on scan times being multiples of ΔT."""
+SEED_NOISE_GATE = 0.999
+"""Gate probability of the measurement-noise part of the seed distance bound."""
+
+
+def _reason(reason: StatusReason) -> int:
+    return REASONS.index(reason)
+
+
+def _as_prediction(bank_h: FloatArray, noise: FloatArray, state: IMMState) -> IMMPrediction:
+    """A zero-step prediction: the posterior itself (a second sensor at the same time)."""
+    h_t = bank_h.T
+    return IMMPrediction(
+        means=state.means,
+        covariances=state.covariances,
+        log_mode_probabilities=state.log_mode_probabilities,
+        measurement_means=state.means @ h_t,
+        innovation_covariances=bank_h @ state.covariances @ h_t + noise,
+    )
+
+
+def _select_prediction(prediction: IMMPrediction, rows: IntArray) -> IMMPrediction:
+    return IMMPrediction(
+        prediction.means[rows],
+        prediction.covariances[rows],
+        prediction.log_mode_probabilities[rows],
+        prediction.measurement_means[rows],
+        prediction.innovation_covariances[rows],
+    )
+
+
+def _concatenate(first: IMMState, second: IMMState) -> IMMState:
+    return IMMState(
+        np.concatenate([first.means, second.means]),
+        np.concatenate([first.covariances, second.covariances]),
+        np.concatenate([first.log_mode_probabilities, second.log_mode_probabilities]),
+    )
+
+
+class LocalTracker:
+    """Multi-target tracker of one sensor system (module docstring).
+
+    Parameters
+    ----------
+    config : LocalTrackerConfig
+    """
+
+    def __init__(self, config: LocalTrackerConfig) -> None:
+        self.config = config
+        found: TrackingPreset | None = config.tracking_preset()
+        self.bank = config.model_bank()
+        self.predictor = IMMPredictor(self.bank)
+        self.updater = IMMUpdater(self.bank)
+        self._h = self.bank.measurement.matrix
+        self._noise = self.bank.measurement.noise_covariance
+        self._q = self.bank.measurement.dim
+        self._velocity_convention = "velocity" if found is None else found.velocity_convention
+        self.classifier: CredalClassifier | None = None
+        if found is not None and config.classification is not None:
+            chosen = config.classification
+            self.classifier = CredalClassifier(
+                found.behaviours,
+                found.relation,
+                likelihood_scale=chosen.likelihood_scale,
+                discount=chosen.discount,
+                reliability=chosen.reliability,
+                accumulation=chosen.accumulation,
+            )
+        self._method = config.association_method
+        options = dict(config.association_options)
+        if self._method == CHEAP_JPDA:
+            unknown = sorted(set(options) - {"bias", "gate_probability"})
+            if unknown:
+                raise TrackingError(f"cheap_jpda: unknown option(s) {unknown}")
+            self._bias = float(options.get("bias", 0.0))  # type: ignore[arg-type]
+            probability = float(options.get("gate_probability", 0.999))  # type: ignore[arg-type]
+            if not 0.0 < probability < 1.0:
+                raise TrackingError("cheap_jpda: gate_probability must be in (0, 1)")
+            self._jpda_gate = float(chi2.ppf(probability, self._q))
+            self._parsed_options: Any = None
+        elif self._method in METHODS:
+            self._parsed_options = METHODS[self._method][0](options)
+        else:
+            raise TrackingError(
+                f"unknown association method {self._method!r}; "
+                f"choose one of {[*METHODS, CHEAP_JPDA]}"
+            )
+        gate_probability = options.get("gate_probability", 0.999)
+        self._gate_probability = (
+            float(gate_probability) if isinstance(gate_probability, int | float) else 0.999
+        )
+        self._gate = float(chi2.ppf(self._gate_probability, self._q))
+        self._modified: ModifiedScale | None = None
+        self._modified_sum: ModifiedScale | None = None
+        if config.distance == "modified":
+            first = self.bank.models[0]
+            steady = steady_state_covariance(
+                first.transition, first.process_noise, self._h, self._noise
+            )
+            kwargs = {
+                "beta": config.modified_beta,
+                "k": config.modified_k,
+                "alpha": config.modified_alpha,
+            }
+            self._modified = ModifiedScale.of(steady.innovation, **kwargs)
+            self._modified_sum = ModifiedScale.of(steady.innovation - self._noise, **kwargs)
+        self._coverage = config.coverage
+        self._views = dict(config.fields_of_view)
+        # The state: one row per live track.
+        self.time: float | None = None
+        self.next_number = 1
+        n, r = self.bank.state_dim, self.bank.n_models
+        self._numbers: IntArray = np.zeros(0, dtype=np.int64)
+        self._status: IntArray = np.zeros(0, dtype=np.int64)
+        self._reason: IntArray = np.zeros(0, dtype=np.int64)
+        self._score: FloatArray = np.zeros(0)
+        self._hits: IntArray = np.zeros(0, dtype=np.int64)
+        self._empty_gate: FloatArray = np.zeros(0)
+        self._phantom_since: FloatArray = np.zeros(0)
+        self._state = IMMState(np.zeros((0, r, n)), np.zeros((0, r, n, n)), np.zeros((0, r)))
+        self._classes: list[CredalClassification] = []
+        self._seeds: FloatArray = np.zeros((0, self._q))
+        self._seed_times: FloatArray = np.zeros(0)
+        self._seed_sensors: IntArray = np.zeros(0, dtype=np.int64)
+        self._occluded: BoolArray = np.zeros(0, dtype=bool)
+
+    # ------------------------------------------------------------------ api
+    @property
+    def n_tracks(self) -> int:
+        """Live tracks (terminated ones are dropped after the step that ends them)."""
+        return len(self._numbers)
+
+    def step(
+        self,
+        time: float,
+        measurements: ArrayLike,
+        measurement_covariances: ArrayLike | None = None,
+        sensor: str | None = None,
+    ) -> TrackerStep:
+        """Process one scan of ``sensor`` (default: the first configured sensor).
+
+        Parameters
+        ----------
+        time : float
+            Scan time; not earlier than the previous scan, a multiple of ΔT after it.
+        measurements : array (m, q)
+        measurement_covariances : array (m, q, q), optional
+            Each detection's own R (default: the bank's R).
+        sensor : str, optional
+
+        Raises
+        ------
+        TrackingError
+            Unknown sensor, a time that goes back or is off the ΔT grid, wrong
+            shapes, non-finite numbers; nothing changes then.
+        """
+        z, own_noise, sensor_name, ahead = self._check(
+            time, measurements, measurement_covariances, sensor
+        )
+        prediction = self._predict(ahead)
+        tracks = len(self._numbers)
+        combined_z, combined_s = prediction.combined_measurement()
+        visibility, seen = self._visibility(combined_z, sensor_name)
+
+        candidates = np.flatnonzero(self._status != PHANTOM)
+        sub = _select_prediction(prediction, candidates)
+        if self._method == CHEAP_JPDA:
+            update, pair_rows, pair_cols, hit_gain, used = self._jpda(sub, z, own_noise)
+        else:
+            update, pair_rows, pair_cols, hit_gain, used = self._associate(sub, z, own_noise)
+        detected = np.zeros(tracks, dtype=bool)
+        detected[candidates] = update.detected
+        means = prediction.means.copy()
+        covariances = prediction.covariances.copy()
+        log_mu = prediction.log_mode_probabilities.copy()
+        means[candidates] = update.state.means
+        covariances[candidates] = update.state.covariances
+        log_mu[candidates] = update.state.log_mode_probabilities
+        self._state = IMMState(means, covariances, log_mu)
+        if self.classifier is not None and len(candidates):
+            chosen = [self._classes[row] for row in candidates.tolist()]
+            classified = self.classifier.update(
+                chosen, update.log_mode_probabilities, update.log_likelihoods, update.detected
+            )
+            for row, value in zip(candidates.tolist(), classified, strict=True):
+                self._classes[row] = value
+
+        # Score and coasting.
+        gain = np.zeros(tracks)
+        gain[candidates] = hit_gain
+        missed = seen & ~detected & (self._status != PHANTOM)
+        self._score = self._score + np.where(detected, gain, 0.0)
+        self._score = self._score + np.where(missed, self.config.score.miss_increment, 0.0)
+        self._score = np.minimum(self._score, self.config.score_ceiling)
+        self._hits = self._hits + detected.astype(np.int64)
+        reacquired = detected & (self._status == COASTING)
+        self._set(reacquired, CONFIRMED, StatusReason.REACQUIRED)
+        self._empty_gate = np.where(detected, 1.0, self._empty_gate)
+        self._set(missed & (self._status == CONFIRMED), COASTING, StatusReason.MISSED)
+        coasting = missed & (self._status == COASTING)
+        if np.any(coasting):
+            volume = gate_volume(self._gate, np.linalg.slogdet(combined_s)[1], self._q)
+            factor = gate_emptiness_factor(
+                self.config.score.false_target_density, self.config.score.new_target_density, volume
+            )
+            self._empty_gate = np.where(coasting, self._empty_gate * factor, self._empty_gate)
+
+        newly_confirmed = self._life_cycle(time, visibility, seen, detected)
+
+        # Per-detection assignment (by track number for now).
+        numbers = np.full(len(z), -1, dtype=np.int64)
+        numbers[pair_cols] = self._numbers[candidates[pair_rows]]
+        self._hand_over(newly_confirmed, numbers)
+        free = np.ones(len(z), dtype=bool)
+        free[used] = False
+        self._initiate(time, sensor_name, z, free, numbers)
+        return self._result(time, sensor_name, numbers)
+
+    # ------------------------------------------------------------ checks
+    def _check(
+        self,
+        time: float,
+        measurements: ArrayLike,
+        measurement_covariances: ArrayLike | None,
+        sensor: str | None,
+    ) -> tuple[FloatArray, FloatArray | None, str, int]:
+        sensor_name = self.config.sensors[0] if sensor is None else sensor
+        if sensor_name not in self._views:
+            raise TrackingError(f"unknown sensor {sensor_name!r}; known: {list(self._views)}")
+        if not math.isfinite(time):
+            raise TrackingError(f"time must be finite, got {time!r}")
+        z = np.asarray(measurements, dtype=np.float64)
+        if z.size == 0:
+            z = z.reshape(0, self._q)
+        if z.ndim != 2 or z.shape[1] != self._q:
+            raise TrackingError(f"measurements must have shape (m, {self._q}), got {z.shape}")
+        if not np.all(np.isfinite(z)):
+            raise TrackingError("measurements must be finite")
+        own: FloatArray | None = None
+        if measurement_covariances is not None:
+            own = np.asarray(measurement_covariances, dtype=np.float64)
+            if own.size == 0:
+                own = own.reshape(0, self._q, self._q)
+            if own.shape != (len(z), self._q, self._q):
+                raise TrackingError(
+                    f"measurement_covariances must have shape ({len(z)}, {self._q}, {self._q})"
+                )
+            if len(own):
+                check_covariances(own, "measurement_covariances")
+        ahead = 0
+        if self.time is not None:
+            elapsed = time - self.time
+            interval = self.config.time_interval
+            ahead = round(elapsed / interval)
+            if elapsed < 0.0 or abs(elapsed - ahead * interval) > TIME_TOLERANCE * max(
+                1.0, abs(time)
+            ):
+                raise TrackingError(
+                    f"scan time {time!r} must be the previous time {self.time!r} "
+                    f"plus a multiple of ΔT = {interval!r}"
+                )
+        return z, own, sensor_name, int(ahead)
+
+    # ---------------------------------------------------------- predict
+    def _predict(self, ahead: int) -> IMMPrediction:
+        state = self._state
+        if ahead == 0:
+            return _as_prediction(self._h, self._noise, state)
+        prediction = self.predictor.predict(state)
+        for _ in range(ahead - 1):
+            prediction = self.predictor.predict(prediction.as_state())
+        return prediction
+
+    def _visibility(self, positions: FloatArray, sensor: str) -> tuple[IntArray, BoolArray]:
+        """Visibility codes of every track, and whether the scan's sensor should see it."""
+        tracks = len(positions)
+        self._occluded = np.zeros(tracks, dtype=bool)
+        if self._q != 2 or tracks == 0:
+            return np.full(tracks, int(Visibility.VISIBLE)), np.ones(tracks, dtype=bool)
+        visibility = self._coverage.visibility(positions)
+        view = self._views[sensor]
+        seen = np.ones(tracks, dtype=bool) if view is None else view.contains(positions)
+        radius = self.config.occlusion_radius
+        if radius > 0.0 and isinstance(view, Sector):
+            occluders = positions[(self._status == CONFIRMED) | (self._status == COASTING)]
+            hidden = occluded(view.origin, positions, occluders, radius)
+            self._occluded = seen & hidden
+            seen = seen & ~hidden
+        return visibility, seen
+
+    # ------------------------------------------------------- association
+    def _hit_gain(self, distance: FloatArray, log_det: FloatArray) -> FloatArray:
+        return self.config.score.hit_increment(distance, log_det, self._q)
+
+    def _associate(
+        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None
+    ) -> tuple[IMMUpdate, IntArray, IntArray, FloatArray, IntArray]:
+        """Assignment by an association method; returns the update, pairs, hit gains, used detections."""
+        combined_z, combined_s = sub.combined_measurement()
+        problem = TrackGatingProblem(
+            known=Estimates(combined_z, combined_s, "tracks"),
+            incoming=Estimates(z, own_noise, "detections"),
+            distance=DistanceModel(covariance="innovation" if own_noise is None else "sum"),
+            prediction=sub,
+            measurement_covariances=own_noise,
+            noise=self._noise,
+            imm_distance=self.config.imm_distance,
+            modified=self._modified if own_noise is None else self._modified_sum,
+        )
+        result = METHODS[self._method][1](problem, self._parsed_options)
+        rows, cols = result.pair_known, result.pair_incoming
+        tracks = len(combined_z)
+        hit_gain = np.zeros(tracks)
+        if len(rows):
+            gated = problem.last["pairs"]
+            keys = gated.pairs.rows * len(z) + gated.pairs.cols
+            position = np.searchsorted(keys, rows * len(z) + cols)
+            hit_gain[rows] = self._hit_gain(
+                gated.plain_distance[position], gated.pairs.log_det[position]
+            )
+        assigned = np.zeros((tracks, self._q))
+        assigned[rows] = z[cols]
+        detected = np.zeros(tracks, dtype=bool)
+        detected[rows] = True
+        noises = None
+        if own_noise is not None:
+            noises = np.broadcast_to(self._noise, (tracks, self._q, self._q)).copy()
+            noises[rows] = own_noise[cols]
+        update = self.updater.update(sub, assigned, detected, noises)
+        return update, rows, cols, hit_gain, cols
+
+    def _jpda(
+        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None
+    ) -> tuple[IMMUpdate, IntArray, IntArray, FloatArray, IntArray]:
+        """The cheap JPDA baseline: soft weights over gated pairs, PDA update."""
+        if own_noise is not None:
+            raise TrackingError(
+                "cheap_jpda uses the bank's R: detections must not carry covariances"
+            )
+        tracks = len(sub.means)
+        gated = gate_pairs(
+            sub, z, None, self._noise, self._jpda_gate, self.config.imm_distance, self._modified
+        )
+        rows, cols = gated.pairs.rows, gated.pairs.cols
+        log_g = -0.5 * (
+            gated.plain_distance + gated.pairs.log_det + self._q * math.log(2 * math.pi)
+        )
+        likelihoods = np.zeros((tracks, len(z)))
+        likelihoods[rows, cols] = np.exp(log_g)
+        weights, _ = cheap_jpda_weights(likelihoods, self._bias)
+        pair_weights = weights[rows, cols]
+        keep = pair_weights > 0.0
+        update = pda_update(self.bank, sub, z, rows[keep], cols[keep], pair_weights[keep])
+        hit_gain = np.zeros(tracks)
+        best_rows = np.zeros(0, dtype=np.int64)
+        best_cols = np.zeros(0, dtype=np.int64)
+        if np.any(keep):
+            # The most probable detection of each track scores it; each detection goes to its most probable track.
+            best_col = np.argmax(weights, axis=1)
+            has = weights.max(axis=1) > 0.0
+            chosen = np.flatnonzero(has)
+            keys = rows * len(z) + cols
+            position = np.searchsorted(keys, chosen * len(z) + best_col[chosen])
+            hit_gain[chosen] = self._hit_gain(
+                gated.plain_distance[position], gated.pairs.log_det[position]
+            )
+            best_cols = np.flatnonzero(weights.max(axis=0) > 0.0)
+            best_rows = np.argmax(weights[:, best_cols], axis=0).astype(np.int64)
+        used = np.unique(cols)
+        return update, best_rows, best_cols, hit_gain, used
+
+    # -------------------------------------------------------- life cycle
+    def _set(self, mask: BoolArray, status: int, reason: StatusReason) -> None:
+        self._status = np.where(mask, status, self._status)
+        self._reason = np.where(mask, _reason(reason), self._reason)
+
+    def _life_cycle(
+        self, time: float, visibility: IntArray, seen: BoolArray, detected: BoolArray
+    ) -> BoolArray:
+        """[HZ] §5.1 table (module docstring); returns the rows confirmed in this scan."""
+        config = self.config
+        status = self._status
+        open_rows = np.ones(len(status), dtype=bool)  # no decision yet
+
+        def decide(mask: BoolArray, new_status: int, reason: StatusReason) -> None:
+            nonlocal open_rows
+            chosen = mask & open_rows
+            self._set(chosen, new_status, reason)
+            open_rows = open_rows & ~chosen
+
+        decide(visibility == Visibility.OUT_OF_RANGE, TERMINATED, StatusReason.OUT_OF_RANGE)
+        is_phantom = status == PHANTOM
+        expired = is_phantom & (time - self._phantom_since > config.phantom_lifetime)
+        decide(expired, TERMINATED, StatusReason.PHANTOM_EXPIRED)
+        open_rows &= ~is_phantom
+        if config.phantoms:
+            established = (status == CONFIRMED) | (status == COASTING)
+            for hidden, reason in (
+                ((visibility == Visibility.BLIND_ZONE) & ~detected, StatusReason.BLIND_ZONE),
+                (self._occluded & ~detected, StatusReason.OCCLUDED),
+            ):
+                entering = hidden & established & open_rows
+                self._phantom_since = np.where(entering, time, self._phantom_since)
+                decide(entering, PHANTOM, reason)
+                decide(hidden & (status == TENTATIVE), TERMINATED, reason)
+        score = config.score
+        decide(self._score <= score.delete_threshold, TERMINATED, StatusReason.SCORE_DELETED)
+        if config.termination_probability > 0.0:
+            decide(
+                (status == COASTING) & (self._empty_gate < config.termination_probability),
+                TERMINATED,
+                StatusReason.GATE_EMPTINESS,
+            )
+        tentative = status == TENTATIVE
+        decide(
+            tentative & (self._score >= score.confirm_threshold),
+            CONFIRMED,
+            StatusReason.SCORE_CONFIRMED,
+        )
+        if config.min_points is not None:
+            decide(
+                tentative & (self._hits >= config.min_points), CONFIRMED, StatusReason.MIN_POINTS
+            )
+        return np.asarray(tentative & (self._status == CONFIRMED), dtype=np.bool_)
+
+    def _hand_over(self, newly_confirmed: BoolArray, numbers: IntArray) -> None:
+        """Newly confirmed tracks that match a phantom give it their estimate ([HZ] §5.1)."""
+        phantoms = np.flatnonzero(self._status == PHANTOM)
+        fresh = np.flatnonzero(newly_confirmed)
+        if len(phantoms) == 0 or len(fresh) == 0:
+            return
+        means, covariances = self._state.combined()
+        decision = associate(
+            (means[phantoms], covariances[phantoms]),
+            (means[fresh], covariances[fresh]),
+            "gnn",
+            {"gate_probability": self._gate_probability},
+            "sum",
+        )
+        if len(decision.pair_known) == 0:
+            return
+        keepers = phantoms[decision.pair_known]
+        newcomers = fresh[decision.pair_incoming]
+        state = self._state
+        means_all, covs_all, log_mu = (
+            state.means.copy(),
+            state.covariances.copy(),
+            state.log_mode_probabilities.copy(),
+        )
+        means_all[keepers] = state.means[newcomers]
+        covs_all[keepers] = state.covariances[newcomers]
+        log_mu[keepers] = state.log_mode_probabilities[newcomers]
+        self._state = IMMState(means_all, covs_all, log_mu)
+        self._score[keepers] = np.maximum(self._score[keepers], self._score[newcomers])
+        self._hits[keepers] += self._hits[newcomers]
+        self._empty_gate[keepers] = 1.0
+        self._phantom_since[keepers] = np.nan
+        keep_mask = np.zeros(len(self._status), dtype=bool)
+        keep_mask[keepers] = True
+        self._set(keep_mask, CONFIRMED, StatusReason.REACQUIRED)
+        gone = np.zeros(len(self._status), dtype=bool)
+        gone[newcomers] = True
+        self._set(gone, TERMINATED, StatusReason.MERGED_INTO_PHANTOM)
+        if self.classifier is not None:
+            for keeper, newcomer in zip(keepers.tolist(), newcomers.tolist(), strict=True):
+                self._classes[keeper] = self.classifier.combine(
+                    self._classes[keeper], self._classes[newcomer].mass
+                )
+        for keeper, newcomer in zip(keepers.tolist(), newcomers.tolist(), strict=True):
+            numbers[numbers == self._numbers[newcomer]] = self._numbers[keeper]
+
+    # -------------------------------------------------------- initiation
+    def _initiate(
+        self, time: float, sensor: str, z: FloatArray, free: BoolArray, numbers: IntArray
+    ) -> None:
+        """New tentative tracks from the detections nobody used (config Readings)."""
+        detections = np.flatnonzero(free)
+        if self.config.initiation == "single_point":
+            starts = detections
+            state = single_point_initiation(self.bank, z[starts], self.config.initial_velocity_std)
+            self._append(state, starts, numbers)
+            return
+        sensor_index = self.config.sensors.index(sensor)
+        mine = self._seed_sensors == sensor_index
+        older = mine & (self._seed_times < time)
+        seeds, seed_times = self._seeds[older], self._seed_times[older]
+        starts = np.zeros(0, dtype=np.int64)
+        if len(seeds) and len(detections):
+            # The sensor's seeds all come from its latest earlier scan (older ones are dropped below).
+            interval = float(time - seed_times.max())
+            noise_gate = float(chi2.ppf(SEED_NOISE_GATE, self._q))
+            largest_noise = float(np.linalg.eigvalsh(self._noise)[-1])
+            radius = self.config.max_speed * interval + math.sqrt(noise_gate * 2.0 * largest_noise)
+            seed_index, detection_index = pair_seeds(seeds, z[detections], radius)
+            if len(seed_index):
+                starts = detections[detection_index]
+                state = two_point_initiation(
+                    self.bank,
+                    seeds[seed_index],
+                    z[starts],
+                    interval,
+                    velocity=self._velocity_convention,
+                )
+                order = np.argsort(starts, kind="stable")
+                starts = starts[order]
+                state = state.select(order)
+                self._append(state, starts, numbers, hits=2)
+        remaining = np.setdiff1d(detections, starts)
+        kept = ~older
+        self._seeds = np.concatenate([self._seeds[kept], z[remaining]])
+        self._seed_times = np.concatenate([self._seed_times[kept], np.full(len(remaining), time)])
+        self._seed_sensors = np.concatenate(
+            [self._seed_sensors[kept], np.full(len(remaining), sensor_index, dtype=np.int64)]
+        )
+
+    def _append(
+        self, state: IMMState, detections: IntArray, numbers: IntArray, hits: int = 1
+    ) -> None:
+        count = len(detections)
+        if count == 0:
+            return
+        new_numbers = np.arange(self.next_number, self.next_number + count, dtype=np.int64)
+        self.next_number += count
+        numbers[detections] = new_numbers
+        score = self.config.score
+        self._numbers = np.concatenate([self._numbers, new_numbers])
+        self._status = np.concatenate([self._status, np.full(count, TENTATIVE)])
+        self._reason = np.concatenate(
+            [self._reason, np.full(count, _reason(StatusReason.INITIATED))]
+        )
+        self._score = np.concatenate([self._score, np.full(count, score.initial)])
+        self._hits = np.concatenate([self._hits, np.full(count, hits, dtype=np.int64)])
+        self._empty_gate = np.concatenate([self._empty_gate, np.ones(count)])
+        self._phantom_since = np.concatenate([self._phantom_since, np.full(count, np.nan)])
+        self._state = _concatenate(self._state, state)
+        if self.classifier is not None:
+            self._classes.extend([self.classifier.initial()] * count)
+        self._status = self._status.astype(np.int64)
+        self._reason = self._reason.astype(np.int64)
+
+    # ------------------------------------------------------------ output
+    def _track_id(self, number: int) -> str:
+        return f"{self.config.id_prefix}{number}"
+
+    def _result(self, time: float, sensor: str, numbers: IntArray) -> TrackerStep:
+        means, covariances = self._state.combined()
+        mu = self._state.mode_probabilities
+        order = np.argsort(self._numbers, kind="stable")
+        tracks = []
+        for row in order.tolist():
+            classification = self._classes[row] if self.classifier is not None else None
+            tracks.append(
+                LocalTrack(
+                    id=self._track_id(int(self._numbers[row])),
+                    status=STATUSES[int(self._status[row])],
+                    reason=REASONS[int(self._reason[row])],
+                    state=means[row],
+                    covariance=covariances[row],
+                    mode_probabilities=mu[row],
+                    score=float(self._score[row]),
+                    hits=int(self._hits[row]),
+                    class_mass=None if classification is None else classification.class_mass,
+                    pignistic=None if classification is None else classification.pignistic,
+                )
+            )
+        live = self._status != TERMINATED
+        self._keep(np.flatnonzero(live))
+        self.time = time
+        assignment = tuple(None if n < 0 else self._track_id(int(n)) for n in numbers.tolist())
+        return TrackerStep(time=time, sensor=sensor, tracks=tuple(tracks), assignment=assignment)
+
+    def _keep(self, rows: IntArray) -> None:
+        self._numbers = self._numbers[rows]
+        self._status = self._status[rows]
+        self._reason = self._reason[rows]
+        self._score = self._score[rows]
+        self._hits = self._hits[rows]
+        self._empty_gate = self._empty_gate[rows]
+        self._phantom_since = self._phantom_since[rows]
+        self._state = self._state.select(rows)
+        if self.classifier is not None:
+            self._classes = [self._classes[row] for row in rows.tolist()]
+
+    # ------------------------------------------------------- persistence
+    def export(self) -> dict[str, Any]:
+        """The whole state as plain data (lists, floats, ints, str, None; see :mod:`core.tracking.track`)."""
+        tracks = []
+        for row in range(len(self._numbers)):
+            entry: dict[str, Any] = {
+                "number": int(self._numbers[row]),
+                "status": STATUSES[int(self._status[row])].value,
+                "reason": REASONS[int(self._reason[row])].value,
+                "score": plain_floats(self._score[row]),
+                "hits": int(self._hits[row]),
+                "empty_gate_probability": plain_floats(self._empty_gate[row]),
+                "phantom_since": plain_floats(self._phantom_since[row]),
+                "means": plain_floats(self._state.means[row]),
+                "covariances": plain_floats(self._state.covariances[row]),
+                "log_mode_probabilities": plain_floats(self._state.log_mode_probabilities[row]),
+                "classification": None,
+            }
+            if self.classifier is not None:
+                value = self._classes[row]
+                entry["classification"] = {
+                    "mass": mass_to_plain(value.mass),
+                    "step_conflict": plain_floats(np.float64(value.step_conflict)),
+                    "log_normaliser": plain_floats(np.float64(value.log_normaliser)),
+                    "steps": value.steps,
+                }
+            tracks.append(entry)
+        return {
+            "version": EXPORT_VERSION,
+            "time": None if self.time is None else plain_floats(np.float64(self.time)),
+            "next_number": self.next_number,
+            "seeds": plain_floats(self._seeds),
+            "seed_times": plain_floats(self._seed_times),
+            "seed_sensors": self._seed_sensors.tolist(),
+            "tracks": tracks,
+        }
+
+    @classmethod
+    def restore(cls, config: LocalTrackerConfig, plain: dict[str, Any]) -> LocalTracker:
+        """Rebuild a tracker from :meth:`export`'s output and the same configuration."""
+        if plain.get("version") != EXPORT_VERSION:
+            raise TrackingError(f"unknown tracker export version {plain.get('version')!r}")
+        tracker = cls(config)
+        tracker.time = None if plain["time"] is None else float(float_array(plain["time"]))
+        tracker.next_number = int(plain["next_number"])
+        tracker._seeds = float_array(plain["seeds"]).reshape(-1, tracker._q)
+        tracker._seed_times = float_array(plain["seed_times"]).reshape(-1)
+        tracker._seed_sensors = np.array(plain["seed_sensors"], dtype=np.int64).reshape(-1)
+        entries = plain["tracks"]
+        n, r = tracker.bank.state_dim, tracker.bank.n_models
+        tracker._numbers = np.array([e["number"] for e in entries], dtype=np.int64)
+        tracker._status = np.array(
+            [STATUSES.index(TrackStatus(e["status"])) for e in entries], dtype=np.int64
+        )
+        tracker._reason = np.array(
+            [REASONS.index(StatusReason(e["reason"])) for e in entries], dtype=np.int64
+        )
+        tracker._score = float_array([e["score"] for e in entries]).reshape(-1)
+        tracker._hits = np.array([e["hits"] for e in entries], dtype=np.int64)
+        tracker._empty_gate = float_array([e["empty_gate_probability"] for e in entries]).reshape(
+            -1
+        )
+        tracker._phantom_since = float_array([e["phantom_since"] for e in entries]).reshape(-1)
+        tracker._state = IMMState(
+            float_array([e["means"] for e in entries]).reshape(-1, r, n),
+            float_array([e["covariances"] for e in entries]).reshape(-1, r, n, n),
+            float_array([e["log_mode_probabilities"] for e in entries]).reshape(-1, r),
+        )
+        if tracker.classifier is not None:
+            tracker._classes = [tracker._classification(e["classification"]) for e in entries]
+        return tracker
+
+    def _classification(self, plain: dict[str, Any]) -> CredalClassification:
+        assert self.classifier is not None
+        classifier = self.classifier
+        frame = (
+            classifier.classes
+            if classifier.accumulation == "classes"
+            else classifier.behaviours.frame
+        )
+        mass = MassFunction(
+            frame,
+            np.array(plain["mass"]["masks"], dtype=np.int64),
+            np.array(plain["mass"]["masses"], dtype=np.float64),
+        )
+        class_mass = (
+            mass if classifier.accumulation == "classes" else classifier.relation.transfer(mass)
+        )
+        pignistic = class_mass.pignistic()
+        return CredalClassification(
+            mass=mass,
+            class_mass=class_mass,
+            pignistic=pignistic,
+            step_conflict=float(float_array(plain["step_conflict"])),
+            log_normaliser=float(float_array(plain["log_normaliser"])),
+            status="ok" if pignistic is not None else "total_conflict",
+            steps=int(plain["steps"]),
+        )
