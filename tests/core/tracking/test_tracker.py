@@ -8,7 +8,6 @@ import math
 import numpy as np
 import pytest
 from scipy.stats import norm
-from tracking_runs import false_assignment_rate, rectangle, run_tracker, sensor_of
 
 from core.errors import TrackingError
 from core.lifecycle import ScoreModel
@@ -18,6 +17,8 @@ from core.tracking import IMMPredictor, IMMUpdater, ModelBank, two_point_initiat
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.jpda import cheap_jpda_weights, pda_update
 from core.tracking.tracker import LocalTracker
+
+from .tracking_runs import false_assignment_rate, rectangle, run_tracker, sensor_of
 
 ROAD_BANK = ModelBank.from_config(
     {
