@@ -14,10 +14,12 @@ from types import MappingProxyType
 from core.association import DEFAULT_DISTANCE
 from core.belief import Frame
 from core.errors import InvalidInput
+from core.fusion.detections import check_layout_for_detections
 from core.fusion.motion import MotionModel
 from core.fusion.state import StateFusion
 from core.geometry import Coverage, FieldOfView, PolygonView
 from core.lifecycle import ScoreModel
+from core.tracking.config import LocalTrackerConfig
 
 
 @dataclass(frozen=True)
@@ -30,12 +32,16 @@ class SensorSpec:
     reliability : λ for discounting its class evidence ([MTT] eq 7).
     p_detect : P_D, used by the track score.
     fov : its field of view, or None if it sees everywhere.
+    tracker : for a sensor that sends raw detections, its local tracker's
+        configuration (the session tracks them, ALGORITHMS.md §4); None for a
+        sensor that sends track lists.
     """
 
     id: str
     reliability: float = 1.0
     p_detect: float = 0.9
     fov: FieldOfView | None = None
+    tracker: LocalTrackerConfig | None = None
 
     def __post_init__(self) -> None:
         if not self.id:
@@ -52,6 +58,10 @@ class TrackManagement:
 
     Densities are per unit of position space (area in 2-D) per report:
     the score and the gate volume are computed on the position components.
+    As in the local tracker (``core.tracking.config``, Reading ``score_margin``),
+    the score is clamped at ``confirm threshold + score_margin`` so that a
+    long-lived track is still deleted after a few consecutive misses where it
+    should have been seen; ``None`` keeps the raw SPRT.
     """
 
     false_confirmation: float = 1e-3
@@ -64,8 +74,13 @@ class TrackManagement:
     phantom_max_distance: float = 500.0
     phantom_min_speed: float = 1.0
     occlusion_radius: float = 0.0
+    score_margin: float | None = 0.0
 
     def __post_init__(self) -> None:
+        if self.score_margin is not None and not (
+            math.isfinite(self.score_margin) and self.score_margin >= 0.0
+        ):
+            raise InvalidInput(f"score_margin must be >= 0 or None, got {self.score_margin!r}")
         for name in ("termination_probability", "gate_probability"):
             value = getattr(self, name)
             if not (math.isfinite(value) and 0.0 < value < 1.0):
@@ -93,6 +108,13 @@ class TrackManagement:
     def thresholds(self) -> ScoreModel:
         """The SPRT thresholds (they depend on α and β only, not on P_D)."""
         return self.score_model(p_detect=0.5)
+
+    @property
+    def score_ceiling(self) -> float:
+        """Largest score a fused track keeps (+inf without a margin)."""
+        if self.score_margin is None:
+            return math.inf
+        return self.thresholds.confirm_threshold + self.score_margin
 
     @property
     def phantom_lifetime(self) -> float:
@@ -145,9 +167,28 @@ class FusionConfig:
         object.__setattr__(
             self, "association_options", MappingProxyType(dict(self.association_options))
         )
+        for sensor in self.sensors:
+            if sensor.tracker is not None:
+                self._check_detecting_sensor(sensor, sensor.tracker)
         if self.distance is None:
             method_distance = DEFAULT_DISTANCE.get(self.association_method, "sum")
             object.__setattr__(self, "distance", method_distance)
+
+    def _check_detecting_sensor(self, sensor: SensorSpec, tracker: LocalTrackerConfig) -> None:
+        check_layout_for_detections(self.motion.layout)
+        preset = tracker.tracking_preset()
+        preset_classes = (
+            None if preset is None or tracker.classification is None else preset.classes
+        )
+        if (
+            self.classes is not None
+            and preset_classes is not None
+            and preset_classes != self.classes
+        ):
+            raise InvalidInput(
+                f"sensor {sensor.id!r}: its tracking preset classifies into "
+                f"{list(preset_classes.labels)}, the session's classes are {list(self.classes.labels)}"
+            )
 
     @property
     def dim(self) -> int:

@@ -50,8 +50,10 @@ from core.distance.cholesky import quadratic_form_and_log_det
 from core.errors import InvalidInput, StaleReport, TotalConflict
 from core.fusion.classes import ClassAssessment, accumulate_likelihoods, fuse_sensor_classes
 from core.fusion.config import FusionConfig, SensorSpec
+from core.fusion.detections import local_track_report
 from core.fusion.reports import (
     AssociationView,
+    DetectionReport,
     FusedTrackView,
     ReportedTrack,
     Source,
@@ -62,6 +64,7 @@ from core.fusion.state import fuse_estimates
 from core.fusion.track import FusedTrack, SensorEstimate
 from core.geometry import Sector, Visibility, occluded
 from core.lifecycle import StatusReason, TrackStatus, gate_emptiness_factor, gate_volume
+from core.tracking.tracker import LocalTracker
 
 EXPORT_VERSION = 1
 LIVE = (TrackStatus.TENTATIVE, TrackStatus.CONFIRMED, TrackStatus.COASTING)
@@ -99,6 +102,11 @@ class SessionEngine:
         self.next_number = 1
         self.last_report: dict[str, float] = {}
         self.tracks: list[FusedTrack] = []
+        self.local_trackers: dict[str, LocalTracker] = {
+            sensor.id: LocalTracker(sensor.tracker)
+            for sensor in config.sensors
+            if sensor.tracker is not None
+        }
         layout = config.motion.layout
         self._position = np.asarray(layout.position, dtype=np.int64)
         self._gate = float(chi2.ppf(config.management.gate_probability, len(layout.position)))
@@ -150,6 +158,39 @@ class SessionEngine:
         self._hand_over_to_phantoms(confirmed, terminated)
         self._absorb_duplicates(terminated)
         return self._result(report, decision, live, terminated, explain)
+
+    def apply_detections(self, report: DetectionReport, *, explain: bool = False) -> StepResult:
+        """Apply one sensor's detections: its local tracker, then the fusion step.
+
+        The sensor's local tracker ([MTT] Fig 6, ``core.tracking``) updates its
+        tracks with the detections; its confirmed tracks updated in this scan
+        become the sensor's track list for :meth:`apply`
+        (``core.fusion.detections``).
+
+        Raises
+        ------
+        InvalidInput
+            Unknown sensor, a sensor without a local tracker (one that sends
+            track lists), bad shapes or numbers, a time off the tracker's ΔT grid.
+        StaleReport
+            The detections are not newer than the sensor's previous input:
+            time never goes backwards for detections.
+        """
+        sensor = self.config.sensor(report.sensor)
+        tracker = self.local_trackers.get(sensor.id)
+        if tracker is None:
+            raise InvalidInput(
+                f"sensor {sensor.id!r} sends track lists: it has no local tracker for detections "
+                "(configure its measurement model)"
+            )
+        if not math.isfinite(report.time):
+            raise InvalidInput(f"time must be finite, got {report.time!r}")
+        last = self.last_report.get(sensor.id)
+        if last is not None and report.time <= last:
+            raise StaleReport(sensor.id, report.time, last)
+        scan = tracker.step(report.time, report.measurements, report.covariances)
+        tracks = local_track_report(tracker, scan, self.config.motion.layout, self.config.classes)
+        return self.apply(TrackReport(sensor.id, report.time, tracks), explain=explain)
 
     # ------------------------------------------------------------ checks
     def _check(self, report: TrackReport) -> tuple[SensorSpec, Estimates]:
@@ -365,7 +406,7 @@ class SessionEngine:
     def _hit(
         self, fused: FusedTrack, reported: ReportedTrack, increment: float, report: TrackReport
     ) -> None:
-        fused.score += increment
+        fused.score = min(fused.score + increment, self.config.management.score_ceiling)
         fused.hits += 1
         previous = fused.estimates.get(report.sensor)
         fused.estimates[report.sensor] = SensorEstimate(
@@ -643,6 +684,9 @@ class SessionEngine:
             "next_number": self.next_number,
             "last_report": dict(sorted(self.last_report.items())),
             "tracks": [track.to_plain() for track in self.tracks],
+            "local_trackers": {
+                sensor: tracker.export() for sensor, tracker in sorted(self.local_trackers.items())
+            },
         }
 
     @classmethod
@@ -656,6 +700,13 @@ class SessionEngine:
         engine.next_number = int(state["next_number"])
         engine.last_report = {str(k): float(v) for k, v in state["last_report"].items()}
         engine.tracks = [FusedTrack.from_plain(plain, config.classes) for plain in state["tracks"]]
+        for sensor, plain in state["local_trackers"].items():
+            tracker_config = config.sensor(sensor).tracker
+            if tracker_config is None:
+                raise InvalidInput(
+                    f"exported state has a local tracker for {sensor!r}, the config none"
+                )
+            engine.local_trackers[sensor] = LocalTracker.restore(tracker_config, plain)
         return engine
 
 

@@ -37,6 +37,17 @@ class TrackReport:
 
 
 @dataclass(frozen=True)
+class DetectionReport:
+    """A sensor's detections at one time: measurements ``z`` (m × q) and, optionally,
+    each detection's own noise covariance (m × q × q; default: the sensor's R)."""
+
+    sensor: str
+    time: float
+    measurements: FloatArray
+    covariances: FloatArray | None = None
+
+
+@dataclass(frozen=True)
 class Source:
     """A sensor track that contributes to a fused track."""
 
