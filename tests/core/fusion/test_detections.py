@@ -49,13 +49,17 @@ def test_aircraft_detections_give_fused_tracks_with_the_paper_classes() -> None:
     # Target 2 (the manoeuvring one): its fused track ends classified as a fighter ([MTT] Fig 15).
     at_step_99 = steps[99]
     truth = SCENARIO.truth(2).state_at(99)
-    nearest = min(at_step_99.tracks, key=lambda t: float(np.hypot(*(t.state[[0, 2]] - truth[[0, 2]]))))
+    nearest = min(
+        at_step_99.tracks, key=lambda t: float(np.hypot(*(t.state[[0, 2]] - truth[[0, 2]])))
+    )
     assert float(np.hypot(*(nearest.state[[0, 2]] - truth[[0, 2]]))) < 5.0
     assert nearest.classification is not None and nearest.classification.decision == "fighter"
     assert nearest.classification.pignistic[2] >= 0.9
     # Target 1 flies straight: liner, bomber and fighter stay undecided (BetP ≈ 1/3 each).
     truth_1 = SCENARIO.truth(1).state_at(99)
-    straight = min(at_step_99.tracks, key=lambda t: float(np.hypot(*(t.state[[0, 2]] - truth_1[[0, 2]]))))
+    straight = min(
+        at_step_99.tracks, key=lambda t: float(np.hypot(*(t.state[[0, 2]] - truth_1[[0, 2]])))
+    )
     assert straight.classification is not None
     np.testing.assert_allclose(straight.classification.pignistic, [1 / 3] * 3, atol=0.1)
     # Four aircraft at step 80 (targets 3 and 4 appeared at 30 and 70): four confirmed fused tracks.
@@ -65,7 +69,9 @@ def test_aircraft_detections_give_fused_tracks_with_the_paper_classes() -> None:
     ids_of_target_2 = set()
     for index in range(40, 100):
         truth_now = SCENARIO.truth(2).state_at(index)[[0, 2]]
-        near = [t.id for t in steps[index].tracks if np.hypot(*(t.state[[0, 2]] - truth_now)) < 50.0]
+        near = [
+            t.id for t in steps[index].tracks if np.hypot(*(t.state[[0, 2]] - truth_now)) < 50.0
+        ]
         ids_of_target_2.update(near)
     assert len(ids_of_target_2) == 1, ids_of_target_2
 
@@ -89,7 +95,9 @@ def test_detection_errors_change_nothing() -> None:
     with pytest.raises(InvalidInput, match="unknown sensor"):
         engine.apply_detections(DetectionReport("lidar", 10.0, np.zeros((1, 2))))
     with pytest.raises(InvalidInput):
-        engine.apply_detections(DetectionReport("radar", SCENARIO.scans[3].time, np.full((1, 2), np.nan)))
+        engine.apply_detections(
+            DetectionReport("radar", SCENARIO.scans[3].time, np.full((1, 2), np.nan))
+        )
     assert json.dumps(engine.export()) == before
 
 
