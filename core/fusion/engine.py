@@ -141,7 +141,7 @@ class SessionEngine:
             if was_tentative and fused.status is TrackStatus.CONFIRMED:
                 confirmed.append(fused)
         missed = np.asarray(decision.missed, dtype=np.int64)
-        seen = self._seen_by(sensor.id, states[missed], live) if len(missed) else np.zeros(0, bool)
+        seen = self._seen_by(sensor, states[missed], states) if len(missed) else np.zeros(0, bool)
         for row, visible in zip(missed, seen, strict=True):
             if visible:
                 self._miss(live[row], covariances[row], sensor.p_detect)
@@ -471,22 +471,21 @@ class SessionEngine:
             )
             fused.empty_gate_probability *= float(factor[0])
 
-    def _seen_by(self, sensor_id: str, states: FloatArray, live: list[FusedTrack]) -> BoolArray:
-        """Which predicted positions sensor ``sensor_id`` should have reported (FOV, not occluded)."""
-        sensor = self.config.sensor(sensor_id)
-        positions = states[:, self._position[:2]] if len(self._position) >= 2 else None
-        if sensor.fov is None or positions is None:
-            return np.ones(len(states), dtype=bool)
-        seen = sensor.fov.contains(positions)
-        radius = self.config.management.occlusion_radius
-        if radius > 0.0 and isinstance(sensor.fov, Sector) and len(live) > 1:
-            others, _ = self._fused_at(live, self._latest_time(live))
-            seen &= ~occluded(sensor.fov.origin, positions, others[:, self._position[:2]], radius)
-        return seen
+    def _seen_by(self, sensor: SensorSpec, missed: FloatArray, everyone: FloatArray) -> BoolArray:
+        """Which missed tracks ``sensor`` should have reported: in its field of view, not occluded.
 
-    @staticmethod
-    def _latest_time(tracks: list[FusedTrack]) -> float:
-        return max(track.last_time for track in tracks)
+        ``missed`` and ``everyone`` are fused states at the report time; every
+        live track (``everyone``) can hide another from a sector's origin when
+        ``occlusion_radius`` > 0 ([HZ] §2.1).
+        """
+        if sensor.fov is None or len(self._position) < 2:
+            return np.ones(len(missed), dtype=bool)
+        plane = self._position[:2]
+        seen = sensor.fov.contains(missed[:, plane])
+        radius = self.config.management.occlusion_radius
+        if radius > 0.0 and isinstance(sensor.fov, Sector):
+            seen &= ~occluded(sensor.fov.origin, missed[:, plane], everyone[:, plane], radius)
+        return seen
 
     def _start(self, reported: ReportedTrack, report: TrackReport) -> FusedTrack:
         sensor = self.config.sensor(report.sensor)

@@ -303,3 +303,24 @@ def test_class_fusion_in_the_engine_discounts_each_sensor_and_combines() -> None
     # Worked by hand: conflict = m1'({b,f}) · m2'({l}) = (0.9·0.6) · (0.6·0.3) = 0.0972.
     assert fused.conflict == pytest.approx(0.0972)
     assert abs(float(np.sum(fused.mass.masses)) - 1.0) < 1e-12
+
+
+@pytest.mark.parametrize(("radius", "penalised"), [(0.0, True), (2.0, False)])
+def test_a_track_hidden_behind_another_is_not_penalised(radius: float, penalised: bool) -> None:
+    # s2 looks north from the origin; A at (0, 50) hides B at (0, 100) when objects have a radius.
+    fov = Sector(
+        origin=(0.0, 0.0), heading_deg=90.0, half_angle_deg=30.0, range_min=0.0, range_max=500.0
+    )
+    engine = SessionEngine(
+        make_config(
+            ["s1", SensorSpec("s2", p_detect=0.9, fov=fov)],
+            management=TrackManagement(occlusion_radius=radius),
+        )
+    )
+    a, b = [0.0, 0.0, 50.0, 0.0], [0.0, 0.0, 100.0, 0.0]
+    engine.apply(report("s1", 0.0, ("a", a), ("b", b)))
+    engine.apply(report("s1", 1.0, ("a", a), ("b", b)))
+    before = {track.id: track.score for track in engine.tracks}
+    engine.apply(report("s2", 1.5, ("x", a)))  # s2 sees A only
+    after = {track.id: track.score for track in engine.tracks}
+    assert (after["F2"] < before["F2"]) is penalised
