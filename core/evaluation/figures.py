@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import textwrap
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -204,7 +205,7 @@ def _plot_classes(axes: Axes, comparison: ClassComparison) -> None:
     bars = axes.bar(positions + width / 2, multi, width, label="multi-information (+ class)")
     axes.bar_label(bars, fmt="%.2f", fontsize=7)
     tuned = ", ".join(f"{m} λ = {t:.0f}" for m, t in comparison.thresholds.items())
-    axes.set_xticks(positions, [label.replace(" (", "\n(") for label in comparison.labels])
+    axes.set_xticks(positions, [textwrap.fill(label, 10) for label in comparison.labels])
     axes.tick_params(axis="x", labelsize=7)
     axes.set_ylabel("false decision rate")
     axes.set_ylim(0, 1.1)
