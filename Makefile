@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: run test lint bench openapi clean
+.PHONY: run test lint bench openapi figures clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -27,6 +27,9 @@ test: lint
 openapi: $(STAMP)
 	$(BIN)/python -m app.openapi openapi.json
 	$(BIN)/python -m app.asyncapi docs/asyncapi.yaml
+
+figures: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python -m core.evaluation.figures --out docs/figures
 
 bench: $(STAMP)
 	@for b in bench/*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done

@@ -5,6 +5,7 @@ from core.simulation.nearby import close_pair_scenario, crossing_scenario
 from core.simulation.pedestrian import pedestrian_scenario
 from core.simulation.road import accelerating_scenario, overtaking_scenario
 from core.simulation.scenario import CLUTTER, Manoeuvre, Region, Scan, Scenario, TargetTruth
+from core.simulation.two_class import ClassifiedTrackListScenario, t2t_two_class
 
 SCENARIOS = {
     "aircraft": aircraft_scenario,
@@ -14,11 +15,16 @@ SCENARIOS = {
     "accelerating": accelerating_scenario,
     "overtaking": overtaking_scenario,
 }
-"""Scenario generators by their EVALUATION.md id; each takes ``seed`` first."""
+"""Scenario generators by their EVALUATION.md id; each takes ``seed`` first.
+
+The track-list scenarios (``t2t-four``, ``t2t-two-class``, crossing traffic)
+return track lists, not detections, and are imported from their modules
+(:func:`t2t_two_class` is exported here too)."""
 
 __all__ = [
     "CLUTTER",
     "SCENARIOS",
+    "ClassifiedTrackListScenario",
     "Manoeuvre",
     "Region",
     "Scan",
@@ -30,4 +36,5 @@ __all__ = [
     "crossing_scenario",
     "overtaking_scenario",
     "pedestrian_scenario",
+    "t2t_two_class",
 ]

@@ -1,0 +1,460 @@
+"""The papers' figures, regenerated: a registry of figure names and :func:`reproduce`.
+
+Each entry of :data:`FIGURES` runs one experiment of :mod:`core.evaluation`
+(full size, or reduced for the tests) and writes one PNG titled with the
+command that regenerates it. Matplotlib is used through its object API with
+the Agg canvas only (no pyplot, no global state), so figures can be made from
+any thread.
+
+``python -m core.evaluation.figures [NAME ...] [--out DIR] [--reduced]``
+writes the named figures (all by default) — what ``make figures`` runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import textwrap
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from numpy.typing import ArrayLike
+
+from core.arrays import FloatArray
+from core.errors import InvalidInput
+from core.evaluation.aircraft import AircraftClassification, aircraft_classification
+from core.evaluation.four_targets import ThresholdSweep, threshold_sweep
+from core.evaluation.pedestrian import PedestrianClassification, pedestrian_classification
+from core.evaluation.two_class import ClassComparison, class_comparison
+from core.evaluation.units import NoiseStudy, UnitSweep, noise_study, unit_sweep
+from core.simulation.scenario import TargetTruth
+from core.simulation.tracklists import SensorTrackList, t2t_four
+from core.simulation.two_class import t2t_two_class
+
+COMMAND = "credal-fusion reproduce"
+"""The command printed in every figure's title (``{COMMAND} NAME``)."""
+
+Echo = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """One reproducible figure.
+
+    Attributes
+    ----------
+    name : str
+        Registry key and PNG file stem.
+    paper : str
+        The figures of the papers it reproduces.
+    summary : str
+        One line: what it shows.
+    draw : callable (reduced, echo) → Figure
+        Runs the experiment (reduced: a few seeds and steps) and draws it.
+    """
+
+    name: str
+    paper: str
+    summary: str
+    draw: Callable[[bool, Echo], Figure]
+
+
+def _seeds(count: int, reduced: bool, small: int = 2) -> tuple[int, ...]:
+    return tuple(range(small if reduced else count))
+
+
+def _titled(figure: Figure, name: str, heading: str, reduced: bool) -> Figure:
+    command = f"{COMMAND} {name}" + (" --reduced" if reduced else "")
+    figure.suptitle(f"{heading}\n$ {command}", fontsize=10)
+    return figure
+
+
+def _shade(axes: Axes, windows: Sequence[tuple[int, int, str]]) -> None:
+    """Grey bands on alternate windows, each labelled inside the top of the axes."""
+    labels = axes.get_xaxis_transform()
+    for index, (first, last, label) in enumerate(windows):
+        if index % 2 == 0 or len(windows) == 1:
+            axes.axvspan(first - 0.5, last + 0.5, color="0.92", zorder=0)
+        axes.text(
+            (first + last) / 2, 0.97, label, transform=labels, ha="center", va="top", fontsize=7
+        )
+
+
+# ------------------------------------------------------------------ t2t-four
+def _scene_axes(
+    axes: Axes, reports: Sequence[SensorTrackList], truths: Sequence[TargetTruth], title: str
+) -> None:
+    """Every report's estimates in the frame moving with the targets (x − ẋ t, true ẋ)."""
+    speed = {truth.target_id: float(truth.states[0, 1]) for truth in truths}
+    for sensor, marker, label in (
+        ("s1", "o", "sensor 1 (incoming)"),
+        ("s2", "*", "sensor 2 (known)"),
+    ):
+        chosen = [r for r in reports if r.sensor == sensor]
+        x = np.concatenate(
+            [
+                r.states[:, 0] - np.array([speed[int(t)] for t in r.target_ids]) * r.time
+                for r in chosen
+            ]
+        )
+        y = np.concatenate([r.states[:, 2] for r in chosen])
+        axes.plot(x, y, marker, mfc="none" if marker == "o" else None, ms=5, label=label)
+    start = np.array([truth.states[0] for truth in truths])
+    axes.plot(start[:, 0], start[:, 2], "k+", ms=12, mew=2, label="truth")
+    axes.set_xlabel("x − ẋ t (m)")
+    axes.set_ylabel("y (m)")
+    axes.set_title(title, fontsize=9)
+    axes.legend(fontsize=7, loc="best")
+    axes.set_aspect("equal", adjustable="datalim")
+
+
+def draw_t2t_four(reduced: bool, echo: Echo) -> Figure:
+    """[T2T] Fig 3 (one realisation) and Fig 4 (false decision rate vs γ)."""
+    seeds = _seeds(10, reduced)
+    n_steps = 4 if reduced else 20
+    thresholds = np.geomspace(0.5, 500.0, 5 if reduced else 31)
+    echo(f"t2t-four: seeds {list(seeds)}, {n_steps} steps, {len(thresholds)} values of λ")
+    sweep = threshold_sweep(seeds, thresholds, n_steps=n_steps)
+    scenario = t2t_four(seed=seeds[0], n_steps=n_steps, separation=sweep.separation)
+    figure = Figure(figsize=(11, 4.6), layout="constrained")
+    left, right = figure.subplots(1, 2, width_ratios=(1, 1.6))
+    _scene_axes(
+        left,
+        scenario.reports,
+        scenario.truths,
+        f"Fig 3: four targets, σ = {sweep.position_sigma} m, {n_steps} steps (seed {seeds[0]})",
+    )
+    _plot_sweep(right, sweep)
+    return _titled(
+        figure,
+        "t2t-four",
+        f"[T2T] Fig 3–4: false decisions over {len(seeds)} noise realisations",
+        reduced,
+    )
+
+
+def _reciprocal_ln2(value: ArrayLike) -> FloatArray:
+    """λ ↔ γ = ln 2 / λ ([T2T] eq 11), safe at 0 for the secondary axis."""
+    magnitude = np.abs(np.asarray(value, dtype=np.float64))
+    return np.asarray(math.log(2.0) / np.maximum(magnitude, 1e-300), dtype=np.float64)
+
+
+def _plot_sweep(axes: Axes, sweep: ThresholdSweep) -> None:
+    axes.plot(sweep.gammas, sweep.gnn.mean(axis=0), "-", label="gnn (λ = ln 2 / γ)")
+    axes.plot(sweep.gammas, sweep.denoeux.mean(axis=0), "--", label="denoeux (γ), α = 1")
+    styles = {"density": ":", "relative": "-.", "density, km": (0, (5, 1, 1, 1))}
+    for label, rates in sweep.hachour.items():
+        axes.axhline(
+            float(rates.mean()),
+            linestyle=styles.get(label, ":"),
+            color="k",
+            lw=1,
+            label=f"hachour {label}: {rates.mean():.2f}",
+        )
+    axes.set_xscale("log")
+    axes.set_xlabel("γ  (λ = ln 2 / γ)")
+    axes.set_ylabel("false decision rate")
+    axes.set_ylim(-0.02, 1.02)
+    axes.set_title("Fig 4: distance [T2T] eq 1–2 (mean covariance)", fontsize=9)
+    top = axes.secondary_xaxis("top", functions=(_reciprocal_ln2, _reciprocal_ln2))
+    top.set_xlabel("λ", fontsize=8)
+    axes.legend(fontsize=7, loc="center right")
+
+
+# ------------------------------------------------------------- t2t-two-class
+def draw_t2t_two_class(reduced: bool, echo: Echo) -> Figure:
+    """[T2T] Fig 5 (one realisation) and Fig 6 (mono vs multi-information)."""
+    seeds = _seeds(10, reduced)
+    n_steps = 4 if reduced else 20
+    grid = np.geomspace(1.0, 300.0, 4 if reduced else 16)
+    echo(f"t2t-two-class: seeds {list(seeds)}, {n_steps} steps")
+    comparison = class_comparison(seeds, n_steps=n_steps, tuning_thresholds=grid)
+    scenario = t2t_two_class(seed=seeds[0], n_steps=n_steps)
+    figure = Figure(figsize=(11, 4.6), layout="constrained")
+    left, right = figure.subplots(1, 2, width_ratios=(1, 1.6))
+    _scene_axes(
+        left,
+        scenario.reports,
+        scenario.truths,
+        f"Fig 5: c1 at y = 0, c2 at y = {comparison.separation} m, {n_steps} steps (seed {seeds[0]})",
+    )
+    _plot_classes(right, comparison)
+    return _titled(
+        figure,
+        "t2t-two-class",
+        f"[T2T] Fig 5–6: distance only vs distance + class, {len(seeds)} realisations",
+        reduced,
+    )
+
+
+def _plot_classes(axes: Axes, comparison: ClassComparison) -> None:
+    positions = np.arange(len(comparison.labels))
+    width = 0.38
+    mono = [comparison.mono[label].mean() for label in comparison.labels]
+    multi = [
+        comparison.multi[label].mean() if label in comparison.multi else np.nan
+        for label in comparison.labels
+    ]
+    bars = axes.bar(positions - width / 2, mono, width, label="mono-information (distance)")
+    axes.bar_label(bars, fmt="%.2f", fontsize=7)
+    bars = axes.bar(positions + width / 2, multi, width, label="multi-information (+ class)")
+    axes.bar_label(bars, fmt="%.2f", fontsize=7)
+    tuned = ", ".join(f"{m} λ = {t:.0f}" for m, t in comparison.thresholds.items())
+    axes.set_xticks(positions, [textwrap.fill(label, 10) for label in comparison.labels])
+    axes.tick_params(axis="x", labelsize=7)
+    axes.set_ylabel("false decision rate")
+    axes.set_ylim(0, 1.1)
+    axes.set_title(f"Fig 6 (tuned: {tuned}; gnn cannot use classes)", fontsize=9)
+    axes.legend(fontsize=7, loc="upper left")
+
+
+# ------------------------------------------------------------------ aircraft
+def draw_aircraft(reduced: bool, echo: Echo) -> Figure:
+    """[MTT] Fig 12, 14 and 15: target 2, behaviours, Bayesian and credal classes."""
+    seeds = _seeds(20, reduced)
+    echo(f"aircraft: seeds {list(seeds)} (target 2)")
+    result = aircraft_classification(seeds)
+    figure = Figure(figsize=(11, 7.5), layout="constrained")
+    top, middle, bottom = figure.subplots(3, 1, sharex=True)
+    _plot_behaviours(top, result)
+    for axes, probabilities, title in (
+        (middle, result.bayesian, "Fig 14: Bayesian class probabilities"),
+        (bottom, result.credal, "Fig 15: credal BetP"),
+    ):
+        for index, label in enumerate(result.classes):
+            axes.plot(result.steps, probabilities[:, :, index].mean(axis=0), label=label)
+        axes.set_ylim(-0.02, 1.02)
+        axes.set_ylabel("probability")
+        axes.set_title(title, fontsize=9, loc="left")
+        axes.legend(fontsize=7, loc="center left")
+        _shade(axes, result.manoeuvres)
+    bottom.axvline(99.5, color="0.5", lw=0.8)
+    bottom.set_xlabel("step (target 2 disappears at 100)")
+    return _titled(
+        figure,
+        "aircraft",
+        f"[MTT] Fig 12, 14, 15: target 2, mean of {len(seeds)} runs",
+        reduced,
+    )
+
+
+def _plot_behaviours(axes: Axes, result: AircraftClassification) -> None:
+    seen = ~np.isnan(result.behaviours).any(axis=(0, 2))
+    for index, label in enumerate(("b1 (CV)", "b2 (≤ 2g)", "b3 (≤ 4g)")):
+        axes.plot(result.steps[seen], result.behaviours[:, seen, index].mean(axis=0), label=label)
+    axes.set_ylim(-0.02, 1.02)
+    axes.set_ylabel("plausibility")
+    axes.set_title(
+        "Fig 12: behaviour plausibilities (scaled by the step's max)", fontsize=9, loc="left"
+    )
+    axes.legend(fontsize=7, loc="center left")
+    _shade(axes, result.manoeuvres)
+
+
+# ---------------------------------------------------------------- pedestrian
+def draw_pedestrian(reduced: bool, echo: Echo) -> Figure:
+    """[MTT] Fig 20–23: pedestrian 1 with standard and discounted classifiers."""
+    seed = 0
+    echo(f"pedestrian: seed {seed} (pedestrian 1; one realisation as in the paper)")
+    result = pedestrian_classification(seed)
+    return _titled(
+        _pedestrian_panels(result),
+        "pedestrian",
+        f"[MTT] Fig 20–23: pedestrian 1 walks, runs, stops (then walks again), seed {seed}",
+        reduced,
+    )
+
+
+PEDESTRIAN_PANELS = (
+    ("standard", "Fig 20: standard (no discounting)"),
+    ("instantaneous 0.3", "Fig 21: instantaneous discounting λ = 0.3"),
+    ("bayesian", "Bayesian baseline"),
+    ("cumulative 0.9, walks again", "Fig 22: cumulative discounting λ = 0.9"),
+    ("instantaneous 0.9, walks again", "Fig 23: instantaneous discounting λ = 0.9"),
+)
+
+
+def _pedestrian_panels(result: PedestrianClassification) -> Figure:
+    figure = Figure(figsize=(11, 9), layout="constrained")
+    grid = figure.subplots(3, 2)
+    panels = [axes for row in grid for axes in row]
+    for axes, (key, title) in zip(panels, PEDESTRIAN_PANELS, strict=False):
+        trace = result.traces[key]
+        for index, label in enumerate(result.classes):
+            axes.plot(trace.steps, trace.probabilities[:, index], label=label)
+        undefined = np.isnan(trace.probabilities).any(axis=1)
+        if undefined.any():
+            first = int(trace.steps[np.argmax(undefined)])
+            axes.axvline(first, color="r", lw=0.8)
+            axes.text(first + 2, 0.5, "total conflict:\nno BetP", color="r", fontsize=7)
+        end = int(trace.steps[-1])
+        _shade(axes, [(a, min(b, end), lab) for a, b, lab in result.phases if a <= end])
+        axes.set_ylim(-0.02, 1.02)
+        axes.set_title(title, fontsize=9, loc="left")
+        axes.legend(fontsize=7, loc="center right")
+    conflicts = panels[5]
+    for key in ("standard", "instantaneous 0.3"):
+        trace = result.traces[key]
+        conflicts.semilogy(trace.steps, np.maximum(trace.step_conflicts, 1e-16), label=key)
+    conflicts.set_title("step conflict K (Fig 20–21 runs)", fontsize=9, loc="left")
+    conflicts.legend(fontsize=7)
+    conflicts.set_xlabel("step")
+    panels[4].set_xlabel("step")
+    return figure
+
+
+# ---------------------------------------------------------------- unit study
+def draw_unit_study(reduced: bool, echo: Echo) -> Figure:
+    """The unit study: hachour across length units and noise levels (ALGORITHMS.md §3.3)."""
+    seeds = _seeds(10, reduced)
+    n_steps = 4 if reduced else 20
+    echo(f"unit-study: seeds {list(seeds)}, {n_steps} steps")
+    sweep = unit_sweep(seeds, np.geomspace(10.0, 1e-4, 4 if reduced else 16), n_steps=n_steps)
+    study = noise_study(
+        seeds,
+        (0.2, 2.0) if reduced else (0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 4.0),
+        n_steps=n_steps,
+        tuning_thresholds=np.geomspace(2.0, 200.0, 3 if reduced else 12),
+    )
+    figure = Figure(figsize=(11, 4.8), layout="constrained")
+    left, right = figure.subplots(1, 2)
+    _plot_unit_sweep(left, sweep)
+    _plot_noise_study(right, study)
+    return _titled(
+        figure,
+        "unit-study",
+        f"Is 'parameterless' unit-free? t2t-four with P(unseen) = {sweep.unseen}, "
+        f"{len(seeds)} realisations",
+        reduced,
+    )
+
+
+def _plot_unit_sweep(axes: Axes, sweep: UnitSweep) -> None:
+    for label, rates in sweep.rates.items():
+        axes.plot(sweep.scales, rates, marker=".", label=label)
+    axes.set_xscale("log")
+    axes.invert_xaxis()
+    axes.set_xlabel("length unit: lengths × s  (s = 1: metres, 1e-3: kilometres)")
+    axes.set_ylabel("false decision rate")
+    axes.set_ylim(-0.02, 1.02)
+    axes.set_title(
+        f"same scene (σ = {sweep.position_sigma} m, side {sweep.separation} m) in other units",
+        fontsize=9,
+    )
+    for unit, scale in (("m", 1.0), ("km", 1e-3)):
+        axes.axvline(scale, color="0.6", lw=0.8)
+        axes.text(scale, 1.0, f" {unit}", fontsize=7, va="top")
+    axes.legend(fontsize=7, loc="lower left")
+
+
+def _plot_noise_study(axes: Axes, study: NoiseStudy) -> None:
+    colours = dict(zip(study.labels, [f"C{i}" for i in range(10)], strict=False))
+    for (label, unit), rates in study.rates.items():
+        axes.plot(
+            study.sigmas,
+            rates,
+            linestyle="-" if unit == "m" else "--",
+            marker="o" if unit == "m" else "x",
+            color=colours[label],
+            label=f"{label} ({unit})",
+            alpha=0.9,
+        )
+    axes.set_xscale("log")
+    axes.set_xlabel("position σ (m); targets 10 m apart")
+    axes.set_ylabel("false decision rate")
+    axes.set_ylim(-0.02, 1.02)
+    axes.set_title("across noise levels: metres (—) vs kilometres (- -)", fontsize=9)
+    axes.legend(fontsize=6, ncol=2, loc="center left")
+
+
+FIGURES: dict[str, FigureSpec] = {
+    spec.name: spec
+    for spec in (
+        FigureSpec(
+            "t2t-four",
+            "[T2T] Fig 3–4",
+            "false decision rate vs λ (gnn), γ (denoeux) and hachour",
+            draw_t2t_four,
+        ),
+        FigureSpec(
+            "t2t-two-class",
+            "[T2T] Fig 5–6",
+            "false decision rate with and without class information",
+            draw_t2t_two_class,
+        ),
+        FigureSpec(
+            "aircraft",
+            "[MTT] Fig 12, 14–15",
+            "target 2: behaviours, Bayesian vs credal classification",
+            draw_aircraft,
+        ),
+        FigureSpec(
+            "pedestrian",
+            "[MTT] Fig 20–23",
+            "pedestrian 1: standard vs instantaneous vs cumulative discounting",
+            draw_pedestrian,
+        ),
+        FigureSpec(
+            "unit-study",
+            "ALGORITHMS.md §3.3",
+            "hachour density vs relative vs gnn/denoeux in metres and kilometres",
+            draw_unit_study,
+        ),
+    )
+}
+"""Figure name → spec; ``reproduce(name, ...)`` accepts exactly these names."""
+
+
+def reproduce(name: str, out_dir: str | Path, reduced: bool = False, echo: Echo = print) -> Path:
+    """Regenerate one figure as ``out_dir/NAME.png`` and return its path.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`FIGURES`.
+    out_dir : str or Path
+        Created if missing.
+    reduced : bool
+        A few seeds and steps (seconds, for the tests) instead of the papers' sizes.
+    echo : callable
+        Receives progress lines (the seeds used, the file written).
+
+    Raises
+    ------
+    InvalidInput
+        Unknown figure name.
+    """
+    if name not in FIGURES:
+        raise InvalidInput(f"unknown figure {name!r}; choose one of {sorted(FIGURES)}")
+    directory = Path(out_dir)
+    directory.mkdir(parents=True, exist_ok=True)
+    figure = FIGURES[name].draw(reduced, echo)
+    FigureCanvasAgg(figure)
+    path = directory / f"{name}.png"
+    figure.savefig(path, dpi=110)
+    echo(f"wrote {path}")
+    return path
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m core.evaluation.figures [NAME ...] [--out DIR] [--reduced]``."""
+    parser = argparse.ArgumentParser(description="Regenerate the papers' figures as PNG.")
+    parser.add_argument("names", nargs="*", help=f"default: all of {', '.join(FIGURES)}")
+    parser.add_argument("--out", default="docs/figures", help="output directory")
+    parser.add_argument("--reduced", action="store_true", help="few seeds and steps")
+    arguments = parser.parse_args(argv)
+    unknown = sorted(set(arguments.names) - set(FIGURES))
+    if unknown:
+        parser.error(f"unknown figures {unknown}; choose from {list(FIGURES)}")
+    for name in arguments.names or list(FIGURES):
+        reproduce(name, arguments.out, arguments.reduced)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,227 @@
+"""Unit study: is the "parameterless" ``hachour`` unit-free? (ALGORITHMS.md §3.3, EVALUATION.md).
+
+[T2T] eq 4 turns a Mahalanobis distance D into the Gaussian density
+``G = exp(−D/2) / sqrt((2π)^q |C|)`` and uses it as a plausibility. D does not
+depend on the length unit; |C| does (×s^{2q} when lengths are multiplied by
+s). Since a pair is matched only when its plausibility exceeds 1/2 and every
+G ≥ 1 is clipped to 1 (``likelihood="density"``), the method
+
+- matches a pair only if ``D < 2 ln 2 + 2 ln G₀`` (G₀ the peak density), and
+- cannot tell apart pairs with ``D < 2 ln G₀`` (all have Pl = 1):
+
+its usable band of D is 2 ln 2 ≈ 1.39 wide and sits where the unit puts it.
+``likelihood="relative"`` (G₀ = 1) is unit-free but gates at D < 2 ln 2.
+
+The scene is :func:`core.simulation.tracklists.t2t_four` (four targets,
+square of side ``separation``) with each sensor missing each track
+independently with probability ``unseen`` — partially observed targets are
+what a gate is for. Two studies:
+
+- :func:`unit_sweep`: false decision rate against the length unit (the
+  scene scaled by s), every method;
+- :func:`noise_study`: across noise levels (position σ), in metres and in
+  kilometres: hachour ``density`` and ``relative``, ``gnn`` and ``denoeux``
+  at their best λ (tuned per noise level on a grid), and the defaults
+  (``gnn`` gate 0.999 with the ``mean`` covariance; the session default
+  ``denoeux`` gate 0.999, α 1, ``sum`` covariance).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from core.arrays import FloatArray
+from core.evaluation.pairing import ListPair, decision_error_rate, list_pairs, partially_observed
+from core.simulation.tracklists import t2t_four
+
+METHODS: dict[str, tuple[str, dict[str, object], str]] = {
+    "hachour density": ("hachour", {"likelihood": "density"}, "mean"),
+    "hachour relative": ("hachour", {"likelihood": "relative"}, "mean"),
+    "gnn default": ("gnn", {"gate_probability": 0.999}, "mean"),
+    "denoeux default": ("denoeux", {"gate_probability": 0.999, "alpha": 1.0}, "sum"),
+}
+"""Label → (method, options, distance) of the methods without a tuned parameter."""
+
+TUNED = ("gnn", "denoeux")
+SCALES = {"m": 1.0, "km": 1e-3}
+TUNING_THRESHOLDS = np.geomspace(2.0, 200.0, 12)
+UNIT_SCALES = np.geomspace(10.0, 1e-4, 16)
+"""Length scale factors s of :func:`unit_sweep`: lengths × 10 down to lengths × 1e-4."""
+
+
+def scene(
+    seeds: Sequence[int], n_steps: int, position_sigma: float, separation: float, unseen: float
+) -> list[list[ListPair]]:
+    """The association problems of each realisation (one per seed), in metres."""
+    realisations = []
+    for seed in seeds:
+        scenario = t2t_four(
+            seed=seed, position_sigma=position_sigma, separation=separation, n_steps=n_steps
+        )
+        rng = np.random.default_rng([seed, 7])  # the misses: their own stream, same seed
+        realisations.append(partially_observed(list_pairs(scenario.reports), unseen, rng))
+    return realisations
+
+
+def _tuned_options(method: str, threshold: float) -> dict[str, object]:
+    if method == "gnn":
+        return {"threshold": threshold}
+    return {"gamma": math.log(2.0) / threshold, "alpha": 1.0}
+
+
+def _mean_rate(
+    realisations: Sequence[Sequence[ListPair]],
+    method: str,
+    options: dict[str, object],
+    distance: str,
+    scale: float = 1.0,
+) -> float:
+    return float(
+        np.mean(
+            [
+                decision_error_rate(
+                    [pair.scaled(scale) for pair in pairs], method, options, distance
+                )
+                for pairs in realisations
+            ]
+        )
+    )
+
+
+@dataclass(frozen=True)
+class UnitSweep:
+    """False decision rate against the length unit.
+
+    Attributes
+    ----------
+    seeds : tuple of int
+    scales : ndarray, shape (k,)
+        Lengths are multiplied by s (s = 1e-3: the scene in kilometres).
+    rates : dict of str to ndarray, shape (k,)
+        Mean rate over the realisations per method label (:data:`METHODS`).
+    implicit_gates : ndarray, shape (k,)
+        hachour-density's implicit gate on D at each scale (scene covariances).
+    position_sigma, separation, unseen : float
+    """
+
+    seeds: tuple[int, ...]
+    scales: FloatArray
+    rates: dict[str, FloatArray]
+    implicit_gates: FloatArray
+    position_sigma: float
+    separation: float
+    unseen: float
+
+
+def implicit_gate(position_sigma: float, scale: float = 1.0, dimension: int = 4) -> float:
+    """hachour-density's gate on D for the scenes' round covariances (``mean``: C = P).
+
+    ``2 ln 2 − q ln 2π − ln|C|`` with position σ ``position_sigma × scale`` and
+    velocity σ half of it.
+    """
+    position, velocity = position_sigma * scale, position_sigma * scale / 2.0
+    log_det = 2.0 * (2.0 * math.log(position) + 2.0 * math.log(velocity))
+    return 2.0 * math.log(2.0) - dimension * math.log(2.0 * math.pi) - log_det
+
+
+def unit_sweep(
+    seeds: Sequence[int] = tuple(range(10)),
+    scales: Sequence[float] | FloatArray = UNIT_SCALES,
+    n_steps: int = 20,
+    position_sigma: float = 0.5,
+    separation: float = 2.0,
+    unseen: float = 0.2,
+) -> UnitSweep:
+    """Rate of every method of :data:`METHODS` on the same scene expressed at each scale."""
+    realisations = scene(seeds, n_steps, position_sigma, separation, unseen)
+    factors = np.asarray(scales, dtype=np.float64)
+    rates = {
+        label: np.array([_mean_rate(realisations, method, options, distance, s) for s in factors])
+        for label, (method, options, distance) in METHODS.items()
+    }
+    return UnitSweep(
+        seeds=tuple(seeds),
+        scales=factors,
+        rates=rates,
+        implicit_gates=np.array([implicit_gate(position_sigma, s) for s in factors]),
+        position_sigma=position_sigma,
+        separation=separation,
+        unseen=unseen,
+    )
+
+
+@dataclass(frozen=True)
+class NoiseStudy:
+    """False decision rates across noise levels, in metres and kilometres.
+
+    Attributes
+    ----------
+    seeds : tuple of int
+    sigmas : ndarray, shape (k,)
+        Position σ (m) of the reported covariances and actual errors.
+    rates : dict of (str, str) to ndarray, shape (k,)
+        ``(label, unit)`` → mean rate; labels of :data:`METHODS` plus
+        ``"gnn tuned"`` and ``"denoeux tuned"``; units ``"m"``, ``"km"``.
+    best_thresholds : dict of str to ndarray, shape (k,)
+        The tuned λ per noise level of ``gnn`` and ``denoeux``.
+    separation, unseen : float
+    """
+
+    seeds: tuple[int, ...]
+    sigmas: FloatArray
+    rates: dict[tuple[str, str], FloatArray]
+    best_thresholds: dict[str, FloatArray]
+    separation: float
+    unseen: float
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """Method labels, in insertion order."""
+        return tuple(dict.fromkeys(label for label, _ in self.rates))
+
+
+def noise_study(
+    seeds: Sequence[int] = tuple(range(10)),
+    sigmas: Sequence[float] | FloatArray = (0.1, 0.2, 0.5, 1.0, 2.0, 4.0),
+    n_steps: int = 20,
+    separation: float = 10.0,
+    unseen: float = 0.2,
+    tuning_thresholds: Sequence[float] | FloatArray = TUNING_THRESHOLDS,
+) -> NoiseStudy:
+    """Every method in metres and kilometres at each noise level (module docstring)."""
+    levels = np.asarray(sigmas, dtype=np.float64)
+    grid = np.asarray(tuning_thresholds, dtype=np.float64)
+    rates: dict[tuple[str, str], FloatArray] = {}
+    best: dict[str, FloatArray] = {method: np.empty(len(levels)) for method in TUNED}
+    for unit in SCALES:
+        for label in (*METHODS, *(f"{method} tuned" for method in TUNED)):
+            rates[(label, unit)] = np.empty(len(levels))
+    for index, sigma in enumerate(levels):
+        realisations = scene(seeds, n_steps, float(sigma), separation, unseen)
+        for method in TUNED:
+            on_grid = [
+                _mean_rate(realisations, method, _tuned_options(method, t), "mean") for t in grid
+            ]
+            best[method][index] = grid[int(np.argmin(on_grid))]
+        for unit, scale in SCALES.items():
+            for label, (method, options, distance) in METHODS.items():
+                rates[(label, unit)][index] = _mean_rate(
+                    realisations, method, options, distance, scale
+                )
+            for method in TUNED:
+                options = _tuned_options(method, float(best[method][index]))
+                rates[(f"{method} tuned", unit)][index] = _mean_rate(
+                    realisations, method, options, "mean", scale
+                )
+    return NoiseStudy(
+        seeds=tuple(seeds),
+        sigmas=levels,
+        rates=rates,
+        best_thresholds=best,
+        separation=separation,
+        unseen=unseen,
+    )

@@ -1,0 +1,92 @@
+"""Each experiment end to end on a reduced size, against the papers' qualitative claims."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from core.evaluation import (
+    aircraft_classification,
+    class_comparison,
+    noise_study,
+    pedestrian_classification,
+    threshold_sweep,
+    unit_sweep,
+)
+
+RAMBLER, SPORTSMAN = 0, 1
+
+
+def test_t2t_four_gnn_and_denoeux_fail_when_lambda_is_too_small() -> None:
+    # [T2T] Fig 4: too small a λ (too large a γ) declares true partners new.
+    sweep = threshold_sweep(seeds=(0, 1, 2), thresholds=(0.5, 4.0, 50.0), n_steps=8)
+    assert sweep.gnn.shape == sweep.denoeux.shape == (3, 3)
+    np.testing.assert_allclose(sweep.gammas, np.log(2.0) / np.array([0.5, 4.0, 50.0]))
+    for rates in (sweep.gnn.mean(axis=0), sweep.denoeux.mean(axis=0)):
+        assert rates[0] > 0.9
+        assert rates[0] > rates[1] > rates[2]
+        assert rates[2] < 0.15
+    assert sweep.best("gnn")[0] == 50.0
+    assert set(sweep.hachour) == {"density", "relative", "density, km"}
+    assert all(rates.shape == (3,) for rates in sweep.hachour.values())
+
+
+def test_t2t_two_class_class_information_lowers_the_false_decision_rate() -> None:
+    # [T2T] Fig 6, for the credal method whose distance evidence works at this scale.
+    comparison = class_comparison(
+        seeds=(0, 1, 2, 3), n_steps=10, separation=1.0, tuning_thresholds=(8.0, 30.0)
+    )
+    assert "gnn" in comparison.mono and "gnn" not in comparison.multi
+    assert set(comparison.thresholds) == {"gnn", "denoeux"}
+    mono, multi = comparison.mono["denoeux"].mean(), comparison.multi["denoeux"].mean()
+    assert multi < mono - 0.05
+    assert multi < comparison.mono["gnn"].mean()
+
+
+def test_unit_study_only_hachour_density_depends_on_the_unit() -> None:
+    sweep = unit_sweep(seeds=(0, 1), scales=(1.0, 0.2, 1e-3), n_steps=6)
+    for label in ("hachour relative", "gnn default", "denoeux default"):
+        assert np.ptp(sweep.rates[label]) == 0.0
+    assert np.ptp(sweep.rates["hachour density"]) > 0.3
+    np.testing.assert_allclose(
+        np.diff(sweep.implicit_gates),
+        [8 * np.log(5.0), 8 * np.log(200.0)],  # ln|C| falls by 2q ln(1/s) = 8 ln(1/s)
+    )
+
+    study = noise_study(seeds=(0, 1), sigmas=(0.5, 2.0), n_steps=6, tuning_thresholds=(5.0, 40.0))
+    for label in study.labels:
+        metres, kilometres = study.rates[(label, "m")], study.rates[(label, "km")]
+        if label == "hachour density":
+            assert metres[0] > kilometres[0] + 0.3  # σ = 0.5 m: misses in m, fine in km
+        else:
+            np.testing.assert_array_equal(metres, kilometres)
+    assert study.rates[("denoeux default", "m")][0] == 0.0
+    assert set(study.best_thresholds) == {"gnn", "denoeux"}
+
+
+def test_aircraft_credal_doubts_where_bayes_picks_a_side() -> None:
+    # [MTT] Fig 14–15: both end on fighter; between the manoeuvres only the credal
+    # classifier keeps bomber and fighter level.
+    result = aircraft_classification(seeds=(0, 1))
+    assert result.credal.shape == result.bayesian.shape == (2, len(result.steps), 3)
+    assert result.doubt_gap("credal") < 0.05
+    assert result.doubt_gap("bayesian") > 0.2
+    for kind in ("credal", "bayesian"):
+        assert 70 <= result.decision_step(kind) <= 76
+    before = result.steps < 50
+    np.testing.assert_allclose(result.credal[:, before], 1 / 3, atol=0.1)
+    assert result.manoeuvres == ((50, 54, "2g"), (70, 75, "4g"))
+
+
+def test_pedestrian_discounting_follows_the_class_changes() -> None:
+    result = pedestrian_classification(seed=0)
+    standard = result.traces["standard"]
+    assert np.isnan(standard.first_step_above(RAMBLER, after=60))  # Fig 20: never follows the stop
+    instantaneous = result.traces["instantaneous 0.3"]
+    assert instantaneous.first_step_above(SPORTSMAN, after=40) < 50  # Fig 21: the run
+    assert 60 < instantaneous.first_step_above(RAMBLER, after=60) < 100  # … and the stop
+    cumulative = result.traces["cumulative 0.9, walks again"]
+    assert cumulative.probabilities[-1, RAMBLER] == pytest.approx(0.5, abs=0.05)  # Fig 22
+    again = result.traces["instantaneous 0.9, walks again"]
+    assert again.probabilities[-1, RAMBLER] > 0.99  # Fig 23
+    assert [phase[2] for phase in result.phases] == ["walk", "run", "stop", "walk"]
