@@ -10,6 +10,7 @@ from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from app.errors import Forbidden, SessionNotFound, Unauthorized
 from app.metrics import ServiceMetrics
 from app.security import Principal, is_admin_token, token_matches
+from app.sessions import LiveSession, SessionRegistry
 from app.settings import Settings
 from app.stores import SessionRecord, Store
 
@@ -37,7 +38,14 @@ def get_metrics(request: Request) -> ServiceMetrics:
     return metrics
 
 
+def get_registry(request: Request) -> SessionRegistry:
+    """The application's live sessions."""
+    registry: SessionRegistry = request.app.state.registry
+    return registry
+
+
 SettingsDep = Annotated[Settings, Depends(get_app_settings)]
+RegistryDep = Annotated[SessionRegistry, Depends(get_registry)]
 StoreDep = Annotated[Store, Depends(get_store)]
 MetricsDep = Annotated[ServiceMetrics, Depends(get_metrics)]
 Credentials = Annotated[HTTPAuthorizationCredentials | None, Depends(bearer_scheme)]
@@ -65,13 +73,11 @@ def require_admin(token: BearerToken, settings: SettingsDep) -> Principal:
     return Principal(admin=True)
 
 
-def authorize_session(
-    sid: SessionId, token: BearerToken, settings: SettingsDep, store: StoreDep
-) -> SessionRecord:
-    """The session ``sid`` if the token opens it: its own token or the admin token.
+def open_session(sid: str, token: str, settings: Settings, store: Store) -> SessionRecord:
+    """The session ``sid`` if ``token`` opens it: its own token or the admin token.
 
-    401 without a token, 404 for an unknown session, 403 for a token that is
-    neither this session's nor the admin's (another session's token included).
+    404 for an unknown session, 403 for a token that is neither this
+    session's nor the admin's (another session's token included).
     """
     record = store.get_session(sid)
     if record is None:
@@ -81,5 +87,20 @@ def authorize_session(
     raise Forbidden(f"this token does not open session {sid!r}")
 
 
+def authorize_session(
+    sid: SessionId, token: BearerToken, settings: SettingsDep, store: StoreDep
+) -> SessionRecord:
+    """The session ``sid`` if the token opens it (401 without a token; see :func:`open_session`)."""
+    return open_session(sid, token, settings, store)
+
+
 AdminDep = Annotated[Principal, Depends(require_admin)]
 AuthorizedSession = Annotated[SessionRecord, Depends(authorize_session)]
+
+
+async def live_session(record: AuthorizedSession, registry: RegistryDep) -> LiveSession:
+    """The authorized session with its engine."""
+    return await registry.get(record.id)
+
+
+LiveSessionDep = Annotated[LiveSession, Depends(live_session)]
