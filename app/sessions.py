@@ -37,8 +37,8 @@ from typing import Any, TypeVar
 import anyio
 
 from api_schemas.config import SessionConfig
-from api_schemas.consistency import track_report_issues
-from api_schemas.reports import TrackReport
+from api_schemas.consistency import detection_report_issues, track_report_issues
+from api_schemas.reports import DetectionReport, TrackReport
 from app.errors import LimitExceeded, SessionNotFound, StaleReport, request_validation_error
 from app.hub import Hub
 from app.limits import check_report_limits
@@ -328,6 +328,13 @@ class SessionRegistry:
         """Checks that need only the config: item limit, sensor, dimensions, class labels."""
         check_report_limits(report, self.settings)
         issues = track_report_issues(report, session.config)
+        if issues:
+            raise request_validation_error(issues)
+
+    def check_detections(self, session: LiveSession, report: DetectionReport) -> None:
+        """Checks of a detection batch that need only the config."""
+        check_report_limits(report, self.settings)
+        issues = detection_report_issues(report, session.config)
         if issues:
             raise request_validation_error(issues)
 

@@ -10,8 +10,11 @@ from api_schemas.base import FiniteFloat
 from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
 from app.deps import LiveSessionDep, RegistryDep
-from app.errors import NotAvailableYet, TrackNotFound, problem_responses
-from app.limits import check_report_limits
+from app.errors import (
+    NotAvailableYet,
+    TrackNotFound,
+    problem_responses,
+)
 from app.responses import PlainJSONResponse
 
 router = APIRouter(prefix="/v1/sessions", tags=["fusion"])
@@ -50,10 +53,11 @@ async def submit_detections(
 ) -> PlainJSONResponse:
     """One sensor's detections → the fused result (this version answers 501: see below).
 
-    The body is validated as documented; a valid one is answered with
-    ``501 not-implemented`` until the session runs local trackers.
+    The body is validated as documented (422 naming the field, as a track
+    list would be); a valid one is answered with ``501 not-implemented``
+    until the session runs local trackers.
     """
-    check_report_limits(report, registry.settings)
+    registry.check_detections(session, report)
     raise NotAvailableYet(
         "detections need the local tracker, which this version does not run yet; "
         "post the sensor's track list to …/tracks instead",

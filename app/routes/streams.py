@@ -124,6 +124,7 @@ async def _answer(session: LiveSession, registry: SessionRegistry, text: str, pa
     ref = message.ref
     try:
         if isinstance(message, DetectionsMessage):
+            registry.check_detections(session, message)
             raise NotAvailableYet(
                 "detections need the local tracker, which this version does not run yet; "
                 "send the sensor's track list ('type': 'tracks') instead",
