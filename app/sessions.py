@@ -223,6 +223,13 @@ class SessionRegistry:
         self._sessions[record.id] = session
         return session
 
+    async def record(self, session_id: str) -> SessionRecord | None:
+        """The stored record of a live session (from memory when the session is loaded)."""
+        session = self._sessions.get(session_id)
+        if session is not None:
+            return session.record
+        return await self._io(self.store.get_session, session_id)
+
     async def get(self, session_id: str) -> LiveSession:
         """The live session ``session_id``, loaded from the store if it is not in memory."""
         session = self._sessions.get(session_id)

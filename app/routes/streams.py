@@ -24,13 +24,12 @@ import anyio
 from fastapi import APIRouter, WebSocket
 from fastapi.exceptions import RequestValidationError
 from pydantic import ValidationError
-from starlette.concurrency import run_in_threadpool
 from starlette.websockets import WebSocketDisconnect
 
 from api_schemas.problem import Problem
 from api_schemas.reports import TrackReport
 from api_schemas.ws import DetectionsMessage, client_message_adapter
-from app.deps import open_session
+from app.deps import open_record
 from app.errors import NotAvailableYet, ServiceError, Unauthorized, problem_for, problem_response
 from app.responses import dumps
 from app.sessions import LiveSession, SessionRegistry, result_message
@@ -59,9 +58,7 @@ async def _open(websocket: WebSocket, sid: str) -> LiveSession | None:
     registry: SessionRegistry = app.state.registry
     try:
         token = _bearer(websocket)
-        record = await run_in_threadpool(
-            open_session, sid, token, app.state.settings, app.state.store
-        )
+        record = open_record(sid, await registry.record(sid), token, app.state.settings)
         return await registry.get(record.id)
     except ServiceError as error:
         if "websocket.http.response" in websocket.scope.get("extensions", {}):
