@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from fastapi.responses import JSONResponse
+from fastapi.responses import JSONResponse, Response
 
 
 def dumps(content: Any) -> str:
@@ -18,3 +18,9 @@ class PlainJSONResponse(JSONResponse):
 
     def render(self, content: Any) -> bytes:
         return dumps(content).encode("utf-8")
+
+
+class JSONTextResponse(Response):
+    """A JSON answer whose text is already serialised (a step result, built once per input)."""
+
+    media_type = "application/json"

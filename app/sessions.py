@@ -63,8 +63,11 @@ from core.fusion.reports import FusedTrackView
 from core.fusion.track import FusedTrack
 
 SNAPSHOT_FORMAT = 1
-TINY_WORK = 16
-"""Report tracks + live fused tracks up to which a step runs on the event loop (a thread hop costs more)."""
+TINY_WORK = 64
+"""Report tracks + live fused tracks up to which a step runs on the event loop.
+
+Such a step costs about 2 ms of engine time: less than what a worker-thread
+hop adds under load. Larger steps run in a worker thread."""
 
 logger = logging.getLogger("credal_fusion.sessions")
 T = TypeVar("T")
@@ -174,11 +177,11 @@ def _restore_snapshot(session: LiveSession, snapshot: Snapshot) -> None:
 
 @dataclass
 class Step:
-    """An applied (not yet logged) input: the engine that holds it and its result."""
+    """An applied (not yet logged) input: the engine that holds it and its result as JSON text."""
 
     engine: SessionEngine
     fusion: FusionConfig
-    plain: PlainObject
+    result: str
 
 
 class SessionRegistry:
@@ -368,12 +371,13 @@ class SessionRegistry:
             step = engine.apply(core_report, explain=explain)
         except CoreStaleReport as stale:
             raise StaleReport(stale.sensor, stale.time, stale.last_time) from None
-        return Step(engine=engine, fusion=fusion, plain=step_plain(step, session.seq + 1))
+        result = dumps(step_plain(step, session.seq + 1))  # serialised once, here
+        return Step(engine=engine, fusion=fusion, result=result)
 
     async def submit_tracks(
         self, session: LiveSession, report: TrackReport, *, explain: bool = False
-    ) -> PlainObject:
-        """Apply one track list, log it durably, then return (and publish) its result."""
+    ) -> str:
+        """Apply one track list, log it durably, then return (and publish) its result (JSON text)."""
         self.check_tracks(session, report)
         async with session.lock:
             if session.closed:
@@ -403,11 +407,12 @@ class SessionRegistry:
                     session.sensor_inputs.get(report.sensor, 0) + 1
                 )
                 self.metrics.inputs.labels("tracks").inc()
-                session.hub.publish(result_message(step.plain))
+                if len(session.hub):
+                    session.hub.publish(result_message(step.result))
                 session.since_snapshot += 1
                 if session.since_snapshot >= self.settings.snapshot_every:
                     await self._snapshot(session)
-        return step.plain
+        return step.result
 
     async def _snapshot(self, session: LiveSession) -> None:
         snapshot = Snapshot(
@@ -448,6 +453,6 @@ class SessionRegistry:
             }
 
 
-def result_message(plain: PlainObject, ref: str | None = None) -> str:
-    """A ``result`` WebSocket message as JSON text (non-finite numbers refused)."""
-    return dumps({"type": "result", "ref": ref, "result": plain})
+def result_message(result: str, ref: str | None = None) -> str:
+    """A ``result`` WebSocket message around a result's JSON text (not serialised again)."""
+    return f'{{"type":"result","ref":{dumps(ref)},"result":{result}}}'

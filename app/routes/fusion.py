@@ -15,7 +15,7 @@ from app.errors import (
     TrackNotFound,
     problem_responses,
 )
-from app.responses import PlainJSONResponse
+from app.responses import JSONTextResponse, PlainJSONResponse
 
 router = APIRouter(prefix="/v1/sessions", tags=["fusion"])
 
@@ -34,13 +34,14 @@ async def submit_tracks(
     explain: Annotated[
         bool, Query(description="add the association method's score matrix")
     ] = False,
-) -> PlainJSONResponse:
+) -> JSONTextResponse:
     """One sensor's track list → the fused result of that step (acknowledged once logged).
 
     409 ``stale-report`` (with ``time`` and ``last_time``) for a report not
     newer than the sensor's previous one.
     """
-    return PlainJSONResponse(await registry.submit_tracks(session, report, explain=explain))
+    result = await registry.submit_tracks(session, report, explain=explain)
+    return JSONTextResponse(result)
 
 
 @router.post(

@@ -130,10 +130,10 @@ async def _answer(session: LiveSession, registry: SessionRegistry, text: str, pa
         report = TrackReport.model_construct(
             sensor=message.sensor, time=message.time, tracks=message.tracks
         )
-        plain = await registry.submit_tracks(session, report)
+        result = await registry.submit_tracks(session, report)
     except Exception as error:  # every failure is answered; the connection stays open
         return _error(problem_for(error, path), ref)
-    return result_message(plain, ref)
+    return result_message(result, ref)
 
 
 @router.websocket("/{sid}/stream")

@@ -34,7 +34,8 @@ def new_session(target: SessionRegistry, config: dict[str, Any], sid: str = "s1"
 async def feed(target: SessionRegistry, sid: str, bodies: list[dict[str, Any]]) -> list[Any]:
     session = await target.get(sid)
     return [
-        await target.submit_tracks(session, TrackReport.model_validate(body)) for body in bodies
+        json.loads(await target.submit_tracks(session, TrackReport.model_validate(body)))
+        for body in bodies
     ]
 
 
