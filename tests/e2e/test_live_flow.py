@@ -6,6 +6,8 @@ import json
 from typing import Any
 
 import httpx
+import pytest
+from websockets.exceptions import ConnectionClosedOK
 from websockets.sync.client import ClientConnection, connect
 
 from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
@@ -131,6 +133,9 @@ def test_subscriber_receives_every_result_in_order(live_server: LiveServer) -> N
             assert receive(sub)["type"] == "ack"
             results = post_all(client, sid, headers)
             received = [receive(sub) for _ in range(STEPS)]
+            assert client.delete(f"/v1/sessions/{sid}", headers=headers).status_code == 204
+            with pytest.raises(ConnectionClosedOK):
+                sub.recv(timeout=RECEIVE_TIMEOUT_S)
         assert [message["result"] for message in received] == results
         assert [message["result"]["seq"] for message in received] == list(range(1, STEPS + 1))
 
