@@ -8,9 +8,10 @@ from fastapi import Depends, Path, Request
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
 from app.errors import Forbidden, SessionNotFound, Unauthorized
+from app.live_session import LiveSession
 from app.metrics import ServiceMetrics
 from app.security import Principal, is_admin_token, token_matches
-from app.sessions import LiveSession, SessionRegistry
+from app.sessions import SessionRegistry
 from app.settings import Settings
 from app.stores import SessionRecord, Store
 

@@ -30,7 +30,7 @@ import functools
 import logging
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from typing import Any, TypeVar
 
@@ -40,29 +40,25 @@ from api_schemas.config import SessionConfig
 from api_schemas.consistency import detection_report_issues, track_report_issues
 from api_schemas.reports import DetectionReport, TrackReport
 from app.errors import LimitExceeded, SessionNotFound, StaleReport, request_validation_error
-from app.hub import Hub
 from app.limits import check_report_limits
+from app.live_session import LiveSession, new_session, restore_snapshot
 from app.metrics import ServiceMetrics
 from app.responses import dumps
 from app.session_log import log_input
 from app.settings import Settings
-from app.stores import MemoryStore, SessionRecord, Snapshot, Store, to_plain
+from app.stores import MemoryStore, SessionLoad, SessionRecord, Snapshot, Store
 from app.translate import (
     PlainObject,
-    class_frame,
     core_track_report,
     fusion_config,
     step_plain,
     tracks_plain,
 )
-from core.belief import Frame
 from core.errors import StaleReport as CoreStaleReport
 from core.fusion.config import FusionConfig
 from core.fusion.engine import SessionEngine
 from core.fusion.reports import FusedTrackView
-from core.fusion.track import FusedTrack
 
-SNAPSHOT_FORMAT = 1
 TINY_WORK = 64
 """Report tracks + live fused tracks up to which a step runs on the event loop.
 
@@ -71,108 +67,6 @@ hop adds under load. Larger steps run in a worker thread."""
 
 logger = logging.getLogger("credal_fusion.sessions")
 T = TypeVar("T")
-
-
-@dataclass
-class LiveSession:
-    """A session in memory: its engine and what the service counts about it."""
-
-    record: SessionRecord
-    config: SessionConfig
-    fusion: FusionConfig | None
-    frame: Frame | None
-    engine: SessionEngine | None
-    seq: int = 0
-    sensor_inputs: dict[str, int] = field(default_factory=dict)
-    last_input_at: datetime | None = None
-    since_snapshot: int = 0
-    closed: bool = False
-    lock: asyncio.Lock = field(default_factory=asyncio.Lock)
-    hub: Hub = field(default_factory=Hub)
-
-    @property
-    def id(self) -> str:
-        """The session id."""
-        return self.record.id
-
-    @property
-    def open_sensors(self) -> bool:
-        """Whether any sensor id is accepted (the config names none)."""
-        return not self.config.sensors
-
-    @property
-    def joined_sensors(self) -> list[str]:
-        """Sensors that joined an open session, in order of arrival."""
-        if not self.open_sensors or self.fusion is None:
-            return []
-        return [sensor.id for sensor in self.fusion.sensors]
-
-    @property
-    def time(self) -> float | None:
-        """The fusion time (latest report time), ``None`` before the first input."""
-        return None if self.engine is None else self.engine.time
-
-    @property
-    def tracks(self) -> list[FusedTrack]:
-        """The live fused tracks (terminated ones are gone)."""
-        return [] if self.engine is None else self.engine.tracks
-
-    @property
-    def created_tracks(self) -> int:
-        """Fused tracks ever started."""
-        return 0 if self.engine is None else self.engine.next_number - 1
-
-    def sensor_ids(self) -> list[str]:
-        """Configured sensors, or the ones that joined an open session."""
-        if self.open_sensors:
-            return self.joined_sensors
-        return [sensor.id for sensor in self.config.sensors]
-
-    def last_time(self, sensor: str) -> float | None:
-        """Time of the sensor's latest accepted report."""
-        return None if self.engine is None else self.engine.last_report.get(sensor)
-
-    def idle_since(self) -> datetime:
-        """When the session last received an input (or was created)."""
-        return self.last_input_at or self.record.created_at
-
-    def snapshot_state(self) -> PlainObject:
-        """What a snapshot keeps: the engine export and the service's counters."""
-        return {
-            "format": SNAPSHOT_FORMAT,
-            "engine": None if self.engine is None else to_plain(self.engine.export()),
-            "joined_sensors": self.joined_sensors,
-            "sensor_inputs": dict(self.sensor_inputs),
-            "last_input_at": None if self.last_input_at is None else self.last_input_at.isoformat(),
-        }
-
-
-def _new_session(record: SessionRecord) -> LiveSession:
-    config = SessionConfig.model_validate(record.config)
-    fusion = fusion_config(config) if config.sensors else None
-    return LiveSession(
-        record=record,
-        config=config,
-        fusion=fusion,
-        frame=class_frame(config.classes),
-        engine=None if fusion is None else SessionEngine(fusion),
-    )
-
-
-def _restore_snapshot(session: LiveSession, snapshot: Snapshot) -> None:
-    state = snapshot.state
-    if state.get("format") != SNAPSHOT_FORMAT:
-        raise ValueError(f"session {session.id}: unknown snapshot format {state.get('format')!r}")
-    joined = [str(sensor) for sensor in state["joined_sensors"]]
-    if session.open_sensors and joined:
-        session.fusion = fusion_config(session.config, joined)
-    if state["engine"] is not None:
-        assert session.fusion is not None
-        session.engine = SessionEngine.restore(session.fusion, state["engine"])
-    session.seq = snapshot.seq
-    session.sensor_inputs = {str(k): int(v) for k, v in state["sensor_inputs"].items()}
-    last = state["last_input_at"]
-    session.last_input_at = None if last is None else datetime.fromisoformat(last)
 
 
 @dataclass
@@ -222,7 +116,7 @@ class SessionRegistry:
 
     def add(self, record: SessionRecord) -> LiveSession:
         """Register a session just created in the store."""
-        session = _new_session(record)
+        session = new_session(record)
         self._sessions[record.id] = session
         return session
 
@@ -252,11 +146,11 @@ class SessionRegistry:
         load = await self._io(self.store.load, session_id)
         return await anyio.to_thread.run_sync(functools.partial(self._rebuild, load.session, load))
 
-    def _rebuild(self, record: SessionRecord, load: Any) -> LiveSession:
+    def _rebuild(self, record: SessionRecord, load: SessionLoad) -> LiveSession:
         """Snapshot + replay of the log after it (runs in a worker thread)."""
-        session = _new_session(record)
+        session = new_session(record)
         if load.snapshot is not None:
-            _restore_snapshot(session, load.snapshot)
+            restore_snapshot(session, load.snapshot)
         for entry in load.entries:
             if entry.input.get("type") == "tracks":
                 report = TrackReport.model_validate(entry.input["report"])

@@ -30,9 +30,9 @@ from app.deps import (
 )
 from app.errors import LimitExceeded, problem_responses
 from app.limits import check_config_limits
+from app.live_session import LiveSession
 from app.security import hash_token, issue_token
 from app.session_log import event_from_entry
-from app.sessions import LiveSession
 from app.stores import SessionRecord
 
 router = APIRouter(prefix="/v1/sessions", tags=["sessions"])

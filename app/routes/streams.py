@@ -31,8 +31,9 @@ from api_schemas.reports import TrackReport
 from api_schemas.ws import DetectionsMessage, client_message_adapter
 from app.deps import open_record
 from app.errors import NotAvailableYet, ServiceError, Unauthorized, problem_for, problem_response
+from app.live_session import LiveSession
 from app.responses import dumps
-from app.sessions import LiveSession, SessionRegistry, result_message
+from app.sessions import SessionRegistry, result_message
 
 router = APIRouter(prefix="/v1/sessions")
 logger = logging.getLogger("credal_fusion.streams")
