@@ -43,7 +43,7 @@ METHOD_OPTIONS: dict[str, frozenset[str]] = {
     "gnn": frozenset({"threshold", "gate_probability", "distance", "imm_distance"}),
     "denoeux": frozenset({"gamma", "gate_probability", "alpha", "distance", "imm_distance"}),
     "hachour": frozenset({"likelihood", "maximise", "distance", "imm_distance"}),
-    "mercier": frozenset({"alpha", "maximise", "distance", "imm_distance"}),
+    "mercier": frozenset({"alpha", "distance", "imm_distance"}),
     "dang_han": frozenset({"alpha", "distance", "imm_distance"}),
     "cheap_jpda": frozenset({"bias", "gate_probability", "imm_distance"}),
 }
@@ -59,7 +59,7 @@ METHOD_DEFAULTS: dict[str, dict[str, object]] = {
     "gnn": {"gate_probability": 0.999, "distance": "mean"},
     "denoeux": {"gate_probability": 0.999, "alpha": 1.0, "distance": "sum"},
     "hachour": {"likelihood": "density", "maximise": "betp", "distance": "mean"},
-    "mercier": {"alpha": 0.9, "maximise": "betp", "distance": "mean"},
+    "mercier": {"alpha": 0.9, "distance": "mean"},
     "dang_han": {"alpha": 0.9, "distance": "mean"},
     "cheap_jpda": {"gate_probability": 0.999},
 }
@@ -71,6 +71,9 @@ is unset (``gnn`` with a ``threshold`` gets no ``gate_probability``).
 
 LOCAL_ONLY_OPTIONS = frozenset({"imm_distance"})
 """Options that only make sense for measurement-to-track association."""
+
+LOCAL_ONLY_DISTANCES = frozenset({"modified"})
+"""Distances that need a local tracker's steady-state covariance ([HZ] §4.1)."""
 
 
 def resolve_options(
@@ -88,6 +91,16 @@ def resolve_options(
         for name, value in given.items()
         if name not in allowed
     ]
+    distance = given.get("distance")
+    if not local and distance in LOCAL_ONLY_DISTANCES:
+        issues.append(
+            FieldIssue(
+                (*loc, "options", "distance"),
+                f"distance {distance!r} is for measurement-to-track association only "
+                f"(track-to-track: mean or sum)",
+                distance,
+            )
+        )
     pair = EXCLUSIVE_OPTIONS.get(method)
     if pair is not None and all(name in given for name in pair):
         issues.append(

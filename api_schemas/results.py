@@ -19,24 +19,34 @@ class TrackSource(WireModel):
     time: FiniteFloat
 
 
+ClassificationState = Literal["defined", "total_conflict"]
+
+
 class FusedClassification(WireModel):
     """The fused class belief of a track.
 
     ``mass`` is normalised (Dempster's rule); ``conflict`` is the mass that
-    normalisation removed. ``pignistic`` is ``null`` (and ``decision`` too)
-    when the conflict is total.
+    normalisation removed. ``state`` is ``total_conflict`` when the sensors'
+    evidence contradicts itself totally: then ``mass``, ``pignistic``,
+    ``belief``, ``plausibility`` and ``decision`` are ``null``.
     """
 
-    mass: list[FocalMass]
+    state: ClassificationState
+    mass: list[FocalMass] | None
     pignistic: dict[Label, UnitFloat] | None
-    belief: dict[Label, UnitFloat]
-    plausibility: dict[Label, UnitFloat]
+    belief: dict[Label, UnitFloat] | None
+    plausibility: dict[Label, UnitFloat] | None
     conflict: UnitFloat
     decision: Label | None
 
 
 class FusedTrack(WireModel):
-    """One fused track: stable id, status, estimate, sources, class belief, score, reason."""
+    """One fused track: stable id, status, estimate, sources, class belief, score, reason.
+
+    ``reason`` says why the status last changed (``initiated``, ``second_sensor``,
+    ``score_confirmed``, ``missed``, ``blind_zone``, ``gate_emptiness``, ...):
+    for a coasting, phantom or terminated track it is why it is so.
+    """
 
     id: Identifier
     status: TrackStatus
@@ -48,18 +58,28 @@ class FusedTrack(WireModel):
     reason: str | None
 
 
+PairBasis = Literal["continuity", "association"]
+
+
 class FusedPair(WireModel):
-    """An association decision of a step: fused track ``fused`` takes report item ``track``."""
+    """An association decision of a step: fused track ``fused`` takes report item ``track``.
+
+    ``basis`` is ``continuity`` when the sensor kept reporting the object under
+    the track id it gave it (no method score: ``score`` is ``null``), and
+    ``association`` when the session's method decided (``score`` is its score).
+    """
 
     fused: Identifier
     track: Identifier
     score: FiniteFloat | None
+    basis: PairBasis
 
 
 class ScoreMatrix(WireModel):
     """A method's score matrix: ``values[i][j]`` scores row ``rows[i]`` against column ``cols[j]``.
 
-    ``null`` marks a forbidden cell (e.g. the ``*`` rows of [T2T] Table 1).
+    ``null`` marks a cell without a finite score: a pair outside the gate, or a
+    forbidden cell (e.g. the ``*`` rows of [T2T] Table 1).
     """
 
     rows: list[str]
@@ -88,13 +108,10 @@ class StepResult(WireModel):
 
 
 class TrackHistoryPoint(WireModel):
-    """A past estimate of a fused track."""
+    """A past fused state of a track (one per step that showed it)."""
 
-    seq: int
     time: FiniteFloat
-    status: TrackStatus
     state: Vector
-    covariance: Matrix
 
 
 class FusedTrackDetail(WireModel):
@@ -113,11 +130,13 @@ class FusedPicture(WireModel):
 
 
 __all__ = [
+    "ClassificationState",
     "FusedClassification",
     "FusedPair",
     "FusedPicture",
     "FusedTrack",
     "FusedTrackDetail",
+    "PairBasis",
     "ScoreMatrix",
     "StepAssociation",
     "StepResult",

@@ -63,13 +63,22 @@ plus `type` and an optional `ref`); the server answers each with exactly one
 `error` that names the problem (field paths in `problem.errors`) and the
 client's `ref`; the connection stays open.
 
-`subscribe`: the server sends every `result` of the session, in order. A
-subscriber that cannot keep up is not queued without bound: it skips to the
-latest result (`seq` shows the gap).
+This version does not run local trackers yet: a valid `detections` message
+is answered with an `error` whose problem has status 501 (`not-implemented`);
+an invalid one gets the validation `error` as usual.
+
+`subscribe`: after the `ack` (its `seq` is the session's latest input), the
+server sends every later `result` of the session, in order, with `ref` null.
+A subscriber that cannot keep up is not queued without bound: it keeps the
+latest 64 results and skips older ones (`seq` shows the gap). Messages sent by
+the client on this channel are ignored. When the session ends the server
+closes the connection (code 1000).
 
 Both channels need the session's bearer token (or the admin token) in the
-`Authorization` header of the upgrade request. The server sends WebSocket
-pings; a peer that does not answer is disconnected.
+`Authorization` header of the upgrade request; a refused upgrade gets the
+REST route's problem+json answer (401, 403 or 404). The server sends
+WebSocket pings every `CREDAL_WS_PING_INTERVAL` seconds; a peer that does not
+answer within `CREDAL_WS_PING_TIMEOUT` is disconnected.
 """
 
 

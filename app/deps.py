@@ -8,8 +8,10 @@ from fastapi import Depends, Path, Request
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
 from app.errors import Forbidden, SessionNotFound, Unauthorized
+from app.live_session import LiveSession
 from app.metrics import ServiceMetrics
 from app.security import Principal, is_admin_token, token_matches
+from app.sessions import SessionRegistry
 from app.settings import Settings
 from app.stores import SessionRecord, Store
 
@@ -19,32 +21,39 @@ bearer_scheme = HTTPBearer(
 )
 
 
-def get_app_settings(request: Request) -> Settings:
+async def get_app_settings(request: Request) -> Settings:
     """The settings the application was built with."""
     settings: Settings = request.app.state.settings
     return settings
 
 
-def get_store(request: Request) -> Store:
+async def get_store(request: Request) -> Store:
     """The application's store."""
     store: Store = request.app.state.store
     return store
 
 
-def get_metrics(request: Request) -> ServiceMetrics:
+async def get_metrics(request: Request) -> ServiceMetrics:
     """The application's metrics."""
     metrics: ServiceMetrics = request.app.state.metrics
     return metrics
 
 
+async def get_registry(request: Request) -> SessionRegistry:
+    """The application's live sessions."""
+    registry: SessionRegistry = request.app.state.registry
+    return registry
+
+
 SettingsDep = Annotated[Settings, Depends(get_app_settings)]
+RegistryDep = Annotated[SessionRegistry, Depends(get_registry)]
 StoreDep = Annotated[Store, Depends(get_store)]
 MetricsDep = Annotated[ServiceMetrics, Depends(get_metrics)]
 Credentials = Annotated[HTTPAuthorizationCredentials | None, Depends(bearer_scheme)]
 SessionId = Annotated[str, Path(min_length=1, max_length=64, description="The session id.")]
 
 
-def bearer_token(credentials: Credentials) -> str:
+async def bearer_token(credentials: Credentials) -> str:
     """The request's bearer token; 401 when there is none."""
     if credentials is None or not credentials.credentials:
         raise Unauthorized("send 'Authorization: Bearer <token>'")
@@ -58,22 +67,21 @@ def _admin_token(settings: Settings) -> str | None:
     return settings.admin_token.get_secret_value() if settings.admin_token is not None else None
 
 
-def require_admin(token: BearerToken, settings: SettingsDep) -> Principal:
+async def require_admin(token: BearerToken, settings: SettingsDep) -> Principal:
     """Admin routes: only the admin token (403 for any other token)."""
     if not is_admin_token(token, _admin_token(settings)):
         raise Forbidden("this route needs the admin token")
     return Principal(admin=True)
 
 
-def authorize_session(
-    sid: SessionId, token: BearerToken, settings: SettingsDep, store: StoreDep
+def open_record(
+    sid: str, record: SessionRecord | None, token: str, settings: Settings
 ) -> SessionRecord:
-    """The session ``sid`` if the token opens it: its own token or the admin token.
+    """The session ``sid`` if ``token`` opens it: its own token or the admin token.
 
-    401 without a token, 404 for an unknown session, 403 for a token that is
-    neither this session's nor the admin's (another session's token included).
+    404 for an unknown session, 403 for a token that is neither this
+    session's nor the admin's (another session's token included).
     """
-    record = store.get_session(sid)
     if record is None:
         raise SessionNotFound(sid)
     if token_matches(token, record.token_hash) or is_admin_token(token, _admin_token(settings)):
@@ -81,5 +89,25 @@ def authorize_session(
     raise Forbidden(f"this token does not open session {sid!r}")
 
 
+async def authorize_session(
+    sid: SessionId, token: BearerToken, settings: SettingsDep, registry: RegistryDep
+) -> SessionRecord:
+    """The session ``sid`` if the token opens it (401 without a token; see :func:`open_session`).
+
+    Live sessions are checked in memory; the store is read (off the event loop) only for
+    a session the registry does not hold.
+    """
+    record = await registry.record(sid)
+    return open_record(sid, record, token, settings)
+
+
 AdminDep = Annotated[Principal, Depends(require_admin)]
 AuthorizedSession = Annotated[SessionRecord, Depends(authorize_session)]
+
+
+async def live_session(record: AuthorizedSession, registry: RegistryDep) -> LiveSession:
+    """The authorized session with its engine."""
+    return await registry.get(record.id)
+
+
+LiveSessionDep = Annotated[LiveSession, Depends(live_session)]

@@ -113,10 +113,33 @@ class StaleReport(Conflict):
 
     def __init__(self, sensor: str, time: float, last_time: float) -> None:
         super().__init__(
-            f"report of sensor {sensor!r} at time {time!r} is older than its last accepted time {last_time!r}",
+            f"report of sensor {sensor!r} at time {time!r} is not newer than its last accepted report at time {last_time!r}",
             sensor=sensor,
             time=time,
             last_time=last_time,
+        )
+
+
+class NotAvailableYet(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """A documented part of the API that this version does not serve yet."""
+
+    status = HTTPStatus.NOT_IMPLEMENTED
+    slug = "not-implemented"
+    title = "Not available yet"
+
+
+class TrackNotFound(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """The session has no live fused track with this id."""
+
+    status = HTTPStatus.NOT_FOUND
+    slug = "track-not-found"
+    title = "Track not found"
+
+    def __init__(self, session_id: str, track_id: str) -> None:
+        super().__init__(
+            f"session {session_id!r} has no live fused track {track_id!r}",
+            session=session_id,
+            track=track_id,
         )
 
 
@@ -286,6 +309,47 @@ async def _on_unexpected_error(request: Request, error: Exception) -> ProblemRes
     )
 
 
+def problem_for(error: Exception, instance: str | None = None) -> Problem:
+    """The problem document of any error (the WebSocket channel's ``error`` messages use it)."""
+    if isinstance(error, RequestValidationError):
+        errors = field_errors(error.errors())
+        return Problem(
+            type=problem_type("validation-error"),
+            title="Invalid request",
+            status=HTTPStatus.UNPROCESSABLE_ENTITY,
+            detail=_validation_detail(errors),
+            instance=instance,
+            errors=errors,
+        )
+    if isinstance(error, ServiceError):
+        return Problem(
+            type=problem_type(error.slug),
+            title=error.title,
+            status=error.status_code,
+            detail=error.detail,
+            instance=instance,
+            **error.extensions,
+        )
+    if isinstance(error, InvalidInput):
+        return Problem(
+            type=problem_type("invalid-input"),
+            title="Invalid input",
+            status=HTTPStatus.UNPROCESSABLE_ENTITY,
+            detail=str(error),
+            instance=instance,
+        )
+    reference = uuid.uuid4().hex
+    logger.error("unexpected error (reference %s) on %s", reference, instance, exc_info=error)
+    return Problem(
+        type=problem_type("internal-error"),
+        title="Internal server error",
+        status=HTTPStatus.INTERNAL_SERVER_ERROR,
+        detail=f"unexpected error; the server log has the details under reference {reference}",
+        instance=instance,
+        reference=reference,
+    )
+
+
 def install_error_handlers(app: FastAPI) -> None:
     """Register every problem+json handler on ``app``."""
     app.add_exception_handler(RequestValidationError, _on_validation_error)
@@ -304,6 +368,7 @@ PROBLEM_STATUSES: dict[int, str] = {
     413: "Body too large",
     422: "Invalid request (every invalid field is listed in `errors`) or a limit exceeded",
     429: "Too many sessions",
+    501: "Not available yet in this version",
 }
 
 

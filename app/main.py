@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
@@ -12,7 +14,8 @@ from app.errors import install_error_handlers
 from app.limits import BodySizeLimit
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
-from app.routes import health, metrics, sessions
+from app.routes import associate, fusion, health, metrics, sessions, streams
+from app.sessions import SessionRegistry
 from app.settings import Settings, get_settings
 from app.stores import open_store
 from core import __version__
@@ -32,10 +35,19 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         store = open_store(settings.store, redis_prefix=settings.redis_prefix)
         app.state.store = store
+        registry = SessionRegistry(store, settings, service_metrics)
+        app.state.registry = registry
+        await registry.restore_all()
         service_metrics.sessions.set(store.count_sessions())
+        expiry = asyncio.create_task(registry.run_expiry(), name="session-expiry")
         try:
             yield
         finally:
+            expiry.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await expiry
+            for session in registry:
+                session.hub.close()
             store.close()
 
     app = FastAPI(
@@ -51,6 +63,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(health.router)
     app.include_router(metrics.router)
     app.include_router(sessions.router)
+    app.include_router(fusion.router)
+    app.include_router(associate.router)
+    app.include_router(streams.router)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     app.add_middleware(HttpMetrics, metrics=service_metrics)
     install_openapi(app)

@@ -1,4 +1,4 @@
-"""Session lifecycle and the event log (the engine-independent part of ``/v1/sessions``)."""
+"""Session lifecycle, summary and the event log (``/v1/sessions``)."""
 
 from __future__ import annotations
 
@@ -11,10 +11,26 @@ from fastapi import APIRouter, Query, Response
 
 from api_schemas.config import SessionConfig
 from api_schemas.events import EventLog
-from api_schemas.sessions import SessionCreated, SessionList, SessionListItem
-from app.deps import AdminDep, AuthorizedSession, MetricsDep, SettingsDep, StoreDep
+from api_schemas.sessions import (
+    SensorActivity,
+    SessionCreated,
+    SessionList,
+    SessionListItem,
+    SessionSummary,
+    TrackCounts,
+)
+from app.deps import (
+    AdminDep,
+    AuthorizedSession,
+    LiveSessionDep,
+    MetricsDep,
+    RegistryDep,
+    SettingsDep,
+    StoreDep,
+)
 from app.errors import LimitExceeded, problem_responses
 from app.limits import check_config_limits
+from app.live_session import LiveSession
 from app.security import hash_token, issue_token
 from app.session_log import event_from_entry
 from app.stores import SessionRecord
@@ -30,10 +46,15 @@ MAX_EVENTS_PAGE = 10_000
     responses=problem_responses(400, 413, 422, 429),
 )
 def create_session(
-    config: SessionConfig, settings: SettingsDep, store: StoreDep, metrics: MetricsDep
+    config: SessionConfig,
+    settings: SettingsDep,
+    store: StoreDep,
+    registry: RegistryDep,
+    metrics: MetricsDep,
 ) -> SessionCreated:
     """Create a session from a config; returns its id, its token (shown only here) and the resolved config."""
     check_config_limits(config, settings)
+    registry.check_config(config)
     live = store.count_sessions()
     if live >= settings.max_sessions:
         raise LimitExceeded(
@@ -51,6 +72,7 @@ def create_session(
         created_at=datetime.now(UTC),
     )
     store.create_session(record)
+    registry.add(record)
     metrics.sessions.set(store.count_sessions())
     return SessionCreated(id=record.id, token=token, config=config, created_at=record.created_at)
 
@@ -76,11 +98,46 @@ def list_sessions(_admin: AdminDep, store: StoreDep) -> SessionList:
     response_class=Response,
     responses=problem_responses(401, 403, 404),
 )
-def delete_session(session: AuthorizedSession, store: StoreDep, metrics: MetricsDep) -> Response:
+async def delete_session(session: AuthorizedSession, registry: RegistryDep) -> Response:
     """End a session: it no longer accepts inputs nor answers (its token stops working)."""
-    store.delete_session(session.id)
-    metrics.sessions.set(store.count_sessions())
+    await registry.delete(session.id)
     return Response(status_code=HTTPStatus.NO_CONTENT)
+
+
+def summary(session: LiveSession) -> SessionSummary:
+    """What ``GET /v1/sessions/{sid}`` says about a live session."""
+    statuses = [track.status.value for track in session.tracks]
+    return SessionSummary(
+        id=session.id,
+        name=session.config.name,
+        created_at=session.record.created_at,
+        last_input_at=session.last_input_at,
+        config=session.config,
+        seq=session.seq,
+        time=session.time,
+        sensors=[
+            SensorActivity(
+                id=sensor,
+                inputs=session.sensor_inputs.get(sensor, 0),
+                last_time=session.last_time(sensor),
+            )
+            for sensor in session.sensor_ids()
+        ],
+        counts=TrackCounts(
+            tentative=statuses.count("tentative"),
+            confirmed=statuses.count("confirmed"),
+            coasting=statuses.count("coasting"),
+            phantom=statuses.count("phantom"),
+            terminated=session.created_tracks - len(statuses),
+        ),
+    )
+
+
+@router.get("/{sid}", responses=problem_responses(401, 403, 404))
+async def get_session(session: LiveSessionDep) -> SessionSummary:
+    """The session's summary: config, sensors with their activity, track counts, time and seq."""
+    async with session.lock:
+        return summary(session)
 
 
 @router.get("/{sid}/events", responses=problem_responses(401, 403, 404, 422))

@@ -172,9 +172,20 @@ def to_plain(value: Any, path: str = "$") -> Any:
     raise TypeError(f"{path}: {type(value).__name__} is not plain data")
 
 
+def _plain_default(value: Any) -> Any:
+    """``json.dumps`` hook: numpy values become plain data; anything else is refused by path."""
+    return to_plain(value)  # numpy → lists and numbers; anything else: TypeError naming it
+
+
 def dumps(value: Any) -> str:
-    """Canonical JSON text of plain data (non-finite floats are kept as JSON extensions)."""
-    return json.dumps(to_plain(value), separators=(",", ":"), sort_keys=True, allow_nan=True)
+    """Canonical JSON text of plain data (non-finite floats are kept as JSON extensions).
+
+    Plain Python data is encoded directly (the C encoder, no walk in Python);
+    numpy arrays and scalars go through :func:`to_plain`.
+    """
+    return json.dumps(
+        value, separators=(",", ":"), sort_keys=True, allow_nan=True, default=_plain_default
+    )
 
 
 def loads(text: str) -> Any:

@@ -630,22 +630,7 @@ class SessionEngine:
         for track, state, covariance in zip(shown, states, covariances, strict=True):
             if track.status is not TrackStatus.TERMINATED:
                 track.remember(self.time, state)
-            sources = tuple(
-                Source(sensor, estimate.track, estimate.time)
-                for sensor, estimate in sorted(track.estimates.items())
-            )
-            views.append(
-                FusedTrackView(
-                    id=track.id,
-                    status=track.status,
-                    reason=track.reason,
-                    state=state,
-                    covariance=covariance,
-                    sources=sources,
-                    classification=self._classify(track),
-                    score=track.score,
-                )
-            )
+            views.append(self._view(track, state, covariance))
         self.tracks = [track for track in self.tracks if track.status is not TrackStatus.TERMINATED]
         association = AssociationView(
             method=decision.method,
@@ -671,6 +656,40 @@ class SessionEngine:
             sensor=report.sensor,
             tracks=tuple(views),
             association=association,
+        )
+
+    def _view(self, track: FusedTrack, state: FloatArray, covariance: FloatArray) -> FusedTrackView:
+        sources = tuple(
+            Source(sensor, estimate.track, estimate.time)
+            for sensor, estimate in sorted(track.estimates.items())
+        )
+        return FusedTrackView(
+            id=track.id,
+            status=track.status,
+            reason=track.reason,
+            state=state,
+            covariance=covariance,
+            sources=sources,
+            classification=self._classify(track),
+            score=track.score,
+        )
+
+    def picture(self, time: float | None = None) -> tuple[FusedTrackView, ...]:
+        """The live fused tracks at ``time`` (default: the fusion time); changes nothing.
+
+        The service's ``GET …/tracks``: each track's sensor estimates are
+        predicted to ``time`` and fused, exactly as a step would.
+        """
+        at = self.time if time is None else float(time)
+        if at is None or not self.tracks:
+            return ()
+        if not math.isfinite(at):
+            raise InvalidInput(f"time must be finite, got {at!r}")
+        shown = sorted(self.tracks, key=lambda track: track.number)
+        states, covariances = self._fused_at(shown, at)
+        return tuple(
+            self._view(track, state, covariance)
+            for track, state, covariance in zip(shown, states, covariances, strict=True)
         )
 
     # ------------------------------------------------------ persistence

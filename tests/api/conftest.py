@@ -6,6 +6,7 @@ import socket
 import threading
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import pytest
@@ -45,10 +46,9 @@ class LiveServer:
     settings: Settings
 
 
-@pytest.fixture
-def live_server() -> Iterator[LiveServer]:
+@contextmanager
+def serving(settings: Settings) -> Iterator[LiveServer]:
     """The application served by uvicorn on a free loopback port, in a background thread."""
-    settings = make_settings()
     listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
     listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     listener.bind(("127.0.0.1", 0))
@@ -68,3 +68,10 @@ def live_server() -> Iterator[LiveServer]:
         server.should_exit = True
         thread.join(timeout=SERVER_START_TIMEOUT_S)
         listener.close()
+
+
+@pytest.fixture
+def live_server() -> Iterator[LiveServer]:
+    """The application served by uvicorn on a free loopback port (memory store)."""
+    with serving(make_settings()) as server:
+        yield server

@@ -67,6 +67,7 @@ STEP_RESULT: dict[str, Any] = {
             "covariance": [[4, 0, 0, 0], [0, 1, 0, 0], [0, 0, 4, 0], [0, 0, 0, 1]],
             "sources": [{"sensor": "radar-1", "track": "17", "time": 12.5}],
             "classification": {
+                "state": "defined",
                 "mass": [
                     {"set": ["bomber", "fighter"], "mass": 0.7},
                     {"set": ["liner", "bomber", "fighter"], "mass": 0.3},
@@ -83,7 +84,7 @@ STEP_RESULT: dict[str, Any] = {
     ],
     "association": {
         "method": "hachour",
-        "pairs": [{"fused": "F3", "track": "17", "score": 0.93}],
+        "pairs": [{"fused": "F3", "track": "17", "score": 0.93, "basis": "association"}],
         "new": ["21"],
         "missed": ["F5"],
         "matrix": None,

@@ -1,0 +1,124 @@
+"""One session in memory: its engine, its lock, its subscribers and what the service counts.
+
+A snapshot (:meth:`LiveSession.snapshot_state`) keeps the engine's export and
+the service's counters; :func:`restore_snapshot` is its inverse.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from dataclasses import dataclass, field
+from datetime import datetime
+
+from api_schemas.config import SessionConfig
+from app.hub import Hub
+from app.stores import SessionRecord, Snapshot, to_plain
+from app.translate import PlainObject, class_frame, fusion_config
+from core.belief import Frame
+from core.fusion.config import FusionConfig
+from core.fusion.engine import SessionEngine
+from core.fusion.track import FusedTrack
+
+SNAPSHOT_FORMAT = 1
+
+
+@dataclass
+class LiveSession:
+    """A session in memory: its engine and what the service counts about it."""
+
+    record: SessionRecord
+    config: SessionConfig
+    fusion: FusionConfig | None
+    frame: Frame | None
+    engine: SessionEngine | None
+    seq: int = 0
+    sensor_inputs: dict[str, int] = field(default_factory=dict)
+    last_input_at: datetime | None = None
+    since_snapshot: int = 0
+    closed: bool = False
+    lock: asyncio.Lock = field(default_factory=asyncio.Lock)
+    hub: Hub = field(default_factory=Hub)
+
+    @property
+    def id(self) -> str:
+        """The session id."""
+        return self.record.id
+
+    @property
+    def open_sensors(self) -> bool:
+        """Whether any sensor id is accepted (the config names none)."""
+        return not self.config.sensors
+
+    @property
+    def joined_sensors(self) -> list[str]:
+        """Sensors that joined an open session, in order of arrival."""
+        if not self.open_sensors or self.fusion is None:
+            return []
+        return [sensor.id for sensor in self.fusion.sensors]
+
+    @property
+    def time(self) -> float | None:
+        """The fusion time (latest report time), ``None`` before the first input."""
+        return None if self.engine is None else self.engine.time
+
+    @property
+    def tracks(self) -> list[FusedTrack]:
+        """The live fused tracks (terminated ones are gone)."""
+        return [] if self.engine is None else self.engine.tracks
+
+    @property
+    def created_tracks(self) -> int:
+        """Fused tracks ever started."""
+        return 0 if self.engine is None else self.engine.next_number - 1
+
+    def sensor_ids(self) -> list[str]:
+        """Configured sensors, or the ones that joined an open session."""
+        if self.open_sensors:
+            return self.joined_sensors
+        return [sensor.id for sensor in self.config.sensors]
+
+    def last_time(self, sensor: str) -> float | None:
+        """Time of the sensor's latest accepted report."""
+        return None if self.engine is None else self.engine.last_report.get(sensor)
+
+    def idle_since(self) -> datetime:
+        """When the session last received an input (or was created)."""
+        return self.last_input_at or self.record.created_at
+
+    def snapshot_state(self) -> PlainObject:
+        """What a snapshot keeps: the engine export and the service's counters."""
+        return {
+            "format": SNAPSHOT_FORMAT,
+            "engine": None if self.engine is None else to_plain(self.engine.export()),
+            "joined_sensors": self.joined_sensors,
+            "sensor_inputs": dict(self.sensor_inputs),
+            "last_input_at": None if self.last_input_at is None else self.last_input_at.isoformat(),
+        }
+
+
+def new_session(record: SessionRecord) -> LiveSession:
+    config = SessionConfig.model_validate(record.config)
+    fusion = fusion_config(config) if config.sensors else None
+    return LiveSession(
+        record=record,
+        config=config,
+        fusion=fusion,
+        frame=class_frame(config.classes),
+        engine=None if fusion is None else SessionEngine(fusion),
+    )
+
+
+def restore_snapshot(session: LiveSession, snapshot: Snapshot) -> None:
+    state = snapshot.state
+    if state.get("format") != SNAPSHOT_FORMAT:
+        raise ValueError(f"session {session.id}: unknown snapshot format {state.get('format')!r}")
+    joined = [str(sensor) for sensor in state["joined_sensors"]]
+    if session.open_sensors and joined:
+        session.fusion = fusion_config(session.config, joined)
+    if state["engine"] is not None:
+        assert session.fusion is not None
+        session.engine = SessionEngine.restore(session.fusion, state["engine"])
+    session.seq = snapshot.seq
+    session.sensor_inputs = {str(k): int(v) for k, v in state["sensor_inputs"].items()}
+    last = state["last_input_at"]
+    session.last_input_at = None if last is None else datetime.fromisoformat(last)

@@ -1,0 +1,97 @@
+"""Inputs and the fused picture of a session: ``/v1/sessions/{sid}/tracks`` and ``…/detections``."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Path, Query
+
+from api_schemas.base import FiniteFloat
+from api_schemas.reports import DetectionReport, TrackReport
+from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
+from app.deps import LiveSessionDep, RegistryDep
+from app.errors import (
+    NotAvailableYet,
+    TrackNotFound,
+    problem_responses,
+)
+from app.responses import JSONTextResponse, PlainJSONResponse
+
+router = APIRouter(prefix="/v1/sessions", tags=["fusion"])
+
+TrackId = Annotated[str, Path(min_length=1, max_length=64, description="A fused track id.")]
+
+
+@router.post(
+    "/{sid}/tracks",
+    response_model=StepResult,
+    responses=problem_responses(401, 403, 404, 409, 413, 422),
+)
+async def submit_tracks(
+    report: TrackReport,
+    session: LiveSessionDep,
+    registry: RegistryDep,
+    explain: Annotated[
+        bool, Query(description="add the association method's score matrix")
+    ] = False,
+) -> JSONTextResponse:
+    """One sensor's track list → the fused result of that step (acknowledged once logged).
+
+    409 ``stale-report`` (with ``time`` and ``last_time``) for a report not
+    newer than the sensor's previous one.
+    """
+    result = await registry.submit_tracks(session, report, explain=explain)
+    return JSONTextResponse(result)
+
+
+@router.post(
+    "/{sid}/detections",
+    response_model=StepResult,
+    responses=problem_responses(401, 403, 404, 413, 422, 501),
+)
+async def submit_detections(
+    report: DetectionReport, session: LiveSessionDep, registry: RegistryDep
+) -> PlainJSONResponse:
+    """One sensor's detections → the fused result (this version answers 501: see below).
+
+    The body is validated as documented (422 naming the field, as a track
+    list would be); a valid one is answered with ``501 not-implemented``
+    until the session runs local trackers.
+    """
+    registry.check_detections(session, report)
+    raise NotAvailableYet(
+        "detections need the local tracker, which this version does not run yet; "
+        "post the sensor's track list to …/tracks instead",
+        session=session.id,
+    )
+
+
+@router.get(
+    "/{sid}/tracks", response_model=FusedPicture, responses=problem_responses(401, 403, 404, 422)
+)
+async def list_fused_tracks(
+    session: LiveSessionDep,
+    registry: RegistryDep,
+    time: Annotated[
+        FiniteFloat | None,
+        Query(description="predict the tracks to this time (default: the fusion time)"),
+    ] = None,
+) -> PlainJSONResponse:
+    """The live fused tracks (not terminated), optionally predicted to ``time``."""
+    seq, at, tracks = await registry.picture(session, time)
+    return PlainJSONResponse({"seq": seq, "time": at, "tracks": tracks})
+
+
+@router.get(
+    "/{sid}/tracks/{tid}",
+    response_model=FusedTrackDetail,
+    responses=problem_responses(401, 403, 404),
+)
+async def get_fused_track(
+    tid: TrackId, session: LiveSessionDep, registry: RegistryDep
+) -> PlainJSONResponse:
+    """One live fused track with its recent history (fused states, oldest first)."""
+    detail = await registry.track_detail(session, tid)
+    if detail is None:
+        raise TrackNotFound(session.id, tid)
+    return PlainJSONResponse(detail)

@@ -1,0 +1,200 @@
+"""WebSocket channels of a session: ``stream`` (inputs in, results out) and ``subscribe``.
+
+The protocol is documented in ``docs/asyncapi.yaml``. Both channels need the
+session's token (or the admin token) in the upgrade request's
+``Authorization`` header; a refused upgrade gets the problem+json answer the
+REST route would give (or close code 1008 where the server cannot send one).
+The server pings (uvicorn's ``ws_ping_interval``/``ws_ping_timeout``) and
+drops a peer that stops answering.
+
+``stream``: a reader task reads, validates and applies each message in
+order and puts its answer (one ``result`` or ``error``, echoing ``ref``) into
+a bounded queue; a writer task sends them. When the client does not read, the
+queue fills, the reader stops reading and TCP pushes back: nothing grows
+without bound. ``subscribe``: the session's hub gives each subscriber a
+bounded queue that keeps the latest results (:mod:`app.hub`).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+
+import anyio
+from fastapi import APIRouter, WebSocket
+from fastapi.exceptions import RequestValidationError
+from pydantic import ValidationError
+from starlette.websockets import WebSocketDisconnect
+
+from api_schemas.problem import Problem
+from api_schemas.reports import TrackReport
+from api_schemas.ws import DetectionsMessage, client_message_adapter
+from app.deps import open_record
+from app.errors import NotAvailableYet, ServiceError, Unauthorized, problem_for, problem_response
+from app.live_session import LiveSession
+from app.responses import dumps
+from app.sessions import SessionRegistry, result_message
+
+router = APIRouter(prefix="/v1/sessions")
+logger = logging.getLogger("credal_fusion.streams")
+
+OUTBOX_SIZE = 16
+"""Answers waiting to be sent on one ``stream`` connection."""
+POLICY_VIOLATION = 1008
+MESSAGE_TAGS = ("tracks", "detections")
+DISCONNECTED = (WebSocketDisconnect, OSError, anyio.ClosedResourceError, anyio.BrokenResourceError)
+"""What a peer that went away raises on our side (uvicorn's ClientDisconnected is an OSError)."""
+
+
+def _bearer(websocket: WebSocket) -> str:
+    scheme, _, token = websocket.headers.get("authorization", "").partition(" ")
+    if scheme.lower() != "bearer" or not token.strip():
+        raise Unauthorized("send 'Authorization: Bearer <token>' with the upgrade request")
+    return token.strip()
+
+
+async def _open(websocket: WebSocket, sid: str) -> LiveSession | None:
+    """The session if the upgrade request may open it; otherwise refuse the upgrade."""
+    app = websocket.app
+    registry: SessionRegistry = app.state.registry
+    try:
+        token = _bearer(websocket)
+        record = open_record(sid, await registry.record(sid), token, app.state.settings)
+        return await registry.get(record.id)
+    except ServiceError as error:
+        if "websocket.http.response" in websocket.scope.get("extensions", {}):
+            response = problem_response(
+                None,
+                status=error.status_code,
+                slug=error.slug,
+                title=error.title,
+                detail=error.detail,
+                headers=error.headers(),
+                instance=websocket.url.path,
+                **error.extensions,
+            )
+            await websocket.send_denial_response(response)
+        else:
+            await websocket.close(code=POLICY_VIOLATION, reason=error.detail[:120])
+        return None
+
+
+def _ack(session: LiveSession) -> str:
+    return dumps({"type": "ack", "ref": None, "seq": session.seq})
+
+
+def _error(problem: Problem, ref: str | None) -> str:
+    return dumps(
+        {"type": "error", "ref": ref, "problem": problem.model_dump(mode="json", exclude_none=True)}
+    )
+
+
+def _ref_of(text: str) -> str | None:
+    """The ``ref`` of a message that failed validation, if it has a usable one."""
+    try:
+        raw = json.loads(text)
+    except ValueError:
+        return None
+    ref = raw.get("ref") if isinstance(raw, dict) else None
+    return ref if isinstance(ref, str) and 0 < len(ref) <= 128 else None
+
+
+def _message_problem(error: ValidationError, path: str) -> Problem:
+    """A validation problem located in the message (the union's tag is left out of the path)."""
+    errors = []
+    for entry in error.errors():
+        loc = list(entry.get("loc", ()))
+        if loc and loc[0] in MESSAGE_TAGS:
+            loc = loc[1:]
+        errors.append(
+            {"loc": tuple(loc), "msg": entry.get("msg", ""), "type": entry.get("type", "")}
+        )
+    return problem_for(RequestValidationError(errors), path)
+
+
+async def _answer(session: LiveSession, registry: SessionRegistry, text: str, path: str) -> str:
+    """The one answer (``result`` or ``error``) to one client message."""
+    ref: str | None = None
+    try:
+        message = client_message_adapter.validate_json(text)
+    except ValidationError as error:
+        return _error(_message_problem(error, path), _ref_of(text))
+    ref = message.ref
+    try:
+        if isinstance(message, DetectionsMessage):
+            registry.check_detections(session, message)
+            raise NotAvailableYet(
+                "detections need the local tracker, which this version does not run yet; "
+                "send the sensor's track list ('type': 'tracks') instead",
+                session=session.id,
+            )
+        report = TrackReport.model_construct(
+            sensor=message.sensor, time=message.time, tracks=message.tracks
+        )
+        result = await registry.submit_tracks(session, report)
+    except Exception as error:  # every failure is answered; the connection stays open
+        return _error(problem_for(error, path), ref)
+    return result_message(result, ref)
+
+
+@router.websocket("/{sid}/stream")
+async def stream_session(websocket: WebSocket, sid: str) -> None:
+    """Send inputs, receive one answer per input, in order."""
+    session = await _open(websocket, sid)
+    if session is None:
+        return
+    registry: SessionRegistry = websocket.app.state.registry
+    path = websocket.url.path
+    await websocket.accept()
+    await websocket.send_text(_ack(session))
+    send, receive = anyio.create_memory_object_stream[str](OUTBOX_SIZE)
+
+    async def reader() -> None:
+        async with send:
+            while True:
+                incoming = await websocket.receive()
+                if incoming["type"] == "websocket.disconnect":
+                    return
+                text = incoming.get("text")
+                if text is None:
+                    text = bytes(incoming.get("bytes") or b"").decode("utf-8", errors="replace")
+                await send.send(await _answer(session, registry, text, path))
+
+    async def writer() -> None:
+        async with receive:
+            async for answer in receive:
+                await websocket.send_text(answer)
+
+    try:
+        async with anyio.create_task_group() as tasks:
+            tasks.start_soon(writer)
+            await reader()
+    except* DISCONNECTED:
+        pass
+
+
+@router.websocket("/{sid}/subscribe")
+async def subscribe_session(websocket: WebSocket, sid: str) -> None:
+    """Receive every result of the session, in order; a slow reader skips to the latest."""
+    session = await _open(websocket, sid)
+    if session is None:
+        return
+    await websocket.accept()
+    subscriber = session.hub.subscribe()
+    await websocket.send_text(_ack(session))
+
+    async def pump() -> None:
+        while (message := await subscriber.next()) is not None:
+            await websocket.send_text(message)
+        await websocket.close(code=1000, reason="session ended")
+
+    try:
+        async with anyio.create_task_group() as tasks:
+            tasks.start_soon(pump)
+            while (await websocket.receive())["type"] != "websocket.disconnect":
+                pass  # the channel is receive-only: client messages are ignored
+            tasks.cancel_scope.cancel()
+    except* (*DISCONNECTED, RuntimeError):
+        pass
+    finally:
+        session.hub.unsubscribe(subscriber)

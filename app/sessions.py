@@ -1,0 +1,352 @@
+"""The live sessions: one engine per session behind a lock, logged before acknowledged.
+
+Per session (:class:`LiveSession`): the engine, an ``asyncio.Lock`` that
+applies inputs one at a time in arrival order, and a :class:`~app.hub.Hub`
+for subscribers. One input (:meth:`SessionRegistry.submit_tracks`):
+
+1. checks that need only the config (limits, sensor, dimensions, labels);
+2. under the lock, the engine applies it (in a worker thread unless the work
+   is tiny); a refusal changes nothing;
+3. the input is appended to the store — durably for sqlite — and only then is
+   the result returned and published. Steps 2–3 are shielded from
+   cancellation (a client that goes away cannot leave the engine ahead of the
+   log); if the append fails anyway, the session is evicted from memory and
+   rebuilt from the store on its next use;
+4. every ``snapshot_every`` inputs the engine state is snapshotted.
+
+On start every stored session is restored from its latest snapshot plus the
+log after it (:meth:`SessionRegistry.restore_all`); a session without input
+for ``session_idle_seconds`` is ended (:meth:`SessionRegistry.expire_idle`).
+
+A session whose config names no sensor accepts any sensor id: each new one
+joins the engine (default reliability and P_D, no field of view) when its
+first input is applied, up to ``max_sensors``; the snapshot keeps the list.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import functools
+import logging
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from datetime import UTC, datetime, timedelta
+from typing import Any, TypeVar
+
+import anyio
+
+from api_schemas.config import SessionConfig
+from api_schemas.consistency import detection_report_issues, track_report_issues
+from api_schemas.reports import DetectionReport, TrackReport
+from app.errors import LimitExceeded, SessionNotFound, StaleReport, request_validation_error
+from app.limits import check_report_limits
+from app.live_session import LiveSession, new_session, restore_snapshot
+from app.metrics import ServiceMetrics
+from app.responses import dumps
+from app.session_log import log_input
+from app.settings import Settings
+from app.stores import MemoryStore, SessionLoad, SessionRecord, Snapshot, Store
+from app.translate import (
+    PlainObject,
+    core_track_report,
+    fusion_config,
+    step_plain,
+    tracks_plain,
+)
+from core.errors import StaleReport as CoreStaleReport
+from core.fusion.config import FusionConfig
+from core.fusion.engine import SessionEngine
+from core.fusion.reports import FusedTrackView
+
+TINY_WORK = 64
+"""Report tracks + live fused tracks up to which a step runs on the event loop.
+
+Such a step costs about 2 ms of engine time: less than what a worker-thread
+hop adds under load. Larger steps run in a worker thread."""
+
+logger = logging.getLogger("credal_fusion.sessions")
+T = TypeVar("T")
+
+
+@dataclass
+class Step:
+    """An applied (not yet logged) input: the engine that holds it and its result as JSON text."""
+
+    engine: SessionEngine
+    fusion: FusionConfig
+    result: str
+
+
+class SessionRegistry:
+    """Every live session of the process, loaded from and logged to the store."""
+
+    def __init__(self, store: Store, settings: Settings, metrics: ServiceMetrics) -> None:
+        self.store = store
+        self.settings = settings
+        self.metrics = metrics
+        self._sessions: dict[str, LiveSession] = {}
+        self._load_lock = asyncio.Lock()
+        self._store_inline = isinstance(store, MemoryStore)
+
+    def __len__(self) -> int:
+        return len(self._sessions)
+
+    def __iter__(self) -> Iterator[LiveSession]:
+        return iter(list(self._sessions.values()))
+
+    # ------------------------------------------------------------ running work
+    async def _io(self, function: Callable[..., T], *args: Any) -> T:
+        """A store call: inline for the memory store, in a worker thread otherwise."""
+        if self._store_inline:
+            return function(*args)
+        return await anyio.to_thread.run_sync(functools.partial(function, *args))
+
+    @staticmethod
+    async def _compute(size: int, function: Callable[[], T]) -> T:
+        """Numeric work: inline when tiny, in a worker thread otherwise."""
+        if size <= TINY_WORK:
+            return function()
+        return await anyio.to_thread.run_sync(function)
+
+    # ------------------------------------------------------------ lifecycle
+    def check_config(self, config: SessionConfig) -> None:
+        """Refuse a config the engine cannot run (422 located at the field)."""
+        fusion_config(config, [] if config.sensors else ["probe"])
+
+    def add(self, record: SessionRecord) -> LiveSession:
+        """Register a session just created in the store."""
+        session = new_session(record)
+        self._sessions[record.id] = session
+        return session
+
+    async def record(self, session_id: str) -> SessionRecord | None:
+        """The stored record of a live session (from memory when the session is loaded)."""
+        session = self._sessions.get(session_id)
+        if session is not None:
+            return session.record
+        return await self._io(self.store.get_session, session_id)
+
+    async def get(self, session_id: str) -> LiveSession:
+        """The live session ``session_id``, loaded from the store if it is not in memory."""
+        session = self._sessions.get(session_id)
+        if session is not None:
+            return session
+        async with self._load_lock:
+            session = self._sessions.get(session_id)
+            if session is None:
+                session = await self._load(session_id)
+                self._sessions[session_id] = session
+        return session
+
+    async def _load(self, session_id: str) -> LiveSession:
+        record = await self._io(self.store.get_session, session_id)
+        if record is None:
+            raise SessionNotFound(session_id)
+        load = await self._io(self.store.load, session_id)
+        return await anyio.to_thread.run_sync(functools.partial(self._rebuild, load.session, load))
+
+    def _rebuild(self, record: SessionRecord, load: SessionLoad) -> LiveSession:
+        """Snapshot + replay of the log after it (runs in a worker thread)."""
+        session = new_session(record)
+        if load.snapshot is not None:
+            restore_snapshot(session, load.snapshot)
+        for entry in load.entries:
+            if entry.input.get("type") == "tracks":
+                report = TrackReport.model_validate(entry.input["report"])
+                try:
+                    step = self._apply(session, report, explain=False)
+                except Exception:
+                    logger.exception("session %s: replay of input %d failed", record.id, entry.seq)
+                else:
+                    session.engine, session.fusion = step.engine, step.fusion
+            else:
+                logger.warning(
+                    "session %s: input %d (%s) cannot be replayed yet",
+                    record.id,
+                    entry.seq,
+                    entry.input.get("type"),
+                )
+            sensor = str(entry.input.get("report", {}).get("sensor", ""))
+            session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
+            session.seq = entry.seq
+            session.last_input_at = entry.received_at
+        session.seq = max(session.seq, load.last_seq)
+        return session
+
+    async def restore_all(self) -> int:
+        """Load every stored session (on start); returns how many."""
+        records = await self._io(self.store.list_sessions)
+        for record in records:
+            try:
+                await self.get(record.id)
+            except Exception:
+                logger.exception("session %s could not be restored", record.id)
+        return len(self._sessions)
+
+    def discard(self, session_id: str) -> None:
+        """Forget a session (deleted): its subscribers are told, waiting inputs get 404."""
+        session = self._sessions.pop(session_id, None)
+        if session is not None:
+            session.closed = True
+            session.hub.close()
+
+    async def delete(self, session_id: str) -> bool:
+        """End a session in the store and in memory."""
+        deleted = await self._io(self.store.delete_session, session_id)
+        self.discard(session_id)
+        self.metrics.sessions.set(await self._io(self.store.count_sessions))
+        return bool(deleted)
+
+    async def expire_idle(self, now: datetime | None = None) -> list[str]:
+        """End every session idle for longer than ``session_idle_seconds`` (0: never)."""
+        idle = self.settings.session_idle_seconds
+        if idle <= 0:
+            return []
+        moment = now or datetime.now(UTC)
+        expired = [
+            session.id
+            for session in self
+            if moment - session.idle_since() > timedelta(seconds=idle) and not session.lock.locked()
+        ]
+        for session_id in expired:
+            logger.info("session %s expired after %.0f s without input", session_id, idle)
+            await self.delete(session_id)
+        return expired
+
+    async def run_expiry(self) -> None:
+        """Check idle sessions periodically until cancelled."""
+        idle = self.settings.session_idle_seconds
+        if idle <= 0:
+            return
+        period = min(60.0, max(1.0, idle / 10.0))
+        while True:
+            await anyio.sleep(period)
+            try:
+                await self.expire_idle()
+            except Exception:
+                logger.exception("idle expiry failed")
+
+    # ------------------------------------------------------------ inputs
+    def check_tracks(self, session: LiveSession, report: TrackReport) -> None:
+        """Checks that need only the config: item limit, sensor, dimensions, class labels."""
+        check_report_limits(report, self.settings)
+        issues = track_report_issues(report, session.config)
+        if issues:
+            raise request_validation_error(issues)
+
+    def check_detections(self, session: LiveSession, report: DetectionReport) -> None:
+        """Checks of a detection batch that need only the config."""
+        check_report_limits(report, self.settings)
+        issues = detection_report_issues(report, session.config)
+        if issues:
+            raise request_validation_error(issues)
+
+    def _engine_for(self, session: LiveSession, sensor: str) -> tuple[SessionEngine, FusionConfig]:
+        """The engine to apply a report of ``sensor`` to (a copy with the sensor joined, if new)."""
+        known = not session.open_sensors or sensor in session.joined_sensors
+        if session.engine is not None and session.fusion is not None and known:
+            return session.engine, session.fusion
+        joined = session.joined_sensors
+        if len(joined) >= self.settings.max_sensors:
+            raise LimitExceeded(
+                "max_sensors", self.settings.max_sensors, len(joined) + 1, what="sensors"
+            )
+        fusion = fusion_config(session.config, [*joined, sensor])
+        if session.engine is None:
+            return SessionEngine(fusion), fusion
+        return SessionEngine.restore(fusion, session.engine.export()), fusion
+
+    def _apply(self, session: LiveSession, report: TrackReport, *, explain: bool) -> Step:
+        """Apply a report to the session's engine (or a copy with a new sensor); logs nothing."""
+        engine, fusion = self._engine_for(session, report.sensor)
+        core_report = core_track_report(report, session.frame)
+        try:
+            step = engine.apply(core_report, explain=explain)
+        except CoreStaleReport as stale:
+            raise StaleReport(stale.sensor, stale.time, stale.last_time) from None
+        result = dumps(step_plain(step, session.seq + 1))  # serialised once, here
+        return Step(engine=engine, fusion=fusion, result=result)
+
+    async def submit_tracks(
+        self, session: LiveSession, report: TrackReport, *, explain: bool = False
+    ) -> str:
+        """Apply one track list, log it durably, then return (and publish) its result (JSON text)."""
+        self.check_tracks(session, report)
+        async with session.lock:
+            if session.closed:
+                raise SessionNotFound(session.id)
+            with anyio.CancelScope(shield=True):
+                started = time.perf_counter()
+                size = len(report.tracks) + len(session.tracks)
+                step = await self._compute(
+                    size, functools.partial(self._apply, session, report, explain=explain)
+                )
+                self.metrics.fusion_step.labels("tracks").observe(time.perf_counter() - started)
+                received_at = datetime.now(UTC)
+                seq = session.seq + 1
+                try:
+                    await self._io(
+                        self.store.append, session.id, seq, log_input(report), received_at
+                    )
+                except BaseException:
+                    self.discard(
+                        session.id
+                    )  # the engine holds an unlogged step: rebuild on next use
+                    raise
+                session.engine, session.fusion = step.engine, step.fusion
+                session.seq = seq
+                session.last_input_at = received_at
+                session.sensor_inputs[report.sensor] = (
+                    session.sensor_inputs.get(report.sensor, 0) + 1
+                )
+                self.metrics.inputs.labels("tracks").inc()
+                if len(session.hub):
+                    session.hub.publish(result_message(step.result))
+                session.since_snapshot += 1
+                if session.since_snapshot >= self.settings.snapshot_every:
+                    await self._snapshot(session)
+        return step.result
+
+    async def _snapshot(self, session: LiveSession) -> None:
+        snapshot = Snapshot(
+            seq=session.seq, taken_at=datetime.now(UTC), state=session.snapshot_state()
+        )
+        try:
+            await self._io(self.store.save_snapshot, session.id, snapshot)
+        except Exception:
+            logger.exception("session %s: snapshot at seq %d failed", session.id, session.seq)
+        else:
+            session.since_snapshot = 0
+
+    # ------------------------------------------------------------ reads
+    async def picture(
+        self, session: LiveSession, at: float | None
+    ) -> tuple[int, float | None, list[PlainObject]]:
+        """``(seq, time, tracks)``: the live fused tracks predicted to ``at`` (default: fusion time)."""
+        async with session.lock:
+            engine = session.engine
+            if engine is None or engine.time is None:
+                return session.seq, at, []
+            views: tuple[FusedTrackView, ...] = await self._compute(
+                len(engine.tracks), functools.partial(engine.picture, at)
+            )
+            return session.seq, engine.time if at is None else at, tracks_plain(views)
+
+    async def track_detail(self, session: LiveSession, track_id: str) -> PlainObject | None:
+        """One live fused track at the fusion time with its history, or ``None``."""
+        async with session.lock:
+            engine = session.engine
+            track = next((t for t in session.tracks if t.id == track_id), None)
+            if engine is None or track is None:
+                return None
+            view = next(view for view in engine.picture() if view.id == track_id)
+            return {
+                "track": tracks_plain([view])[0],
+                "history": [{"time": time, "state": state} for time, state in track.history],
+            }
+
+
+def result_message(result: str, ref: str | None = None) -> str:
+    """A ``result`` WebSocket message around a result's JSON text (not serialised again)."""
+    return f'{{"type":"result","ref":{dumps(ref)},"result":{result}}}'

@@ -1,0 +1,265 @@
+"""Translation between the wire models (:mod:`api_schemas`) and the session engine (:mod:`core`).
+
+Config: :func:`fusion_config` turns a validated ``SessionConfig`` into the
+engine's ``FusionConfig``; what the core still refuses (a self-intersecting
+field-of-view polygon) comes back as a validation error located at the field.
+Inputs: :func:`core_track_report`. Outputs: :func:`step_plain` and
+:func:`picture_plain` give the contract's JSON shape as plain data (served
+as-is: :mod:`api_schemas.results` documents it and the tests validate it),
+with every non-finite score of a matrix as ``null``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+
+from api_schemas.associate import AssociateRequest
+from api_schemas.association import AssociationOptions
+from api_schemas.classification import ClassEvidence
+from api_schemas.config import PolygonFieldOfView, SectorFieldOfView, SensorConfig, SessionConfig
+from api_schemas.issues import FieldIssue
+from api_schemas.reports import SensorTrack, TrackReport
+from app.errors import request_validation_error
+from core.association import AssociationResult
+from core.belief import Frame, MassFunction
+from core.errors import InvalidInput, TotalConflict
+from core.fusion.classes import accumulate_likelihoods
+from core.fusion.config import FusionConfig, SensorSpec, TrackManagement
+from core.fusion.motion import MotionKind, MotionModel, StateLayout
+from core.fusion.reports import (
+    AssociationView,
+    FusedTrackView,
+    ReportedTrack,
+    StepResult,
+    step_to_plain,
+)
+from core.fusion.reports import TrackReport as CoreTrackReport
+from core.fusion.state import StateFusion
+from core.geometry import FieldOfView, PolygonView, Sector
+
+PlainObject = dict[str, Any]
+
+ENGINE_ONLY_OPTIONS = frozenset({"distance", "imm_distance"})
+"""Wire options that are not method options of the core (the distance is its own argument)."""
+
+CLASSIFICATION_KEYS = ("state", "mass", "pignistic", "belief", "plausibility", "conflict")
+NO_ASSOCIATION = AssociationView(method="", pairs=(), new=(), missed=())
+
+
+# ------------------------------------------------------------------ config
+def class_frame(classes: Sequence[str]) -> Frame | None:
+    """The class frame of a session (``None`` without classes)."""
+    return Frame(list(classes)) if classes else None
+
+
+def field_of_view(fov: SectorFieldOfView | PolygonFieldOfView) -> FieldOfView:
+    """A sensor's field of view as core geometry."""
+    if isinstance(fov, SectorFieldOfView):
+        return Sector(
+            origin=(fov.origin[0], fov.origin[1]),
+            heading_deg=fov.heading_deg,
+            half_angle_deg=fov.half_angle_deg,
+            range_min=fov.range[0],
+            range_max=fov.range[1],
+        )
+    return PolygonView(vertices=tuple((vertex[0], vertex[1]) for vertex in fov.vertices))
+
+
+def sensor_spec(sensor: SensorConfig, index: int) -> SensorSpec:
+    """One sensor; a field of view the core refuses is a validation error at ``sensors/i/fov``."""
+    try:
+        fov = None if sensor.fov is None else field_of_view(sensor.fov)
+    except InvalidInput as error:
+        raise request_validation_error(
+            [FieldIssue(("sensors", index, "fov"), str(error), None)]
+        ) from None
+    return SensorSpec(
+        id=sensor.id, reliability=sensor.reliability, p_detect=sensor.p_detect, fov=fov
+    )
+
+
+def method_options(options: AssociationOptions) -> dict[str, object]:
+    """The core method options of a resolved wire options object."""
+    return {
+        name: value
+        for name, value in options.model_dump(exclude_none=True).items()
+        if name not in ENGINE_ONLY_OPTIONS
+    }
+
+
+def fusion_config(config: SessionConfig, extra_sensors: Iterable[str] = ()) -> FusionConfig:
+    """The engine configuration of a session.
+
+    A session that configures no sensor accepts any sensor id: each one seen
+    joins as ``extra_sensors`` (default reliability and P_D, seeing everywhere).
+    """
+    layout = StateLayout(
+        dim=config.state.dim,
+        position=tuple(config.state.position),
+        velocity=tuple(config.state.velocity),
+    )
+    motion = MotionModel(layout=layout, kind=MotionKind(config.motion.model), q=config.motion.q)
+    sensors = [sensor_spec(sensor, index) for index, sensor in enumerate(config.sensors)]
+    sensors += [SensorSpec(id=sensor_id) for sensor_id in extra_sensors]
+    thresholds = config.tracking.thresholds
+    association = config.association
+    return FusionConfig(
+        motion=motion,
+        sensors=tuple(sensors),
+        classes=class_frame(config.classes),
+        association_method=association.method,
+        association_options=method_options(association.options),
+        distance=association.options.distance or "sum",
+        state_fusion=StateFusion(config.fusion.state),
+        management=TrackManagement(
+            false_confirmation=thresholds.false_confirmation,
+            true_deletion=thresholds.true_deletion,
+            termination_probability=thresholds.termination_probability,
+            min_points=thresholds.min_points,
+        ),
+    )
+
+
+# ------------------------------------------------------------------ inputs
+def class_mass(evidence: ClassEvidence, frame: Frame) -> MassFunction:
+    """Reported focal sets as a mass function on ``frame``."""
+    assert evidence.mass is not None
+    return MassFunction.from_sets(frame, [(focal.set, focal.mass) for focal in evidence.mass])
+
+
+def class_likelihoods(evidence: ClassEvidence, frame: Frame) -> np.ndarray:
+    """Reported likelihoods as an array in frame order (a class not named gets 1: no evidence)."""
+    values = evidence.likelihoods or {}
+    return np.array([values.get(label, 1.0) for label in frame.labels], dtype=np.float64)
+
+
+def reported_track(track: SensorTrack, frame: Frame | None) -> ReportedTrack:
+    """One sensor track for the engine."""
+    evidence = track.classification
+    mass = likelihoods = None
+    if evidence is not None and frame is not None:
+        if evidence.mass is not None:
+            mass = class_mass(evidence, frame)
+        else:
+            likelihoods = class_likelihoods(evidence, frame)
+    return ReportedTrack(
+        id=track.id,
+        state=np.asarray(track.state, dtype=np.float64),
+        covariance=np.asarray(track.covariance, dtype=np.float64),
+        class_mass=mass,
+        class_likelihoods=likelihoods,
+    )
+
+
+def core_track_report(report: TrackReport, frame: Frame | None) -> CoreTrackReport:
+    """A sensor's track list for the engine."""
+    return CoreTrackReport(
+        sensor=report.sensor,
+        time=report.time,
+        tracks=tuple(reported_track(track, frame) for track in report.tracks),
+    )
+
+
+# ------------------------------------------------------------------ outputs
+def finite_or_none(value: float | None) -> float | None:
+    """``value`` if it is a finite number, else ``None``."""
+    return value if value is not None and math.isfinite(value) else None
+
+
+def _classification(plain: PlainObject | None) -> PlainObject | None:
+    if plain is None:
+        return None
+    return {key: plain.get(key) for key in CLASSIFICATION_KEYS} | {"decision": plain["decision"]}
+
+
+def _track(plain: PlainObject) -> PlainObject:
+    plain["classification"] = _classification(plain["classification"])
+    return plain
+
+
+def step_plain(step: StepResult, seq: int) -> PlainObject:
+    """A step result in the contract's shape, numbered ``seq`` (the session's input number)."""
+    plain = step_to_plain(step)
+    plain["seq"] = seq
+    plain["tracks"] = [_track(track) for track in plain["tracks"]]
+    association = plain["association"]
+    for pair in association["pairs"]:
+        pair["score"] = finite_or_none(pair["score"])
+    matrix = association["matrix"]
+    if matrix is not None:
+        matrix["values"] = [[finite_or_none(value) for value in row] for row in matrix["values"]]
+    return plain
+
+
+def tracks_plain(views: Iterable[FusedTrackView]) -> list[PlainObject]:
+    """Fused tracks in the contract's shape (through ``step_to_plain``: one source of field names)."""
+    holder = StepResult(seq=0, time=0.0, sensor="", tracks=tuple(views), association=NO_ASSOCIATION)
+    return [_track(track) for track in step_to_plain(holder)["tracks"]]
+
+
+# ------------------------------------------------------- stateless associate
+def evidence_masses(tracks: Sequence[SensorTrack], frame: Frame) -> list[MassFunction]:
+    """Class masses of one side of ``POST /v1/associate`` (vacuous where a track has none)."""
+    vacuous = MassFunction.vacuous(frame)
+    masses = []
+    for track in tracks:
+        evidence = track.classification
+        if evidence is None:
+            masses.append(vacuous)
+        elif evidence.mass is not None:
+            masses.append(class_mass(evidence, frame))
+        else:
+            try:
+                masses.append(
+                    accumulate_likelihoods(None, frame, class_likelihoods(evidence, frame))[0]
+                )
+            except TotalConflict:
+                masses.append(vacuous)
+    return masses
+
+
+def side_arrays(tracks: Sequence[SensorTrack], dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """States (N × d) and covariances (N × d × d) of one side."""
+    states = np.array([track.state for track in tracks], dtype=np.float64).reshape(-1, dim)
+    covariances = np.array([track.covariance for track in tracks], dtype=np.float64).reshape(
+        -1, dim, dim
+    )
+    return states, covariances
+
+
+def associate_plain(request: AssociateRequest, result: AssociationResult) -> PlainObject:
+    """The answer of ``POST /v1/associate`` in the contract's shape."""
+    known = [track.id for track in request.known]
+    incoming = [track.id for track in request.incoming]
+    dense = result.scores.dense()
+    diagnostics = result.diagnostics
+    return {
+        "pairs": [
+            {"known": known[row], "incoming": incoming[col], "score": finite_or_none(score)}
+            for row, col, score in result.pairs
+        ],
+        "new": [incoming[int(col)] for col in result.new],
+        "missed": [known[int(row)] for row in result.missed],
+        "matrix": {
+            "rows": known,
+            "cols": incoming,
+            "values": [[finite_or_none(float(value)) for value in row] for row in dense],
+        },
+        "diagnostics": {
+            "method": result.method,
+            "score_kind": result.scores.kind,
+            "uses_classes": diagnostics.uses_classes,
+            "classes_ignored": diagnostics.classes_ignored,
+            "candidate_pairs": int(diagnostics.candidate_pairs),
+            "clusters": int(diagnostics.clusters),
+            "largest_cluster": int(diagnostics.largest_cluster),
+            "gate": finite_or_none(float(diagnostics.gate)),
+            "clipped": int(np.sum(diagnostics.clipped)),
+            "undefined": len(diagnostics.undefined),
+            "notes": "; ".join(diagnostics.notes) or None,
+        },
+    }

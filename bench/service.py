@@ -1,0 +1,347 @@
+"""The service under load on loopback: REST and WebSocket latency and throughput.
+
+Run with ``make bench`` (or ``python bench/service.py``). Two servers run as
+subprocesses on 127.0.0.1, each on uvicorn: the service (memory store, so the
+numbers are the service's own cost, not the disk's fsync) and a bare FastAPI
+app that validates the same 20-track body with the same wire model and echoes
+it. The load generator is this process. Prints a table; never asserts a time.
+Bounded: each measurement runs for a fixed number of requests or seconds.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import socket
+import statistics
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import httpx
+import numpy as np
+from fastapi import FastAPI, WebSocket
+from starlette.websockets import WebSocketDisconnect
+from websockets.asyncio.client import connect
+
+from api_schemas.reports import TrackReport
+from api_schemas.ws import client_message_adapter
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from machine import describe_machine
+
+ROOT = Path(__file__).resolve().parents[1]
+TRACKS = 20
+LATENCY_REQUESTS = 300
+THROUGHPUT_SECONDS = 3.0
+WORKERS = 8
+WS_WINDOW = 16
+"""Messages in flight on one WebSocket during the throughput run (pipelining, bounded)."""
+BIG_TRACKS = 1000
+BIG_REPEATS = 5
+START_TIMEOUT_S = 30.0
+FLOOR_REST_RATIO = 0.5
+FLOOR_WS_P50_MS = 3.0
+
+
+# ---------------------------------------------------------------- payloads
+def track_list(sensor: str, time_s: float, count: int) -> dict[str, Any]:
+    """``count`` targets on a grid, each reported by ``sensor`` at ``time_s``."""
+    rng = np.random.default_rng(int(time_s * 1000) % 2**31)
+    tracks = []
+    for index in range(count):
+        x0, y0 = 300.0 * (index % 40), 300.0 * (index // 40)
+        state = np.array([x0 + 5.0 * time_s, 5.0, y0 - 2.0 * time_s, -2.0]) + rng.normal(0, 1, 4)
+        tracks.append(
+            {
+                "id": f"t{index}",
+                "state": [round(float(v), 4) for v in state],
+                "covariance": [[4, 0, 0, 0], [0, 1, 0, 0], [0, 0, 4, 0], [0, 0, 0, 1]],
+            }
+        )
+    return {"sensor": sensor, "time": time_s, "tracks": tracks}
+
+
+def config(sensors: list[str]) -> dict[str, Any]:
+    return {
+        "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+        "sensors": [{"id": sensor} for sensor in sensors],
+    }
+
+
+# ---------------------------------------------------------------- servers
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+def bare_app() -> Any:
+    """FastAPI that validates a track list with the service's model and echoes it."""
+    app = FastAPI()
+
+    @app.post("/echo")
+    def echo(report: TrackReport) -> TrackReport:
+        return report
+
+    @app.websocket("/echo")
+    async def echo_ws(websocket: WebSocket) -> None:
+        await websocket.accept()
+        try:
+            while True:
+                message = client_message_adapter.validate_json(await websocket.receive_text())
+                await websocket.send_text(message.model_dump_json())
+        except WebSocketDisconnect:
+            return
+
+    return app
+
+
+@contextmanager
+def server(command: list[str], port: int) -> Iterator[str]:
+    process = subprocess.Popen(
+        command,
+        cwd=ROOT,
+        env=os.environ | {"CREDAL_ADMIN_TOKEN": "bench-admin-token"},
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    url = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while True:
+            try:
+                httpx.get(f"{url}/openapi.json", timeout=1)
+                break
+            except httpx.TransportError:
+                if process.poll() is not None or time.monotonic() > deadline:
+                    raise RuntimeError(f"server {command} did not start") from None
+                time.sleep(0.05)
+        yield url
+    finally:
+        process.terminate()
+        process.wait(timeout=START_TIMEOUT_S)
+
+
+def service_command(port: int) -> list[str]:
+    return [
+        sys.executable,
+        "-m",
+        "app.cli",
+        "serve",
+        "--host",
+        "127.0.0.1",
+        "--port",
+        str(port),
+        "--store",
+        "memory",
+    ]
+
+
+def bare_command(port: int) -> list[str]:
+    return [sys.executable, str(Path(__file__).resolve()), "--serve-bare", str(port)]
+
+
+# ---------------------------------------------------------------- load
+def percentiles(samples_ms: list[float]) -> tuple[float, float]:
+    ordered = sorted(samples_ms)
+    p99 = ordered[min(len(ordered) - 1, round(0.99 * (len(ordered) - 1)))]
+    return statistics.median(ordered), p99
+
+
+def rest_latency(
+    url: str, path: str, headers: dict[str, str], bodies: Callable[[int], bytes]
+) -> tuple[float, float]:
+    samples = []
+    with httpx.Client(
+        base_url=url, headers=headers | {"Content-Type": "application/json"}
+    ) as client:
+        for index in range(LATENCY_REQUESTS + 20):
+            body = bodies(index)
+            started = time.perf_counter()
+            answer = client.post(path, content=body)
+            elapsed = (time.perf_counter() - started) * 1e3
+            assert answer.status_code == 200, answer.text
+            if index >= 20:
+                samples.append(elapsed)
+    return percentiles(samples)
+
+
+async def rest_throughput_async(
+    url: str, path: str, headers: dict[str, str], bodies: Callable[[int, int], bytes]
+) -> float:
+    done = 0
+    stop = time.perf_counter() + THROUGHPUT_SECONDS
+
+    async def worker(number: int) -> None:
+        nonlocal done
+        async with httpx.AsyncClient(
+            base_url=url, headers=headers | {"Content-Type": "application/json"}
+        ) as client:
+            index = 0
+            while time.perf_counter() < stop:
+                answer = await client.post(path, content=bodies(number, index))
+                assert answer.status_code == 200, answer.text
+                index += 1
+                done += 1
+
+    started = time.perf_counter()
+    await asyncio.gather(*(worker(number) for number in range(WORKERS)))
+    return done / (time.perf_counter() - started)
+
+
+async def ws_measure(
+    url: str, headers: dict[str, str], messages: Callable[[int], str]
+) -> tuple[float, float, float]:
+    """Round-trip p50/p99 (one message at a time), then throughput with ``WS_WINDOW`` in flight."""
+    samples = []
+    async with connect(url, additional_headers=headers, max_size=None) as websocket:
+        if "echo" not in url:
+            await websocket.recv()  # ack
+        for index in range(LATENCY_REQUESTS + 20):
+            started = time.perf_counter()
+            await websocket.send(messages(index))
+            answer = json.loads(await websocket.recv())
+            elapsed = (time.perf_counter() - started) * 1e3
+            assert answer.get("type") != "error", answer
+            if index >= 20:
+                samples.append(elapsed)
+        base = LATENCY_REQUESTS + 20
+        window = asyncio.Semaphore(WS_WINDOW)
+        sent = 0
+        stop = time.perf_counter() + THROUGHPUT_SECONDS
+        started = time.perf_counter()
+
+        async def sender() -> None:
+            nonlocal sent
+            while time.perf_counter() < stop:
+                await window.acquire()
+                await websocket.send(messages(base + sent))
+                sent += 1
+
+        send_task = asyncio.create_task(sender())
+        received = 0
+        while not (send_task.done() and received >= sent):
+            await websocket.recv()
+            received += 1
+            window.release()
+        await send_task
+        rate = received / (time.perf_counter() - started)
+    p50, p99 = percentiles(samples)
+    return p50, p99, rate
+
+
+def main() -> int:
+    print(describe_machine())
+    print(f"loopback; {TRACKS}-track report; {LATENCY_REQUESTS} sequential requests for latency,")
+    print(
+        f"{WORKERS} concurrent clients for {THROUGHPUT_SECONDS:.0f} s for throughput; service on the memory store"
+    )
+    sensors = [f"s{index}" for index in range(WORKERS)]
+    service_port, bare_port = free_port(), free_port()
+    rows: list[tuple[str, float, float, float]] = []
+    with (
+        server(service_command(service_port), service_port) as service_url,
+        server(bare_command(bare_port), bare_port) as bare_url,
+    ):
+        echo = {i: json.dumps(track_list("s0", 1.0 + i, TRACKS)).encode() for i in range(2)}
+        p50, p99 = rest_latency(bare_url, "/echo", {}, lambda i: echo[i % 2])
+        rate = asyncio.run(rest_throughput_async(bare_url, "/echo", {}, lambda w, i: echo[i % 2]))
+        rows.append(("REST bare validate+echo", p50, p99, rate))
+
+        created = httpx.post(f"{service_url}/v1/sessions", json=config(sensors)).json()
+        headers = {"Authorization": f"Bearer {created['token']}"}
+        path = f"/v1/sessions/{created['id']}/tracks"
+        p50, p99 = rest_latency(
+            service_url,
+            path,
+            headers,
+            lambda i: json.dumps(track_list("s0", 1.0 + i, TRACKS)).encode(),
+        )
+        rest_p50 = p50
+        offset = LATENCY_REQUESTS + 100.0
+        rate = asyncio.run(
+            rest_throughput_async(
+                service_url,
+                path,
+                headers,
+                lambda w, i: json.dumps(
+                    track_list(sensors[w], offset + i + w / WORKERS, TRACKS)
+                ).encode(),
+            )
+        )
+        rows.append(("REST service /tracks", rest_p50, p99, rate))
+
+        ws_bare = bare_url.replace("http://", "ws://") + "/echo"
+        bare_messages = [json.dumps(track_list("s0", 1.0, TRACKS) | {"type": "tracks"})]
+        rows.append(
+            (
+                "WS bare validate+echo",
+                *asyncio.run(ws_measure(ws_bare, {}, lambda i: bare_messages[0])),
+            )
+        )
+
+        created = httpx.post(f"{service_url}/v1/sessions", json=config(sensors)).json()
+        ws_url = service_url.replace("http://", "ws://") + f"/v1/sessions/{created['id']}/stream"
+        ws_headers = {"Authorization": f"Bearer {created['token']}"}
+        rows.append(
+            (
+                "WS service stream",
+                *asyncio.run(
+                    ws_measure(
+                        ws_url,
+                        ws_headers,
+                        lambda i: json.dumps(
+                            track_list("s0", 1.0 + i, TRACKS) | {"type": "tracks"}
+                        ),
+                    )
+                ),
+            )
+        )
+
+        created = httpx.post(f"{service_url}/v1/sessions", json=config(["a", "b"])).json()
+        headers = {"Authorization": f"Bearer {created['token']}"}
+        big = []
+        with httpx.Client(base_url=service_url, headers=headers, timeout=120) as client:
+            for index in range(BIG_REPEATS + 1):
+                body = json.dumps(track_list("ab"[index % 2], 1.0 + index / 2, BIG_TRACKS)).encode()
+                started = time.perf_counter()
+                answer = client.post(
+                    f"/v1/sessions/{created['id']}/tracks",
+                    content=body,
+                    headers={"Content-Type": "application/json"},
+                )
+                assert answer.status_code == 200, answer.text[:300]
+                if index:
+                    big.append((time.perf_counter() - started) * 1e3)
+
+    print(f"{'':26} {'p50 ms':>8} {'p99 ms':>8} {'per s':>8}")
+    for name, p50, p99, rate in rows:
+        print(f"{name:26} {p50:8.2f} {p99:8.2f} {rate:8.0f}")
+    print(
+        f"{BIG_TRACKS}-track report against {BIG_TRACKS} fused tracks (REST): "
+        f"median {statistics.median(big):.0f} ms, max {max(big):.0f} ms over {BIG_REPEATS}"
+    )
+    ratio = rows[1][3] / rows[0][3]
+    print(
+        f"floor: REST throughput >= {FLOOR_REST_RATIO:.0%} of bare -> "
+        f"{'met' if ratio >= FLOOR_REST_RATIO else 'NOT met'} ({ratio:.0%}); "
+        f"WS p50 <= {FLOOR_WS_P50_MS:.0f} ms -> "
+        f"{'met' if rows[3][1] <= FLOOR_WS_P50_MS else 'NOT met'} ({rows[3][1]:.2f} ms)"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    if len(sys.argv) == 3 and sys.argv[1] == "--serve-bare":
+        import uvicorn
+
+        uvicorn.run(bare_app(), host="127.0.0.1", port=int(sys.argv[2]), log_level="warning")
+        raise SystemExit(0)
+    raise SystemExit(main())

@@ -1,0 +1,129 @@
+"""The session registry and the hub, without HTTP: restore, expiry, open sensors, fan-out."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+from datetime import UTC, datetime, timedelta
+from typing import Any
+
+from api_schemas.reports import TrackReport
+from app.hub import Hub
+from app.metrics import ServiceMetrics
+from app.sessions import SessionRegistry
+from app.stores import MemoryStore, SessionRecord
+from tests.api.conftest import make_settings
+from tests.api.scenario import reports, session_config
+
+STEPS = 9
+
+
+def registry(**settings: Any) -> SessionRegistry:
+    return SessionRegistry(MemoryStore(), make_settings(**settings), ServiceMetrics.create())
+
+
+def new_session(target: SessionRegistry, config: dict[str, Any], sid: str = "s1") -> SessionRecord:
+    record = SessionRecord(
+        id=sid, config=config, token_hash="sha256:0", created_at=datetime.now(UTC)
+    )
+    target.store.create_session(record)
+    target.add(record)
+    return record
+
+
+async def feed(target: SessionRegistry, sid: str, bodies: list[dict[str, Any]]) -> list[Any]:
+    session = await target.get(sid)
+    return [
+        json.loads(await target.submit_tracks(session, TrackReport.model_validate(body)))
+        for body in bodies
+    ]
+
+
+def test_rebuilt_session_equals_the_live_one() -> None:
+    async def scenario() -> None:
+        live = registry(snapshot_every=4)
+        new_session(live, session_config())
+        await feed(live, "s1", reports(STEPS))
+        session = await live.get("s1")
+        picture = await live.picture(session, None)
+        load = live.store.load("s1")
+        assert load.snapshot is not None and load.snapshot.seq == 8 and len(load.entries) == 1
+        live.discard("s1")  # forget it in memory: the next use rebuilds it from the store
+        rebuilt = await live.get("s1")
+        assert rebuilt is not session and rebuilt.seq == STEPS
+        assert await live.picture(rebuilt, None) == picture
+        assert rebuilt.sensor_inputs == session.sensor_inputs
+        assert rebuilt.last_input_at == session.last_input_at
+
+    asyncio.run(scenario())
+
+
+def test_session_without_sensors_accepts_any_sensor_up_to_the_limit() -> None:
+    async def scenario() -> None:
+        target = registry(max_sensors=2, snapshot_every=2)
+        config = session_config()
+        config["sensors"] = []
+        new_session(target, config)
+        results = await feed(target, "s1", reports(4))
+        assert {track["status"] for track in results[-1]["tracks"]} == {"confirmed"}
+        session = await target.get("s1")
+        assert session.sensor_ids() == ["radar-1", "radar-2"]
+        third = reports(5, sensors=["radar-1", "radar-2", "radar-3"])[2]
+        try:
+            await feed(target, "s1", [third])
+        except Exception as error:
+            assert getattr(error, "extensions", {}).get("limit") == "max_sensors"
+        else:
+            raise AssertionError("a third sensor should exceed max_sensors")
+        assert session.seq == 4
+        target.discard("s1")
+        rebuilt = await target.get("s1")
+        assert rebuilt.sensor_ids() == ["radar-1", "radar-2"]
+        assert await target.picture(rebuilt, None) == await target.picture(session, None)
+
+    asyncio.run(scenario())
+
+
+def test_idle_sessions_expire() -> None:
+    async def scenario() -> None:
+        target = registry(session_idle_seconds=60)
+        new_session(target, session_config(), "idle")
+        new_session(target, session_config(), "busy")
+        await feed(target, "busy", reports(1))
+        later = datetime.now(UTC) + timedelta(seconds=61)
+        busy = await target.get("busy")
+        busy.last_input_at = later - timedelta(seconds=5)
+        assert await target.expire_idle(later) == ["idle"]
+        assert target.store.get_session("idle") is None
+        assert target.store.get_session("busy") is not None
+
+    asyncio.run(scenario())
+
+
+def test_slow_subscriber_gets_the_latest_results_never_a_backlog() -> None:
+    async def scenario() -> None:
+        hub = Hub()
+        slow = hub.subscribe(capacity=4)
+        for seq in range(1, 101):
+            hub.publish(f"result {seq}")
+        assert slow.queue.qsize() == 4 and slow.dropped == 96
+        assert [await slow.next() for _ in range(4)] == [f"result {n}" for n in range(97, 101)]
+        hub.publish("result 101")
+        assert await slow.next() == "result 101"
+        hub.close()
+        assert await slow.next() is None and len(hub) == 0
+
+    asyncio.run(scenario())
+
+
+def test_subscriber_receives_published_results() -> None:
+    async def scenario() -> None:
+        target = registry()
+        new_session(target, session_config())
+        session = await target.get("s1")
+        subscriber = session.hub.subscribe()
+        results = await feed(target, "s1", reports(3))
+        received = [json.loads(str(await subscriber.next()))["result"] for _ in range(3)]
+        assert received == results
+
+    asyncio.run(scenario())
