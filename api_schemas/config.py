@@ -184,9 +184,16 @@ class TrackThresholds(WireModel):
 
 
 class TrackingConfig(WireModel):
-    """Local tracking of detecting sensors and track management."""
+    """Local tracking of detecting sensors and track management.
+
+    Sensors with a ``measurement`` model send detections; the session tracks
+    them with an IMM over the preset's model bank (or one constant-velocity
+    model of the session's ``motion.q`` without a preset), scans every
+    ``time_interval`` seconds (scan times are multiples of it after the first).
+    """
 
     preset: TrackingPreset | None = None
+    time_interval: PositiveFloat = 1.0
     association: LocalAssociationConfig = Field(default_factory=LocalAssociationConfig)
     thresholds: TrackThresholds = Field(default_factory=TrackThresholds)
 

@@ -63,9 +63,9 @@ plus `type` and an optional `ref`); the server answers each with exactly one
 `error` that names the problem (field paths in `problem.errors`) and the
 client's `ref`; the connection stays open.
 
-This version does not run local trackers yet: a valid `detections` message
-is answered with an `error` whose problem has status 501 (`not-implemented`);
-an invalid one gets the validation `error` as usual.
+A `detections` message runs the sensor's local tracker (the sensor needs a
+`measurement` model in the session config) and then the fusion step, like
+`POST …/detections`.
 
 `subscribe`: after the `ack` (its `seq` is the session's latest input), the
 server sends every later `result` of the session, in order, with `ref` null.

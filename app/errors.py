@@ -120,14 +120,6 @@ class StaleReport(Conflict):
         )
 
 
-class NotAvailableYet(ServiceError):  # noqa: N818 - HTTP vocabulary
-    """A documented part of the API that this version does not serve yet."""
-
-    status = HTTPStatus.NOT_IMPLEMENTED
-    slug = "not-implemented"
-    title = "Not available yet"
-
-
 class TrackNotFound(ServiceError):  # noqa: N818 - HTTP vocabulary
     """The session has no live fused track with this id."""
 
@@ -368,7 +360,6 @@ PROBLEM_STATUSES: dict[int, str] = {
     413: "Body too large",
     422: "Invalid request (every invalid field is listed in `errors`) or a limit exceeded",
     429: "Too many sessions",
-    501: "Not available yet in this version",
 }
 
 

@@ -44,11 +44,12 @@ from app.limits import check_report_limits
 from app.live_session import LiveSession, new_session, restore_snapshot
 from app.metrics import ServiceMetrics
 from app.responses import dumps
-from app.session_log import log_input
+from app.session_log import event_from_entry, log_input
 from app.settings import Settings
 from app.stores import MemoryStore, SessionLoad, SessionRecord, Snapshot, Store
 from app.translate import (
     PlainObject,
+    core_detection_report,
     core_track_report,
     fusion_config,
     step_plain,
@@ -152,21 +153,13 @@ class SessionRegistry:
         if load.snapshot is not None:
             restore_snapshot(session, load.snapshot)
         for entry in load.entries:
-            if entry.input.get("type") == "tracks":
-                report = TrackReport.model_validate(entry.input["report"])
-                try:
-                    step = self._apply(session, report, explain=False)
-                except Exception:
-                    logger.exception("session %s: replay of input %d failed", record.id, entry.seq)
-                else:
-                    session.engine, session.fusion = step.engine, step.fusion
+            event = event_from_entry(entry)
+            try:
+                step = self._apply(session, event.report, explain=False)
+            except Exception:
+                logger.exception("session %s: replay of input %d failed", record.id, entry.seq)
             else:
-                logger.warning(
-                    "session %s: input %d (%s) cannot be replayed yet",
-                    record.id,
-                    entry.seq,
-                    entry.input.get("type"),
-                )
+                session.engine, session.fusion = step.engine, step.fusion
             sensor = str(entry.input.get("report", {}).get("sensor", ""))
             session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
             session.seq = entry.seq
@@ -257,12 +250,18 @@ class SessionRegistry:
             return SessionEngine(fusion), fusion
         return SessionEngine.restore(fusion, session.engine.export()), fusion
 
-    def _apply(self, session: LiveSession, report: TrackReport, *, explain: bool) -> Step:
-        """Apply a report to the session's engine (or a copy with a new sensor); logs nothing."""
+    def _apply(
+        self, session: LiveSession, report: TrackReport | DetectionReport, *, explain: bool
+    ) -> Step:
+        """Apply an input to the session's engine (or a copy with a new sensor); logs nothing."""
         engine, fusion = self._engine_for(session, report.sensor)
-        core_report = core_track_report(report, session.frame)
         try:
-            step = engine.apply(core_report, explain=explain)
+            if isinstance(report, TrackReport):
+                step = engine.apply(core_track_report(report, session.frame), explain=explain)
+            else:
+                step = engine.apply_detections(
+                    core_detection_report(report, session.config), explain=explain
+                )
         except CoreStaleReport as stale:
             raise StaleReport(stale.sensor, stale.time, stale.last_time) from None
         result = dumps(step_plain(step, session.seq + 1))  # serialised once, here
@@ -273,16 +272,35 @@ class SessionRegistry:
     ) -> str:
         """Apply one track list, log it durably, then return (and publish) its result (JSON text)."""
         self.check_tracks(session, report)
+        return await self._submit(session, report, len(report.tracks), explain=explain)
+
+    async def submit_detections(
+        self, session: LiveSession, report: DetectionReport, *, explain: bool = False
+    ) -> str:
+        """Apply one detection batch (local tracker, then fusion), log it, return its result."""
+        self.check_detections(session, report)
+        return await self._submit(session, report, len(report.detections), explain=explain)
+
+    async def _submit(
+        self,
+        session: LiveSession,
+        report: TrackReport | DetectionReport,
+        items: int,
+        *,
+        explain: bool,
+    ) -> str:
+        """Under the session lock: apply, log durably, then publish and return the result."""
+        kind = "tracks" if isinstance(report, TrackReport) else "detections"
         async with session.lock:
             if session.closed:
                 raise SessionNotFound(session.id)
             with anyio.CancelScope(shield=True):
                 started = time.perf_counter()
-                size = len(report.tracks) + len(session.tracks)
+                size = items + len(session.tracks)
                 step = await self._compute(
                     size, functools.partial(self._apply, session, report, explain=explain)
                 )
-                self.metrics.fusion_step.labels("tracks").observe(time.perf_counter() - started)
+                self.metrics.fusion_step.labels(kind).observe(time.perf_counter() - started)
                 received_at = datetime.now(UTC)
                 seq = session.seq + 1
                 try:
@@ -300,7 +318,7 @@ class SessionRegistry:
                 session.sensor_inputs[report.sensor] = (
                     session.sensor_inputs.get(report.sensor, 0) + 1
                 )
-                self.metrics.inputs.labels("tracks").inc()
+                self.metrics.inputs.labels(kind).inc()
                 if len(session.hub):
                     session.hub.publish(result_message(step.result))
                 session.since_snapshot += 1

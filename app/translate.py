@@ -22,7 +22,7 @@ from api_schemas.association import AssociationOptions
 from api_schemas.classification import ClassEvidence
 from api_schemas.config import PolygonFieldOfView, SectorFieldOfView, SensorConfig, SessionConfig
 from api_schemas.issues import FieldIssue
-from api_schemas.reports import SensorTrack, TrackReport
+from api_schemas.reports import DetectionReport, SensorTrack, TrackReport
 from app.errors import request_validation_error
 from core.association import AssociationResult
 from core.belief import Frame, MassFunction
@@ -37,9 +37,13 @@ from core.fusion.reports import (
     StepResult,
     step_to_plain,
 )
+from core.fusion.reports import DetectionReport as CoreDetectionReport
 from core.fusion.reports import TrackReport as CoreTrackReport
 from core.fusion.state import StateFusion
 from core.geometry import FieldOfView, PolygonView, Sector
+from core.lifecycle import ScoreModel
+from core.tracking.config import ClassificationOptions, LocalTrackerConfig
+from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
 
 PlainObject = dict[str, Any]
 
@@ -69,7 +73,7 @@ def field_of_view(fov: SectorFieldOfView | PolygonFieldOfView) -> FieldOfView:
     return PolygonView(vertices=tuple((vertex[0], vertex[1]) for vertex in fov.vertices))
 
 
-def sensor_spec(sensor: SensorConfig, index: int) -> SensorSpec:
+def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> SensorSpec:
     """One sensor; a field of view the core refuses is a validation error at ``sensors/i/fov``."""
     try:
         fov = None if sensor.fov is None else field_of_view(sensor.fov)
@@ -78,7 +82,50 @@ def sensor_spec(sensor: SensorConfig, index: int) -> SensorSpec:
             [FieldIssue(("sensors", index, "fov"), str(error), None)]
         ) from None
     return SensorSpec(
-        id=sensor.id, reliability=sensor.reliability, p_detect=sensor.p_detect, fov=fov
+        id=sensor.id,
+        reliability=sensor.reliability,
+        p_detect=sensor.p_detect,
+        fov=fov,
+        tracker=local_tracker_config(config, sensor, fov),
+    )
+
+
+def local_tracker_config(
+    config: SessionConfig, sensor: SensorConfig, fov: FieldOfView | None
+) -> LocalTrackerConfig | None:
+    """The local tracker of a sensor that sends detections (it has a measurement model)."""
+    if sensor.measurement is None:
+        return None
+    tracking = config.tracking
+    interval = tracking.time_interval
+    r = tuple(tuple(float(x) for x in row) for row in sensor.measurement.r)
+    bank = None
+    if tracking.preset is None:
+        bank = ModelBank(
+            models=(constant_velocity(interval, config.motion.q),),
+            measurement=LinearMeasurementModel.position(1.0),
+            mode_transition=np.ones((1, 1)),
+        )
+    options = tracking.association.options
+    thresholds = tracking.thresholds
+    return LocalTrackerConfig(
+        preset=tracking.preset or "aircraft",
+        time_interval=interval,
+        bank=bank,
+        measurement_noise=r,
+        association_method=tracking.association.method,
+        association_options=method_options(options),
+        imm_distance=options.imm_distance or "closest_model",
+        score=ScoreModel(
+            p_detect=sensor.p_detect,
+            false_confirmation=thresholds.false_confirmation,
+            true_deletion=thresholds.true_deletion,
+        ),
+        termination_probability=thresholds.termination_probability,
+        min_points=thresholds.min_points,
+        fields_of_view={sensor.id: fov},
+        classification=ClassificationOptions() if config.classes else None,
+        id_prefix=f"{sensor.id}:",
     )
 
 
@@ -103,7 +150,7 @@ def fusion_config(config: SessionConfig, extra_sensors: Iterable[str] = ()) -> F
         velocity=tuple(config.state.velocity),
     )
     motion = MotionModel(layout=layout, kind=MotionKind(config.motion.model), q=config.motion.q)
-    sensors = [sensor_spec(sensor, index) for index, sensor in enumerate(config.sensors)]
+    sensors = [sensor_spec(sensor, index, config) for index, sensor in enumerate(config.sensors)]
     sensors += [SensorSpec(id=sensor_id) for sensor_id in extra_sensors]
     thresholds = config.tracking.thresholds
     association = config.association
@@ -165,6 +212,22 @@ def core_track_report(report: TrackReport, frame: Frame | None) -> CoreTrackRepo
 
 
 # ------------------------------------------------------------------ outputs
+def core_detection_report(report: DetectionReport, config: SessionConfig) -> CoreDetectionReport:
+    """Wire detections as the core's: measurements (m × q) and, when any detection gives its
+    own ``r``, one R per detection (the sensor's ``measurement.r`` for the others)."""
+    dim = len(report.detections[0].z) if report.detections else 2
+    measurements = np.array([d.z for d in report.detections], dtype=np.float64).reshape(-1, dim)
+    if all(detection.r is None for detection in report.detections):
+        return CoreDetectionReport(report.sensor, report.time, measurements, None)
+    sensor = next((s for s in config.sensors if s.id == report.sensor), None)
+    default = None if sensor is None or sensor.measurement is None else sensor.measurement.r
+    covariances = np.array(
+        [detection.r if detection.r is not None else default for detection in report.detections],
+        dtype=np.float64,
+    )
+    return CoreDetectionReport(report.sensor, report.time, measurements, covariances)
+
+
 def finite_or_none(value: float | None) -> float | None:
     """``value`` if it is a finite number, else ``None``."""
     return value if value is not None and math.isfinite(value) else None

@@ -11,7 +11,6 @@ from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
 from app.deps import LiveSessionDep, RegistryDep
 from app.errors import (
-    NotAvailableYet,
     TrackNotFound,
     problem_responses,
 )
@@ -47,23 +46,25 @@ async def submit_tracks(
 @router.post(
     "/{sid}/detections",
     response_model=StepResult,
-    responses=problem_responses(401, 403, 404, 413, 422, 501),
+    responses=problem_responses(401, 403, 404, 409, 413, 422),
 )
 async def submit_detections(
-    report: DetectionReport, session: LiveSessionDep, registry: RegistryDep
-) -> PlainJSONResponse:
-    """One sensor's detections → the fused result (this version answers 501: see below).
+    report: DetectionReport,
+    session: LiveSessionDep,
+    registry: RegistryDep,
+    explain: Annotated[bool, Query(description="add the association score matrix")] = False,
+) -> JSONTextResponse:
+    """One sensor's detections → the fused result of that step.
 
-    The body is validated as documented (422 naming the field, as a track
-    list would be); a valid one is answered with ``501 not-implemented``
-    until the session runs local trackers.
+    The session's local tracker for that sensor (configured by its
+    ``measurement`` model and ``tracking``) updates its tracks; its confirmed
+    tracks updated by this scan enter the fusion step like a track list.
+    409 ``stale-report`` when the batch is not newer than the sensor's
+    previous input; 422 for a sensor without a measurement model or a time
+    off the tracker's ``time_interval`` grid.
     """
-    registry.check_detections(session, report)
-    raise NotAvailableYet(
-        "detections need the local tracker, which this version does not run yet; "
-        "post the sensor's track list to …/tracks instead",
-        session=session.id,
-    )
+    result = await registry.submit_detections(session, report, explain=explain)
+    return JSONTextResponse(result)
 
 
 @router.get(

@@ -27,10 +27,10 @@ from pydantic import ValidationError
 from starlette.websockets import WebSocketDisconnect
 
 from api_schemas.problem import Problem
-from api_schemas.reports import TrackReport
+from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.ws import DetectionsMessage, client_message_adapter
 from app.deps import open_record
-from app.errors import NotAvailableYet, ServiceError, Unauthorized, problem_for, problem_response
+from app.errors import ServiceError, Unauthorized, problem_for, problem_response
 from app.live_session import LiveSession
 from app.responses import dumps
 from app.sessions import SessionRegistry, result_message
@@ -122,16 +122,15 @@ async def _answer(session: LiveSession, registry: SessionRegistry, text: str, pa
     ref = message.ref
     try:
         if isinstance(message, DetectionsMessage):
-            registry.check_detections(session, message)
-            raise NotAvailableYet(
-                "detections need the local tracker, which this version does not run yet; "
-                "send the sensor's track list ('type': 'tracks') instead",
-                session=session.id,
+            detections = DetectionReport.model_construct(
+                sensor=message.sensor, time=message.time, detections=message.detections
             )
-        report = TrackReport.model_construct(
-            sensor=message.sensor, time=message.time, tracks=message.tracks
-        )
-        result = await registry.submit_tracks(session, report)
+            result = await registry.submit_detections(session, detections)
+        else:
+            report = TrackReport.model_construct(
+                sensor=message.sensor, time=message.time, tracks=message.tracks
+            )
+            result = await registry.submit_tracks(session, report)
     except Exception as error:  # every failure is answered; the connection stays open
         return _error(problem_for(error, path), ref)
     return result_message(result, ref)

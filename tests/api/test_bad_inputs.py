@@ -239,15 +239,14 @@ ROWS = [
         slug="track-not-found",
     ),
     Row(
-        "detections are not served yet",
-        501,
+        "detections from a sensor that sends track lists (no measurement model)",
+        422,
         body={
             "sensor": "radar-1",
             "time": 14.0,
             "detections": [{"z": [1.0, 2.0], "r": [[1, 0], [0, 1]]}],
         },
         path="/v1/sessions/{sid}/detections",
-        slug="not-implemented",
     ),
     Row(
         "detection z of 3 in a 2-position session",

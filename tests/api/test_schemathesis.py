@@ -24,7 +24,6 @@ from tests.api.conftest import LiveServer, make_settings, serving
 from tests.api.scenario import session_config, track_report
 
 EXAMPLES_PER_OPERATION = 25
-NOT_SERVED_YET = "/v1/sessions/{sid}/detections"
 
 schema = schemathesis.openapi.from_dict(create_app(make_settings()).openapi())
 
@@ -65,8 +64,5 @@ def test_no_server_error_and_answers_match_the_schema(
         case.path_parameters["sid"] = sid
         case.headers = {**(case.headers or {}), **headers}
     response = case.call(base_url=live.url)
-    if case.operation.path == NOT_SERVED_YET and response.status_code == 501:
-        assert response.json()["type"].endswith(":not-implemented")
-    else:
-        assert response.status_code < 500, response.text
+    assert response.status_code < 500, response.text
     case.validate_response(response, checks=[response_schema_conformance, content_type_conformance])
