@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Literal, get_args
 
 import numpy as np
@@ -99,13 +100,19 @@ class DistanceModel:
         return 2.0 if self.covariance == "mean" else 1.0
 
 
+@lru_cache(maxsize=512)
+def chi2_quantile(probability: float, dimension: int) -> float:
+    """``chi2.ppf(p, q)``, cached: gates are asked for at every step with the same few values."""
+    return float(chi2.ppf(probability, dimension))
+
+
 def threshold_from_probability(probability: float, dimension: int, model: DistanceModel) -> float:
     """T with P(D ≤ T) = probability for a true pair (ALGORITHMS.md §3.1).
 
     ``chi2.ppf(p, q)``, doubled for the ``mean`` covariance whose C is halved.
     The modified distance is ≥ D, so the same T is a (tighter) gate there.
     """
-    return float(model.chi2_scale * chi2.ppf(probability, dimension))
+    return model.chi2_scale * chi2_quantile(probability, dimension)
 
 
 @dataclass(frozen=True, eq=False)

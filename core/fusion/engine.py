@@ -40,12 +40,11 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.stats import chi2
 
 from core.arrays import BoolArray, FloatArray, IntArray
 from core.association import associate
 from core.belief import MassFunction
-from core.distance import Estimates
+from core.distance import Estimates, chi2_quantile
 from core.distance.cholesky import quadratic_form_and_log_det
 from core.errors import InvalidInput, StaleReport, TotalConflict
 from core.fusion.classes import ClassAssessment, accumulate_likelihoods, fuse_sensor_classes
@@ -109,7 +108,7 @@ class SessionEngine:
         }
         layout = config.motion.layout
         self._position = np.asarray(layout.position, dtype=np.int64)
-        self._gate = float(chi2.ppf(config.management.gate_probability, len(layout.position)))
+        self._gate = chi2_quantile(config.management.gate_probability, len(layout.position))
 
     # ------------------------------------------------------------ the step
     def apply(self, report: TrackReport, *, explain: bool = False) -> StepResult:
@@ -249,25 +248,43 @@ class SessionEngine:
 
     # ------------------------------------------------------- prediction
     def _fused_at(self, tracks: list[FusedTrack], time: float) -> tuple[FloatArray, FloatArray]:
-        """The fused state of every track at ``time``: its sensors' estimates predicted and fused."""
+        """The fused state of every track at ``time``: its sensors' estimates predicted and fused.
+
+        Each track caches its result until one of its estimates changes
+        (:meth:`FusedTrack.set_estimate`), so the several looks of one step
+        at the same time cost one computation per track.
+        """
         dim = self.config.dim
-        if not tracks:
-            return np.zeros((0, dim)), np.zeros((0, dim, dim))
-        width = max(len(track.estimates) for track in tracks)
-        states = np.zeros((len(tracks), width, dim))
-        covariances = np.broadcast_to(np.eye(dim), (len(tracks), width, dim, dim)).copy()
-        present = np.zeros((len(tracks), width), dtype=bool)
-        times = np.zeros((len(tracks), width))
+        fused = np.zeros((len(tracks), dim))
+        fused_cov = np.zeros((len(tracks), dim, dim))
+        missing = []
         for row, track in enumerate(tracks):
+            cached = track.cached_fusion(time)
+            if cached is None:
+                missing.append(row)
+            else:
+                fused[row], fused_cov[row] = cached
+        if not missing:
+            return fused, fused_cov
+        todo = [tracks[row] for row in missing]
+        width = max(len(track.estimates) for track in todo)
+        states = np.zeros((len(todo), width, dim))
+        covariances = np.broadcast_to(np.eye(dim), (len(todo), width, dim, dim)).copy()
+        present = np.zeros((len(todo), width), dtype=bool)
+        times = np.zeros((len(todo), width))
+        for row, track in enumerate(todo):
             for slot, estimate in enumerate(track.estimates.values()):
                 states[row, slot] = estimate.state
                 covariances[row, slot] = estimate.covariance
                 present[row, slot] = True
                 times[row, slot] = estimate.time
         predicted, predicted_cov = self.config.motion.predict(states, covariances, time - times)
-        fused, fused_cov, _ = fuse_estimates(
+        computed, computed_cov, _ = fuse_estimates(
             predicted, predicted_cov, present, times, self.config.state_fusion
         )
+        for k, (row, track) in enumerate(zip(missing, todo, strict=True)):
+            fused[row], fused_cov[row] = computed[k], computed_cov[k]
+            track.fused_cache = (time, track.revision, computed[k], computed_cov[k])
         return fused, fused_cov
 
     # ------------------------------------------------------- association
@@ -351,7 +368,7 @@ class SessionEngine:
         distance, _ = _mahalanobis(
             incoming.states[cols] - states[rows], incoming.covariances[cols] + covariances[rows]
         )
-        gate = float(chi2.ppf(CONTINUITY_GATE_PROBABILITY, self.config.dim))
+        gate = chi2_quantile(CONTINUITY_GATE_PROBABILITY, self.config.dim)
         return {int(c): int(r) for c, r, d in zip(cols, rows, distance, strict=True) if d <= gate}
 
     def _association_classes(
@@ -409,12 +426,15 @@ class SessionEngine:
         fused.score = min(fused.score + increment, self.config.management.score_ceiling)
         fused.hits += 1
         previous = fused.estimates.get(report.sensor)
-        fused.estimates[report.sensor] = SensorEstimate(
-            track=reported.id,
-            time=report.time,
-            state=reported.state.copy(),
-            covariance=reported.covariance.copy(),
-            class_mass=self._class_evidence(reported, previous),
+        fused.set_estimate(
+            report.sensor,
+            SensorEstimate(
+                track=reported.id,
+                time=report.time,
+                state=reported.state.copy(),
+                covariance=reported.covariance.copy(),
+                class_mass=self._class_evidence(reported, previous),
+            ),
         )
         fused.empty_gate_probability = 1.0
         if fused.status is TrackStatus.COASTING:
@@ -496,12 +516,15 @@ class SessionEngine:
             score=self.config.management.score_model(sensor.p_detect).initial,
         )
         self.next_number += 1
-        fused.estimates[report.sensor] = SensorEstimate(
-            track=reported.id,
-            time=report.time,
-            state=reported.state.copy(),
-            covariance=reported.covariance.copy(),
-            class_mass=self._class_evidence(reported, None),
+        fused.set_estimate(
+            report.sensor,
+            SensorEstimate(
+                track=reported.id,
+                time=report.time,
+                state=reported.state.copy(),
+                covariance=reported.covariance.copy(),
+                class_mass=self._class_evidence(reported, None),
+            ),
         )
         self._maybe_confirm(fused)
         return fused
@@ -592,7 +615,8 @@ class SessionEngine:
             keeper, newcomer = keepers[row], newcomers[col]
             if set(keeper.estimates) & set(newcomer.estimates):
                 continue  # a sensor that reports both as distinct objects knows better
-            keeper.estimates.update(newcomer.estimates)
+            for sensor_id, estimate in newcomer.estimates.items():
+                keeper.set_estimate(sensor_id, estimate)
             if keeper.status is not TrackStatus.CONFIRMED:
                 keeper.status, keeper.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
             keeper.phantom_since = None

@@ -90,9 +90,23 @@ class MotionModel:
     def predict(
         self, states: FloatArray, covariances: FloatArray, dt: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
-        """x ← F x, P ← F P Fᵀ + Q for every estimate, each with its own Δt."""
-        transition, noise = self.matrices(dt)
-        predicted = np.einsum("...ij,...j->...i", transition, states)
-        covariance = transition @ covariances @ np.swapaxes(transition, -1, -2) + noise
-        covariance = (covariance + np.swapaxes(covariance, -1, -2)) / 2.0
+        """x ← F x, P ← F P Fᵀ + Q for every estimate, each with its own Δt.
+
+        Raises
+        ------
+        InvalidInput
+            The prediction is not finite (a time so far from the estimates, or a
+            ``q`` so large, that the numbers overflow): the time is refused.
+        """
+        with np.errstate(over="ignore", invalid="ignore"):
+            transition, noise = self.matrices(dt)
+            predicted = np.einsum("...ij,...j->...i", transition, states)
+            covariance = transition @ covariances @ np.swapaxes(transition, -1, -2) + noise
+            covariance = (covariance + np.swapaxes(covariance, -1, -2)) / 2.0
+        if not (np.all(np.isfinite(predicted)) and np.all(np.isfinite(covariance))):
+            horizon = float(np.max(np.abs(dt))) if np.size(dt) else 0.0
+            raise InvalidInput(
+                f"time: predicting the tracks over {horizon:.6g} s overflows; "
+                "give a time closer to the session's"
+            )
         return np.asarray(predicted, dtype=np.float64), np.asarray(covariance, dtype=np.float64)

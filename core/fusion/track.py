@@ -60,6 +60,8 @@ class FusedTrack:
     empty_gate_probability : [HZ] §4.2 product while coasting (1 otherwise).
     phantom_since : when it entered a blind zone or occlusion (None otherwise).
     history : recent (time, fused state) pairs, oldest first.
+    revision, fused_cache : the fused state last computed, valid while no
+        estimate changed (not exported: derived data).
     """
 
     id: str
@@ -71,6 +73,22 @@ class FusedTrack:
     empty_gate_probability: float = 1.0
     phantom_since: float | None = None
     history: list[tuple[float, list[float]]] = field(default_factory=list)
+    revision: int = field(default=0, compare=False)
+    fused_cache: tuple[float, int, FloatArray, FloatArray] | None = field(
+        default=None, compare=False, repr=False
+    )
+
+    def set_estimate(self, sensor: str, estimate: SensorEstimate) -> None:
+        """Record a sensor's latest estimate (and forget the cached fused state)."""
+        self.estimates[sensor] = estimate
+        self.revision += 1
+
+    def cached_fusion(self, time: float) -> tuple[FloatArray, FloatArray] | None:
+        """The fused state at ``time`` if it was computed from the current estimates."""
+        cache = self.fused_cache
+        if cache is None or cache[0] != time or cache[1] != self.revision:
+            return None
+        return cache[2], cache[3]
 
     @property
     def number(self) -> int:

@@ -232,6 +232,27 @@ ROWS = [
         params={"time": "nan"},
     ),
     Row(
+        "prediction time too far to predict to (overflow)",
+        422,
+        method="GET",
+        params={"time": "1e200"},
+    ),
+    Row(
+        "report time too far from the fused tracks (overflow)",
+        422,
+        body={
+            "sensor": "radar-2",
+            "time": 1e200,
+            "tracks": [
+                {
+                    "id": "x",
+                    "state": [0, 0, 0, 0],
+                    "covariance": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]],
+                }
+            ],
+        },
+    ),
+    Row(
         "unknown fused track",
         404,
         method="GET",

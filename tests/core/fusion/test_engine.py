@@ -324,3 +324,14 @@ def test_a_track_hidden_behind_another_is_not_penalised(radius: float, penalised
     engine.apply(report("s2", 1.5, ("x", a)))  # s2 sees A only
     after = {track.id: track.score for track in engine.tracks}
     assert (after["F2"] < before["F2"]) is penalised
+
+
+def test_a_time_too_far_to_predict_to_is_refused_and_changes_nothing() -> None:
+    engine = SessionEngine(make_config(["s1", "s2"]))
+    engine.apply(report("s1", 1.0, ("a", moving(0.0, 1.0))))
+    before = json.dumps(engine.export())
+    with pytest.raises(InvalidInput, match=r"time: predicting the tracks over .* overflows"):
+        engine.picture(1e200)
+    with pytest.raises(InvalidInput, match="overflows"):
+        engine.apply(report("s2", 1e200, ("b", moving(0.0, 1.0))))
+    assert json.dumps(engine.export()) == before
