@@ -165,8 +165,8 @@ def test_modified_distance_prevents_observation_stealing() -> None:
     vehicle 1. With the plain distance it steals as soon as D_A = E/u < D_B
     (E = d²/S_ss ≈ 49/0.129 = 381, u its size against the steady state): the
     per-scan chance is exp(−E/2u), 39 % at u = 200. With the modified distance
-    the same comparison uses v(u) instead of u (exp(−E/2v) = 0.4 % at u = 200,
-    v = 35), and its gate D_mod ≤ 13.8 excludes vehicle 1's detections while
+    the same comparison uses v(u) instead of u (exp(−E/2v) = 0.5 % at u = 200,
+    v = 36), and its gate D_mod ≤ 13.8 excludes vehicle 1's detections while
     v < E/13.8 = 28 (u < 90). Measured: plain steals in 11 of 12 seeds, 140
     detections in all (first steal between steps 98 and 141); modified 1
     detection (seed 4, step 156). With the default termination strategy the
