@@ -8,7 +8,8 @@ the same tracks with the same measurements. Prints the machine. Floor
 Then one full :class:`~core.tracking.tracker.LocalTracker` scan (predict,
 closest-model gating, GNN, update, score, life cycle, initiation) on the same
 numbers of well-separated confirmed aircraft, with and without the credal
-classification (its per-track belief-function loop is the cost that grows).
+classification (:class:`~core.classification.batched.BatchedCredalClassifier`,
+dense masses vectorised over tracks). The floor holds for both columns.
 
 Run: ``.venv/bin/python bench/tracking.py`` (or ``make bench``).
 """
@@ -138,7 +139,7 @@ def tracker_table(rng: np.random.Generator) -> None:
     print("one LocalTracker scan (13-model aircraft IMM, gnn, closest model), median ms")
     print(f"{'tracks':>7} {'no classes':>11} {'credal':>10} {'per track (µs)':>15}")
     warm, timed = 6, 10
-    kinematic_1000 = float("nan")
+    kinematic_1000 = credal_1000 = float("nan")
     for tracks in TRACK_COUNTS:
         scans = _tracker_scans(rng, tracks, warm + timed)
         row = []
@@ -157,13 +158,14 @@ def tracker_table(rng: np.random.Generator) -> None:
                 raise SystemExit(f"bench setup: {confirmed} of {tracks} tracks confirmed")
             row.append(statistics.median(samples))
         if tracks == 1000:
-            kinematic_1000 = row[0]
+            kinematic_1000, credal_1000 = row
         print(f"{tracks:>7} {row[0]:>11.2f} {row[1]:>10.2f} {1e3 * row[0] / tracks:>15.1f}")
-    verdict = "meets" if kinematic_1000 <= FLOOR_MS else "MISSES"
-    print(
-        f"floor: 1000 tracks <= {FLOOR_MS:.0f} ms per tracker scan (no classes) -> "
-        f"{verdict} ({kinematic_1000:.2f} ms)"
-    )
+    for label, value in (("no classes", kinematic_1000), ("credal classes", credal_1000)):
+        verdict = "meets" if value <= FLOOR_MS else "MISSES"
+        print(
+            f"floor: 1000 tracks <= {FLOOR_MS:.0f} ms per tracker scan ({label}) -> "
+            f"{verdict} ({value:.2f} ms)"
+        )
 
 
 if __name__ == "__main__":

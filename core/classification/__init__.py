@@ -1,5 +1,6 @@
 """Kinematic classification of tracks: credal ([MTT] §5.2) and Bayesian baseline (§5.1)."""
 
+from core.classification.batched import BatchedCredalClassifier, CredalBatch
 from core.classification.bayesian import (
     BayesianClassification,
     BayesianClassifier,
@@ -9,9 +10,11 @@ from core.classification.behaviours import BehaviourModels
 from core.classification.credal import CredalClassification, CredalClassifier
 
 __all__ = [
+    "BatchedCredalClassifier",
     "BayesianClassification",
     "BayesianClassifier",
     "BehaviourModels",
+    "CredalBatch",
     "CredalClassification",
     "CredalClassifier",
     "class_given_behaviour",

@@ -20,6 +20,11 @@ step's conflict is total (``1 − K_k ≤ 1e-12``) the state becomes
 the conjunctive rule that state is absorbing, as in [MTT] Fig 20;
 ``discount="cumulative"`` can leave it (discounting m(∅) = 1 gives mass to Ω).
 
+This is the reference implementation (a Python loop over sparse
+:class:`~core.belief.MassFunction` objects); the tracker runs
+:class:`~core.classification.batched.BatchedCredalClassifier`, which computes
+the same on dense arrays for all tracks at once.
+
 Tracks without a measurement this step (coasting) receive no evidence: their
 mass does not change. ([MTT] §6.1.3 feeds the coasting track its predicted
 measurement, which leaves the behaviour likelihoods "still constant"; a

@@ -3,7 +3,7 @@
 from core.simulation.aircraft import aircraft_scenario
 from core.simulation.nearby import close_pair_scenario, crossing_scenario
 from core.simulation.pedestrian import pedestrian_scenario
-from core.simulation.road import accelerating_scenario, overtaking_scenario
+from core.simulation.road import accelerating_scenario, overtaking_scenario, stealing_scenario
 from core.simulation.scenario import CLUTTER, Manoeuvre, Region, Scan, Scenario, TargetTruth
 from core.simulation.two_class import ClassifiedTrackListScenario, t2t_two_class
 
@@ -36,5 +36,6 @@ __all__ = [
     "crossing_scenario",
     "overtaking_scenario",
     "pedestrian_scenario",
+    "stealing_scenario",
     "t2t_two_class",
 ]

@@ -1,4 +1,4 @@
-"""Road scenes of [HZ] §6: ``accelerating`` (Fig 5) and ``overtaking`` (Fig 6).
+"""Road scenes of [HZ] §6: ``accelerating`` (Fig 5), its ``stealing`` variant, ``overtaking`` (Fig 6).
 
 Coordinates are relative to our vehicle: x lateral (m, right positive), y
 ahead (m). ΔT = 0.1 s. Truth by [MTT] eq 24 (piecewise constant
@@ -12,6 +12,16 @@ accelerations) with a small process noise; detections with R = 0.1 I.
     the expected maximum acceleration for the tracker"). Poisson clutter of
     mean ``clutter_rate`` (3, as in [HZ]) per frame, uniform over the sensor's
     area.
+``stealing`` (:func:`stealing_scenario`)
+    The ``accelerating`` scene with vehicle 1 two lanes to
+    the left (x = −5.25, 7 m from vehicle 2), no clutter and 160 steps. The
+    track of vehicle 2 loses lock early in the acceleration (a constant
+    velocity filter with σ_a ≈ 1 m/s² cannot follow 6 m/s²) and coasts on at
+    its last velocity, level with vehicle 1, while its covariance grows: the
+    lost, large-gated event e₁ of [HZ] §3.1 Fig 1 next to the well-localised
+    e₂. False alarms would reset the lost track's covariance at every hit
+    (the "false alarm random walk" of [HZ] Fig 5b), so the scene has none, to
+    show the stealing itself.
 ``overtaking``
     A rear sensor sees ``y ∈ [−40, −5]`` and a front sensor ``y ∈ [5, 60]``
     (both ``x ∈ [−10, 10]``); ``|y| < 5`` beside us is the blind zone.
@@ -61,11 +71,33 @@ def accelerating_scenario(
     n_steps: int = 80,
     acceleration: float = 6.0,
     clutter_rate: float = 3.0,
+    manoeuvre_step: int = 40,
+    lead: float = 0.0,
+    speeds: tuple[float, float] = (1.0, 0.5),
+    lanes: tuple[float, float] = (-1.75, 1.75),
 ) -> Scenario:
-    """Build ``accelerating`` (see the module docstring)."""
+    """Build ``accelerating`` (see the module docstring).
+
+    Parameters
+    ----------
+    seed : int
+    n_steps : int
+    acceleration : float
+        Vehicle 2's acceleration (m/s², along y) from ``manoeuvre_step`` on.
+    clutter_rate : float
+        Mean number of false alarms per frame.
+    manoeuvre_step : int
+        First step of vehicle 2's acceleration (40 by default).
+    lead : float
+        How far ahead of vehicle 2 vehicle 1 starts (m, along y; 0 by default).
+    speeds : (float, float)
+        Initial speeds along y of vehicles 1 and 2 (m/s; (1, 0.5) by default).
+    lanes : (float, float)
+        Lateral positions x of vehicles 1 and 2 (m; adjacent lanes ±1.75 by default).
+    """
     rng = np.random.default_rng(seed)
     region: Region = ((-10.0, 10.0), (0.0, 80.0))
-    window = Manoeuvre(2, 40, n_steps - 1, "accelerate", (0.0, acceleration))
+    window = Manoeuvre(2, manoeuvre_step, n_steps - 1, "accelerate", (0.0, acceleration))
     inputs = np.zeros((n_steps, 2))
     inputs[window.first_step :] = window.value
     truths = (
@@ -73,11 +105,17 @@ def accelerating_scenario(
             1,
             0,
             propagate(
-                (-1.75, 0.0, 15.0, 1.0), np.zeros((n_steps, 2)), TIME_INTERVAL, PROCESS_NOISE, rng
+                (lanes[0], 0.0, 15.0 + lead, speeds[0]),
+                np.zeros((n_steps, 2)),
+                TIME_INTERVAL,
+                PROCESS_NOISE,
+                rng,
             ),
         ),
         TargetTruth(
-            2, 0, propagate((1.75, 0.0, 15.0, 0.5), inputs, TIME_INTERVAL, PROCESS_NOISE, rng)
+            2,
+            0,
+            propagate((lanes[1], 0.0, 15.0, speeds[1]), inputs, TIME_INTERVAL, PROCESS_NOISE, rng),
         ),
     )
     noise = MEASUREMENT_VARIANCE * np.eye(2)
@@ -103,6 +141,11 @@ def accelerating_scenario(
         measurement_noise=noise,
         sensor_regions={"front": region},
     )
+
+
+def stealing_scenario(seed: int = 0, *, n_steps: int = 160) -> Scenario:
+    """``accelerating`` set up for observation stealing ([HZ] §3.1; module docstring)."""
+    return accelerating_scenario(seed, n_steps=n_steps, clutter_rate=0.0, lanes=(-5.25, 1.75))
 
 
 def overtaking_scenario(

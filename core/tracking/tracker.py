@@ -14,7 +14,8 @@ array batched over tracks (and over the models of the IMM):
    or modified (:mod:`core.tracking.gating`), or the ``cheap_jpda`` baseline
    (:mod:`core.tracking.jpda`);
 4. **update** (:class:`IMMUpdater`, or the PDA update) and credal
-   **classification** of the updated tracks ([MTT] §5.2);
+   **classification** of the updated tracks ([MTT] §5.2), all tracks at once
+   (:class:`~core.classification.batched.BatchedCredalClassifier`);
 5. **track score** ([MTT] §4.3): a hit adds ``ln[P_D / ((2π)^{q/2} β_FT √|S|)] − D/2``
    (D, S of the pair's model), a miss ``ln(1 − P_D)``; a confirmed track that
    misses coasts; the empty-gate probability ([HZ] §4.2) multiplies
@@ -52,7 +53,8 @@ from core.arrays import BoolArray, FloatArray, IntArray
 from core.association import associate
 from core.association.associate import METHODS
 from core.belief import MassFunction
-from core.classification import CredalClassification, CredalClassifier
+from core.classification import CredalClassification
+from core.classification.batched import BatchedCredalClassifier, CredalBatch, dense_to_mass
 from core.distance import DistanceModel, Estimates, ModifiedScale, steady_state_covariance
 from core.distance.estimates import check_covariances
 from core.errors import TrackingError
@@ -132,10 +134,10 @@ class LocalTracker:
         self._noise = self.bank.measurement.noise_covariance
         self._q = self.bank.measurement.dim
         self._velocity_convention = "velocity" if found is None else found.velocity_convention
-        self.classifier: CredalClassifier | None = None
+        self.classifier: BatchedCredalClassifier | None = None
         if found is not None and config.classification is not None:
             chosen = config.classification
-            self.classifier = CredalClassifier(
+            self.classifier = BatchedCredalClassifier(
                 found.behaviours,
                 found.relation,
                 likelihood_scale=chosen.likelihood_scale,
@@ -195,7 +197,9 @@ class LocalTracker:
         self._empty_gate: FloatArray = np.zeros(0)
         self._phantom_since: FloatArray = np.zeros(0)
         self._state = IMMState(np.zeros((0, r, n)), np.zeros((0, r, n, n)), np.zeros((0, r)))
-        self._classes: list[CredalClassification] = []
+        self._classes: CredalBatch | None = (
+            None if self.classifier is None else self.classifier.initial(0)
+        )
         self._seeds: FloatArray = np.zeros((0, self._q))
         self._seed_times: FloatArray = np.zeros(0)
         self._seed_sensors: IntArray = np.zeros(0, dtype=np.int64)
@@ -254,13 +258,15 @@ class LocalTracker:
         covariances[candidates] = update.state.covariances
         log_mu[candidates] = update.state.log_mode_probabilities
         self._state = IMMState(means, covariances, log_mu)
-        if self.classifier is not None and len(candidates):
-            chosen = [self._classes[row] for row in candidates.tolist()]
+        if self.classifier is not None and self._classes is not None and len(candidates):
+            every = len(candidates) == tracks
             classified = self.classifier.update(
-                chosen, update.log_mode_probabilities, update.log_likelihoods, update.detected
+                self._classes if every else self._classes.select(candidates),
+                update.log_mode_probabilities,
+                update.log_likelihoods,
+                update.detected,
             )
-            for row, value in zip(candidates.tolist(), classified, strict=True):
-                self._classes[row] = value
+            self._classes = classified if every else self._classes.replace(candidates, classified)
 
         # Score and coasting.
         gain = np.zeros(tracks)
@@ -538,11 +544,12 @@ class LocalTracker:
         gone = np.zeros(len(self._status), dtype=bool)
         gone[newcomers] = True
         self._set(gone, TERMINATED, StatusReason.MERGED_INTO_PHANTOM)
-        if self.classifier is not None:
-            for keeper, newcomer in zip(keepers.tolist(), newcomers.tolist(), strict=True):
-                self._classes[keeper] = self.classifier.combine(
-                    self._classes[keeper], self._classes[newcomer].mass
-                )
+        if self.classifier is not None and self._classes is not None:
+            # The newcomer's cumulative mass is one more piece of evidence for the keeper.
+            merged = self.classifier.combine(
+                self._classes.select(keepers), self._classes.masses[newcomers]
+            )
+            self._classes = self._classes.replace(keepers, merged)
         for keeper, newcomer in zip(keepers.tolist(), newcomers.tolist(), strict=True):
             numbers[numbers == self._numbers[newcomer]] = self._numbers[keeper]
 
@@ -610,8 +617,8 @@ class LocalTracker:
         self._empty_gate = np.concatenate([self._empty_gate, np.ones(count)])
         self._phantom_since = np.concatenate([self._phantom_since, np.full(count, np.nan)])
         self._state = _concatenate(self._state, state)
-        if self.classifier is not None:
-            self._classes.extend([self.classifier.initial()] * count)
+        if self.classifier is not None and self._classes is not None:
+            self._classes = self._classes.concatenate(self.classifier.initial(count))
         self._status = self._status.astype(np.int64)
         self._reason = self._reason.astype(np.int64)
 
@@ -623,9 +630,19 @@ class LocalTracker:
         means, covariances = self._state.combined()
         mu = self._state.mode_probabilities
         order = np.argsort(self._numbers, kind="stable")
+        classes = self._classes
+        class_masses: list[MassFunction | None] = [None] * len(order)
+        pignistic: list[FloatArray | None] = [None] * len(order)
+        if self.classifier is not None and classes is not None:
+            class_masses = list(self.classifier.class_mass_functions(classes))
+            pignistic = [
+                row_betp if defined else None
+                for row_betp, defined in zip(
+                    classes.pignistic, classes.defined.tolist(), strict=True
+                )
+            ]
         tracks = []
         for row in order.tolist():
-            classification = self._classes[row] if self.classifier is not None else None
             tracks.append(
                 LocalTrack(
                     id=self._track_id(int(self._numbers[row])),
@@ -636,8 +653,8 @@ class LocalTracker:
                     mode_probabilities=mu[row],
                     score=float(self._score[row]),
                     hits=int(self._hits[row]),
-                    class_mass=None if classification is None else classification.class_mass,
-                    pignistic=None if classification is None else classification.pignistic,
+                    class_mass=class_masses[row],
+                    pignistic=pignistic[row],
                 )
             )
         live = self._status != TERMINATED
@@ -655,8 +672,8 @@ class LocalTracker:
         self._empty_gate = self._empty_gate[rows]
         self._phantom_since = self._phantom_since[rows]
         self._state = self._state.select(rows)
-        if self.classifier is not None:
-            self._classes = [self._classes[row] for row in rows.tolist()]
+        if self._classes is not None:
+            self._classes = self._classes.select(rows)
 
     # ------------------------------------------------------- persistence
     def export(self) -> dict[str, Any]:
@@ -676,13 +693,15 @@ class LocalTracker:
                 "log_mode_probabilities": plain_floats(self._state.log_mode_probabilities[row]),
                 "classification": None,
             }
-            if self.classifier is not None:
-                value = self._classes[row]
+            if self.classifier is not None and self._classes is not None:
+                classes = self._classes
                 entry["classification"] = {
-                    "mass": mass_to_plain(value.mass),
-                    "step_conflict": plain_floats(np.float64(value.step_conflict)),
-                    "log_normaliser": plain_floats(np.float64(value.log_normaliser)),
-                    "steps": value.steps,
+                    "mass": mass_to_plain(
+                        dense_to_mass(self.classifier.frame, classes.masses[row])
+                    ),
+                    "step_conflict": plain_floats(classes.step_conflicts[row]),
+                    "log_normaliser": plain_floats(classes.log_normalisers[row]),
+                    "steps": int(classes.steps[row]),
                 }
             tracks.append(entry)
         return {
@@ -727,19 +746,16 @@ class LocalTracker:
             float_array([e["log_mode_probabilities"] for e in entries]).reshape(-1, r),
         )
         if tracker.classifier is not None:
-            tracker._classes = [tracker._classification(e["classification"]) for e in entries]
+            tracker._classes = tracker.classifier.from_classifications(
+                [tracker._classification(e["classification"]) for e in entries]
+            )
         return tracker
 
     def _classification(self, plain: dict[str, Any]) -> CredalClassification:
         assert self.classifier is not None
         classifier = self.classifier
-        frame = (
-            classifier.classes
-            if classifier.accumulation == "classes"
-            else classifier.behaviours.frame
-        )
         mass = MassFunction(
-            frame,
+            classifier.frame,
             np.array(plain["mass"]["masks"], dtype=np.int64),
             np.array(plain["mass"]["masses"], dtype=np.float64),
         )
