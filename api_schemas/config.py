@@ -212,6 +212,14 @@ class SessionConfig(WireModel):
     motion: MotionModel = Field(default_factory=MotionModel)
     classes: Annotated[list[Label], Field(max_length=MAX_CLASSES)] = Field(default_factory=list)
     sensors: list[SensorConfig] = Field(default_factory=list)
+    region: PolygonFieldOfView | None = Field(
+        default=None,
+        description=(
+            "the surveillance region: a track that leaves every field of view inside it "
+            "becomes a phantom, outside it it is terminated (default: the union of the "
+            "sensors' ranges)"
+        ),
+    )
     association: AssociationConfig = Field(default_factory=AssociationConfig)
     fusion: StateFusionConfig = Field(default_factory=StateFusionConfig)
     tracking: TrackingConfig = Field(default_factory=TrackingConfig)

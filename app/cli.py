@@ -3,13 +3,21 @@
 from __future__ import annotations
 
 import argparse
+import subprocess
+import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 import uvicorn
 
+from app.commands.replay import export_command, replay_command
+from app.commands.scenarios import names as scenario_names
+from app.commands.simulate import command as simulate_command
 from app.main import create_app
 from app.settings import get_settings
 from app.stores import parse_store_url
+from core.evaluation.figures import FIGURES
+from core.evaluation.figures import reproduce as reproduce_figure
 
 
 def _serve(args: argparse.Namespace) -> int:
@@ -56,7 +64,66 @@ def build_parser() -> argparse.ArgumentParser:
         help="memory | sqlite[:PATH] | redis[s]://HOST:PORT/DB (default: %(default)s, or CREDAL_STORE)",
     )
     serve.set_defaults(handler=_serve)
+
+    simulate = commands.add_parser(
+        "simulate", help="run a paper scenario through the engine (or a running server)"
+    )
+    simulate.add_argument("scenario", choices=scenario_names())
+    simulate.add_argument("--seed", type=int, default=0)
+    simulate.add_argument("--server", help="URL of a running service, e.g. http://127.0.0.1:8000")
+    simulate.add_argument("--quiet", action="store_true", help="no progress bar")
+    simulate.set_defaults(handler=simulate_command)
+
+    reproduce = commands.add_parser("reproduce", help="regenerate one paper figure (PNG)")
+    reproduce.add_argument("figure", choices=sorted(FIGURES))
+    reproduce.add_argument("--out", default="docs/figures", help="directory (default: %(default)s)")
+    reproduce.add_argument("--reduced", action="store_true", help="small sizes, for a quick look")
+    reproduce.set_defaults(handler=_reproduce)
+
+    export = commands.add_parser("export", help="write a session's event log as JSON lines")
+    export.add_argument("--server", required=True)
+    export.add_argument("--session", required=True)
+    export.add_argument("--token", required=True, help="the session's token (or the admin token)")
+    export.set_defaults(handler=export_command)
+
+    replay = commands.add_parser("replay", help="apply an exported event log, print the results")
+    replay.add_argument("events", help="EVENTS.jsonl written by `credal-fusion export`")
+    replay.add_argument("--server", help="replay through a running service instead of in process")
+    replay.add_argument("--quiet", action="store_true", help="no progress bar")
+    replay.set_defaults(handler=replay_command)
+
+    bench = commands.add_parser("bench", help="run the benchmarks of bench/ (from a checkout)")
+    bench.add_argument("names", nargs="*", help="benchmarks to run (default: all)")
+    bench.set_defaults(handler=_bench)
     return parser
+
+
+def _reproduce(args: argparse.Namespace) -> int:
+    path = reproduce_figure(args.figure, args.out, reduced=args.reduced)
+    print(path)
+    return 0
+
+
+def _bench(args: argparse.Namespace) -> int:
+    """Each ``bench/NAME.py`` of the checkout, in turn (they print their own tables)."""
+    folder = Path(__file__).resolve().parents[1] / "bench"
+    available = sorted(p.stem for p in folder.glob("*.py") if p.stem != "machine")
+    if not available:
+        print(f"no benchmarks found in {folder} (run from a checkout)", file=sys.stderr)
+        return 2
+    chosen = args.names or available
+    unknown = sorted(set(chosen) - set(available))
+    if unknown:
+        print(f"unknown benchmark(s) {unknown}; choose from {available}", file=sys.stderr)
+        return 2
+    for name in chosen:
+        print(f"== bench/{name}.py", flush=True)
+        status = subprocess.run(
+            [sys.executable, str(folder / f"{name}.py")], check=False
+        ).returncode
+        if status != 0:
+            return status
+    return 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -154,7 +154,13 @@ def fusion_config(config: SessionConfig, extra_sensors: Iterable[str] = ()) -> F
     sensors += [SensorSpec(id=sensor_id) for sensor_id in extra_sensors]
     thresholds = config.tracking.thresholds
     association = config.association
+    try:
+        region = None if config.region is None else field_of_view(config.region)
+    except InvalidInput as error:
+        raise request_validation_error([FieldIssue(("region",), str(error), None)]) from None
+    assert region is None or isinstance(region, PolygonView)
     return FusionConfig(
+        region=region,
         motion=motion,
         sensors=tuple(sensors),
         classes=class_frame(config.classes),

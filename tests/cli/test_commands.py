@@ -1,0 +1,90 @@
+"""The CLI beyond `serve`: simulate, reproduce, export and replay (against a live server too)."""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import pytest
+
+from api_schemas.reports import TrackReport
+from app.cli import main
+from app.commands.replay import export_events, read_events
+from app.commands.runner import run_locally, run_on_server
+from app.commands.scenarios import build
+from tests.api.conftest import LiveServer, live_server
+
+__all__ = ["live_server"]
+
+
+def test_simulate_t2t_four_in_process_prints_a_clean_summary(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["simulate", "t2t-four", "--seed", "1", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "scenario t2t-four, seed 1: 40 inputs" in out
+    assert (
+        "identity switches: 0; fused ids per target: 0: ['F1'], 1: ['F2'], 2: ['F3'], 3: ['F4']"
+        in out
+    )
+
+
+def test_simulate_overtaking_keeps_the_identity_through_the_blind_zone(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["simulate", "overtaking", "--quiet"]) == 0
+    assert "identity switches: 0" in capsys.readouterr().out
+
+
+def test_a_scenario_gives_the_same_results_through_a_server(live_server: LiveServer) -> None:
+    run = build("aircraft", seed=2)
+    inputs = run.inputs[:40]
+    assert list(run_on_server(live_server.url, run.config, inputs)) == list(
+        run_locally(run.config, inputs)
+    )
+
+
+def test_export_then_replay_gives_exactly_the_recorded_results(
+    live_server: LiveServer, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run = build("crossing-traffic", seed=3)
+    inputs = run.inputs[:30]
+    sessions: list[tuple[str, str]] = []
+    recorded = list(
+        run_on_server(
+            live_server.url, run.config, inputs, on_session=lambda i, t: sessions.append((i, t))
+        )
+    )
+    events = tmp_path / "events.jsonl"
+    session_id, token = sessions[0]
+    events.write_text("\n".join(export_events(live_server.url, session_id, token)) + "\n")
+    config, logged = read_events(io.StringIO(events.read_text()))
+    assert [TrackReport.model_validate(body) for _, body in logged] == [
+        TrackReport.model_validate(body) for _, body in inputs
+    ]
+    # Through a live server (a new session) and in process: the same results, line by line.
+    assert main(["replay", str(events), "--server", live_server.url, "--quiet"]) == 0
+    through_server = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert main(["replay", str(events), "--quiet"]) == 0
+    in_process = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert through_server == recorded
+    assert in_process == recorded
+    assert config["sensors"][0]["id"] == "s1"
+
+
+def test_reproduce_writes_the_png(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["reproduce", "aircraft", "--reduced", "--out", str(tmp_path)]) == 0
+    written = Path(capsys.readouterr().out.strip().splitlines()[-1])
+    assert written == tmp_path / "aircraft.png"
+    assert written.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_bench_refuses_an_unknown_benchmark(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["bench", "no-such-bench"]) == 2
+    assert "unknown benchmark(s) ['no-such-bench']" in capsys.readouterr().err
+
+
+def test_read_events_refuses_a_file_without_its_session_line() -> None:
+    with pytest.raises(ValueError, match="no session line"):
+        read_events(io.StringIO('{"type": "tracks", "seq": 1, "report": {}}\n'))
