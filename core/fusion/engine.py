@@ -425,6 +425,15 @@ class SessionEngine:
     ) -> None:
         fused.score = min(fused.score + increment, self.config.management.score_ceiling)
         fused.hits += 1
+        self._record(fused, reported, report)
+        fused.empty_gate_probability = 1.0
+        if fused.status is TrackStatus.COASTING:
+            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
+        elif fused.status is TrackStatus.TENTATIVE:
+            self._maybe_confirm(fused)
+
+    def _record(self, fused: FusedTrack, reported: ReportedTrack, report: TrackReport) -> None:
+        """The report track becomes its sensor's latest estimate of ``fused``."""
         previous = fused.estimates.get(report.sensor)
         fused.set_estimate(
             report.sensor,
@@ -436,11 +445,6 @@ class SessionEngine:
                 class_mass=self._class_evidence(reported, previous),
             ),
         )
-        fused.empty_gate_probability = 1.0
-        if fused.status is TrackStatus.COASTING:
-            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
-        elif fused.status is TrackStatus.TENTATIVE:
-            self._maybe_confirm(fused)
 
     def _maybe_confirm(self, fused: FusedTrack) -> None:
         management = self.config.management
@@ -516,16 +520,7 @@ class SessionEngine:
             score=self.config.management.score_model(sensor.p_detect).initial,
         )
         self.next_number += 1
-        fused.set_estimate(
-            report.sensor,
-            SensorEstimate(
-                track=reported.id,
-                time=report.time,
-                state=reported.state.copy(),
-                covariance=reported.covariance.copy(),
-                class_mass=self._class_evidence(reported, None),
-            ),
-        )
+        self._record(fused, reported, report)
         self._maybe_confirm(fused)
         return fused
 
