@@ -454,16 +454,19 @@ def draw_crossing(reduced: bool, echo: Echo) -> Figure:
 
 
 def _plot_crossing_example(axes: Axes, study: CrossingStudy) -> None:
+    """Fig 17 in the frame of target 2 (y − y₂), so that metres show next to kilometres."""
     example = study.example
     steps = np.arange(len(example.truth_y))
-    axes.plot(steps, example.truth_y[:, 0], "C3-", lw=1, label="truth 1 (fighter)")
-    axes.plot(steps, example.truth_y[:, 1], "C0-", lw=1, label="truth 2")
+    reference = example.truth_y[:, 1]
+    axes.plot(steps, example.truth_y[:, 0] - reference, "C3-", lw=1, label="truth 1 (fighter)")
+    axes.plot(steps, np.zeros_like(reference), "C0-", lw=1, label="truth 2")
+    relative = example.detection_y - reference[example.detection_steps.astype(np.int64)]
     for owner, colour, label in ((1, "C3", "→ track of 1"), (2, "C0", "→ track of 2")):
         for target, marker in ((1, "^"), (2, "o")):
             chosen = (example.detection_owner == owner) & (example.detection_targets == target)
             axes.plot(
                 example.detection_steps[chosen],
-                example.detection_y[chosen],
+                relative[chosen],
                 marker,
                 color=colour,
                 mfc="none",
@@ -485,18 +488,16 @@ def _plot_crossing_example(axes: Axes, study: CrossingStudy) -> None:
             transform=axes.get_xaxis_transform(),
             fontsize=7,
         )
-    axes.set_xlim(28, len(steps) - 1)
-    low = float(np.min(example.truth_y[28:])) - 20.0
-    high = float(np.max(example.truth_y[28:])) + 20.0
-    axes.set_ylim(low, high)
+    axes.set_xlim(30, len(steps) - 1)
+    axes.set_ylim(-25.0, 30.0)
     axes.set_xlabel("step")
-    axes.set_ylabel("y (m)")
+    axes.set_ylabel("y − y of target 2 (m)")
     axes.set_title(
         f"Fig 17: y over time (seed {example.seed}, σ² = {example.variance:g} m²; x is the same)",
         fontsize=9,
         loc="left",
     )
-    axes.legend(fontsize=6, loc="upper left")
+    axes.legend(fontsize=6, loc="upper right")
 
 
 def _plot_crossing_swaps(axes: Axes, study: CrossingStudy) -> None:
@@ -523,6 +524,15 @@ def _plot_crossing_swaps(axes: Axes, study: CrossingStudy) -> None:
         "C2--",
         marker="v",
         label="target 2: final BetP(liner), closest_model",
+    )
+    before = np.nanmean(study.betp["closest_model"][:, :, 1, 33, liner], axis=1)
+    axes.plot(
+        study.variances,
+        before,
+        "C2:",
+        marker="v",
+        mfc="none",
+        label="target 2: BetP(liner) at step 33, before the crossing",
     )
     axes.plot(
         study.variances,
@@ -593,16 +603,16 @@ def _plot_road_table(axes: Axes, study: RoadFourStudy) -> None:
     axes.axis("off")
     header = [
         "method",
-        "TM pos (m)",
-        "TM vel (m/s)",
-        "no track",
-        "false assign.",
-        "losses/run",
-        "false tracks/run",
+        "TM pos\n(m)",
+        "TM vel\n(m/s)",
+        "no\ntrack",
+        "false\nassign.",
+        "losses\n/ run",
+        "false tracks\n/ run",
     ]
     rows = [
         [
-            label,
+            textwrap.fill(label, 12),
             f"{study.time_mean(label).mean():.3f}",
             f"{study.time_mean(label, 'velocity').mean():.3f}",
             f"{study.missing(label):.3f}",
@@ -615,7 +625,7 @@ def _plot_road_table(axes: Axes, study: RoadFourStudy) -> None:
     table = axes.table(cellText=rows, colLabels=header, loc="center", cellLoc="center")
     table.auto_set_font_size(False)
     table.set_fontsize(7)
-    table.scale(1.0, 1.6)
+    table.scale(1.0, 2.4)
     axes.set_title(
         "time-mean errors ([DH] eq 29, mean of the 4 vehicles) and track keeping",
         fontsize=9,
