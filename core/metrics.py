@@ -7,12 +7,18 @@
   step and its time mean ([DH] §5 eq 28-29);
 - :func:`false_decision_rate` — the share of association decisions that
   differ from the truth ([T2T] §4, [MTT] §6.2.1);
-- :func:`identity_switches` — how often a true object changes fused identity.
+- :func:`identity_switches` — how often a true object changes fused identity;
+- :func:`coverage` — which track covers which true object at one step (GOSPA-style
+  assignment with a cut-off), the input of the three below;
+- :func:`track_losses` — how often a covered true object becomes uncovered;
+- :func:`false_tracks` — tracks that never cover a true object;
+- :func:`time_to_decision` — classification: steps until the true class is
+  decided for good (EVALUATION.md "time to correct decision").
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TypeVar
 
@@ -168,3 +174,107 @@ def identity_switches(assigned: Sequence[Mapping[Key, Identity | None]]) -> int:
                 switches += 1
             last[truth_id] = fused_id
     return switches
+
+
+def coverage(
+    truths: Mapping[Key, ArrayLike],
+    tracks: Mapping[Identity, ArrayLike],
+    cutoff: float,
+) -> dict[Key, Identity | None]:
+    """Which track covers each true object at one step.
+
+    The truth–track pairs minimising the total distance (Hungarian, as in
+    OSPA/GOSPA) among the pairs closer than ``cutoff``; a true object left
+    without a track maps to None.
+
+    Parameters
+    ----------
+    truths : mapping id → position (d,)
+    tracks : mapping id → position (d,)
+    cutoff : float
+        Largest distance at which a track covers a true object.
+    """
+    _check_cutoff(cutoff, 1.0)
+    truth_ids, track_ids = list(truths), list(tracks)
+    found: dict[Key, Identity | None] = dict.fromkeys(truth_ids)
+    if not truth_ids or not track_ids:
+        return found
+    x = _points(
+        np.array([np.asarray(truths[key], dtype=np.float64) for key in truth_ids]), "truths"
+    )
+    y = _points(
+        np.array([np.asarray(tracks[key], dtype=np.float64) for key in track_ids]), "tracks"
+    )
+    distances = cdist(x, y)
+    # Pairs beyond the cut-off cost more than leaving both unpaired.
+    costs = np.where(distances < cutoff, distances, 2.0 * cutoff + 1.0)
+    rows, cols = linear_sum_assignment(costs)
+    for row, col in zip(rows.tolist(), cols.tolist(), strict=True):
+        if distances[row, col] < cutoff:
+            found[truth_ids[row]] = track_ids[col]
+    return found
+
+
+def track_losses(assigned: Sequence[Mapping[Key, Identity | None]]) -> int:
+    """Times a true object that was covered by a track is covered by none at the next step.
+
+    ``assigned[k]`` maps each true object present at step k to the track
+    covering it (None: none). An object absent from a step (not yet born,
+    or gone) is not lost; one covered again later and lost again counts twice.
+    """
+    covered: dict[Key, bool] = {}
+    losses = 0
+    for step in assigned:
+        for truth_id, track_id in step.items():
+            if track_id is None and covered.get(truth_id, False):
+                losses += 1
+            covered[truth_id] = track_id is not None
+        for truth_id in set(covered) - set(step):
+            covered[truth_id] = False
+    return losses
+
+
+def false_tracks(
+    tracks: Iterable[Identity], assigned: Sequence[Mapping[Key, Identity | None]]
+) -> int:
+    """How many of ``tracks`` (e.g. every confirmed track id) never cover a true object."""
+    used = {track_id for step in assigned for track_id in step.values() if track_id is not None}
+    return len(set(tracks) - used)
+
+
+def time_to_decision(
+    probabilities: ArrayLike, true_class: int, level: float = 0.5, start: int = 0
+) -> FloatArray:
+    """Steps from ``start`` until the true class's probability stays ≥ ``level`` to the end.
+
+    Parameters
+    ----------
+    probabilities : array (..., steps, classes)
+        Class probabilities (e.g. BetP) over time; NaN rows (no decision
+        possible) count as undecided.
+    true_class : int
+        Column of the true class.
+    level : float
+        Decision threshold (0.5: the true class has the majority).
+    start : int
+        Step from which the decision is due (e.g. the step of the manoeuvre that reveals the class).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``k − start`` for the first step k ≥ start from which the decision
+        holds at every later step (0: decided from ``start`` on); NaN when
+        it does not hold at the last step.
+    """
+    p = np.asarray(probabilities, dtype=np.float64)
+    if p.ndim < 2:
+        raise InvalidInput(f"probabilities must be (..., steps, classes), got shape {p.shape}")
+    steps = p.shape[-2]
+    if not 0 <= start < steps:
+        raise InvalidInput(f"start must be a step in [0, {steps}), got {start!r}")
+    if not 0 <= true_class < p.shape[-1]:
+        raise InvalidInput(f"true_class must be a column in [0, {p.shape[-1]})")
+    decided = np.nan_to_num(p[..., start:, true_class], nan=-np.inf) >= level
+    stays = np.flip(np.logical_and.accumulate(np.flip(decided, axis=-1), axis=-1), axis=-1)
+    first = np.argmax(stays, axis=-1).astype(np.float64)
+    return np.asarray(np.where(stays.any(axis=-1), first, np.nan), dtype=np.float64)

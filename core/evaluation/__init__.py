@@ -9,7 +9,13 @@ them reduced and :mod:`core.evaluation.figures` draws them full size:
 - :mod:`~core.evaluation.aircraft` — [MTT] Fig 12–15, credal vs Bayesian classification;
 - :mod:`~core.evaluation.pedestrian` — [MTT] Fig 20–23, discounting for changing classes;
 - :mod:`~core.evaluation.units` — is the "parameterless" ``hachour`` unit-free?
-- :mod:`~core.evaluation.pairing` — the track-to-track problems and their false decision rate.
+- :mod:`~core.evaluation.pairing` — the track-to-track problems and their false decision rate;
+- :mod:`~core.evaluation.close_pair` — [MTT] Fig 16, false assignments of two close targets;
+- :mod:`~core.evaluation.crossing` — [MTT] Fig 17–18, a fighter crosses an unknown aircraft;
+- :mod:`~core.evaluation.road_four` — [DH] Fig 1–5, RMS errors vs cheap JPDA in clutter;
+- :mod:`~core.evaluation.accelerating` — [HZ] Fig 5, modified distance and termination;
+- :mod:`~core.evaluation.overtaking` — [HZ] Fig 6, phantoms through a blind zone;
+- :mod:`~core.evaluation.tracking` — running the local tracker over a scenario (shared).
 
 The figures module (matplotlib) is not imported here: ``from
 core.evaluation.figures import FIGURES, reproduce``.

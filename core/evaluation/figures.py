@@ -27,9 +27,17 @@ from numpy.typing import ArrayLike
 
 from core.arrays import FloatArray
 from core.errors import InvalidInput
+from core.evaluation.accelerating import CASES as ACCELERATING_CASES
+from core.evaluation.accelerating import SCENES as ACCELERATING_SCENES
+from core.evaluation.accelerating import AcceleratingStudy, accelerating_study
 from core.evaluation.aircraft import AircraftClassification, aircraft_classification
+from core.evaluation.close_pair import ClosePairStudy, close_pair_study
+from core.evaluation.crossing import CrossingStudy, crossing_study
 from core.evaluation.four_targets import ThresholdSweep, threshold_sweep
+from core.evaluation.overtaking import CASES as OVERTAKING_CASES
+from core.evaluation.overtaking import OvertakingStudy, overtaking_study
 from core.evaluation.pedestrian import PedestrianClassification, pedestrian_classification
+from core.evaluation.road_four import RoadFourStudy, road_four_study
 from core.evaluation.two_class import ClassComparison, class_comparison
 from core.evaluation.units import NoiseStudy, UnitSweep, noise_study, unit_sweep
 from core.simulation.scenario import TargetTruth
@@ -372,6 +380,382 @@ def _plot_noise_study(axes: Axes, study: NoiseStudy) -> None:
     axes.legend(fontsize=6, ncol=2, loc="center left")
 
 
+# ---------------------------------------------------------------- close-pair
+def draw_close_pair(reduced: bool, echo: Echo) -> Figure:
+    """[MTT] Fig 16: false assignment rate vs noise, closest-model vs combined IMM distance."""
+    seeds = _seeds(100, reduced)
+    ratios = (0.0, 0.5, 2.0) if reduced else (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0)
+    n_steps = 20 if reduced else 60
+    echo(f"close-pair: seeds {seeds[0]}..{seeds[-1]}, {n_steps} steps, σ/d in {list(ratios)}")
+    study = close_pair_study(seeds, ratios, n_steps=n_steps)
+    figure = Figure(figsize=(8, 4.8), layout="constrained")
+    axes = figure.subplots()
+    _plot_close_pair(axes, study)
+    return _titled(
+        figure,
+        "close-pair",
+        f"[MTT] Fig 16: two aircraft {study.separation:g} m apart, {len(seeds)} runs per point",
+        reduced,
+    )
+
+
+def _plot_close_pair(axes: Axes, study: ClosePairStudy) -> None:
+    percent = 100.0 * study.noise_ratios
+    for kind, marker in (("closest_model", "o"), ("combined", "s")):
+        mean = study.mean(kind)
+        spread = study.rates[kind].std(axis=1) / math.sqrt(len(study.seeds))
+        axes.errorbar(percent, mean, yerr=spread, marker=marker, capsize=3, label=f"GNN, {kind}")
+    axes.plot(percent, study.swap_floor, "k:", label="swap floor Φ̄(d / √2σ) (perfect prediction)")
+    axes.axhline(0.5, color="0.6", lw=0.8)
+    axes.set_xlabel("measurement noise σ per axis, % of the separation")
+    axes.set_ylabel("false assignment rate")
+    axes.set_ylim(-0.02, 0.62)
+    axes.set_title("13-model aircraft IMM, R = simulated noise; ± 1 standard error", fontsize=9)
+    axes.legend(fontsize=8, loc="center right")
+
+
+# ------------------------------------------------------------------ crossing
+def draw_crossing(reduced: bool, echo: Echo) -> Figure:
+    """[MTT] Fig 17–18: a fighter crosses an unknown aircraft; assignments and classes."""
+    seeds = _seeds(20, reduced)
+    variances = (1.0, 10.0) if reduced else (0.2, 1.0, 4.0, 10.0, 25.0)
+    echo(f"crossing: seeds {list(seeds)}, measurement variances {list(variances)} m²")
+    study = crossing_study(seeds, variances)
+    figure = Figure(figsize=(11, 8), layout="constrained")
+    grid = figure.subplots(2, 2)
+    _plot_crossing_example(grid[0][0], study)
+    _plot_crossing_swaps(grid[0][1], study)
+    chosen = int(np.argmin(np.abs(study.variances - study.example.variance)))
+    for axes, target, title in (
+        (grid[1][0], 1, "Fig 18 left: target 1 (fighter)"),
+        (grid[1][1], 2, "Fig 18 right: target 2 (flies straight)"),
+    ):
+        betp = study.betp["closest_model"][chosen, :, target - 1]
+        steps = np.arange(betp.shape[1])
+        alive = ~np.isnan(betp[:, :, 0])
+        counts = np.maximum(alive.sum(axis=0), 1)
+        for index, label in enumerate(study.classes):
+            mean = np.where(alive, betp[:, :, index], 0.0).sum(axis=0) / counts
+            axes.plot(steps, np.where(alive.any(axis=0), mean, np.nan), label=label)
+        axes.set_ylim(-0.02, 1.02)
+        axes.set_xlabel("step")
+        axes.set_ylabel("BetP (mean of runs)")
+        axes.set_title(
+            f"{title}, σ² = {study.variances[chosen]:g} m², closest_model", fontsize=9, loc="left"
+        )
+        axes.legend(fontsize=7, loc="center left")
+        _shade(axes, study.manoeuvres)
+    return _titled(
+        figure,
+        "crossing",
+        f"[MTT] Fig 17–18: a fighter crosses an unknown aircraft, {len(seeds)} runs per noise",
+        reduced,
+    )
+
+
+def _plot_crossing_example(axes: Axes, study: CrossingStudy) -> None:
+    """Fig 17 in the frame of target 2 (y − y₂), so that metres show next to kilometres."""
+    example = study.example
+    steps = np.arange(len(example.truth_y))
+    reference = example.truth_y[:, 1]
+    axes.plot(steps, example.truth_y[:, 0] - reference, "C3-", lw=1, label="truth 1 (fighter)")
+    axes.plot(steps, np.zeros_like(reference), "C0-", lw=1, label="truth 2")
+    relative = example.detection_y - reference[example.detection_steps.astype(np.int64)]
+    for owner, colour, label in ((1, "C3", "→ track of 1"), (2, "C0", "→ track of 2")):
+        for target, marker in ((1, "^"), (2, "o")):
+            chosen = (example.detection_owner == owner) & (example.detection_targets == target)
+            axes.plot(
+                example.detection_steps[chosen],
+                relative[chosen],
+                marker,
+                color=colour,
+                mfc="none",
+                ms=4,
+                ls="none",
+                label=f"detection of {target} {label}",
+            )
+    wrong = np.flatnonzero(
+        (example.detection_owner >= 1) & (example.detection_owner != example.detection_targets)
+    )
+    if len(wrong):
+        first = int(example.detection_steps[wrong].min())
+        axes.axvline(first, color="r", lw=0.8)
+        axes.text(
+            first + 0.5,
+            0.05,
+            f"first false\nassignment: {first}",
+            color="r",
+            transform=axes.get_xaxis_transform(),
+            fontsize=7,
+        )
+    axes.set_xlim(30, len(steps) - 1)
+    axes.set_ylim(-25.0, 30.0)
+    axes.set_xlabel("step")
+    axes.set_ylabel("y − y of target 2 (m)")
+    axes.set_title(
+        f"Fig 17: y over time (seed {example.seed}, σ² = {example.variance:g} m²; x is the same)",
+        fontsize=9,
+        loc="left",
+    )
+    axes.legend(fontsize=6, loc="upper right")
+
+
+def _plot_crossing_swaps(axes: Axes, study: CrossingStudy) -> None:
+    for kind, marker in (("closest_model", "o"), ("combined", "s")):
+        axes.plot(
+            study.variances,
+            study.swapped_share(kind),
+            marker=marker,
+            label=f"runs with a false assignment ({kind})",
+        )
+    fighter = study.classes.index("fighter")
+    liner = study.classes.index("liner")
+    final = study.final_betp("closest_model", 2)
+    axes.plot(
+        study.variances,
+        final[:, fighter],
+        "C3--",
+        marker="^",
+        label="target 2: final BetP(fighter), closest_model",
+    )
+    axes.plot(
+        study.variances,
+        final[:, liner],
+        "C2--",
+        marker="v",
+        label="target 2: final BetP(liner), closest_model",
+    )
+    before = np.nanmean(study.betp["closest_model"][:, :, 1, 33, liner], axis=1)
+    axes.plot(
+        study.variances,
+        before,
+        "C2:",
+        marker="v",
+        mfc="none",
+        label="target 2: BetP(liner) at step 33, before the crossing",
+    )
+    axes.plot(
+        study.variances,
+        study.alive_at_end("combined", 1),
+        "k:",
+        marker="x",
+        label="target 1's track alive at the end (combined)",
+    )
+    axes.axhline(1 / 3, color="0.6", lw=0.8)
+    axes.set_xscale("log")
+    axes.set_ylim(-0.02, 1.02)
+    axes.set_xlabel("measurement variance per axis (m²); final separation 5 m per axis")
+    axes.set_title("across noise levels (perfect doubt: 1/3)", fontsize=9, loc="left")
+    axes.legend(fontsize=6, loc="center left")
+
+
+# ---------------------------------------------------------------- road-four
+def draw_road_four(reduced: bool, echo: Echo) -> Figure:
+    """[DH] Fig 1–5: RMS position and velocity errors of four vehicles, per method."""
+    seeds = _seeds(50, reduced)
+    n_steps = 30 if reduced else 100
+    echo(f"road-four: seeds {list(seeds) if reduced else f'0..{seeds[-1]}'}, {n_steps} steps")
+    study = road_four_study(seeds, n_steps=n_steps)
+    figure = Figure(figsize=(11, 8), layout="constrained")
+    grid = figure.subplots(2, 2)
+    _plot_road_scene(grid[0][0], seeds[0], n_steps)
+    time = np.arange(study.n_steps) * study.time_interval
+    for label, style in zip(study.labels, ("-", "--", "-.", ":"), strict=False):
+        grid[0][1].plot(time, study.rms(label).mean(axis=0), style, label=label)
+        grid[1][0].plot(time, study.rms(label, "velocity").mean(axis=0), style, label=label)
+    for axes, what in ((grid[0][1], "position (m)"), (grid[1][0], "velocity (m/s)")):
+        axes.set_xlabel("time (s)")
+        axes.set_ylabel(f"RMS {what}, mean of the 4 vehicles")
+        axes.set_yscale("log")
+        axes.legend(fontsize=7)
+    grid[0][1].set_title("Fig 2–3: RMS position error ([DH] eq 28)", fontsize=9, loc="left")
+    grid[1][0].set_title("Fig 4–5: RMS velocity error", fontsize=9, loc="left")
+    _plot_road_table(grid[1][1], study)
+    return _titled(
+        figure,
+        "road-four",
+        f"[DH] Fig 1–5: four vehicles in clutter, {len(seeds)} Monte Carlo runs",
+        reduced,
+    )
+
+
+def _plot_road_scene(axes: Axes, seed: int, n_steps: int) -> None:
+    from core.simulation import CLUTTER, road_four_scenario
+
+    scenario = road_four_scenario(seed, n_steps=n_steps)
+    for scan in scenario.scans:
+        clutter = scan.target_ids == CLUTTER
+        axes.plot(scan.measurements[~clutter, 0], scan.measurements[~clutter, 1], "k.", ms=1.5)
+        axes.plot(scan.measurements[clutter, 0], scan.measurements[clutter, 1], "r*", ms=2.5)
+    for truth in scenario.truths:
+        axes.plot(
+            truth.states[:, 0], truth.states[:, 2], lw=1.5, label=f"vehicle {truth.target_id}"
+        )
+    axes.set_xlabel("x (m, lateral)")
+    axes.set_ylabel("y (m, ahead)")
+    axes.set_title(
+        f"Fig 1: truth, detections (·) and clutter (*), seed {seed}", fontsize=9, loc="left"
+    )
+    axes.legend(fontsize=7)
+
+
+def _plot_road_table(axes: Axes, study: RoadFourStudy) -> None:
+    axes.axis("off")
+    header = [
+        "method",
+        "TM pos\n(m)",
+        "TM vel\n(m/s)",
+        "no\ntrack",
+        "false\nassign.",
+        "losses\n/ run",
+        "false tracks\n/ run",
+    ]
+    rows = [
+        [
+            textwrap.fill(label, 12),
+            f"{study.time_mean(label).mean():.3f}",
+            f"{study.time_mean(label, 'velocity').mean():.3f}",
+            f"{study.missing(label):.3f}",
+            f"{study.false_assignments[label].mean():.3f}",
+            f"{study.losses[label].mean():.2f}",
+            f"{study.false_track_counts[label].mean():.2f}",
+        ]
+        for label in study.labels
+    ]
+    table = axes.table(cellText=rows, colLabels=header, loc="center", cellLoc="center")
+    table.auto_set_font_size(False)
+    table.set_fontsize(7)
+    table.scale(1.0, 2.4)
+    axes.set_title(
+        "time-mean errors ([DH] eq 29, mean of the 4 vehicles) and track keeping",
+        fontsize=9,
+        loc="left",
+    )
+
+
+# -------------------------------------------------------------- accelerating
+def draw_accelerating(reduced: bool, echo: Echo) -> Figure:
+    """[HZ] Fig 5: the lost track of an accelerating vehicle, four tracker cases."""
+    seeds = _seeds(20, reduced)
+    echo(f"accelerating: seeds {list(seeds)}")
+    study = accelerating_study(seeds)
+    figure = Figure(figsize=(12, 8), layout="constrained")
+    count = len(ACCELERATING_CASES)
+    grid = figure.add_gridspec(2, 2 * count, height_ratios=(1.2, 1))
+    for index, case in enumerate(ACCELERATING_CASES):
+        axes = figure.add_subplot(grid[0, 2 * index : 2 * index + 2])
+        _plot_accelerating_plan(axes, study, case)
+    for index, scene in enumerate(ACCELERATING_SCENES):
+        axes = figure.add_subplot(grid[1, index * count : (index + 1) * count])
+        _plot_accelerating_bars(axes, study, scene)
+    return _titled(
+        figure,
+        "accelerating",
+        f"[HZ] Fig 5: vehicle 2 accelerates at 6 m/s² from step 40, {len(seeds)} runs per case",
+        reduced,
+    )
+
+
+def _plot_accelerating_plan(axes: Axes, study: AcceleratingStudy, case: str) -> None:
+    detections, targets = study.example_detections, study.example_targets
+    clutter = targets < 0
+    axes.plot(detections[clutter, 0], detections[clutter, 1], "r*", ms=2)
+    axes.plot(detections[~clutter, 0], detections[~clutter, 1], "k.", ms=1.5)
+    for track, trajectory in study.example[case].items():
+        axes.plot(trajectory[:, 0], trajectory[:, 2], lw=1.2, label=track)
+    axes.set_xlim(-10, 10)
+    axes.set_ylim(0, 80)
+    axes.set_xlabel("x (m)")
+    axes.set_title(f"{case}\n(seed {study.seeds[0]}, clutter 3/frame)", fontsize=8)
+    axes.legend(fontsize=6, loc="upper left")
+
+
+def _plot_accelerating_bars(axes: Axes, study: AcceleratingStudy, scene: str) -> None:
+    fields = (
+        ("stolen", "detections of vehicle 1 stolen / run"),
+        ("false_alarms", "false alarms taken / run"),
+        ("terminated", "share of runs: lost track terminated"),
+    )
+    positions = np.arange(len(ACCELERATING_CASES))
+    width = 0.27
+    runs = len(study.seeds)
+    for offset, (field, label) in enumerate(fields):
+        values = [
+            study.share(scene, case, field)
+            if field == "terminated"
+            else study.total(scene, case, field) / runs
+            for case in ACCELERATING_CASES
+        ]
+        bars = axes.bar(positions + (offset - 1) * width, values, width, label=label)
+        axes.bar_label(bars, fmt="%.2g", fontsize=6)
+    axes.set_xticks(positions, [textwrap.fill(case, 14) for case in ACCELERATING_CASES])
+    axes.tick_params(axis="x", labelsize=7)
+    detail = (
+        "clutter 3/frame, 8 s"
+        if scene == "accelerating"
+        else "vehicle 1 two lanes away, no clutter, 16 s"
+    )
+    axes.set_title(f"scene '{scene}' ({detail})", fontsize=9, loc="left")
+    axes.legend(fontsize=6, loc="upper right")
+
+
+# ---------------------------------------------------------------- overtaking
+def draw_overtaking(reduced: bool, echo: Echo) -> Figure:
+    """[HZ] Fig 6: identity of an overtaking vehicle through the blind zone, five cases."""
+    seeds = _seeds(20, reduced)
+    echo(f"overtaking: seeds {list(seeds)}")
+    study = overtaking_study(seeds)
+    figure = Figure(figsize=(11, 4.8), layout="constrained")
+    left, right = figure.subplots(1, 2, width_ratios=(1, 1.3))
+    _plot_overtaking_example(left, study)
+    _plot_overtaking_bars(right, study)
+    return _titled(
+        figure,
+        "overtaking",
+        f"[HZ] Fig 6: a vehicle overtakes through the blind zone, {len(seeds)} runs per case",
+        reduced,
+    )
+
+
+def _plot_overtaking_example(axes: Axes, study: OvertakingStudy) -> None:
+    steps = np.arange(study.truths.shape[1])
+    axes.axhspan(-5, 5, color="0.9", zorder=0)
+    axes.text(2, 0, "blind zone", fontsize=7, va="center")
+    axes.plot(steps, study.truths[0, :, 2], "k-", lw=2, alpha=0.4, label="truth, vehicle 1")
+    axes.plot(steps, study.truths[1, :, 2], "k--", lw=2, alpha=0.4, label="truth, vehicle 2")
+    for index, (case, trajectory) in enumerate(study.example.items()):
+        axes.plot(steps, trajectory[:, 2], color=f"C{index}", lw=1, label=f"rear track, {case}")
+    axes.set_xlabel("step (ΔT = 0.1 s)")
+    axes.set_ylabel("y (m, ahead)")
+    axes.set_title(
+        f"vehicle 1's rear track until it ends (seed {study.seeds[0]})", fontsize=9, loc="left"
+    )
+    axes.legend(fontsize=6, loc="lower right")
+
+
+def _plot_overtaking_bars(axes: Axes, study: OvertakingStudy) -> None:
+    cases = list(OVERTAKING_CASES)
+    positions = np.arange(len(cases))
+    runs = len(study.seeds)
+    width = 0.27
+    series = (
+        ("identity kept (share of runs)", [study.kept_share(case) for case in cases]),
+        (
+            "vehicle 2 detections stolen / run",
+            [study.total(case, "stolen") / runs for case in cases],
+        ),
+        ("false alarms taken / run", [study.total(case, "false_alarms") / runs for case in cases]),
+    )
+    for offset, (label, values) in enumerate(series):
+        bars = axes.bar(positions + (offset - 1) * width, values, width, label=label)
+        axes.bar_label(bars, fmt="%.2g", fontsize=6)
+    axes.set_xticks(positions, [textwrap.fill(case, 14) for case in cases])
+    axes.tick_params(axis="x", labelsize=7)
+    axes.set_ylim(0, 1.15)
+    axes.set_title("per case", fontsize=9, loc="left")
+    axes.legend(fontsize=7, loc="upper center")
+
+
 FIGURES: dict[str, FigureSpec] = {
     spec.name: spec
     for spec in (
@@ -404,6 +788,36 @@ FIGURES: dict[str, FigureSpec] = {
             "ALGORITHMS.md §3.3",
             "hachour density vs relative vs gnn/denoeux in metres and kilometres",
             draw_unit_study,
+        ),
+        FigureSpec(
+            "close-pair",
+            "[MTT] Fig 16",
+            "false assignment rate vs noise, closest-model vs combined IMM distance",
+            draw_close_pair,
+        ),
+        FigureSpec(
+            "crossing",
+            "[MTT] Fig 17–18",
+            "a fighter crosses an unknown aircraft: false assignments and classes",
+            draw_crossing,
+        ),
+        FigureSpec(
+            "road-four",
+            "[DH] Fig 1–5",
+            "RMS position/velocity error of four vehicles in clutter vs cheap JPDA",
+            draw_road_four,
+        ),
+        FigureSpec(
+            "accelerating",
+            "[HZ] Fig 5",
+            "plain vs modified distance, with and without termination",
+            draw_accelerating,
+        ),
+        FigureSpec(
+            "overtaking",
+            "[HZ] Fig 6",
+            "identity through the blind zone with and without phantoms",
+            draw_overtaking,
         ),
     )
 }

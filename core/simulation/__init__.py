@@ -3,7 +3,12 @@
 from core.simulation.aircraft import aircraft_scenario
 from core.simulation.nearby import close_pair_scenario, crossing_scenario
 from core.simulation.pedestrian import pedestrian_scenario
-from core.simulation.road import accelerating_scenario, overtaking_scenario, stealing_scenario
+from core.simulation.road import (
+    accelerating_scenario,
+    overtaking_scenario,
+    road_four_scenario,
+    stealing_scenario,
+)
 from core.simulation.scenario import CLUTTER, Manoeuvre, Region, Scan, Scenario, TargetTruth
 from core.simulation.two_class import ClassifiedTrackListScenario, t2t_two_class
 
@@ -14,6 +19,7 @@ SCENARIOS = {
     "crossing": crossing_scenario,
     "accelerating": accelerating_scenario,
     "overtaking": overtaking_scenario,
+    "road-four": road_four_scenario,
 }
 """Scenario generators by their EVALUATION.md id; each takes ``seed`` first.
 
@@ -36,6 +42,7 @@ __all__ = [
     "crossing_scenario",
     "overtaking_scenario",
     "pedestrian_scenario",
+    "road_four_scenario",
     "stealing_scenario",
     "t2t_two_class",
 ]

@@ -1,4 +1,5 @@
-"""Road scenes of [HZ] §6: ``accelerating`` (Fig 5), its ``stealing`` variant, ``overtaking`` (Fig 6).
+"""Road scenes of [HZ] §6: ``accelerating`` (Fig 5), its ``stealing`` variant, ``overtaking``
+(Fig 6); and ``road-four`` of [DH] §5 (:func:`road_four_scenario`, its own Reading).
 
 Coordinates are relative to our vehicle: x lateral (m, right positive), y
 ahead (m). ΔT = 0.1 s. Truth by [MTT] eq 24 (piecewise constant
@@ -196,4 +197,87 @@ def overtaking_scenario(
         scans=scans,
         measurement_noise=noise,
         sensor_regions=regions,
+    )
+
+
+ROAD_FOUR_VARIANCE = 0.5
+"""[DH] §5: "the deviation of the measurement noise has been selected as σ² = 0.5 m²"."""
+
+
+def road_four_scenario(
+    seed: int = 0,
+    *,
+    n_steps: int = 100,
+    clutter_rate: float = 3.0,
+    p_detect: float = 1.0,
+    lane_change: tuple[int, int] = (40, 59),
+) -> Scenario:
+    """Build ``road-four`` ([DH] §5 Fig 1): four vehicles ahead of ours, in clutter.
+
+    T = 0.1 s and R = 0.5 I m² as in [DH]; x lateral, y ahead, relative to
+    our vehicle. **Reading:** [DH] takes its trajectories from its ref. [8]
+    and gives no coordinates; ours are three lanes 3.5 m apart, 10 s:
+
+    - vehicle 1, left lane (x = −3.5), y = 20 m, pulls away at +1 m/s;
+    - vehicle 2, our lane (x = 0), y = 30 m, keeps its distance;
+    - vehicle 3, right lane (x = +3.5), y = 12 m, +1 m/s, changes into our
+      lane during steps ``lane_change`` (lateral ±1.75·(2/d)² m/s² for the two
+      halves of the window, d its duration in s: 3.5 m across, behind vehicle 2);
+    - vehicle 4, right lane, y = 45 m, approaches at −1 m/s.
+
+    Clutter: Poisson, mean ``clutter_rate`` per frame, uniform over the
+    sensor's area ``x ∈ [−10, 10]``, ``y ∈ [0, 60]`` (one forward sensor, "front").
+    """
+    rng = np.random.default_rng(seed)
+    region: Region = ((-10.0, 10.0), (0.0, 60.0))
+    first, last = lane_change
+    half = (last - first + 1) // 2
+    duration = 2 * half * TIME_INTERVAL
+    lateral = 3.5 * 4.0 / duration**2  # a·(d/2)² = 3.5 m over the window
+    inputs = np.zeros((n_steps, 2))
+    inputs[first : first + half, 0] = -lateral
+    inputs[first + half : first + 2 * half, 0] = lateral
+    starts = (
+        (-3.5, 0.0, 20.0, 1.0),
+        (0.0, 0.0, 30.0, 0.0),
+        (3.5, 0.0, 12.0, 1.0),
+        (3.5, 0.0, 45.0, -1.0),
+    )
+    truths = tuple(
+        TargetTruth(
+            index + 1,
+            0,
+            propagate(
+                start,
+                inputs if index == 2 else np.zeros((n_steps, 2)),
+                TIME_INTERVAL,
+                PROCESS_NOISE,
+                rng,
+            ),
+        )
+        for index, start in enumerate(starts)
+    )
+    noise = ROAD_FOUR_VARIANCE * np.eye(2)
+    scans = observe(
+        truths,
+        n_steps,
+        TIME_INTERVAL,
+        noise,
+        rng,
+        sensor="front",
+        p_detect=p_detect,
+        clutter_rate=clutter_rate,
+        region=region,
+        visible=_coverage(region),
+    )
+    return Scenario(
+        name="road-four",
+        seed=seed,
+        time_interval=TIME_INTERVAL,
+        n_steps=n_steps,
+        truths=truths,
+        manoeuvres=(Manoeuvre(3, first, first + 2 * half - 1, "lane change", (-lateral, 0.0)),),
+        scans=tuple(scans),
+        measurement_noise=noise,
+        sensor_regions={"front": region},
     )

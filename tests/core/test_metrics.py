@@ -13,12 +13,16 @@ from stonesoup.types.state import State
 from core.arrays import FloatArray
 from core.errors import InvalidInput
 from core.metrics import (
+    coverage,
     false_decision_rate,
+    false_tracks,
     gospa,
     identity_switches,
     ospa,
     rms_error,
     time_mean_error,
+    time_to_decision,
+    track_losses,
 )
 
 NOW = datetime.datetime(2026, 11, 22)
@@ -133,3 +137,63 @@ def test_identity_switches() -> None:
 def test_invalid_metric_inputs(call: object, message: str) -> None:
     with pytest.raises(InvalidInput, match=message):
         call()  # type: ignore[operator]
+
+
+# ------------------------------------------- coverage, losses, false tracks, decisions
+def test_coverage_hand_worked() -> None:
+    # Truth a at 0, b at 10; tracks T1 at 1 (covers a), T2 at 10.5 (covers b), T3 at 30 (none).
+    truths = {"a": [0.0, 0.0], "b": [10.0, 0.0]}
+    tracks = {"T1": [1.0, 0.0], "T2": [10.5, 0.0], "T3": [30.0, 0.0]}
+    assert coverage(truths, tracks, cutoff=2.0) == {"a": "T1", "b": "T2"}
+    # T1 is the nearest track of both truths; the total-distance pairing gives b to T2.
+    truths = {"a": [0.0, 0.0], "b": [1.5, 0.0]}
+    tracks = {"T1": [1.0, 0.0], "T2": [2.0, 0.0]}
+    assert coverage(truths, tracks, cutoff=2.0) == {"a": "T1", "b": "T2"}
+    # Beyond the cut-off nothing covers; no tracks at all: every truth uncovered.
+    assert coverage({"a": [0.0, 0.0]}, {"T1": [5.0, 0.0]}, cutoff=2.0) == {"a": None}
+    assert coverage({"a": [0.0, 0.0]}, {}, cutoff=2.0) == {"a": None}
+    with pytest.raises(InvalidInput):
+        coverage({"a": [0.0]}, {"T": [0.0]}, cutoff=0.0)
+
+
+def test_track_losses_and_false_tracks_hand_worked() -> None:
+    steps: list[dict[str, str | None]] = [
+        {"a": None, "b": "T2"},  # a not yet covered: not a loss
+        {"a": "T1", "b": "T2"},
+        {"a": None, "b": "T2"},  # a lost (1)
+        {"a": "T3", "b": None},  # b lost (2); a found again under another id
+        {"a": None},  # a lost (3); b gone from the scene: not a loss
+        {"a": None, "b": None},  # b back without a track: was not covered before
+    ]
+    assert track_losses(steps) == 3
+    assert track_losses([]) == 0
+    assert false_tracks({"T1", "T2", "T3", "T4", "T5"}, steps) == 2  # T4, T5 never cover
+    assert false_tracks(set(), steps) == 0
+
+
+def test_time_to_decision_hand_worked() -> None:
+    fighter = 2
+    nan = np.nan
+    run = np.array(
+        [
+            [1 / 3, 1 / 3, 1 / 3],  # 0
+            [0.0, 0.5, 0.5],  # 1
+            [0.0, 0.2, 0.8],  # 2: decided …
+            [0.0, 0.6, 0.4],  # 3: … but not for good
+            [nan, nan, nan],  # 4: no BetP (total conflict): undecided
+            [0.0, 0.1, 0.9],  # 5: decided from here to the end
+            [0.0, 0.0, 1.0],  # 6
+        ]
+    )
+    assert time_to_decision(run, fighter) == 5.0
+    assert time_to_decision(run, fighter, start=2) == 3.0
+    assert time_to_decision(run, fighter, level=0.95) == 6.0
+    assert np.isnan(time_to_decision(run, 0))  # liner never
+    assert time_to_decision(run, fighter, start=5) == 0.0
+    # Batched over runs: the same run twice and one decided at once.
+    stacked = np.stack([run, run, np.tile([0.0, 0.0, 1.0], (7, 1))])
+    assert_allclose(time_to_decision(stacked, fighter), [5.0, 5.0, 0.0])
+    with pytest.raises(InvalidInput):
+        time_to_decision(run, fighter, start=7)
+    with pytest.raises(InvalidInput):
+        time_to_decision(run[0], fighter)

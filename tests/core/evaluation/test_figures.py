@@ -25,7 +25,18 @@ def test_reproduce_writes_a_png(name: str, tmp_path: Path) -> None:
 
 
 def test_the_registry_names_the_papers_figures() -> None:
-    assert set(FIGURES) == {"t2t-four", "t2t-two-class", "aircraft", "pedestrian", "unit-study"}
+    assert set(FIGURES) == {
+        "t2t-four",
+        "t2t-two-class",
+        "aircraft",
+        "pedestrian",
+        "unit-study",
+        "close-pair",
+        "crossing",
+        "road-four",
+        "accelerating",
+        "overtaking",
+    }
     assert all(spec.name == name and spec.paper for name, spec in FIGURES.items())
 
 
