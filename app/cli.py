@@ -8,6 +8,7 @@ from collections.abc import Sequence
 import uvicorn
 
 from app.main import create_app
+from app.runtime import tune_garbage_collector
 from app.settings import get_settings
 from app.stores import parse_store_url
 
@@ -21,8 +22,10 @@ def _serve(args: argparse.Namespace) -> int:
         f"credal-fusion on http://{args.host}:{args.port}  (API docs: /docs, store: {args.store})",
         flush=True,
     )
+    application = create_app(settings)
+    tune_garbage_collector()
     uvicorn.run(
-        create_app(settings),
+        application,
         host=args.host,
         port=args.port,
         ws_max_size=settings.max_body_bytes,

@@ -52,7 +52,7 @@ from app.translate import (
     core_detection_report,
     core_track_report,
     fusion_config,
-    step_plain,
+    step_json,
     tracks_plain,
 )
 from core.errors import StaleReport as CoreStaleReport
@@ -264,7 +264,7 @@ class SessionRegistry:
                 )
         except CoreStaleReport as stale:
             raise StaleReport(stale.sensor, stale.time, stale.last_time) from None
-        result = dumps(step_plain(step, session.seq + 1))  # serialised once, here
+        result = step_json(step, session.seq + 1)  # serialised once, here
         return Step(engine=engine, fusion=fusion, result=result)
 
     async def submit_tracks(
