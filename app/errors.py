@@ -359,12 +359,16 @@ PROBLEM_STATUSES: dict[int, str] = {
     409: "Conflict with the session state",
     413: "Body too large",
     422: "Invalid request (every invalid field is listed in `errors`) or a limit exceeded",
-    429: "Too many sessions",
+    429: "Too many requests (``rate_limit``, with ``Retry-After``) or too many sessions",
 }
 
 
 def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
-    """OpenAPI ``responses`` entries documenting problem+json answers for ``statuses``."""
+    """OpenAPI ``responses`` entries documenting problem+json answers for ``statuses``.
+
+    Every route may answer 429 (the rate limit, :mod:`app.rate_limit`), so it is always listed.
+    """
     return {
-        status: {"model": Problem, "description": PROBLEM_STATUSES[status]} for status in statuses
+        status: {"model": Problem, "description": PROBLEM_STATUSES[status]}
+        for status in sorted({*statuses, int(HTTPStatus.TOO_MANY_REQUESTS)})
     }

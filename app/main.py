@@ -14,6 +14,7 @@ from app.errors import install_error_handlers
 from app.limits import BodySizeLimit
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
+from app.rate_limit import RateLimit, parse_rates
 from app.routes import associate, fusion, health, metrics, sessions, streams
 from app.sessions import SessionRegistry
 from app.settings import Settings, get_settings
@@ -67,6 +68,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(associate.router)
     app.include_router(streams.router)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
+    app.add_middleware(RateLimit, rates=parse_rates(settings.rate_limit))  # before the body is read
     app.add_middleware(HttpMetrics, metrics=service_metrics)
     install_openapi(app)
     return app
