@@ -47,8 +47,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             expiry.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await expiry
-            for session in registry:
-                session.hub.close()
+            await registry.aclose()
             store.close()
 
     app = FastAPI(

@@ -44,6 +44,12 @@ class Settings(BaseSettings):
     snapshot_every: int = Field(100, ge=1, description="snapshot the engine every N inputs")
     ws_ping_interval: float = Field(20.0, gt=0.0, description="seconds between WebSocket pings")
     ws_ping_timeout: float = Field(20.0, gt=0.0, description="a peer silent this long is dropped")
+    lease_ttl_ms: int = Field(
+        10_000,
+        ge=100,
+        description="redis store: an instance that stops renewing a session's lease loses it "
+        "after this long, and another instance takes the session over",
+    )
     rate_limit: str = Field(
         "1000/second",
         description="requests per bearer token (or client address without one), in the "

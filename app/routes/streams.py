@@ -12,7 +12,9 @@ order and puts its answer (one ``result`` or ``error``, echoing ``ref``) into
 a bounded queue; a writer task sends them. When the client does not read, the
 queue fills, the reader stops reading and TCP pushes back: nothing grows
 without bound. ``subscribe``: the session's hub gives each subscriber a
-bounded queue that keeps the latest results (:mod:`app.hub`).
+bounded queue that keeps the latest results (:mod:`app.hub`); with the
+redis store the hub is fed from Redis pub/sub, so results applied on any
+instance arrive (:meth:`app.sessions.SessionRegistry.subscribe`).
 """
 
 from __future__ import annotations
@@ -178,8 +180,9 @@ async def subscribe_session(websocket: WebSocket, sid: str) -> None:
     session = await _open(websocket, sid)
     if session is None:
         return
+    registry: SessionRegistry = websocket.app.state.registry
     await websocket.accept()
-    subscriber = session.hub.subscribe()
+    subscriber = await registry.subscribe(session)  # in place before the ack: nothing missed
     await websocket.send_text(_ack(session))
 
     async def pump() -> None:
@@ -196,4 +199,4 @@ async def subscribe_session(websocket: WebSocket, sid: str) -> None:
     except* (*DISCONNECTED, RuntimeError):
         pass
     finally:
-        session.hub.unsubscribe(subscriber)
+        registry.unsubscribe(session, subscriber)
