@@ -19,7 +19,10 @@ def _serve(args: argparse.Namespace) -> int:
         update={"host": args.host, "port": args.port, "store": args.store}
     )
     print(
-        f"credal-fusion on http://{args.host}:{args.port}  (API docs: /docs, store: {args.store})",
+        f"credal-fusion on http://{args.host}:{args.port}\n"
+        f"  live viewer: http://{args.host}:{args.port}/\n"
+        f"  API docs: http://{args.host}:{args.port}/docs\n"
+        f"  store: {args.store}",
         flush=True,
     )
     application = create_app(settings)

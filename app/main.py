@@ -15,7 +15,7 @@ from app.limits import BodySizeLimit
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
 from app.rate_limit import RateLimit, parse_rates
-from app.routes import associate, fusion, health, metrics, sessions, streams
+from app.routes import associate, fusion, health, metrics, sessions, streams, viewer
 from app.sessions import SessionRegistry
 from app.settings import Settings, get_settings
 from app.stores import open_store
@@ -66,6 +66,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(fusion.router)
     app.include_router(associate.router)
     app.include_router(streams.router)
+    app.include_router(viewer.router)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     app.add_middleware(RateLimit, rates=parse_rates(settings.rate_limit))  # before the body is read
     app.add_middleware(HttpMetrics, metrics=service_metrics)
