@@ -10,7 +10,9 @@ the limit gets ``429`` problem+json naming the limit (``limit:
 read. ``/healthz`` is never limited: a liveness probe must not be refused.
 
 The counters are the library's sliding-window counters in this process's
-memory: with several instances behind a load balancer each instance counts
+memory, its asyncio flavour (the threaded one starts a timer thread every
+10 ms under load, which took the GIL from the event loop: +2 ms of REST
+p50 in ``bench/service.py``): with several instances behind a load balancer each instance counts
 its own share (session affinity sends a session's token to one instance).
 Tokens are keyed by a hash, never kept in clear.
 """
@@ -23,8 +25,8 @@ import time
 from http import HTTPStatus
 
 from limits import RateLimitItem, parse_many
-from limits.storage import MemoryStorage
-from limits.strategies import SlidingWindowCounterRateLimiter
+from limits.aio.storage import MemoryStorage
+from limits.aio.strategies import SlidingWindowCounterRateLimiter
 from starlette.responses import Response
 from starlette.types import ASGIApp, Receive, Scope, Send
 from starlette.websockets import WebSocket
@@ -81,7 +83,7 @@ class RateLimit:
             return
         key = client_key(scope)
         for item in self.rates:
-            if not self.limiter.hit(item, key):
+            if not await self.limiter.hit(item, key):
                 await self._refuse(scope, receive, send, item, key)
                 return
         await self.app(scope, receive, send)
@@ -89,7 +91,7 @@ class RateLimit:
     async def _refuse(
         self, scope: Scope, receive: Receive, send: Send, item: RateLimitItem, key: str
     ) -> None:
-        reset = self.limiter.get_window_stats(item, key).reset_time
+        reset = (await self.limiter.get_window_stats(item, key)).reset_time
         retry_after = max(1, math.ceil(reset - time.time()))
         rate = _rate_text(item)
         who = "this token" if key.startswith("token:") else "this client address"
