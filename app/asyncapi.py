@@ -75,8 +75,12 @@ the client on this channel are ignored. When the session ends the server
 closes the connection (code 1000).
 
 Both channels need the session's bearer token (or the admin token) in the
-`Authorization` header of the upgrade request; a refused upgrade gets the
-REST route's problem+json answer (401, 403 or 404). The server sends
+`Authorization` header of the upgrade request, or, from a browser (which
+cannot set headers on an upgrade), offered as the two subprotocols `bearer`
+and the token (the server accepts `bearer`); a refused upgrade gets the
+REST route's problem+json answer (401, 403, 404 or 429). With the redis
+store, `subscribe` on any instance receives the results applied on any
+other. The server sends
 WebSocket pings every `CREDAL_WS_PING_INTERVAL` seconds; a peer that does not
 answer within `CREDAL_WS_PING_TIMEOUT` is disconnected.
 """

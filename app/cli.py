@@ -14,6 +14,7 @@ from app.commands.replay import export_command, replay_command
 from app.commands.scenarios import names as scenario_names
 from app.commands.simulate import command as simulate_command
 from app.main import create_app
+from app.runtime import tune_garbage_collector
 from app.settings import get_settings
 from app.stores import parse_store_url
 from core.evaluation.figures import FIGURES
@@ -26,11 +27,16 @@ def _serve(args: argparse.Namespace) -> int:
         update={"host": args.host, "port": args.port, "store": args.store}
     )
     print(
-        f"credal-fusion on http://{args.host}:{args.port}  (API docs: /docs, store: {args.store})",
+        f"credal-fusion on http://{args.host}:{args.port}\n"
+        f"  live viewer: http://{args.host}:{args.port}/\n"
+        f"  API docs: http://{args.host}:{args.port}/docs\n"
+        f"  store: {args.store}",
         flush=True,
     )
+    application = create_app(settings)
+    tune_garbage_collector()
     uvicorn.run(
-        create_app(settings),
+        application,
         host=args.host,
         port=args.port,
         ws_max_size=settings.max_body_bytes,

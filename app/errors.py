@@ -120,6 +120,26 @@ class StaleReport(Conflict):
         )
 
 
+class SessionLeased(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """Another service instance holds the session's lease (it applies the session's inputs)."""
+
+    status = HTTPStatus.SERVICE_UNAVAILABLE
+    slug = "session-leased"
+    title = "Session applied by another instance"
+
+    def __init__(self, session_id: str, retry_after_s: int) -> None:
+        super().__init__(
+            f"session {session_id!r} is applied by another service instance; "
+            f"its lease lapses within {retry_after_s} s if that instance is gone",
+            session=session_id,
+            retry_after=retry_after_s,
+        )
+        self.retry_after_s = retry_after_s
+
+    def headers(self) -> dict[str, str]:
+        return {"Retry-After": str(self.retry_after_s)}
+
+
 class TrackNotFound(ServiceError):  # noqa: N818 - HTTP vocabulary
     """The session has no live fused track with this id."""
 
@@ -359,12 +379,17 @@ PROBLEM_STATUSES: dict[int, str] = {
     409: "Conflict with the session state",
     413: "Body too large",
     422: "Invalid request (every invalid field is listed in `errors`) or a limit exceeded",
-    429: "Too many sessions",
+    429: "Too many requests (``rate_limit``, with ``Retry-After``) or too many sessions",
+    503: "Another service instance applies this session's inputs (``Retry-After``)",
 }
 
 
 def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
-    """OpenAPI ``responses`` entries documenting problem+json answers for ``statuses``."""
+    """OpenAPI ``responses`` entries documenting problem+json answers for ``statuses``.
+
+    Every route may answer 429 (the rate limit, :mod:`app.rate_limit`), so it is always listed.
+    """
     return {
-        status: {"model": Problem, "description": PROBLEM_STATUSES[status]} for status in statuses
+        status: {"model": Problem, "description": PROBLEM_STATUSES[status]}
+        for status in sorted({*statuses, int(HTTPStatus.TOO_MANY_REQUESTS)})
     }

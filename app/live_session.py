@@ -36,6 +36,8 @@ class LiveSession:
     last_input_at: datetime | None = None
     since_snapshot: int = 0
     closed: bool = False
+    lease_deadline: float = 0.0
+    """Monotonic time until which this instance surely holds the session's lease (redis store)."""
     lock: asyncio.Lock = field(default_factory=asyncio.Lock)
     hub: Hub = field(default_factory=Hub)
 

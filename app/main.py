@@ -14,7 +14,8 @@ from app.errors import install_error_handlers
 from app.limits import BodySizeLimit
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
-from app.routes import associate, fusion, health, metrics, sessions, streams
+from app.rate_limit import RateLimit, parse_rates
+from app.routes import associate, fusion, health, metrics, sessions, streams, viewer
 from app.sessions import SessionRegistry
 from app.settings import Settings, get_settings
 from app.stores import open_store
@@ -46,8 +47,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             expiry.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await expiry
-            for session in registry:
-                session.hub.close()
+            await registry.aclose()
             store.close()
 
     app = FastAPI(
@@ -66,7 +66,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(fusion.router)
     app.include_router(associate.router)
     app.include_router(streams.router)
+    app.include_router(viewer.router)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
+    app.add_middleware(RateLimit, rates=parse_rates(settings.rate_limit))  # before the body is read
     app.add_middleware(HttpMetrics, metrics=service_metrics)
     install_openapi(app)
     return app

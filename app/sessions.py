@@ -18,6 +18,21 @@ On start every stored session is restored from its latest snapshot plus the
 log after it (:meth:`SessionRegistry.restore_all`); a session without input
 for ``session_idle_seconds`` is ended (:meth:`SessionRegistry.expire_idle`).
 
+With the ``redis`` store several instances share the sessions
+(:mod:`app.stores.lease`, :mod:`app.stores.fanout`): before applying an input
+the instance takes (or renews) the session's lease — a session another live
+instance holds answers 503 with ``Retry-After``; an instance that (re)takes a
+lease first rebuilds the engine from the store if the log moved on meanwhile.
+The store's sequence check is the fence: an append that meets
+``SequenceConflict`` (overtaken while paused past the lease) rebuilds the
+session from the store and applies the input once more. Results go out
+through Redis pub/sub, and each instance forwards the results of a session
+with local subscribers into that session's hub, so a ``subscribe`` client on
+any instance receives every result in order. Leases are released when a
+session is deleted and when the instance shuts down. Reads (the picture, the
+summary) answer from the instance's memory: with session affinity that is
+the instance applying the session's inputs.
+
 A session whose config names no sensor accepts any sensor id: each new one
 joins the engine (default reliability and P_D, no field of view) when its
 first input is applied, up to ``max_sensors``; the snapshot keeps the list.
@@ -26,8 +41,10 @@ first input is applied, up to ``max_sensors``; the snapshot keeps the list.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import functools
 import logging
+import math
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -39,20 +56,37 @@ import anyio
 from api_schemas.config import SessionConfig
 from api_schemas.consistency import detection_report_issues, track_report_issues
 from api_schemas.reports import DetectionReport, TrackReport
-from app.errors import LimitExceeded, SessionNotFound, StaleReport, request_validation_error
+from app.errors import (
+    LimitExceeded,
+    SessionLeased,
+    SessionNotFound,
+    StaleReport,
+    request_validation_error,
+)
+from app.hub import Subscriber
 from app.limits import check_report_limits
 from app.live_session import LiveSession, new_session, restore_snapshot
 from app.metrics import ServiceMetrics
 from app.responses import dumps
 from app.session_log import event_from_entry, log_input
 from app.settings import Settings
-from app.stores import MemoryStore, SessionLoad, SessionRecord, Snapshot, Store
+from app.stores import (
+    MemoryStore,
+    RedisStore,
+    SequenceConflict,
+    SessionLoad,
+    SessionRecord,
+    Snapshot,
+    Store,
+)
+from app.stores.fanout import ResultFanout, open_fanout
+from app.stores.lease import SessionLeases, new_owner_id, open_leases
 from app.translate import (
     PlainObject,
     core_detection_report,
     core_track_report,
     fusion_config,
-    step_plain,
+    step_json,
     tracks_plain,
 )
 from core.errors import StaleReport as CoreStaleReport
@@ -82,13 +116,28 @@ class Step:
 class SessionRegistry:
     """Every live session of the process, loaded from and logged to the store."""
 
-    def __init__(self, store: Store, settings: Settings, metrics: ServiceMetrics) -> None:
+    def __init__(
+        self,
+        store: Store,
+        settings: Settings,
+        metrics: ServiceMetrics,
+        *,
+        leases: SessionLeases | None = None,
+        fanout: ResultFanout | None = None,
+        owner: str | None = None,
+    ) -> None:
         self.store = store
         self.settings = settings
         self.metrics = metrics
+        self.shared = isinstance(store, RedisStore)
+        """Several instances share the store: leases, fan-out through Redis."""
+        self.leases = leases or open_leases(store)
+        self.fanout = fanout or open_fanout(store)
+        self.owner = owner or new_owner_id()
         self._sessions: dict[str, LiveSession] = {}
         self._load_lock = asyncio.Lock()
         self._store_inline = isinstance(store, MemoryStore)
+        self._forwarders: dict[str, asyncio.Task[None]] = {}
 
     def __len__(self) -> int:
         return len(self._sessions)
@@ -183,13 +232,38 @@ class SessionRegistry:
         if session is not None:
             session.closed = True
             session.hub.close()
+        forwarder = self._forwarders.pop(session_id, None)
+        if forwarder is not None:
+            forwarder.cancel()
 
     async def delete(self, session_id: str) -> bool:
-        """End a session in the store and in memory."""
+        """End a session in the store and in memory (and give its lease up)."""
         deleted = await self._io(self.store.delete_session, session_id)
         self.discard(session_id)
+        if self.shared:
+            await self._io(self.leases.release, session_id, self.owner)
         self.metrics.sessions.set(await self._io(self.store.count_sessions))
         return bool(deleted)
+
+    async def aclose(self) -> None:
+        """Shutdown: end local subscriptions, release the leases this instance holds."""
+        for session in self:
+            session.hub.close()
+        for forwarder in self._forwarders.values():
+            forwarder.cancel()
+        for forwarder in list(self._forwarders.values()):
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await forwarder
+        self._forwarders.clear()
+        if self.shared:
+            now = time.monotonic()
+            for session in self:
+                if session.lease_deadline > now:
+                    try:
+                        await self._io(self.leases.release, session.id, self.owner)
+                    except Exception:
+                        logger.exception("session %s: lease release failed", session.id)
+        await self.fanout.aclose()
 
     async def expire_idle(self, now: datetime | None = None) -> list[str]:
         """End every session idle for longer than ``session_idle_seconds`` (0: never)."""
@@ -202,10 +276,25 @@ class SessionRegistry:
             for session in self
             if moment - session.idle_since() > timedelta(seconds=idle) and not session.lock.locked()
         ]
+        if self.shared:
+            expired = [sid for sid in expired if not await self._active_elsewhere(sid, moment)]
         for session_id in expired:
             logger.info("session %s expired after %.0f s without input", session_id, idle)
             await self.delete(session_id)
         return expired
+
+    async def _active_elsewhere(self, session_id: str, now: datetime) -> bool:
+        """Whether another instance moved the session's log on (then it is not idle)."""
+        session = self._sessions.get(session_id)
+        try:
+            last = await self._io(self.store.last_seq, session_id)
+        except SessionNotFound:
+            self.discard(session_id)
+            return True
+        if session is not None and last != session.seq:
+            session.last_input_at = now  # it will be rebuilt when this instance next applies
+            return True
+        return False
 
     async def run_expiry(self) -> None:
         """Check idle sessions periodically until cancelled."""
@@ -219,6 +308,51 @@ class SessionRegistry:
                 await self.expire_idle()
             except Exception:
                 logger.exception("idle expiry failed")
+
+    # ------------------------------------------------------------ subscribers
+    async def subscribe(self, session: LiveSession) -> Subscriber:
+        """A subscriber of every result of the session published from now on, on any instance."""
+        subscriber = session.hub.subscribe()
+        if self.shared:
+            try:
+                await self._forward(session)
+            except BaseException:
+                session.hub.unsubscribe(subscriber)
+                raise
+        return subscriber
+
+    def unsubscribe(self, session: LiveSession, subscriber: Subscriber) -> None:
+        """Stop delivering to ``subscriber``; the last one of a session stops its forwarding."""
+        session.hub.unsubscribe(subscriber)
+        if not len(session.hub):
+            forwarder = self._forwarders.pop(session.id, None)
+            if forwarder is not None:
+                forwarder.cancel()
+
+    async def _forward(self, session: LiveSession) -> None:
+        """Forward the session's results from Redis into its hub; returns once subscribed."""
+        running = self._forwarders.get(session.id)
+        if running is not None and not running.done():
+            return
+        subscribed: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+
+        async def forward() -> None:
+            try:
+                async with self.fanout.subscribe(session.id) as results:
+                    subscribed.set_result(None)
+                    async for message in results:
+                        session.hub.publish(message)
+            except Exception as error:
+                if not subscribed.done():
+                    subscribed.set_exception(error)
+                else:
+                    logger.exception("session %s: result forwarding failed", session.id)
+                    session.hub.close()
+
+        self._forwarders[session.id] = asyncio.create_task(
+            forward(), name=f"forward-results:{session.id}"
+        )
+        await subscribed
 
     # ------------------------------------------------------------ inputs
     def check_tracks(self, session: LiveSession, report: TrackReport) -> None:
@@ -264,7 +398,7 @@ class SessionRegistry:
                 )
         except CoreStaleReport as stale:
             raise StaleReport(stale.sensor, stale.time, stale.last_time) from None
-        result = dumps(step_plain(step, session.seq + 1))  # serialised once, here
+        result = step_json(step, session.seq + 1)  # serialised once, here
         return Step(engine=engine, fusion=fusion, result=result)
 
     async def submit_tracks(
@@ -289,42 +423,95 @@ class SessionRegistry:
         *,
         explain: bool,
     ) -> str:
-        """Under the session lock: apply, log durably, then publish and return the result."""
+        """Under the session lock: (lease,) apply, log durably, then publish and return the result."""
         kind = "tracks" if isinstance(report, TrackReport) else "detections"
         async with session.lock:
             if session.closed:
                 raise SessionNotFound(session.id)
             with anyio.CancelScope(shield=True):
-                started = time.perf_counter()
-                size = items + len(session.tracks)
-                step = await self._compute(
-                    size, functools.partial(self._apply, session, report, explain=explain)
-                )
-                self.metrics.fusion_step.labels(kind).observe(time.perf_counter() - started)
-                received_at = datetime.now(UTC)
-                seq = session.seq + 1
+                if self.shared:
+                    await self._hold_lease(session)
                 try:
-                    await self._io(
-                        self.store.append, session.id, seq, log_input(report), received_at
-                    )
-                except BaseException:
-                    self.discard(
-                        session.id
-                    )  # the engine holds an unlogged step: rebuild on next use
-                    raise
-                session.engine, session.fusion = step.engine, step.fusion
-                session.seq = seq
-                session.last_input_at = received_at
-                session.sensor_inputs[report.sensor] = (
-                    session.sensor_inputs.get(report.sensor, 0) + 1
-                )
+                    step = await self._apply_and_log(session, report, items, kind, explain=explain)
+                except SequenceConflict:
+                    if not self.shared:
+                        raise
+                    # overtaken by another instance: rebuild from the store, apply once more
+                    await self._refresh(session)
+                    step = await self._apply_and_log(session, report, items, kind, explain=explain)
                 self.metrics.inputs.labels(kind).inc()
-                if len(session.hub):
-                    session.hub.publish(result_message(step.result))
+                message = result_message(step.result)
+                if self.shared:
+                    await self._publish(session, message)
+                elif len(session.hub):
+                    session.hub.publish(message)
                 session.since_snapshot += 1
                 if session.since_snapshot >= self.settings.snapshot_every:
                     await self._snapshot(session)
         return step.result
+
+    async def _apply_and_log(
+        self,
+        session: LiveSession,
+        report: TrackReport | DetectionReport,
+        items: int,
+        kind: str,
+        *,
+        explain: bool,
+    ) -> Step:
+        """Apply the input, append it to the log, then move the session on (else it is rebuilt)."""
+        started = time.perf_counter()
+        size = items + len(session.tracks)
+        step = await self._compute(
+            size, functools.partial(self._apply, session, report, explain=explain)
+        )
+        self.metrics.fusion_step.labels(kind).observe(time.perf_counter() - started)
+        received_at = datetime.now(UTC)
+        seq = session.seq + 1
+        try:
+            await self._io(self.store.append, session.id, seq, log_input(report), received_at)
+        except SequenceConflict:
+            if not self.shared:
+                self.discard(session.id)
+            raise  # shared: the caller rebuilds the engine in place from the store
+        except BaseException:
+            self.discard(session.id)  # the engine holds an unlogged step: rebuild on next use
+            raise
+        session.engine, session.fusion = step.engine, step.fusion
+        session.seq = seq
+        session.last_input_at = received_at
+        session.sensor_inputs[report.sensor] = session.sensor_inputs.get(report.sensor, 0) + 1
+        return step
+
+    async def _hold_lease(self, session: LiveSession) -> None:
+        """Take or renew the session's lease; after a (re)take, catch up with the store's log."""
+        ttl_ms = self.settings.lease_ttl_ms
+        now = time.monotonic()
+        held = now < session.lease_deadline
+        if not await self._io(self.leases.acquire, session.id, self.owner, ttl_ms):
+            session.lease_deadline = 0.0
+            raise SessionLeased(session.id, math.ceil(ttl_ms / 1000))
+        session.lease_deadline = now + 0.8 * ttl_ms / 1000  # a margin for clock and round trips
+        if not held and await self._io(self.store.last_seq, session.id) != session.seq:
+            await self._refresh(session)
+
+    async def _refresh(self, session: LiveSession) -> None:
+        """Rebuild the session's engine in place from the store (another instance moved it on)."""
+        load = await self._io(self.store.load, session.id)
+        fresh = await anyio.to_thread.run_sync(functools.partial(self._rebuild, load.session, load))
+        logger.info("session %s: rebuilt from the store at seq %d", session.id, fresh.seq)
+        session.engine, session.fusion = fresh.engine, fresh.fusion
+        session.seq = fresh.seq
+        session.sensor_inputs = fresh.sensor_inputs
+        session.last_input_at = fresh.last_input_at
+        session.since_snapshot = 0
+
+    async def _publish(self, session: LiveSession, message: str) -> None:
+        """Send a result to the session's subscribers on every instance (logged, never raised)."""
+        try:
+            await self.fanout.publish(session.id, message)
+        except Exception:
+            logger.exception("session %s: publishing result %d failed", session.id, session.seq)
 
     async def _snapshot(self, session: LiveSession) -> None:
         snapshot = Snapshot(

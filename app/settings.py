@@ -8,10 +8,11 @@ from __future__ import annotations
 
 from functools import lru_cache
 
-from pydantic import Field, SecretStr
+from pydantic import Field, SecretStr, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from api_schemas.base import MAX_CLASSES
+from app.rate_limit import parse_rates
 from app.stores.redis_keys import DEFAULT_PREFIX
 
 DEFAULT_STORE = "sqlite:data/credal-fusion.db"
@@ -43,6 +44,23 @@ class Settings(BaseSettings):
     snapshot_every: int = Field(100, ge=1, description="snapshot the engine every N inputs")
     ws_ping_interval: float = Field(20.0, gt=0.0, description="seconds between WebSocket pings")
     ws_ping_timeout: float = Field(20.0, gt=0.0, description="a peer silent this long is dropped")
+    lease_ttl_ms: int = Field(
+        10_000,
+        ge=100,
+        description="redis store: an instance that stops renewing a session's lease loses it "
+        "after this long, and another instance takes the session over",
+    )
+    rate_limit: str = Field(
+        "1000/second",
+        description="requests per bearer token (or client address without one), in the "
+        "'limits' notation: '200/second', '50/second;2000/minute'; 'none' turns it off",
+    )
+
+    @field_validator("rate_limit")
+    @classmethod
+    def _rate_limit_parses(cls, value: str) -> str:
+        parse_rates(value)
+        return value
 
 
 @lru_cache

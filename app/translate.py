@@ -4,9 +4,12 @@ Config: :func:`fusion_config` turns a validated ``SessionConfig`` into the
 engine's ``FusionConfig``; what the core still refuses (a self-intersecting
 field-of-view polygon) comes back as a validation error located at the field.
 Inputs: :func:`core_track_report`. Outputs: :func:`step_plain` and
-:func:`picture_plain` give the contract's JSON shape as plain data (served
+:func:`tracks_plain` give the contract's JSON shape as plain data (served
 as-is: :mod:`api_schemas.results` documents it and the tests validate it),
-with every non-finite score of a matrix as ``null``.
+with every non-finite score of a matrix as ``null``. :func:`step_json` writes
+the same document as JSON text straight from the engine's views (numpy arrays
+and ``Source`` dataclasses serialised by orjson in C, no intermediate lists):
+the per-input hot path. A test holds it equal to ``step_plain``.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
+import orjson
 
 from api_schemas.associate import AssociateRequest
 from api_schemas.association import AssociationOptions
@@ -27,7 +31,7 @@ from app.errors import request_validation_error
 from core.association import AssociationResult
 from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, TotalConflict
-from core.fusion.classes import accumulate_likelihoods
+from core.fusion.classes import ClassAssessment, accumulate_likelihoods
 from core.fusion.config import FusionConfig, SensorSpec, TrackManagement
 from core.fusion.motion import MotionKind, MotionModel, StateLayout
 from core.fusion.reports import (
@@ -262,6 +266,97 @@ def step_plain(step: StepResult, seq: int) -> PlainObject:
     if matrix is not None:
         matrix["values"] = [[finite_or_none(value) for value in row] for row in matrix["values"]]
     return plain
+
+
+def _finite_array(values: np.ndarray, what: str, track: str) -> np.ndarray:
+    """``values`` as a C-contiguous float64 array; a non-finite entry raises (never ``null`` or NaN)."""
+    if not np.isfinite(values).all():
+        raise ValueError(f"fused track {track!r}: non-finite {what}")
+    return np.ascontiguousarray(values, dtype=np.float64)
+
+
+def _class_fast(assessment: ClassAssessment | None) -> PlainObject | None:
+    """A track's classification as :func:`_classification` of ``step_to_plain`` gives it."""
+    if assessment is None:
+        return None
+    conflict = float(assessment.conflict)
+    if not math.isfinite(conflict):
+        raise ValueError("non-finite class conflict")
+    if assessment.mass is None:
+        return {
+            "state": assessment.state.value,
+            "mass": None,
+            "pignistic": None,
+            "belief": None,
+            "plausibility": None,
+            "conflict": conflict,
+            "decision": None,
+        }
+    labels = assessment.mass.frame.labels
+    return {
+        "state": assessment.state.value,
+        "mass": [
+            {"set": list(subset), "mass": mass} for subset, mass in assessment.mass.focal_sets()
+        ],
+        "pignistic": dict(zip(labels, assessment.pignistic.tolist(), strict=True)),
+        "belief": dict(zip(labels, assessment.belief.tolist(), strict=True)),
+        "plausibility": dict(zip(labels, assessment.plausibility.tolist(), strict=True)),
+        "conflict": conflict,
+        "decision": assessment.decision,
+    }
+
+
+def _track_fast(view: FusedTrackView) -> PlainObject:
+    score = float(view.score)
+    if not math.isfinite(score):
+        raise ValueError(f"fused track {view.id!r}: non-finite score")
+    return {
+        "id": view.id,
+        "status": view.status.value,
+        "state": _finite_array(view.state, "state", view.id),
+        "covariance": _finite_array(view.covariance, "covariance", view.id),
+        "sources": view.sources,  # frozen dataclasses (sensor, track, time): the wire names
+        "classification": _class_fast(view.classification),
+        "score": score,
+        "reason": view.reason.value,
+    }
+
+
+def _association_plain(association: AssociationView) -> PlainObject:
+    matrix = association.matrix
+    return {
+        "method": association.method,
+        "pairs": [
+            {"fused": fused, "track": track, "score": finite_or_none(score), "basis": basis}
+            for fused, track, score, basis in association.pairs
+        ],
+        "new": list(association.new),
+        "missed": list(association.missed),
+        "matrix": None
+        if matrix is None
+        else {
+            "rows": list(matrix[0]),
+            "cols": list(matrix[1]),
+            "values": [[finite_or_none(value) for value in row] for row in matrix[2].tolist()],
+        },
+    }
+
+
+def step_json(step: StepResult, seq: int) -> str:
+    """:func:`step_plain` as compact JSON text, built without intermediate lists (hot path).
+
+    Refuses (``ValueError``) any non-finite number instead of writing ``null``.
+    """
+    if not math.isfinite(step.time):
+        raise ValueError("non-finite step time")
+    document = {
+        "seq": seq,
+        "time": step.time,
+        "sensor": step.sensor,
+        "tracks": [_track_fast(view) for view in step.tracks],
+        "association": _association_plain(step.association),
+    }
+    return orjson.dumps(document, option=orjson.OPT_SERIALIZE_NUMPY).decode()
 
 
 def tracks_plain(views: Iterable[FusedTrackView]) -> list[PlainObject]:

@@ -24,7 +24,7 @@ TrackId = Annotated[str, Path(min_length=1, max_length=64, description="A fused 
 @router.post(
     "/{sid}/tracks",
     response_model=StepResult,
-    responses=problem_responses(401, 403, 404, 409, 413, 422),
+    responses=problem_responses(401, 403, 404, 409, 413, 422, 503),
 )
 async def submit_tracks(
     report: TrackReport,
@@ -46,7 +46,7 @@ async def submit_tracks(
 @router.post(
     "/{sid}/detections",
     response_model=StepResult,
-    responses=problem_responses(401, 403, 404, 409, 413, 422),
+    responses=problem_responses(401, 403, 404, 409, 413, 422, 503),
 )
 async def submit_detections(
     report: DetectionReport,

@@ -5,6 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter, Response
 
 from app.deps import MetricsDep
+from app.errors import problem_responses
 
 router = APIRouter(tags=["health"])
 
@@ -16,7 +17,8 @@ router = APIRouter(tags=["health"])
         200: {
             "content": {"text/plain": {"schema": {"type": "string"}}},
             "description": "Prometheus text",
-        }
+        },
+        **problem_responses(),
     },
 )
 def get_metrics(metrics: MetricsDep) -> Response:

@@ -2,7 +2,9 @@
 
 The protocol is documented in ``docs/asyncapi.yaml``. Both channels need the
 session's token (or the admin token) in the upgrade request's
-``Authorization`` header; a refused upgrade gets the problem+json answer the
+``Authorization`` header, or — for browsers, which cannot set headers on an
+upgrade — offered as the two subprotocols ``bearer`` and the token (the
+server then accepts ``bearer``); a refused upgrade gets the problem+json answer the
 REST route would give (or close code 1008 where the server cannot send one).
 The server pings (uvicorn's ``ws_ping_interval``/``ws_ping_timeout``) and
 drops a peer that stops answering.
@@ -12,7 +14,9 @@ order and puts its answer (one ``result`` or ``error``, echoing ``ref``) into
 a bounded queue; a writer task sends them. When the client does not read, the
 queue fills, the reader stops reading and TCP pushes back: nothing grows
 without bound. ``subscribe``: the session's hub gives each subscriber a
-bounded queue that keeps the latest results (:mod:`app.hub`).
+bounded queue that keeps the latest results (:mod:`app.hub`); with the
+redis store the hub is fed from Redis pub/sub, so results applied on any
+instance arrive (:meth:`app.sessions.SessionRegistry.subscribe`).
 """
 
 from __future__ import annotations
@@ -41,16 +45,34 @@ logger = logging.getLogger("credal_fusion.streams")
 OUTBOX_SIZE = 16
 """Answers waiting to be sent on one ``stream`` connection."""
 POLICY_VIOLATION = 1008
+BEARER_SUBPROTOCOL = "bearer"
+"""Browsers offer the token as the subprotocols ``["bearer", token]``; the server accepts ``bearer``."""
 MESSAGE_TAGS = ("tracks", "detections")
 DISCONNECTED = (WebSocketDisconnect, OSError, anyio.ClosedResourceError, anyio.BrokenResourceError)
 """What a peer that went away raises on our side (uvicorn's ClientDisconnected is an OSError)."""
 
 
 def _bearer(websocket: WebSocket) -> str:
+    """The upgrade request's token: ``Authorization: Bearer …``, or the subprotocol pair
+    ``bearer, <token>`` (what a browser can send: it cannot set headers on an upgrade)."""
     scheme, _, token = websocket.headers.get("authorization", "").partition(" ")
-    if scheme.lower() != "bearer" or not token.strip():
-        raise Unauthorized("send 'Authorization: Bearer <token>' with the upgrade request")
-    return token.strip()
+    if scheme.lower() == "bearer" and token.strip():
+        return token.strip()
+    offered = [
+        part.strip() for part in websocket.headers.get("sec-websocket-protocol", "").split(",")
+    ]
+    if len(offered) == 2 and offered[0] == BEARER_SUBPROTOCOL and offered[1]:
+        return offered[1]
+    raise Unauthorized(
+        "send 'Authorization: Bearer <token>' with the upgrade request "
+        f"(or the subprotocols '{BEARER_SUBPROTOCOL}', '<token>')"
+    )
+
+
+def _subprotocol(websocket: WebSocket) -> str | None:
+    """The subprotocol to accept: ``bearer`` when the token came that way."""
+    offered = websocket.headers.get("sec-websocket-protocol", "")
+    return BEARER_SUBPROTOCOL if offered.split(",")[0].strip() == BEARER_SUBPROTOCOL else None
 
 
 async def _open(websocket: WebSocket, sid: str) -> LiveSession | None:
@@ -144,7 +166,7 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
         return
     registry: SessionRegistry = websocket.app.state.registry
     path = websocket.url.path
-    await websocket.accept()
+    await websocket.accept(subprotocol=_subprotocol(websocket))
     await websocket.send_text(_ack(session))
     send, receive = anyio.create_memory_object_stream[str](OUTBOX_SIZE)
 
@@ -178,8 +200,9 @@ async def subscribe_session(websocket: WebSocket, sid: str) -> None:
     session = await _open(websocket, sid)
     if session is None:
         return
-    await websocket.accept()
-    subscriber = session.hub.subscribe()
+    registry: SessionRegistry = websocket.app.state.registry
+    await websocket.accept(subprotocol=_subprotocol(websocket))
+    subscriber = await registry.subscribe(session)  # in place before the ack: nothing missed
     await websocket.send_text(_ack(session))
 
     async def pump() -> None:
@@ -196,4 +219,4 @@ async def subscribe_session(websocket: WebSocket, sid: str) -> None:
     except* (*DISCONNECTED, RuntimeError):
         pass
     finally:
-        session.hub.unsubscribe(subscriber)
+        registry.unsubscribe(session, subscriber)

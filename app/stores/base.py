@@ -24,6 +24,8 @@ import numpy as np
 from app.errors import Conflict, SessionNotFound
 
 JsonObject = dict[str, Any]
+_PLAIN_KINDS = frozenset("biuf")
+"""numpy dtype kinds whose ``tolist()`` is plain data (bool, signed/unsigned int, float)."""
 
 
 class SequenceConflict(Conflict):
@@ -157,6 +159,8 @@ def to_plain(value: Any, path: str = "$") -> Any:
     if isinstance(value, float):
         return value
     if isinstance(value, np.ndarray):
+        if value.dtype.kind in _PLAIN_KINDS:
+            return value.tolist()  # bools, integers and floats: plain already, no walk in Python
         return to_plain(value.tolist(), path)
     if isinstance(value, np.generic):
         return to_plain(value.item(), path)
