@@ -273,11 +273,12 @@ class SessionEngine:
         present = np.zeros((len(todo), width), dtype=bool)
         times = np.zeros((len(todo), width))
         for row, track in enumerate(todo):
-            for slot, estimate in enumerate(track.estimates.values()):
-                states[row, slot] = estimate.state
-                covariances[row, slot] = estimate.covariance
-                present[row, slot] = True
-                times[row, slot] = estimate.time
+            track_states, track_covariances, track_times = track.stacked()
+            count = len(track_times)
+            states[row, :count] = track_states
+            covariances[row, :count] = track_covariances
+            present[row, :count] = True
+            times[row, :count] = track_times
         predicted, predicted_cov = self.config.motion.predict(states, covariances, time - times)
         computed, computed_cov, _ = fuse_estimates(
             predicted, predicted_cov, present, times, self.config.state_fusion
@@ -636,11 +637,12 @@ class SessionEngine:
         explain: bool,
     ) -> StepResult:
         assert self.time is not None
+        ending = {id(track) for track in terminated}
         shown = sorted(
             (
                 track
                 for track in self.tracks
-                if track.status is not TrackStatus.TERMINATED or track in terminated
+                if track.status is not TrackStatus.TERMINATED or id(track) in ending
             ),
             key=lambda track: track.number,
         )

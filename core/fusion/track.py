@@ -77,6 +77,23 @@ class FusedTrack:
     fused_cache: tuple[float, int, FloatArray, FloatArray] | None = field(
         default=None, compare=False, repr=False
     )
+    stack_cache: tuple[int, FloatArray, FloatArray, FloatArray] | None = field(
+        default=None, compare=False, repr=False
+    )
+
+    def stacked(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The estimates as arrays: states (k, d), covariances (k, d, d), times (k,)."""
+        cache = self.stack_cache
+        if cache is None or cache[0] != self.revision:
+            estimates = list(self.estimates.values())
+            cache = (
+                self.revision,
+                np.array([e.state for e in estimates]),
+                np.array([e.covariance for e in estimates]),
+                np.array([e.time for e in estimates]),
+            )
+            self.stack_cache = cache
+        return cache[1], cache[2], cache[3]
 
     def set_estimate(self, sensor: str, estimate: SensorEstimate) -> None:
         """Record a sensor's latest estimate (and forget the cached fused state)."""
