@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property, lru_cache
 from types import MappingProxyType
 
 from core.association import DEFAULT_DISTANCE
@@ -95,21 +96,15 @@ class TrackManagement:
             raise InvalidInput(f"min_points must be >= 1, got {self.min_points}")
 
     def score_model(self, p_detect: float) -> ScoreModel:
-        """The SPRT score of a sensor with detection probability ``p_detect``."""
-        return ScoreModel(
-            p_detect=p_detect,
-            false_target_density=self.false_target_density,
-            new_target_density=self.new_target_density,
-            false_confirmation=self.false_confirmation,
-            true_deletion=self.true_deletion,
-        )
+        """The SPRT score of a sensor with detection probability ``p_detect`` (built once)."""
+        return _score_model(self, p_detect)
 
-    @property
+    @cached_property
     def thresholds(self) -> ScoreModel:
         """The SPRT thresholds (they depend on α and β only, not on P_D)."""
         return self.score_model(p_detect=0.5)
 
-    @property
+    @cached_property
     def score_ceiling(self) -> float:
         """Largest score a fused track keeps (+inf without a margin)."""
         if self.score_margin is None:
@@ -120,6 +115,17 @@ class TrackManagement:
     def phantom_lifetime(self) -> float:
         """Longest time in a blind zone: the maximum distance at the minimum speed ([HZ] §5.1)."""
         return self.phantom_max_distance / self.phantom_min_speed
+
+
+@lru_cache(maxsize=64)
+def _score_model(management: TrackManagement, p_detect: float) -> ScoreModel:
+    return ScoreModel(
+        p_detect=p_detect,
+        false_target_density=management.false_target_density,
+        new_target_density=management.new_target_density,
+        false_confirmation=management.false_confirmation,
+        true_deletion=management.true_deletion,
+    )
 
 
 @dataclass(frozen=True)

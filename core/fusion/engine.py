@@ -108,6 +108,7 @@ class SessionEngine:
         }
         layout = config.motion.layout
         self._position = np.asarray(layout.position, dtype=np.int64)
+        self._coverage = config.coverage
         self._gate = chi2_quantile(config.management.gate_probability, len(layout.position))
 
     # ------------------------------------------------------------ the step
@@ -534,18 +535,19 @@ class SessionEngine:
             return
         states, _ = self._fused_at(candidates, time)
         if len(self._position) >= 2:
-            visibility = self.config.coverage.visibility(states[:, self._position[:2]])
+            codes = self._coverage.visibility(states[:, self._position[:2]])
         else:
-            visibility = np.full(len(candidates), int(Visibility.VISIBLE))
-        for track, where in zip(candidates, visibility, strict=True):
+            codes = np.full(len(candidates), int(Visibility.VISIBLE))
+        out_of_range, blind = int(Visibility.OUT_OF_RANGE), int(Visibility.BLIND_ZONE)
+        for track, where in zip(candidates, codes.tolist(), strict=True):
             reason: StatusReason | None = None
-            if where == Visibility.OUT_OF_RANGE:
+            if where == out_of_range:
                 reason = StatusReason.OUT_OF_RANGE
             elif track.status is TrackStatus.PHANTOM:
                 assert track.phantom_since is not None
                 if time - track.phantom_since > management.phantom_lifetime:
                     reason = StatusReason.PHANTOM_EXPIRED
-            elif where == Visibility.BLIND_ZONE:
+            elif where == blind:
                 if track.status is TrackStatus.TENTATIVE:
                     reason = StatusReason.BLIND_ZONE
                 else:
