@@ -173,8 +173,7 @@ def _two_class_run(name: str, seed: int) -> ScenarioRun:
 def build(name: str, seed: int) -> ScenarioRun:
     """The scenario ``name`` (an EVALUATION.md id, or ``crossing-traffic``) with ``seed``."""
     if name in SCENARIOS:
-        scenario: Scenario = SCENARIOS[name](seed)  # type: ignore[operator]
-        return _detection_run(name, scenario)
+        return _detection_run(name, SCENARIOS[name](seed))
     track_lists: dict[str, Callable[[int], ScenarioRun]] = {
         "t2t-four": lambda s: _track_list_run(name, t2t_four(s)),
         "crossing-traffic": lambda s: _track_list_run(name, crossing_traffic(s)),

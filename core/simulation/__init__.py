@@ -1,5 +1,7 @@
 """Seeded ground-truth scenarios with simulated detections (EVALUATION.md)."""
 
+from collections.abc import Callable
+
 from core.simulation.aircraft import aircraft_scenario
 from core.simulation.nearby import close_pair_scenario, crossing_scenario
 from core.simulation.pedestrian import pedestrian_scenario
@@ -12,7 +14,7 @@ from core.simulation.road import (
 from core.simulation.scenario import CLUTTER, Manoeuvre, Region, Scan, Scenario, TargetTruth
 from core.simulation.two_class import ClassifiedTrackListScenario, t2t_two_class
 
-SCENARIOS = {
+SCENARIOS: dict[str, Callable[..., Scenario]] = {
     "aircraft": aircraft_scenario,
     "pedestrian": pedestrian_scenario,
     "close-pair": close_pair_scenario,
