@@ -39,6 +39,7 @@ from core.fusion.reports import (
     FusedTrackView,
     ReportedTrack,
     StepResult,
+    class_to_plain,
     step_to_plain,
 )
 from core.fusion.reports import DetectionReport as CoreDetectionReport
@@ -54,7 +55,6 @@ PlainObject = dict[str, Any]
 ENGINE_ONLY_OPTIONS = frozenset({"distance", "imm_distance"})
 """Wire options that are not method options of the core (the distance is its own argument)."""
 
-CLASSIFICATION_KEYS = ("state", "mass", "pignistic", "belief", "plausibility", "conflict")
 NO_ASSOCIATION = AssociationView(method="", pairs=(), new=(), missed=())
 
 
@@ -243,22 +243,10 @@ def finite_or_none(value: float | None) -> float | None:
     return value if value is not None and math.isfinite(value) else None
 
 
-def _classification(plain: PlainObject | None) -> PlainObject | None:
-    if plain is None:
-        return None
-    return {key: plain.get(key) for key in CLASSIFICATION_KEYS} | {"decision": plain["decision"]}
-
-
-def _track(plain: PlainObject) -> PlainObject:
-    plain["classification"] = _classification(plain["classification"])
-    return plain
-
-
 def step_plain(step: StepResult, seq: int) -> PlainObject:
     """A step result in the contract's shape, numbered ``seq`` (the session's input number)."""
     plain = step_to_plain(step)
     plain["seq"] = seq
-    plain["tracks"] = [_track(track) for track in plain["tracks"]]
     association = plain["association"]
     for pair in association["pairs"]:
         pair["score"] = finite_or_none(pair["score"])
@@ -276,34 +264,12 @@ def _finite_array(values: np.ndarray, what: str, track: str) -> np.ndarray:
 
 
 def _class_fast(assessment: ClassAssessment | None) -> PlainObject | None:
-    """A track's classification as :func:`_classification` of ``step_to_plain`` gives it."""
+    """A track's classification as ``step_to_plain`` gives it; a non-finite conflict raises."""
     if assessment is None:
         return None
-    conflict = float(assessment.conflict)
-    if not math.isfinite(conflict):
+    if not math.isfinite(float(assessment.conflict)):
         raise ValueError("non-finite class conflict")
-    if assessment.mass is None:
-        return {
-            "state": assessment.state.value,
-            "mass": None,
-            "pignistic": None,
-            "belief": None,
-            "plausibility": None,
-            "conflict": conflict,
-            "decision": None,
-        }
-    labels = assessment.mass.frame.labels
-    return {
-        "state": assessment.state.value,
-        "mass": [
-            {"set": list(subset), "mass": mass} for subset, mass in assessment.mass.focal_sets()
-        ],
-        "pignistic": dict(zip(labels, assessment.pignistic.tolist(), strict=True)),
-        "belief": dict(zip(labels, assessment.belief.tolist(), strict=True)),
-        "plausibility": dict(zip(labels, assessment.plausibility.tolist(), strict=True)),
-        "conflict": conflict,
-        "decision": assessment.decision,
-    }
+    return class_to_plain(assessment)
 
 
 def _track_fast(view: FusedTrackView) -> PlainObject:
@@ -362,7 +328,8 @@ def step_json(step: StepResult, seq: int) -> str:
 def tracks_plain(views: Iterable[FusedTrackView]) -> list[PlainObject]:
     """Fused tracks in the contract's shape (through ``step_to_plain``: one source of field names)."""
     holder = StepResult(seq=0, time=0.0, sensor="", tracks=tuple(views), association=NO_ASSOCIATION)
-    return [_track(track) for track in step_to_plain(holder)["tracks"]]
+    tracks: list[PlainObject] = step_to_plain(holder)["tracks"]
+    return tracks
 
 
 # ------------------------------------------------------- stateless associate

@@ -134,15 +134,25 @@ def _track_to_plain(track: FusedTrackView) -> dict[str, Any]:
         "sources": [{"sensor": s.sensor, "track": s.track, "time": s.time} for s in track.sources],
         "classification": None
         if track.classification is None
-        else _class_to_plain(track.classification),
+        else class_to_plain(track.classification),
         "score": track.score,
         "reason": track.reason.value,
     }
 
 
-def _class_to_plain(assessment: ClassAssessment) -> dict[str, Any]:
+def class_to_plain(assessment: ClassAssessment) -> dict[str, Any]:
+    """A class assessment in the contract's shape; under total conflict every
+    distribution is ``None`` (only the state and the conflict are known)."""
     if assessment.mass is None:
-        return {"state": assessment.state.value, "conflict": assessment.conflict, "decision": None}
+        return {
+            "state": assessment.state.value,
+            "mass": None,
+            "pignistic": None,
+            "belief": None,
+            "plausibility": None,
+            "conflict": assessment.conflict,
+            "decision": None,
+        }
     labels = assessment.mass.frame.labels
     return {
         "state": assessment.state.value,
