@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from core.arrays import BoolArray, FloatArray, IntArray
-from core.association import associate
+from core.association import ScoreMatrix, associate
 from core.belief import MassFunction
 from core.distance import Estimates, chi2_quantile
 from core.distance.cholesky import quadratic_form_and_log_det
@@ -79,7 +79,8 @@ class Decision:
 
     ``pairs`` holds (row, col, score, basis): basis ``"continuity"`` (the sensor
     kept its track id; no method score) or ``"association"`` (the method's
-    score). ``scores`` is the method's matrix over ``matrix_rows × matrix_cols``.
+    score). ``scores`` is the method's (sparse) matrix over ``matrix_rows ×
+    matrix_cols``, made dense only when a step is explained.
     """
 
     method: str
@@ -88,7 +89,7 @@ class Decision:
     missed: list[int]
     matrix_rows: IntArray
     matrix_cols: IntArray
-    scores: FloatArray
+    scores: ScoreMatrix
 
 
 class SessionEngine:
@@ -334,9 +335,7 @@ class SessionEngine:
             missed=[int(rows[k]) for k in result.missed],
             matrix_rows=rows,
             matrix_cols=cols,
-            scores=result.scores.dense()
-            if len(rows) and len(cols)
-            else np.zeros((len(rows), len(cols))),
+            scores=result.scores,
         )
 
     def _continuity(
@@ -667,7 +666,7 @@ class SessionEngine:
                 (
                     tuple(live[row].id for row in decision.matrix_rows),
                     tuple(report.tracks[col].id for col in decision.matrix_cols),
-                    decision.scores,
+                    decision.scores.dense(),
                 )
                 if explain
                 else None
