@@ -279,6 +279,18 @@ class IMMPredictor:
         )
 
 
+def posterior_log_modes(prior: FloatArray, joint: FloatArray, hit: BoolArray) -> FloatArray:
+    """Updated log mode probabilities ([MTT] eq 18-19, log domain): ``joint`` (prior
+    + log-likelihood per track × model) normalised by log-sum-exp where the track
+    was hit and the normaliser is finite; the prior elsewhere."""
+    log_norm = logsumexp(joint, axis=1)
+    usable = hit & np.isfinite(log_norm)
+    return np.asarray(
+        np.where(usable[:, None], joint - np.where(usable, log_norm, 0.0)[:, None], prior),
+        dtype=np.float64,
+    )
+
+
 class IMMUpdater:
     """Kalman update of every model with the shared H, R, then the mode probabilities.
 
@@ -357,13 +369,10 @@ class IMMUpdater:
         _, log_det = np.linalg.slogdet(s)
         log_likelihoods = -0.5 * (distances + log_det + q * _LOG_2PI)
 
-        joint = prediction.log_mode_probabilities + log_likelihoods
-        log_norm = logsumexp(joint, axis=1)
-        usable = hit & np.isfinite(log_norm)
-        log_mu = np.where(
-            usable[:, None],
-            joint - np.where(usable, log_norm, 0.0)[:, None],
+        log_mu = posterior_log_modes(
             prediction.log_mode_probabilities,
+            prediction.log_mode_probabilities + log_likelihoods,
+            hit,
         )
 
         means = np.where(hit[:, None, None], means, prediction.means)

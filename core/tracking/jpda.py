@@ -33,8 +33,8 @@ import numpy as np
 
 from core.arrays import FloatArray, IntArray
 from core.errors import TrackingError
-from core.numerics import logsumexp, safe_log
-from core.tracking.imm import IMMPrediction, IMMState, IMMUpdate
+from core.numerics import safe_log
+from core.tracking.imm import IMMPrediction, IMMState, IMMUpdate, posterior_log_modes
 from core.tracking.models import ModelBank
 
 _LOG_2PI = math.log(2.0 * math.pi)
@@ -135,13 +135,7 @@ def pda_update(
         hit[:, None], log_likelihoods - safe_log(np.where(hit, weight_total, 1.0))[:, None], np.nan
     )
     joint = prediction.log_mode_probabilities + np.where(hit[:, None], log_likelihoods, 0.0)
-    log_norm = logsumexp(joint, axis=1)
-    usable = hit & np.isfinite(log_norm)
-    log_mu = np.where(
-        usable[:, None],
-        joint - np.where(usable, log_norm, 0.0)[:, None],
-        prediction.log_mode_probabilities,
-    )
+    log_mu = posterior_log_modes(prediction.log_mode_probabilities, joint, hit)
     means = np.where(hit[:, None, None], means, prediction.means)
     covariances = np.where(hit[:, None, None, None], covariances, prediction.covariances)
     return IMMUpdate(
