@@ -126,6 +126,13 @@ def _constant_velocity_matrix(dt: float, speeds: tuple[float, float] = (1.0, 1.0
     )
 
 
+def _check_noise_intensity(noise_intensity: float, name: str) -> float:
+    q = float(noise_intensity)
+    if not np.isfinite(q) or q < 0.0:
+        raise ModelConfigError(f"model {name!r}: noise_intensity must be >= 0, got {q!r}")
+    return q
+
+
 def acceleration_input(
     time_interval: float,
     acceleration: Sequence[float],
@@ -146,9 +153,7 @@ def acceleration_input(
     """
     dt = _check_positive(time_interval, "time_interval")
     u = _as_matrix(acceleration, (2,), f"model {name!r} acceleration")
-    q = float(noise_intensity)
-    if not np.isfinite(q) or q < 0.0:
-        raise ModelConfigError(f"model {name!r}: noise_intensity must be >= 0, got {q!r}")
+    q = _check_noise_intensity(noise_intensity, name)
     b = input_matrix(dt)
     return MotionModel(
         name=name,
@@ -179,9 +184,7 @@ def speed_model(
     """
     dt = _check_positive(time_interval, "time_interval")
     s = _as_matrix(speeds, (2,), f"model {name!r} speeds")
-    q = float(noise_intensity)
-    if not np.isfinite(q) or q < 0.0:
-        raise ModelConfigError(f"model {name!r}: noise_intensity must be >= 0, got {q!r}")
+    q = _check_noise_intensity(noise_intensity, name)
     b = input_matrix(dt)
     return MotionModel(
         name=name,
