@@ -158,6 +158,8 @@ class Coverage:
     def visibility(self, points: FloatArray) -> IntArray:
         """:class:`Visibility` code of every position."""
         array = _as_points(points)
+        if any(view is None for view in self.views):  # a sensor that sees everywhere
+            return np.full(len(array), int(Visibility.VISIBLE), dtype=np.int64)
         visible = self.sees(array).any(axis=0)
         if self.region is not None:
             surveyed = self.region.contains(array)

@@ -80,7 +80,8 @@ class Decision:
     ``pairs`` holds (row, col, score, basis): basis ``"continuity"`` (the sensor
     kept its track id; no method score) or ``"association"`` (the method's
     score). ``scores`` is the method's (sparse) matrix over ``matrix_rows ×
-    matrix_cols``, made dense only when a step is explained.
+    matrix_cols``, made dense only when a step is explained; ``None`` when
+    one side was empty after continuity and the method did not run.
     """
 
     method: str
@@ -89,7 +90,7 @@ class Decision:
     missed: list[int]
     matrix_rows: IntArray
     matrix_cols: IntArray
-    scores: ScoreMatrix
+    scores: ScoreMatrix | None
 
 
 class SessionEngine:
@@ -111,6 +112,7 @@ class SessionEngine:
         self._position = np.asarray(layout.position, dtype=np.int64)
         self._coverage = config.coverage
         self._gate = chi2_quantile(config.management.gate_probability, len(layout.position))
+        self._reliabilities = {sensor.id: sensor.reliability for sensor in config.sensors}
 
     # ------------------------------------------------------------ the step
     def apply(self, report: TrackReport, *, explain: bool = False) -> StepResult:
@@ -269,24 +271,33 @@ class SessionEngine:
         if not missing:
             return fused, fused_cov
         todo = [tracks[row] for row in missing]
-        width = max(len(track.estimates) for track in todo)
-        states = np.zeros((len(todo), width, dim))
-        covariances = np.broadcast_to(np.eye(dim), (len(todo), width, dim, dim)).copy()
-        present = np.zeros((len(todo), width), dtype=bool)
-        times = np.zeros((len(todo), width))
-        for row, track in enumerate(todo):
-            track_states, track_covariances, track_times = track.stacked()
-            count = len(track_times)
-            states[row, :count] = track_states
-            covariances[row, :count] = track_covariances
-            present[row, :count] = True
-            times[row, :count] = track_times
-        predicted, predicted_cov = self.config.motion.predict(states, covariances, time - times)
-        computed, computed_cov, _ = fuse_estimates(
-            predicted, predicted_cov, present, times, self.config.state_fusion
+        stacks = [track.stacked() for track in todo]
+        counts = np.array([len(track_times) for _, _, track_times in stacks])
+        estimate_times = np.concatenate([track_times for _, _, track_times in stacks])
+        predicted, predicted_cov = self.config.motion.predict(
+            np.concatenate([track_states for track_states, _, _ in stacks]),
+            np.concatenate([track_covariances for _, track_covariances, _ in stacks]),
+            time - estimate_times,
         )
-        for k, (row, track) in enumerate(zip(missing, todo, strict=True)):
-            fused[row], fused_cov[row] = computed[k], computed_cov[k]
+        if counts.max() == 1:  # one estimate per track: each is its own fusion (ω = 1)
+            computed, computed_cov = predicted, predicted_cov
+        else:  # into the padded (track, sensor slot) layout of fuse_estimates
+            rows = np.repeat(np.arange(len(todo)), counts)
+            slots = np.arange(len(rows)) - np.repeat(np.cumsum(counts) - counts, counts)
+            shape = (len(todo), int(counts.max()))
+            states = np.zeros((*shape, dim))
+            covariances = np.zeros((*shape, dim, dim))
+            present = np.zeros(shape, dtype=bool)
+            times = np.zeros(shape)
+            states[rows, slots] = predicted
+            covariances[rows, slots] = predicted_cov
+            present[rows, slots] = True
+            times[rows, slots] = estimate_times
+            computed, computed_cov, _ = fuse_estimates(
+                states, covariances, present, times, self.config.state_fusion
+            )
+        fused[missing], fused_cov[missing] = computed, computed_cov
+        for k, track in enumerate(todo):
             track.fused_cache = (time, track.revision, computed[k], computed_cov[k])
         return fused, fused_cov
 
@@ -308,19 +319,29 @@ class SessionEngine:
         cols = np.array(
             [col for col in range(len(report.tracks)) if col not in kept], dtype=np.int64
         )
+        pairs: list[tuple[int, int, float | None, str]] = sorted(
+            (row, col, None, "continuity") for col, row in kept.items()
+        )
+        if len(rows) == 0 or len(cols) == 0:  # nothing left to decide: no method run
+            return Decision(
+                method=self.config.association_method,
+                pairs=pairs,
+                new=cols.tolist(),
+                missed=rows.tolist(),
+                matrix_rows=rows,
+                matrix_cols=cols,
+                scores=None,
+            )
         known_classes, incoming_classes = self._association_classes(live, report)
-        result = associate(
-            (states[rows], covariances[rows]),
-            (incoming_states[cols], incoming_covariances[cols]),
+        result = associate(  # both sides are valid already: fused, and checked by _check
+            Estimates(states[rows], covariances[rows], "known"),
+            Estimates(incoming_states[cols], incoming_covariances[cols], "incoming"),
             self.config.association_method,
             self.config.association_options,
             self.config.distance or "sum",
             None if known_classes is None else [known_classes[row] for row in rows],
             None if incoming_classes is None else [incoming_classes[col] for col in cols],
         )
-        pairs: list[tuple[int, int, float | None, str]] = [
-            (row, col, None, "continuity") for col, row in kept.items()
-        ]
         pairs += [
             (int(rows[k]), int(cols[i]), float(score), "association")
             for k, i, score in zip(
@@ -626,8 +647,7 @@ class SessionEngine:
     # ------------------------------------------------------------ output
     def _classify(self, fused: FusedTrack) -> ClassAssessment | None:
         masses = {s: e.class_mass for s, e in fused.estimates.items() if e.class_mass is not None}
-        reliabilities = {sensor.id: sensor.reliability for sensor in self.config.sensors}
-        return fuse_sensor_classes(masses, reliabilities)
+        return fuse_sensor_classes(masses, self._reliabilities) if masses else None
 
     def _result(
         self,
@@ -666,7 +686,9 @@ class SessionEngine:
                 (
                     tuple(live[row].id for row in decision.matrix_rows),
                     tuple(report.tracks[col].id for col in decision.matrix_cols),
-                    decision.scores.dense(),
+                    np.zeros((len(decision.matrix_rows), len(decision.matrix_cols)))
+                    if decision.scores is None
+                    else decision.scores.dense(),
                 )
                 if explain
                 else None

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -72,20 +73,30 @@ class MotionModel:
     def matrices(self, dt: FloatArray) -> tuple[FloatArray, FloatArray]:
         """F and Q for every Δt (shape (T,) → (T, d, d) each)."""
         dt = np.asarray(dt, dtype=np.float64)
-        span = np.abs(dt)
         d = self.layout.dim
-        transition = np.broadcast_to(np.eye(d), (*dt.shape, d, d)).copy()
-        noise = np.zeros((*dt.shape, d, d))
-        for axis, p in enumerate(self.layout.position):
-            if self.kind is MotionKind.CONSTANT_VELOCITY:
-                v = self.layout.velocity[axis]
-                transition[..., p, v] = dt
-                noise[..., p, p] = self.q * span**3 / 3.0
-                noise[..., p, v] = noise[..., v, p] = self.q * span**2 / 2.0
-                noise[..., v, v] = self.q * span
-            else:
-                noise[..., p, p] = self.q * span
-        return transition, noise
+        shift, powers, basis = self._structure
+        transition = np.eye(d) + dt[..., None, None] * shift
+        span = np.abs(dt)[..., None]
+        noise = (span**powers / powers) @ basis.reshape(len(basis), d * d)
+        return transition, self.q * noise.reshape(*dt.shape, d, d)
+
+    @cached_property
+    def _structure(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``E`` of ``F = I + Δt E``, and the terms of ``Q = q Σ_k |Δt|^{n_k} / n_k B_k``:
+        the powers ``n_k`` and the matrices ``B_k``."""
+        d = self.layout.dim
+        position, velocity = list(self.layout.position), list(self.layout.velocity)
+        shift = np.zeros((d, d))
+        if self.kind is MotionKind.CONSTANT_POSITION:
+            basis = np.zeros((1, d, d))
+            basis[0, position, position] = 1.0
+            return shift, np.array([1.0]), basis
+        shift[position, velocity] = 1.0
+        basis = np.zeros((3, d, d))
+        basis[0, position, position] = 1.0  # |Δt|³/3
+        basis[1, position, velocity] = basis[1, velocity, position] = 1.0  # |Δt|²/2
+        basis[2, velocity, velocity] = 1.0  # |Δt|
+        return shift, np.array([3.0, 2.0, 1.0]), basis
 
     def predict(
         self, states: FloatArray, covariances: FloatArray, dt: FloatArray
@@ -100,10 +111,10 @@ class MotionModel:
         """
         with np.errstate(over="ignore", invalid="ignore"):
             transition, noise = self.matrices(dt)
-            predicted = np.einsum("...ij,...j->...i", transition, states)
+            predicted = (transition @ states[..., None])[..., 0]
             covariance = transition @ covariances @ np.swapaxes(transition, -1, -2) + noise
             covariance = (covariance + np.swapaxes(covariance, -1, -2)) / 2.0
-        if not (np.all(np.isfinite(predicted)) and np.all(np.isfinite(covariance))):
+        if not (np.isfinite(predicted).all() and np.isfinite(covariance).all()):
             horizon = float(np.max(np.abs(dt))) if np.size(dt) else 0.0
             raise InvalidInput(
                 f"time: predicting the tracks over {horizon:.6g} s overflows; "

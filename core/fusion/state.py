@@ -100,16 +100,29 @@ def fast_ci_weights(covariances: FloatArray, present: BoolArray) -> FloatArray:
 def _information_sum(
     states: FloatArray, covariances: FloatArray, weights: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
-    """x, P from P⁻¹ = Σ ω_i P_i⁻¹ and P⁻¹ x = Σ ω_i P_i⁻¹ x_i (absent slots have ω = 0)."""
-    dim = states.shape[-1]
-    safe = np.where(weights[..., None, None] > 0.0, covariances, np.eye(dim))
-    information = np.linalg.inv(safe) * weights[..., None, None]
-    total_information = information.sum(axis=1)
-    information_state = np.einsum("tsij,tsj->ti", information, states)
-    covariance = np.linalg.inv(total_information)
-    covariance = (covariance + np.swapaxes(covariance, -1, -2)) / 2.0
-    state = np.einsum("tij,tj->ti", covariance, information_state)
-    return np.asarray(state, dtype=np.float64), np.asarray(covariance, dtype=np.float64)
+    """x, P from P⁻¹ = Σ ω_i P_i⁻¹ and P⁻¹ x = Σ ω_i P_i⁻¹ x_i (absent slots have ω = 0).
+
+    A track with a single weighted estimate (ω = 1 by every rule) keeps it as
+    it is: no inverse is taken of it.
+    """
+    weighted = weights > 0.0
+    single = weighted.sum(axis=1) == 1
+    slot = np.argmax(weighted, axis=1)
+    rows = np.arange(len(states))
+    state = np.array(states[rows, slot])
+    covariance = np.array(covariances[rows, slot])
+    several = np.flatnonzero(~single)
+    if len(several):
+        dim = states.shape[-1]
+        chosen = weights[several]
+        safe = np.where(chosen[..., None, None] > 0.0, covariances[several], np.eye(dim))
+        information = np.linalg.inv(safe) * chosen[..., None, None]
+        information_state = np.einsum("tsij,tsj->ti", information, states[several])
+        fused_covariance = np.linalg.inv(information.sum(axis=1))
+        fused_covariance = (fused_covariance + np.swapaxes(fused_covariance, -1, -2)) / 2.0
+        covariance[several] = fused_covariance
+        state[several] = np.einsum("tij,tj->ti", fused_covariance, information_state)
+    return state, covariance
 
 
 def fuse_estimates(

@@ -96,9 +96,23 @@ class FusedTrack:
         return cache[1], cache[2], cache[3]
 
     def set_estimate(self, sensor: str, estimate: SensorEstimate) -> None:
-        """Record a sensor's latest estimate (and forget the cached fused state)."""
+        """Record a sensor's latest estimate (and forget the cached fused state).
+
+        The stacked arrays follow a replaced estimate (same slot: a dict keeps
+        the position of a key it already holds) instead of being rebuilt.
+        """
+        cache = self.stack_cache
+        slot = list(self.estimates).index(sensor) if sensor in self.estimates else None
         self.estimates[sensor] = estimate
         self.revision += 1
+        if cache is not None and cache[0] == self.revision - 1 and slot is not None:
+            states, covariances, times = cache[1].copy(), cache[2].copy(), cache[3].copy()
+            states[slot], covariances[slot], times[slot] = (
+                estimate.state,
+                estimate.covariance,
+                estimate.time,
+            )
+            self.stack_cache = (self.revision, states, covariances, times)
 
     def cached_fusion(self, time: float) -> tuple[FloatArray, FloatArray] | None:
         """The fused state at ``time`` if it was computed from the current estimates."""
