@@ -105,3 +105,52 @@ def quadratic_form_and_log_det(
     for component in whitened:
         distance += component * component
     return distance, log_det
+
+
+UNROLLED_MIN_STACK = 256
+"""Below this many matrices :func:`spd_inverse` calls LAPACK: its per-matrix cost
+is then smaller than the fixed cost of the unrolled vector operations."""
+
+
+def spd_inverse(matrices: FloatArray) -> FloatArray:
+    """Inverse of every symmetric positive-definite matrix of a stack, shape (n, q, q).
+
+    ``C = L Lᵀ``, ``M = L⁻¹`` by forward substitution, ``C⁻¹ = Mᵀ M``; each
+    step a vector operation over the stack (component-major) for small q and
+    large n, LAPACK (``np.linalg.inv``) otherwise. The caller guarantees
+    positive definiteness (no pivot is checked).
+    """
+    n, q, _ = matrices.shape
+    if q > UNROLLED_MAX_DIMENSION or n < UNROLLED_MIN_STACK:
+        return np.asarray(np.linalg.inv(matrices), dtype=np.float64)
+    entries = np.moveaxis(matrices, 0, -1)
+    lower: list[list[FloatArray]] = [[] for _ in range(q)]  # lower[i][k] = L_ik, k <= i
+    for j in range(q):
+        pivot = entries[j, j].copy()
+        for k in range(j):
+            pivot -= lower[j][k] * lower[j][k]
+        root = np.sqrt(pivot)
+        inverse_root = 1.0 / root
+        for i in range(j + 1, q):
+            entry = entries[i, j].copy()
+            for k in range(j):
+                entry -= lower[i][k] * lower[j][k]
+            lower[i].append(entry * inverse_root)
+        lower[j].append(root)
+    # M = L⁻¹ (lower triangular): M_ii = 1 / L_ii, M_ij = −M_ii Σ_{j<=k<i} L_ik M_kj
+    solved: list[dict[int, FloatArray]] = [{} for _ in range(q)]
+    for i in range(q):
+        solved[i][i] = 1.0 / lower[i][i]
+        for j in range(i):
+            total = lower[i][j] * solved[j][j]
+            for k in range(j + 1, i):
+                total += lower[i][k] * solved[k][j]
+            solved[i][j] = -total * solved[i][i]
+    inverse = np.empty((q, q, n))
+    for i in range(q):
+        for j in range(i + 1):
+            total = solved[i][i] * solved[i][j]  # (Mᵀ M)_ij = Σ_{k >= i} M_ki M_kj
+            for k in range(i + 1, q):
+                total += solved[k][i] * solved[k][j]
+            inverse[i, j] = inverse[j, i] = total
+    return np.moveaxis(inverse, -1, 0)

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
 
 from core.distance import check_covariances
+from core.distance.cholesky import UNROLLED_MIN_STACK, spd_inverse
 from core.distance.estimates import LAPACK_MAX_STACK, PIVOT_TOLERANCE
 from core.errors import CovarianceError, InvalidInput
 
@@ -50,3 +52,12 @@ def test_valid_stacks_pass_and_other_defects_are_named(n: int) -> None:
     infinite[1, 0, 0] = np.inf
     with pytest.raises(InvalidInput, match=r"known\[1\]\.covariance is not finite"):
         check_covariances(infinite, "known")
+
+
+@pytest.mark.parametrize("q", [1, 2, 4, 6])
+@pytest.mark.parametrize("n", [3, UNROLLED_MIN_STACK + 5])  # LAPACK and unrolled paths
+def test_spd_inverse_matches_numpy(n: int, q: int) -> None:
+    stack = valid_stack(n, q, seed=q)
+    inverse = spd_inverse(stack)
+    assert_allclose(inverse, np.linalg.inv(stack), rtol=1e-9, atol=1e-12)
+    assert_allclose(inverse, np.swapaxes(inverse, 1, 2), rtol=1e-12, atol=1e-15)
