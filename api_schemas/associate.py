@@ -9,6 +9,7 @@ from pydantic import Field, model_validator
 from api_schemas.association import AssociationMethod, AssociationOptions, resolve_options
 from api_schemas.base import MAX_CLASSES, FiniteFloat, Identifier, Label, WireModel
 from api_schemas.issues import FieldIssue, raise_issues
+from api_schemas.linalg import covariance_problems
 from api_schemas.reports import MAX_ITEMS, SensorTrack
 from api_schemas.results import ScoreMatrix
 
@@ -29,14 +30,22 @@ class AssociateRequest(WireModel):
 
     @model_validator(mode="after")
     def _consistent(self) -> Self:
+        """Per side: covariances symmetric positive definite (one batch), distinct ids; one dim; known classes."""
         self.options = resolve_options(self.method, self.options, local=False)
         issues: list[FieldIssue] = []
         frame = set(self.classes)
         dim: int | None = None
         for side in ("known", "incoming"):
             tracks: list[SensorTrack] = getattr(self, side)
+            bad_covariances = covariance_problems([track.covariance for track in tracks])
             seen: set[str] = set()
             for index, track in enumerate(tracks):
+                if index in bad_covariances:
+                    issues.append(
+                        FieldIssue(
+                            (side, index, "covariance"), bad_covariances[index], track.covariance
+                        )
+                    )
                 if track.id in seen:
                     issues.append(
                         FieldIssue(

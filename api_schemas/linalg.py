@@ -7,6 +7,7 @@ pydantic turns it into a validation error located at the field being checked.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from itertools import chain
 
 import numpy as np
 
@@ -30,15 +31,69 @@ def check_square(matrix: Sequence[Sequence[float]], size: int | None = None) -> 
 
 
 def check_covariance(matrix: Sequence[Sequence[float]], size: int | None = None) -> None:
-    """Check that ``matrix`` is a square, symmetric, positive-definite covariance."""
+    """Check that ``matrix`` is a square, symmetric, positive-definite covariance.
+
+    For the many matrices of one input use :func:`covariance_problems` (one batch).
+    """
     check_square(matrix, size)
-    values = np.asarray(matrix, dtype=float)
-    # ndarray methods, not np.max(...): the checks run once per track of every input
-    scale = max(1.0, float(np.abs(values).max()))
-    asymmetry = float(np.abs(values - values.T).max())
-    if asymmetry > SYMMETRY_TOLERANCE * scale:
-        raise ValueError(f"covariance is not symmetric (largest |P - Pᵀ| = {asymmetry:.3g})")
+    problem = covariance_problems([matrix]).get(0)
+    if problem is not None:
+        raise ValueError(problem)
+
+
+def covariance_problems(matrices: Sequence[Sequence[Sequence[float]]]) -> dict[int, str]:
+    """What is wrong with each matrix that is not a symmetric positive-definite covariance.
+
+    The matrices must already be square (:func:`check_square`); they may differ in
+    size. Matrices of one size are stacked and checked together: one symmetry
+    test and one batched Cholesky factorisation; only when that fails is each
+    matrix of the batch factorised alone, to find which ones fail.
+
+    Parameters
+    ----------
+    matrices : sequence of square matrices
+        The covariances of one input, in input order.
+
+    Returns
+    -------
+    dict of int to str
+        Index in ``matrices`` → the problem (the message :func:`check_covariance`
+        raises); empty when every matrix is a covariance.
+    """
+    by_size: dict[int, list[int]] = {}
+    for index, matrix in enumerate(matrices):
+        by_size.setdefault(len(matrix), []).append(index)
+    problems: dict[int, str] = {}
+    for size, indices in by_size.items():
+        group = matrices if len(indices) == len(matrices) else [matrices[i] for i in indices]
+        entries = chain.from_iterable(chain.from_iterable(group))
+        stack = np.fromiter(entries, dtype=float, count=len(indices) * size * size)
+        for position, problem in _stack_problems(stack.reshape(len(indices), size, size)).items():
+            problems[indices[position]] = problem
+    return dict(sorted(problems.items()))
+
+
+def _stack_problems(stack: np.ndarray) -> dict[int, str]:
+    """:func:`covariance_problems` of a ``(k, n, n)`` stack, by position in the stack."""
+    problems: dict[int, str] = {}
+    difference = np.abs(stack - stack.transpose(0, 2, 1))
+    # every scale is at least 1: below the bare tolerance, every matrix is symmetric
+    if difference.max() > SYMMETRY_TOLERANCE:
+        asymmetry = difference.max(axis=(1, 2))
+        scale = np.maximum(1.0, np.abs(stack).max(axis=(1, 2)))
+        for position in np.flatnonzero(asymmetry > SYMMETRY_TOLERANCE * scale).tolist():
+            problems[position] = (
+                f"covariance is not symmetric (largest |P - Pᵀ| = {asymmetry[position]:.3g})"
+            )
+    candidates = [position for position in range(len(stack)) if position not in problems]
+    if not candidates:
+        return problems
     try:
-        np.linalg.cholesky(values)
+        np.linalg.cholesky(stack[candidates] if problems else stack)
     except np.linalg.LinAlgError:
-        raise ValueError("covariance is not positive definite (Cholesky failed)") from None
+        for position in candidates:
+            try:
+                np.linalg.cholesky(stack[position])
+            except np.linalg.LinAlgError:
+                problems[position] = "covariance is not positive definite (Cholesky failed)"
+    return problems

@@ -2,6 +2,12 @@
 
 Checks that need only the body live here (square symmetric positive-definite
 covariances of the right size, distinct track ids, valid class evidence).
+
+Each track or detection checks that its matrix is square and of its vector's
+size; whether the matrices are symmetric positive definite is checked once per
+input, for all of them together (:func:`~api_schemas.linalg.covariance_problems`),
+by the model that holds the list.
+
 Checks against the session configuration (state dimension, known sensor,
 class labels in the frame) are in :mod:`api_schemas.consistency`.
 """
@@ -15,7 +21,7 @@ from pydantic import Field, model_validator
 from api_schemas.base import FiniteFloat, Identifier, Matrix, Vector, WireModel
 from api_schemas.classification import ClassEvidence
 from api_schemas.issues import FieldIssue, raise_issues
-from api_schemas.linalg import check_covariance
+from api_schemas.linalg import check_square, covariance_problems
 
 MAX_ITEMS = 100_000
 """Hard ceiling on items per input; the service's configured limit is lower."""
@@ -33,8 +39,13 @@ class SensorTrack(WireModel):
 
     @model_validator(mode="after")
     def _covariance_matches_state(self) -> Self:
+        """Square and of the state's size; symmetric positive definite is checked by the list.
+
+        Every model holding tracks (:class:`TrackReport`, ``AssociateRequest``) checks
+        all their covariances at once with :func:`~api_schemas.linalg.covariance_problems`.
+        """
         try:
-            check_covariance(self.covariance, len(self.state))
+            check_square(self.covariance, len(self.state))
         except ValueError as error:
             raise_issues("SensorTrack", [FieldIssue(("covariance",), str(error), self.covariance)])
         return self
@@ -48,10 +59,18 @@ class TrackReport(WireModel):
     tracks: Annotated[list[SensorTrack], Field(max_length=MAX_ITEMS)]
 
     @model_validator(mode="after")
-    def _distinct_ids(self) -> Self:
+    def _covariances_and_distinct_ids(self) -> Self:
+        """Every covariance symmetric positive definite (one batch), every track id once."""
+        bad_covariances = covariance_problems([track.covariance for track in self.tracks])
         seen: set[str] = set()
         issues: list[FieldIssue] = []
         for index, track in enumerate(self.tracks):
+            if index in bad_covariances:
+                issues.append(
+                    FieldIssue(
+                        ("tracks", index, "covariance"), bad_covariances[index], track.covariance
+                    )
+                )
             if track.id in seen:
                 issues.append(
                     FieldIssue(
@@ -73,9 +92,10 @@ class Detection(WireModel):
 
     @model_validator(mode="after")
     def _r_matches_z(self) -> Self:
+        """Square and of ``z``'s size; symmetric positive definite is checked by the report."""
         if self.r is not None:
             try:
-                check_covariance(self.r, len(self.z))
+                check_square(self.r, len(self.z))
             except ValueError as error:
                 raise_issues("Detection", [FieldIssue(("r",), str(error), self.r)])
         return self
@@ -87,3 +107,22 @@ class DetectionReport(WireModel):
     sensor: Identifier
     time: FiniteFloat
     detections: Annotated[list[Detection], Field(max_length=MAX_ITEMS)]
+
+    @model_validator(mode="after")
+    def _noise_is_covariance(self) -> Self:
+        """Every detection's own ``r`` symmetric positive definite (one batch)."""
+        noisy = [
+            (index, detection.r)
+            for index, detection in enumerate(self.detections)
+            if detection.r is not None
+        ]
+        bad_noise = covariance_problems([r for _, r in noisy])
+        if bad_noise:
+            raise_issues(
+                "DetectionReport",
+                [
+                    FieldIssue(("detections", noisy[position][0], "r"), problem, noisy[position][1])
+                    for position, problem in bad_noise.items()
+                ],
+            )
+        return self

@@ -21,10 +21,19 @@ bearer_scheme = HTTPBearer(
 )
 
 
-async def get_app_settings(request: Request) -> Settings:
-    """The settings the application was built with."""
+def _settings_of(request: Request) -> Settings:
     settings: Settings = request.app.state.settings
     return settings
+
+
+def _registry_of(request: Request) -> SessionRegistry:
+    registry: SessionRegistry = request.app.state.registry
+    return registry
+
+
+async def get_app_settings(request: Request) -> Settings:
+    """The settings the application was built with."""
+    return _settings_of(request)
 
 
 async def get_store(request: Request) -> Store:
@@ -41,8 +50,7 @@ async def get_metrics(request: Request) -> ServiceMetrics:
 
 async def get_registry(request: Request) -> SessionRegistry:
     """The application's live sessions."""
-    registry: SessionRegistry = request.app.state.registry
-    return registry
+    return _registry_of(request)
 
 
 SettingsDep = Annotated[Settings, Depends(get_app_settings)]
@@ -89,25 +97,26 @@ def open_record(
     raise Forbidden(f"this token does not open session {sid!r}")
 
 
-async def authorize_session(
-    sid: SessionId, token: BearerToken, settings: SettingsDep, registry: RegistryDep
-) -> SessionRecord:
-    """The session ``sid`` if the token opens it (401 without a token; see :func:`open_session`).
+async def authorize_session(sid: SessionId, token: BearerToken, request: Request) -> SessionRecord:
+    """The session ``sid`` if the token opens it (401 without a token; see :func:`open_record`).
 
     Live sessions are checked in memory; the store is read (off the event loop) only for
-    a session the registry does not hold.
+    a session the registry does not hold. The settings and the registry are read from
+    the application here rather than as sub-dependencies: FastAPI resolves every
+    sub-dependency anew on each request, and these two never change.
     """
-    record = await registry.record(sid)
-    return open_record(sid, record, token, settings)
+    record = await _registry_of(request).record(sid)
+    return open_record(sid, record, token, _settings_of(request))
 
 
 AdminDep = Annotated[Principal, Depends(require_admin)]
 AuthorizedSession = Annotated[SessionRecord, Depends(authorize_session)]
 
 
-async def live_session(record: AuthorizedSession, registry: RegistryDep) -> LiveSession:
-    """The authorized session with its engine."""
-    return await registry.get(record.id)
+async def live_session(sid: SessionId, token: BearerToken, request: Request) -> LiveSession:
+    """The authorized session with its engine (the checks of :func:`authorize_session`)."""
+    record = await authorize_session(sid, token, request)
+    return await _registry_of(request).get(record.id)
 
 
 LiveSessionDep = Annotated[LiveSession, Depends(live_session)]
