@@ -12,7 +12,7 @@ from datetime import datetime
 
 from api_schemas.config import SessionConfig
 from app.hub import Hub
-from app.stores import SessionRecord, Snapshot, to_plain
+from app.stores import SessionRecord, Snapshot
 from app.translate import PlainObject, class_frame, fusion_config
 from core.belief import Frame
 from core.fusion.config import FusionConfig
@@ -91,7 +91,7 @@ class LiveSession:
         """What a snapshot keeps: the engine export and the service's counters."""
         return {
             "format": SNAPSHOT_FORMAT,
-            "engine": None if self.engine is None else to_plain(self.engine.export()),
+            "engine": None if self.engine is None else self.engine.export(),  # plain already
             "joined_sensors": self.joined_sensors,
             "sensor_inputs": dict(self.sensor_inputs),
             "last_input_at": None if self.last_input_at is None else self.last_input_at.isoformat(),
