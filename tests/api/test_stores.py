@@ -10,6 +10,7 @@ import textwrap
 import threading
 from collections.abc import Iterator
 from contextlib import ExitStack
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -31,6 +32,7 @@ from app.stores import (
     parse_store_url,
     to_plain,
 )
+from app.stores.base import copy_plain, dumps, loads
 from tests.api.redis_support import REDIS_URL, redis_prefix, redis_store
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -129,6 +131,42 @@ def test_stored_inputs_are_copies(store: Store) -> None:
     store.append("s1", 1, payload, now())
     payload["tracks"].append(3)
     assert store.entries("s1")[0].input == {"tracks": [1, 2]}
+
+
+COPIED_AS_JSON_READS_IT = [
+    {"tracks": [{"id": "t0", "state": [0.1, -0.0, 1e-320, 1.7976931348623157e308]}]},
+    {"nested": ("tuple", [1, 2**63 - 1, -(2**63)]), "text": 'é\u2028\\"', "flag": True},
+    {"big": 2**70, "keys": {1: "int key"}},
+    {"numpy": np.arange(3.0), "scalar": np.float64(2.5)},
+    {"none": None, "lone": "\ud800"},
+]
+
+
+@pytest.mark.parametrize("value", COPIED_AS_JSON_READS_IT)
+def test_copy_plain_is_the_json_round_trip(value: dict[str, object]) -> None:
+    copied = copy_plain(value)
+    assert copied == loads(dumps(value))
+    assert dumps(copied) == dumps(loads(dumps(value)))
+
+
+def test_copy_plain_keeps_non_finite_numbers() -> None:
+    copied = copy_plain({"values": [float("nan"), float("inf"), -float("inf")]})
+    assert dumps(copied) == '{"values":[NaN,Infinity,-Infinity]}'
+
+
+@dataclass
+class Reading:
+    value: float
+
+
+@pytest.mark.parametrize("value", [object(), Reading(1.0), datetime(2026, 1, 1, tzinfo=UTC)])
+def test_copy_plain_refuses_what_dumps_refuses(value: object) -> None:
+    with pytest.raises(TypeError) as by_dumps:
+        dumps({"engine": value})
+    with pytest.raises(TypeError) as by_copy:
+        copy_plain({"engine": value})
+    assert str(by_copy.value) == str(by_dumps.value)
+    assert str(by_copy.value).endswith("is not plain data")
 
 
 def test_to_plain_refuses_objects() -> None:
