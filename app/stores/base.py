@@ -149,12 +149,44 @@ class Store(Protocol):
         ...
 
 
+_PLAIN_SCALARS = frozenset({type(None), bool, str, int, float})
+"""Exact types that are plain data as they are (subclasses take :func:`_plain_at`'s rules)."""
+
+
 def to_plain(value: Any, path: str = "$") -> Any:
     """``value`` as plain JSON data: numpy arrays → nested lists, numpy scalars → numbers.
 
     Anything that is not a dict with string keys, a list/tuple, a string, a
     number, a bool or ``None`` is refused with a :class:`TypeError` naming its path.
+    Plain lists and dicts are walked without tracking the path (a snapshot holds
+    thousands of numbers in lists); the path is found by a second walk only
+    when something is refused.
     """
+    try:
+        return _plain(value)
+    except TypeError:
+        return _plain_at(value, path)  # raises, naming the path of what is not plain data
+
+
+def _plain(value: Any) -> Any:
+    """:func:`to_plain` without the path; what is not a plain list or dict takes :func:`_plain_at`."""
+    kind = type(value)
+    if kind in _PLAIN_SCALARS:
+        return value
+    if kind is list or kind is tuple:
+        return [item if type(item) in _PLAIN_SCALARS else _plain(item) for item in value]
+    if kind is dict:
+        plain: JsonObject = {}
+        for key, item in value.items():
+            if type(key) is not str:
+                raise TypeError(f"key {key!r} is not a string")
+            plain[key] = item if type(item) in _PLAIN_SCALARS else _plain(item)
+        return plain
+    return _plain_at(value, "$")
+
+
+def _plain_at(value: Any, path: str) -> Any:
+    """The rules of :func:`to_plain`, tracking the path of every value."""
     if value is None or isinstance(value, bool | str | int):
         return value
     if isinstance(value, float):
@@ -162,18 +194,18 @@ def to_plain(value: Any, path: str = "$") -> Any:
     if isinstance(value, np.ndarray):
         if value.dtype.kind in _PLAIN_KINDS:
             return value.tolist()  # bools, integers and floats: plain already, no walk in Python
-        return to_plain(value.tolist(), path)
+        return _plain_at(value.tolist(), path)
     if isinstance(value, np.generic):
-        return to_plain(value.item(), path)
+        return _plain_at(value.item(), path)
     if isinstance(value, Mapping):
         plain: JsonObject = {}
         for key, item in value.items():
             if not isinstance(key, str):
                 raise TypeError(f"{path}: key {key!r} is not a string")
-            plain[key] = to_plain(item, f"{path}.{key}")
+            plain[key] = _plain_at(item, f"{path}.{key}")
         return plain
     if isinstance(value, Sequence):
-        return [to_plain(item, f"{path}[{index}]") for index, item in enumerate(value)]
+        return [_plain_at(item, f"{path}[{index}]") for index, item in enumerate(value)]
     raise TypeError(f"{path}: {type(value).__name__} is not plain data")
 
 

@@ -175,6 +175,34 @@ def test_to_plain_refuses_objects() -> None:
     assert to_plain({"x": np.float32(0.5), "flag": np.bool_(True)}) == {"x": 0.5, "flag": True}
 
 
+def test_to_plain_names_the_path_of_a_nested_refusal() -> None:
+    state = {"tracks": [{"history": [[0.0, 1.0]]}, {"history": [[2.0, (3.0, object())]]}]}
+    with pytest.raises(TypeError, match=r"^\$\.tracks\[1\]\.history\[0\]\[1\]\[1\]: object is"):
+        to_plain(state)
+    with pytest.raises(TypeError, match=r"^\$\.tracks\[0\]: key 3 is not a string"):
+        to_plain({"tracks": [{3: "x"}]})
+
+
+def test_to_plain_converts_nested_numpy_tuples_and_subclasses() -> None:
+    class Label(str):
+        pass
+
+    state = {
+        "rows": [(1.0, 2), [np.float64(0.5), np.int64(7)], np.eye(2)],
+        "flags": (np.bool_(False), True, None),
+        "names": {Label("a"): Label("b")},
+        "objects": np.array([1.5, "x"], dtype=object),
+    }
+    plain = to_plain(state)
+    assert plain == {
+        "rows": [[1.0, 2], [0.5, 7], [[1.0, 0.0], [0.0, 1.0]]],
+        "flags": [False, True, None],
+        "names": {"a": "b"},
+        "objects": [1.5, "x"],
+    }
+    assert type(plain["rows"][0]) is list and type(plain["flags"][0]) is bool
+
+
 def test_store_urls(tmp_path: Path) -> None:
     assert parse_store_url("memory") == StoreSpec("memory")
     assert parse_store_url("sqlite") == StoreSpec("sqlite", Path("data/credal-fusion.db"))
