@@ -5,7 +5,10 @@ from __future__ import annotations
 from typing import Annotated
 
 from fastapi import Depends, Path, Request
-from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
+from fastapi.openapi.models import HTTPBearer as HTTPBearerModel
+from fastapi.security.base import SecurityBase
+from fastapi.security.utils import get_authorization_scheme_param
+from starlette.requests import HTTPConnection
 
 from app.errors import Forbidden, SessionNotFound, Unauthorized
 from app.live_session import LiveSession
@@ -15,9 +18,28 @@ from app.sessions import SessionRegistry
 from app.settings import Settings
 from app.stores import SessionRecord, Store
 
-bearer_scheme = HTTPBearer(
-    auto_error=False,
-    description="The session's token (returned once by POST /v1/sessions) or the admin token.",
+
+class BearerTokenScheme(SecurityBase):
+    """The ``HTTPBearer`` security scheme as a dependency that gives the token (401 without one).
+
+    It reads the header as FastAPI's ``HTTPBearer`` does and documents the same
+    scheme, but it is one dependency where ``HTTPBearer`` and a check of its
+    result were two: FastAPI resolves every dependency anew on each request.
+    """
+
+    def __init__(self, description: str) -> None:
+        self.model = HTTPBearerModel(description=description)
+        self.scheme_name = "HTTPBearer"
+
+    async def __call__(self, request: HTTPConnection) -> str:
+        scheme, token = get_authorization_scheme_param(request.headers.get("Authorization"))
+        if scheme.lower() != "bearer" or not token:
+            raise Unauthorized("send 'Authorization: Bearer <token>'")
+        return token
+
+
+bearer_token = BearerTokenScheme(
+    "The session's token (returned once by POST /v1/sessions) or the admin token."
 )
 
 
@@ -57,15 +79,7 @@ SettingsDep = Annotated[Settings, Depends(get_app_settings)]
 RegistryDep = Annotated[SessionRegistry, Depends(get_registry)]
 StoreDep = Annotated[Store, Depends(get_store)]
 MetricsDep = Annotated[ServiceMetrics, Depends(get_metrics)]
-Credentials = Annotated[HTTPAuthorizationCredentials | None, Depends(bearer_scheme)]
 SessionId = Annotated[str, Path(min_length=1, max_length=64, description="The session id.")]
-
-
-async def bearer_token(credentials: Credentials) -> str:
-    """The request's bearer token; 401 when there is none."""
-    if credentials is None or not credentials.credentials:
-        raise Unauthorized("send 'Authorization: Bearer <token>'")
-    return credentials.credentials
 
 
 BearerToken = Annotated[str, Depends(bearer_token)]

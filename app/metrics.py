@@ -102,6 +102,8 @@ class HttpMetrics:
     def __init__(self, app: ASGIApp, metrics: ServiceMetrics) -> None:
         self.app = app
         self.metrics = metrics
+        self._series: dict[tuple[str, str, str], tuple[Counter, Histogram]] = {}
+        """(method, route, status) → its counter and latency histogram (``labels()`` once each)."""
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
@@ -119,7 +121,13 @@ class HttpMetrics:
         try:
             await self.app(scope, receive, send_with_status)
         finally:
-            route = _route_template(scope)
-            method = str(scope.get("method", ""))
-            self.metrics.requests.labels(method, route, str(status)).inc()
-            self.metrics.latency.labels(method, route).observe(time.perf_counter() - started)
+            key = (str(scope.get("method", "")), _route_template(scope), str(status))
+            series = self._series.get(key)
+            if series is None:
+                method, route, status_text = key
+                series = self._series[key] = (
+                    self.metrics.requests.labels(method, route, status_text),
+                    self.metrics.latency.labels(method, route),
+                )
+            series[0].inc()
+            series[1].observe(time.perf_counter() - started)

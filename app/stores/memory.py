@@ -15,6 +15,7 @@ from app.stores.base import (
     SessionRecord,
     Snapshot,
     check_seq,
+    copy_plain,
     dumps,
     loads,
     require,
@@ -72,7 +73,7 @@ class MemoryStore:
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
     ) -> LogEntry:
-        entry = LogEntry(seq=seq, received_at=received_at, input=loads(dumps(entry_input)))
+        entry = LogEntry(seq=seq, received_at=received_at, input=copy_plain(entry_input))
         with self._lock:
             data = self._require(session_id)
             check_seq(session_id, seq, self._last_seq(data))

@@ -10,6 +10,7 @@ import textwrap
 import threading
 from collections.abc import Iterator
 from contextlib import ExitStack
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -31,6 +32,7 @@ from app.stores import (
     parse_store_url,
     to_plain,
 )
+from app.stores.base import copy_plain, dumps, loads
 from tests.api.redis_support import REDIS_URL, redis_prefix, redis_store
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -131,10 +133,74 @@ def test_stored_inputs_are_copies(store: Store) -> None:
     assert store.entries("s1")[0].input == {"tracks": [1, 2]}
 
 
+COPIED_AS_JSON_READS_IT = [
+    {"tracks": [{"id": "t0", "state": [0.1, -0.0, 1e-320, 1.7976931348623157e308]}]},
+    {"nested": ("tuple", [1, 2**63 - 1, -(2**63)]), "text": 'é\u2028\\"', "flag": True},
+    {"big": 2**70, "keys": {1: "int key"}},
+    {"numpy": np.arange(3.0), "scalar": np.float64(2.5)},
+    {"none": None, "lone": "\ud800"},
+]
+
+
+@pytest.mark.parametrize("value", COPIED_AS_JSON_READS_IT)
+def test_copy_plain_is_the_json_round_trip(value: dict[str, object]) -> None:
+    copied = copy_plain(value)
+    assert copied == loads(dumps(value))
+    assert dumps(copied) == dumps(loads(dumps(value)))
+
+
+def test_copy_plain_keeps_non_finite_numbers() -> None:
+    copied = copy_plain({"values": [float("nan"), float("inf"), -float("inf")]})
+    assert dumps(copied) == '{"values":[NaN,Infinity,-Infinity]}'
+
+
+@dataclass
+class Reading:
+    value: float
+
+
+@pytest.mark.parametrize("value", [object(), Reading(1.0), datetime(2026, 1, 1, tzinfo=UTC)])
+def test_copy_plain_refuses_what_dumps_refuses(value: object) -> None:
+    with pytest.raises(TypeError) as by_dumps:
+        dumps({"engine": value})
+    with pytest.raises(TypeError) as by_copy:
+        copy_plain({"engine": value})
+    assert str(by_copy.value) == str(by_dumps.value)
+    assert str(by_copy.value).endswith("is not plain data")
+
+
 def test_to_plain_refuses_objects() -> None:
     with pytest.raises(TypeError, match=r"\$\.engine"):
         to_plain({"engine": object()})
     assert to_plain({"x": np.float32(0.5), "flag": np.bool_(True)}) == {"x": 0.5, "flag": True}
+
+
+def test_to_plain_names_the_path_of_a_nested_refusal() -> None:
+    state = {"tracks": [{"history": [[0.0, 1.0]]}, {"history": [[2.0, (3.0, object())]]}]}
+    with pytest.raises(TypeError, match=r"^\$\.tracks\[1\]\.history\[0\]\[1\]\[1\]: object is"):
+        to_plain(state)
+    with pytest.raises(TypeError, match=r"^\$\.tracks\[0\]: key 3 is not a string"):
+        to_plain({"tracks": [{3: "x"}]})
+
+
+def test_to_plain_converts_nested_numpy_tuples_and_subclasses() -> None:
+    class Label(str):
+        pass
+
+    state = {
+        "rows": [(1.0, 2), [np.float64(0.5), np.int64(7)], np.eye(2)],
+        "flags": (np.bool_(False), True, None),
+        "names": {Label("a"): Label("b")},
+        "objects": np.array([1.5, "x"], dtype=object),
+    }
+    plain = to_plain(state)
+    assert plain == {
+        "rows": [[1.0, 2], [0.5, 7], [[1.0, 0.0], [0.0, 1.0]]],
+        "flags": [False, True, None],
+        "names": {"a": "b"},
+        "objects": [1.5, "x"],
+    }
+    assert type(plain["rows"][0]) is list and type(plain["flags"][0]) is bool
 
 
 def test_store_urls(tmp_path: Path) -> None:
