@@ -256,11 +256,22 @@ def step_plain(step: StepResult, seq: int) -> PlainObject:
     return plain
 
 
-def _finite_array(values: np.ndarray, what: str, track: str) -> np.ndarray:
-    """``values`` as a C-contiguous float64 array; a non-finite entry raises (never ``null`` or NaN)."""
-    if not np.isfinite(values).all():
-        raise ValueError(f"fused track {track!r}: non-finite {what}")
-    return np.ascontiguousarray(values, dtype=np.float64)
+def _check_finite(views: Sequence[FusedTrackView]) -> None:
+    """Raise ``ValueError`` naming the first track with a non-finite state or covariance.
+
+    One test over every track of the step (the arrays are small: per-track
+    calls would cost more than the test); the culprit is looked for only then.
+    """
+    if not views:
+        return
+    states = np.concatenate([view.state for view in views])
+    covariances = np.concatenate([view.covariance.ravel() for view in views])
+    if np.isfinite(states).all() and np.isfinite(covariances).all():
+        return
+    for view in views:
+        for what, values in (("state", view.state), ("covariance", view.covariance)):
+            if not np.isfinite(values).all():
+                raise ValueError(f"fused track {view.id!r}: non-finite {what}")
 
 
 def _class_fast(assessment: ClassAssessment | None) -> PlainObject | None:
@@ -279,8 +290,8 @@ def _track_fast(view: FusedTrackView) -> PlainObject:
     return {
         "id": view.id,
         "status": view.status.value,
-        "state": _finite_array(view.state, "state", view.id),
-        "covariance": _finite_array(view.covariance, "covariance", view.id),
+        "state": np.ascontiguousarray(view.state, dtype=np.float64),  # finite: _check_finite
+        "covariance": np.ascontiguousarray(view.covariance, dtype=np.float64),
         "sources": view.sources,  # frozen dataclasses (sensor, track, time): the wire names
         "classification": _class_fast(view.classification),
         "score": score,
@@ -315,6 +326,7 @@ def step_json(step: StepResult, seq: int) -> str:
     """
     if not math.isfinite(step.time):
         raise ValueError("non-finite step time")
+    _check_finite(step.tracks)
     document = {
         "seq": seq,
         "time": step.time,

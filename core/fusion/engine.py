@@ -55,7 +55,6 @@ from core.fusion.reports import (
     DetectionReport,
     FusedTrackView,
     ReportedTrack,
-    Source,
     StepResult,
     TrackReport,
 )
@@ -704,8 +703,7 @@ class SessionEngine:
 
     def _view(self, track: FusedTrack, state: FloatArray, covariance: FloatArray) -> FusedTrackView:
         sources = tuple(
-            Source(sensor, estimate.track, estimate.time)
-            for sensor, estimate in sorted(track.estimates.items())
+            estimate.source(sensor) for sensor, estimate in sorted(track.estimates.items())
         )
         return FusedTrackView(
             id=track.id,

@@ -9,6 +9,7 @@ import numpy as np
 
 from core.arrays import FloatArray
 from core.belief import Frame, MassFunction
+from core.fusion.reports import Source
 from core.lifecycle import StatusReason, TrackStatus
 
 HISTORY_LENGTH = 100
@@ -24,6 +25,13 @@ class SensorEstimate:
     state: FloatArray
     covariance: FloatArray
     class_mass: MassFunction | None = None
+    _source: Source | None = field(default=None, init=False, repr=False, compare=False)
+
+    def source(self, sensor: str) -> Source:
+        """This estimate as a source of its fused track (built once: a step shows every source)."""
+        if self._source is None or self._source.sensor != sensor:
+            self._source = Source(sensor, self.track, self.time)
+        return self._source
 
     def to_plain(self) -> dict[str, Any]:
         return {

@@ -47,6 +47,12 @@ def test_step_json_refuses_non_finite_numbers() -> None:
     broken = replace(step, tracks=(replace(track, state=state), *step.tracks[1:]))
     with pytest.raises(ValueError, match="non-finite state"):
         step_json(broken, 1)
+    last = step.tracks[-1]
+    covariance = last.covariance.copy()
+    covariance[1, 1] = math.inf
+    broken = replace(step, tracks=(*step.tracks[:-1], replace(last, covariance=covariance)))
+    with pytest.raises(ValueError, match=rf"fused track '{last.id}': non-finite covariance"):
+        step_json(broken, 1)
     broken = replace(step, tracks=(replace(track, score=-math.inf), *step.tracks[1:]))
     with pytest.raises(ValueError, match="non-finite score"):
         step_json(broken, 1)
