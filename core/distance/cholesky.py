@@ -73,34 +73,22 @@ def quadratic_form_and_log_det(
     q, n = differences.shape
     if q > UNROLLED_MAX_DIMENSION:
         matrices = np.moveaxis(covariances, -1, 0)
-        lower = np.linalg.cholesky(matrices)
-        solved = np.linalg.solve(lower, differences.T[:, :, None])[:, :, 0]
-        diagonal = np.diagonal(lower, axis1=1, axis2=2)
+        factor = np.linalg.cholesky(matrices)
+        solved = np.linalg.solve(factor, differences.T[:, :, None])[:, :, 0]
+        diagonal = np.diagonal(factor, axis1=1, axis2=2)
         return (
             np.einsum("ni,ni->n", solved, solved),
             2.0 * np.log(diagonal).sum(axis=1),
         )
-    factor: list[list[FloatArray]] = [[] for _ in range(q)]
-    whitened: list[FloatArray] = []
+    lower = _lower_factor(covariances)
+    whitened: list[FloatArray] = []  # y = L⁻¹ Δ by forward substitution
     log_det = np.zeros(n)
     for j in range(q):
-        pivot = covariances[j, j].copy()
-        for k in range(j):
-            pivot -= factor[j][k] * factor[j][k]
-        root = np.sqrt(pivot)
-        log_det += np.log(pivot)
-        inverse_root = 1.0 / root
-        for i in range(j + 1, q):
-            entry = covariances[i, j].copy()
-            for k in range(j):
-                entry -= factor[i][k] * factor[j][k]
-            factor[i].append(entry * inverse_root)
-        factor[j].append(root)
-        # forward substitution for y = L⁻¹ Δ, row j
         residual = differences[j].copy()
         for k in range(j):
-            residual -= factor[j][k] * whitened[k]
-        whitened.append(residual * inverse_root)
+            residual -= lower[j][k] * whitened[k]
+        whitened.append(residual / lower[j][j])
+        log_det += 2.0 * np.log(lower[j][j])
     distance = np.zeros(n)
     for component in whitened:
         distance += component * component
@@ -123,20 +111,7 @@ def spd_inverse(matrices: FloatArray) -> FloatArray:
     n, q, _ = matrices.shape
     if q > UNROLLED_MAX_DIMENSION or n < UNROLLED_MIN_STACK:
         return np.asarray(np.linalg.inv(matrices), dtype=np.float64)
-    entries = np.moveaxis(matrices, 0, -1)
-    lower: list[list[FloatArray]] = [[] for _ in range(q)]  # lower[i][k] = L_ik, k <= i
-    for j in range(q):
-        pivot = entries[j, j].copy()
-        for k in range(j):
-            pivot -= lower[j][k] * lower[j][k]
-        root = np.sqrt(pivot)
-        inverse_root = 1.0 / root
-        for i in range(j + 1, q):
-            entry = entries[i, j].copy()
-            for k in range(j):
-                entry -= lower[i][k] * lower[j][k]
-            lower[i].append(entry * inverse_root)
-        lower[j].append(root)
+    lower = _lower_factor(np.moveaxis(matrices, 0, -1))
     # M = L⁻¹ (lower triangular): M_ii = 1 / L_ii, M_ij = −M_ii Σ_{j<=k<i} L_ik M_kj
     solved: list[dict[int, FloatArray]] = [{} for _ in range(q)]
     for i in range(q):
@@ -154,3 +129,22 @@ def spd_inverse(matrices: FloatArray) -> FloatArray:
                 total += solved[k][i] * solved[k][j]
             inverse[i, j] = inverse[j, i] = total
     return np.moveaxis(inverse, -1, 0)
+
+
+def _lower_factor(entries: FloatArray) -> list[list[FloatArray]]:
+    """The Cholesky factor of component-major SPD matrices (q, q, n): ``lower[i][k]`` = L_ik, k <= i."""
+    q = entries.shape[0]
+    lower: list[list[FloatArray]] = [[] for _ in range(q)]
+    for j in range(q):
+        pivot = entries[j, j].copy()
+        for k in range(j):
+            pivot -= lower[j][k] * lower[j][k]
+        root = np.sqrt(pivot)
+        inverse_root = 1.0 / root
+        for i in range(j + 1, q):
+            entry = entries[i, j].copy()
+            for k in range(j):
+                entry -= lower[i][k] * lower[j][k]
+            lower[i].append(entry * inverse_root)
+        lower[j].append(root)
+    return lower
