@@ -119,11 +119,11 @@ def _information_sum(
         safe = np.where(chosen[..., None, None] > 0.0, covariances[several], np.eye(dim))
         information = spd_inverse(safe.reshape(-1, dim, dim)).reshape(safe.shape)
         information *= chosen[..., None, None]
-        information_state = np.einsum("tsij,tsj->ti", information, states[several])
+        information_state = (information @ states[several][..., None]).sum(axis=1)[..., 0]
         fused_covariance = spd_inverse(information.sum(axis=1))
         fused_covariance = (fused_covariance + np.swapaxes(fused_covariance, -1, -2)) / 2.0
         covariance[several] = fused_covariance
-        state[several] = np.einsum("tij,tj->ti", fused_covariance, information_state)
+        state[several] = (fused_covariance @ information_state[..., None])[..., 0]
     return state, covariance
 
 
