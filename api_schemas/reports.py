@@ -60,7 +60,12 @@ class TrackReport(WireModel):
 
     @model_validator(mode="after")
     def _covariances_and_distinct_ids(self) -> Self:
-        """Every covariance symmetric positive definite (one batch), every track id once."""
+        """Every covariance symmetric positive definite (one batch), every track id once.
+
+        Runs once every track is otherwise valid (a model validator): a body
+        with type errors lists those first, its covariance problems after they
+        are fixed. The field paths are those of a per-track check.
+        """
         bad_covariances = covariance_problems([track.covariance for track in self.tracks])
         seen: set[str] = set()
         issues: list[FieldIssue] = []

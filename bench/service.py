@@ -150,27 +150,22 @@ def bare_command(port: int) -> list[str]:
     return [sys.executable, str(Path(__file__).resolve()), "--serve-bare", str(port)]
 
 
-def mean_step_ms(url: str) -> tuple[float, int]:
-    """Mean engine step (``credal_fusion_step_seconds``, all kinds) so far, in ms, and the count."""
-    text = httpx.get(f"{url}/metrics").text
-    total = count = 0.0
-    for line in text.splitlines():
+def step_totals(url: str) -> tuple[float, int]:
+    """Seconds spent in engine steps so far (``credal_fusion_step_seconds``, all kinds), and how many."""
+    total, count = 0.0, 0
+    for line in httpx.get(f"{url}/metrics").text.splitlines():
         if line.startswith("credal_fusion_step_seconds_sum"):
             total += float(line.rsplit(" ", 1)[1])
         elif line.startswith("credal_fusion_step_seconds_count"):
-            count += float(line.rsplit(" ", 1)[1])
-    return (1e3 * total / count if count else float("nan")), int(count)
+            count += int(float(line.rsplit(" ", 1)[1]))
+    return total, count
 
 
-def step_share(url: str, before: tuple[float, int]) -> float:
-    """Mean engine step (ms) of the inputs applied since ``before``."""
-    after_ms, after_count = mean_step_ms(url)
-    before_ms, before_count = before
-    applied = after_count - before_count
-    if applied <= 0:
-        return float("nan")
-    before_total = 0.0 if before_count == 0 else before_ms * before_count
-    return (after_ms * after_count - before_total) / applied
+def mean_step_ms(url: str, before: tuple[float, int]) -> float:
+    """Mean engine step (ms) of the inputs applied since ``before`` (a :func:`step_totals`)."""
+    total, count = step_totals(url)
+    applied = count - before[1]
+    return 1e3 * (total - before[0]) / applied if applied > 0 else float("nan")
 
 
 # ---------------------------------------------------------------- load
@@ -272,8 +267,7 @@ def main() -> int:
     sensors = [f"s{index}" for index in range(WORKERS)]
     service_port, bare_port = free_port(), free_port()
     rows: list[tuple[str, float, float, float]] = []
-    steps: dict[str, float] = {}
-    """Mean engine step inside the server during a run (from its /metrics)."""
+    steps: dict[str, float] = {}  # mean engine step inside the server during a run (/metrics)
     with (
         server(service_command(service_port), service_port) as service_url,
         server(bare_command(bare_port), bare_port) as bare_url,
@@ -308,10 +302,10 @@ def main() -> int:
                 return prepared[w][i]
             return json.dumps(track_list(sensors[w], offset + i + w / WORKERS, TRACKS)).encode()
 
-        before = mean_step_ms(service_url)
+        before = step_totals(service_url)
         rate = asyncio.run(rest_throughput_async(service_url, path, headers, service_body))
         rows.append(("REST service /tracks", rest_p50, p99, rate))
-        steps["REST throughput (8 sensors)"] = step_share(service_url, before)
+        steps["REST throughput (8 sensors)"] = mean_step_ms(service_url, before)
 
         ws_bare = bare_url.replace("http://", "ws://") + "/echo"
         bare_messages = [json.dumps(track_list("s0", 1.0, TRACKS) | {"type": "tracks"})]
@@ -325,7 +319,7 @@ def main() -> int:
         created = httpx.post(f"{service_url}/v1/sessions", json=config(sensors)).json()
         ws_url = service_url.replace("http://", "ws://") + f"/v1/sessions/{created['id']}/stream"
         ws_headers = {"Authorization": f"Bearer {created['token']}"}
-        before = mean_step_ms(service_url)
+        before = step_totals(service_url)
         rows.append(
             (
                 "WS service stream",
@@ -341,7 +335,7 @@ def main() -> int:
             )
         )
 
-        steps["WS stream (1 sensor)"] = step_share(service_url, before)
+        steps["WS stream (1 sensor)"] = mean_step_ms(service_url, before)
 
         created = httpx.post(f"{service_url}/v1/sessions", json=config(["a", "b"])).json()
         headers = {"Authorization": f"Bearer {created['token']}"}

@@ -231,7 +231,8 @@ def loads(text: str) -> Any:
 
 
 _ORJSON_STRICT = (
-    orjson.OPT_PASSTHROUGH_DATACLASS
+    orjson.OPT_SORT_KEYS  # dumps sorts keys (code-point order = orjson's UTF-8 byte order)
+    | orjson.OPT_PASSTHROUGH_DATACLASS
     | orjson.OPT_PASSTHROUGH_DATETIME
     | orjson.OPT_PASSTHROUGH_SUBCLASS
 )

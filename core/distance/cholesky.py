@@ -19,36 +19,6 @@ UNROLLED_MAX_DIMENSION = 8
 """Above this dimension the LAPACK path (``np.linalg``) is used instead."""
 
 
-def cholesky_pivots(covariances: FloatArray) -> FloatArray:
-    """Schur-complement pivots ``d_j = L_jj²`` of every matrix of a stack.
-
-    Parameters
-    ----------
-    covariances : ndarray, shape (n, q, q)
-
-    Returns
-    -------
-    ndarray, shape (n, q)
-        A matrix is positive definite exactly when all its pivots are > 0.
-        The factorisation stops contributing at the first non-positive pivot
-        (later pivots are then meaningless but finite).
-    """
-    n, q, _ = covariances.shape
-    factor = np.zeros((q, q, n))
-    pivots = np.zeros((n, q))
-    stacked = np.moveaxis(covariances, 0, -1)
-    for j in range(q):
-        pivot = stacked[j, j] - np.einsum("kn,kn->n", factor[j, :j], factor[j, :j])
-        pivots[:, j] = pivot
-        root = np.sqrt(np.where(pivot > 0.0, pivot, 1.0))
-        for i in range(j + 1, q):
-            factor[i, j] = (
-                stacked[i, j] - np.einsum("kn,kn->n", factor[i, :j], factor[j, :j])
-            ) / root
-        factor[j, j] = root
-    return pivots
-
-
 def quadratic_form_and_log_det(
     differences: FloatArray, covariances: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
@@ -93,42 +63,6 @@ def quadratic_form_and_log_det(
     for component in whitened:
         distance += component * component
     return distance, log_det
-
-
-UNROLLED_MIN_STACK = 256
-"""Below this many matrices :func:`spd_inverse` calls LAPACK: its per-matrix cost
-is then smaller than the fixed cost of the unrolled vector operations."""
-
-
-def spd_inverse(matrices: FloatArray) -> FloatArray:
-    """Inverse of every symmetric positive-definite matrix of a stack, shape (n, q, q).
-
-    ``C = L Lᵀ``, ``M = L⁻¹`` by forward substitution, ``C⁻¹ = Mᵀ M``; each
-    step a vector operation over the stack (component-major) for small q and
-    large n, LAPACK (``np.linalg.inv``) otherwise. The caller guarantees
-    positive definiteness (no pivot is checked).
-    """
-    n, q, _ = matrices.shape
-    if q > UNROLLED_MAX_DIMENSION or n < UNROLLED_MIN_STACK:
-        return np.asarray(np.linalg.inv(matrices), dtype=np.float64)
-    lower = _lower_factor(np.moveaxis(matrices, 0, -1))
-    # M = L⁻¹ (lower triangular): M_ii = 1 / L_ii, M_ij = −M_ii Σ_{j<=k<i} L_ik M_kj
-    solved: list[dict[int, FloatArray]] = [{} for _ in range(q)]
-    for i in range(q):
-        solved[i][i] = 1.0 / lower[i][i]
-        for j in range(i):
-            total = lower[i][j] * solved[j][j]
-            for k in range(j + 1, i):
-                total += lower[i][k] * solved[k][j]
-            solved[i][j] = -total * solved[i][i]
-    inverse = np.empty((q, q, n))
-    for i in range(q):
-        for j in range(i + 1):
-            total = solved[i][i] * solved[i][j]  # (Mᵀ M)_ij = Σ_{k >= i} M_ki M_kj
-            for k in range(i + 1, q):
-                total += solved[k][i] * solved[k][j]
-            inverse[i, j] = inverse[j, i] = total
-    return np.moveaxis(inverse, -1, 0)
 
 
 def _lower_factor(entries: FloatArray) -> list[list[FloatArray]]:

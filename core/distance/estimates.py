@@ -8,13 +8,13 @@ innovation covariance S of the known side carries it ([MTT] eq 15).
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from core.arrays import FloatArray
-from core.distance.cholesky import cholesky_pivots
 from core.errors import CovarianceError, InvalidInput
 
 SYMMETRY_TOLERANCE = 1e-9
@@ -98,12 +98,6 @@ class Estimates:
         return int(self.states.shape[1])
 
 
-LAPACK_MAX_STACK = 256
-"""Stacks up to this size are factorised by LAPACK (``np.linalg.cholesky``): its
-per-matrix cost is lower than the fixed cost of the unrolled factorisation of
-:func:`~core.distance.cholesky.cholesky_pivots`, which wins on larger stacks."""
-
-
 def check_covariances(covariances: FloatArray, name: str) -> None:
     """Raise unless every matrix of the stack is finite, symmetric and positive definite.
 
@@ -137,12 +131,18 @@ def check_covariances(covariances: FloatArray, name: str) -> None:
 
 
 def _pivots(covariances: FloatArray) -> FloatArray:
-    """Cholesky pivots ``L_jj²`` of every matrix (shape (n, q)); non-positive where it fails."""
-    if len(covariances) <= LAPACK_MAX_STACK:
-        try:
-            lower = np.linalg.cholesky(covariances)
-        except np.linalg.LinAlgError:
-            pass  # some matrix is not positive definite: the unrolled pivots locate it
-        else:
-            return np.asarray(np.diagonal(lower, axis1=1, axis2=2) ** 2, dtype=np.float64)
-    return cholesky_pivots(covariances)
+    """Cholesky pivots ``L_jj²`` of every matrix (shape (n, q)); 0 where the factorisation fails.
+
+    LAPACK factorises each matrix on its own, so a matrix gets the same
+    pivots (and the same verdict) whatever else is in the stack; the stack is
+    retried matrix by matrix only when some matrix is not positive definite.
+    """
+    try:
+        lower = np.linalg.cholesky(covariances)
+    except np.linalg.LinAlgError:
+        pivots = np.zeros(covariances.shape[:2])
+        for index, matrix in enumerate(covariances):
+            with contextlib.suppress(np.linalg.LinAlgError):  # not positive definite: stays 0
+                pivots[index] = np.diagonal(np.linalg.cholesky(matrix)) ** 2
+        return pivots
+    return np.asarray(np.diagonal(lower, axis1=1, axis2=2) ** 2, dtype=np.float64)

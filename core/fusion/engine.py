@@ -332,14 +332,16 @@ class SessionEngine:
                 scores=None,
             )
         known_classes, incoming_classes = self._association_classes(live, report)
-        result = associate(  # both sides are valid already: fused, and checked by _check
-            Estimates(states[rows], covariances[rows], "known"),
-            Estimates(incoming_states[cols], incoming_covariances[cols], "incoming"),
-            self.config.association_method,
-            self.config.association_options,
-            self.config.distance or "sum",
-            None if known_classes is None else [known_classes[row] for row in rows],
-            None if incoming_classes is None else [incoming_classes[col] for col in cols],
+        result = (
+            associate(  # not checked again: the report by _check, the fused side by construction
+                Estimates(states[rows], covariances[rows], "known"),
+                Estimates(incoming_states[cols], incoming_covariances[cols], "incoming"),
+                self.config.association_method,
+                self.config.association_options,
+                self.config.distance or "sum",
+                None if known_classes is None else [known_classes[row] for row in rows],
+                None if incoming_classes is None else [incoming_classes[col] for col in cols],
+            )
         )
         pairs += [
             (int(rows[k]), int(cols[i]), float(score), "association")
@@ -760,6 +762,9 @@ class SessionEngine:
         engine.next_number = int(state["next_number"])
         engine.last_report = {str(k): float(v) for k, v in state["last_report"].items()}
         engine.tracks = [FusedTrack.from_plain(plain, config.classes) for plain in state["tracks"]]
+        empty = [track.id for track in engine.tracks if not track.estimates]
+        if empty:
+            raise InvalidInput(f"exported tracks without any sensor estimate: {empty}")
         for sensor, plain in state["local_trackers"].items():
             tracker_config = config.sensor(sensor).tracker
             if tracker_config is None:

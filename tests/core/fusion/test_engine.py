@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -11,8 +12,9 @@ from core.association import METHODS
 from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, StaleReport
 from core.fusion.classes import fuse_sensor_classes
-from core.fusion.config import SensorSpec, TrackManagement
+from core.fusion.config import FusionConfig, SensorSpec, TrackManagement
 from core.fusion.engine import SessionEngine
+from core.fusion.motion import MotionModel, StateLayout
 from core.fusion.reports import ReportedTrack, TrackReport
 from core.geometry import PolygonView, Sector
 from core.lifecycle import StatusReason, TrackStatus
@@ -335,3 +337,22 @@ def test_a_time_too_far_to_predict_to_is_refused_and_changes_nothing() -> None:
     with pytest.raises(InvalidInput, match="overflows"):
         engine.apply(report("s2", 1e200, ("b", moving(0.0, 1.0))))
     assert json.dumps(engine.export()) == before
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"association_method": "nope"}, "unknown association method 'nope'"),
+        ({"association_options": {"gate_probability": 2.0}}, "gate_probability"),
+        ({"distance": "euclid"}, "distance must be one of"),
+    ],
+)
+def test_a_bad_association_setting_is_refused_when_the_config_is_made(
+    changes: dict[str, object], message: str
+) -> None:
+    """Not at the first step that runs the method: with continuity that may be never."""
+    base = FusionConfig(
+        motion=MotionModel(StateLayout(4, (0, 2), (1, 3))), sensors=(SensorSpec("a"),)
+    )
+    with pytest.raises(InvalidInput, match=message):
+        replace(base, **changes)

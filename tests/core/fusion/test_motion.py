@@ -46,18 +46,24 @@ def test_prediction_is_f_p_ft_plus_q(kind: MotionKind, layout: StateLayout) -> N
     states = rng.normal(size=(6, 3, layout.dim))
     factors = rng.normal(size=(6, 3, layout.dim, layout.dim))
     covariances = factors @ np.swapaxes(factors, -1, -2)
-    dt = rng.normal(size=(6, 3)) * 5.0  # backwards too (late reports)
-    transition, noise = reference(layout, kind, dt)
-    predicted, predicted_covariance = model.predict(states, covariances, dt)
-    assert_allclose(predicted, np.einsum("...ij,...j->...i", transition, states), atol=1e-12)
-    expected = transition @ covariances @ np.swapaxes(transition, -1, -2) + noise
-    assert_allclose(predicted_covariance, expected, rtol=1e-12, atol=1e-12)
-    assert_allclose(model.matrices(dt)[0], transition)
-    assert_allclose(model.matrices(dt)[1], noise, atol=1e-15)
-    # inputs untouched
-    assert np.isfinite(states).all() and np.allclose(
-        covariances, factors @ np.swapaxes(factors, -1, -2)
-    )
+    states_before, covariances_before = states.copy(), covariances.copy()
+    # Δt per (track, slot), per track (one estimate each) and one for all; backwards too
+    cases = [
+        (states, covariances, rng.normal(size=(6, 3)) * 5.0),
+        (states[:, 0], covariances[:, 0], rng.normal(size=6) * 5.0),
+        (states[:, 0], covariances[:, 0], np.float64(-2.5)),
+    ]
+    for batch_states, batch_covariances, dt in cases:
+        transition, noise = reference(layout, kind, np.asarray(dt))
+        predicted, predicted_covariance = model.predict(batch_states, batch_covariances, dt)
+        expected_states = np.einsum("...ij,...j->...i", transition, batch_states)
+        assert_allclose(predicted, expected_states, atol=1e-12)
+        expected = transition @ batch_covariances @ np.swapaxes(transition, -1, -2) + noise
+        assert_allclose(predicted_covariance, expected, rtol=1e-12, atol=1e-12)
+        assert_allclose(model.matrices(dt)[0], transition)
+        assert_allclose(model.matrices(dt)[1], noise, atol=1e-15)
+    np.testing.assert_array_equal(states, states_before)  # inputs untouched
+    np.testing.assert_array_equal(covariances, covariances_before)
 
 
 def test_overflowing_prediction_names_the_time() -> None:

@@ -155,3 +155,27 @@ def test_invalid_layouts_are_rejected() -> None:
             np.zeros((1, 1)),
             "not_a_rule",
         )
+
+
+@pytest.mark.parametrize("rule", list(StateFusion))
+def test_a_track_fuses_to_the_same_bits_whatever_else_is_in_the_batch(rule: StateFusion) -> None:
+    """Determinism across restore: a track's fused state must not depend on the batch size
+    (the engine recomputes different subsets of tracks before and after a restore)."""
+    rng = np.random.default_rng(11)
+    tracks, slots, dim = 300, 3, 4
+    states = rng.normal(size=(tracks, slots, dim))
+    covariances = np.array(
+        [[random_spd(rng, dim) for _ in range(slots)] for _ in range(tracks)], dtype=np.float64
+    )
+    present = np.ones((tracks, slots), dtype=bool)
+    present[::3, 2] = False  # some tracks with two estimates (the exact-ω path)
+    present[1::7, 1:] = False  # some with one
+    times = rng.uniform(0, 5, size=(tracks, slots))
+    state, covariance, weights = fuse_estimates(states, covariances, present, times, rule)
+    for chosen in (np.arange(10), np.array([5, 150, 299])):
+        alone = fuse_estimates(
+            states[chosen], covariances[chosen], present[chosen], times[chosen], rule
+        )
+        np.testing.assert_array_equal(alone[0], state[chosen])
+        np.testing.assert_array_equal(alone[1], covariance[chosen])
+        np.testing.assert_array_equal(alone[2], weights[chosen])
