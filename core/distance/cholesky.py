@@ -43,42 +43,35 @@ def quadratic_form_and_log_det(
     q, n = differences.shape
     if q > UNROLLED_MAX_DIMENSION:
         matrices = np.moveaxis(covariances, -1, 0)
-        factor = np.linalg.cholesky(matrices)
-        solved = np.linalg.solve(factor, differences.T[:, :, None])[:, :, 0]
-        diagonal = np.diagonal(factor, axis1=1, axis2=2)
+        lower = np.linalg.cholesky(matrices)
+        solved = np.linalg.solve(lower, differences.T[:, :, None])[:, :, 0]
+        diagonal = np.diagonal(lower, axis1=1, axis2=2)
         return (
             np.einsum("ni,ni->n", solved, solved),
             2.0 * np.log(diagonal).sum(axis=1),
         )
-    lower = _lower_factor(covariances)
-    whitened: list[FloatArray] = []  # y = L⁻¹ Δ by forward substitution
+    factor: list[list[FloatArray]] = [[] for _ in range(q)]
+    whitened: list[FloatArray] = []
     log_det = np.zeros(n)
     for j in range(q):
+        pivot = covariances[j, j].copy()
+        for k in range(j):
+            pivot -= factor[j][k] * factor[j][k]
+        root = np.sqrt(pivot)
+        log_det += np.log(pivot)
+        inverse_root = 1.0 / root
+        for i in range(j + 1, q):
+            entry = covariances[i, j].copy()
+            for k in range(j):
+                entry -= factor[i][k] * factor[j][k]
+            factor[i].append(entry * inverse_root)
+        factor[j].append(root)
+        # forward substitution for y = L⁻¹ Δ, row j
         residual = differences[j].copy()
         for k in range(j):
-            residual -= lower[j][k] * whitened[k]
-        whitened.append(residual / lower[j][j])
-        log_det += 2.0 * np.log(lower[j][j])
+            residual -= factor[j][k] * whitened[k]
+        whitened.append(residual * inverse_root)
     distance = np.zeros(n)
     for component in whitened:
         distance += component * component
     return distance, log_det
-
-
-def _lower_factor(entries: FloatArray) -> list[list[FloatArray]]:
-    """The Cholesky factor of component-major SPD matrices (q, q, n): ``lower[i][k]`` = L_ik, k <= i."""
-    q = entries.shape[0]
-    lower: list[list[FloatArray]] = [[] for _ in range(q)]
-    for j in range(q):
-        pivot = entries[j, j].copy()
-        for k in range(j):
-            pivot -= lower[j][k] * lower[j][k]
-        root = np.sqrt(pivot)
-        inverse_root = 1.0 / root
-        for i in range(j + 1, q):
-            entry = entries[i, j].copy()
-            for k in range(j):
-                entry -= lower[i][k] * lower[j][k]
-            lower[i].append(entry * inverse_root)
-        lower[j].append(root)
-    return lower
