@@ -62,6 +62,22 @@ def _side(side: Side, name: str) -> Estimates:
     return Estimates.of(states, covariances, name=name)
 
 
+def resolve_method(
+    method: str, options: Mapping[str, object] | None, distance: str | DistanceModel
+) -> tuple[Callable[..., AssociationResult], Any, DistanceModel]:
+    """A method's runner, its parsed options and the distance model; refuses any of them by name.
+
+    Raises
+    ------
+    InvalidInput
+        Unknown method or distance, invalid option (:class:`~core.errors.OptionError`).
+    """
+    if method not in METHODS:
+        raise InvalidInput(f"unknown association method {method!r}; choose one of {list(METHODS)}")
+    parse, run = METHODS[method]
+    return run, parse(dict(options or {})), DistanceModel.of(distance)
+
+
 def associate(
     known: Side,
     incoming: Side,
@@ -103,13 +119,9 @@ def associate(
         bad shapes, non-finite numbers, invalid covariances
         (:class:`~core.errors.CovarianceError`).
     """
-    if method not in METHODS:
-        raise InvalidInput(f"unknown association method {method!r}; choose one of {list(METHODS)}")
     if solver not in SOLVERS:
         raise InvalidInput(f"solver must be one of {list(SOLVERS)}, got {solver!r}")
-    parse, run = METHODS[method]
-    parsed = parse(dict(options or {}))
-    model = DistanceModel.of(distance)
+    run, parsed, model = resolve_method(method, options, distance)
     known_side = _side(known, "known")
     incoming_side = _side(incoming, "incoming")
     check_classes(known_classes, incoming_classes, len(known_side), len(incoming_side))

@@ -13,9 +13,8 @@ from functools import cached_property, lru_cache
 from types import MappingProxyType
 
 from core.association import DEFAULT_DISTANCE
-from core.association.associate import METHODS
+from core.association.associate import resolve_method
 from core.belief import Frame
-from core.distance import DistanceModel
 from core.errors import InvalidInput
 from core.fusion.detections import check_layout_for_detections
 from core.fusion.motion import MotionModel
@@ -178,15 +177,9 @@ class FusionConfig:
         for sensor in self.sensors:
             if sensor.tracker is not None:
                 self._check_detecting_sensor(sensor, sensor.tracker)
-        if self.association_method not in METHODS:
-            raise InvalidInput(
-                f"unknown association method {self.association_method!r}; "
-                f"choose one of {list(METHODS)}"
-            )
-        parse_options, _ = METHODS[self.association_method]
-        parse_options(dict(self.association_options))  # a bad option fails here, at creation,
         distance = self.distance or DEFAULT_DISTANCE.get(self.association_method, "sum")
-        DistanceModel.of(distance)  # not at the first step that runs the method
+        # a bad method, option or distance fails here, not at the first step that runs it
+        resolve_method(self.association_method, self.association_options, distance)
         object.__setattr__(self, "distance", distance)
 
     def _check_detecting_sensor(self, sensor: SensorSpec, tracker: LocalTrackerConfig) -> None:
