@@ -58,7 +58,7 @@ from core.fusion.reports import (
     StepResult,
     TrackReport,
 )
-from core.fusion.state import fuse_estimates
+from core.fusion.table import EstimateTable
 from core.fusion.track import FusedTrack, SensorEstimate
 from core.geometry import Sector, Visibility, occluded
 from core.lifecycle import StatusReason, TrackStatus, gate_emptiness_factor, gate_volume
@@ -112,6 +112,9 @@ class SessionEngine:
         self._coverage = config.coverage
         self._gate = chi2_quantile(config.management.gate_probability, len(layout.position))
         self._reliabilities = {sensor.id: sensor.reliability for sensor in config.sensors}
+        self._table = EstimateTable(
+            [sensor.id for sensor in config.sensors], config.motion, config.state_fusion
+        )
 
     # ------------------------------------------------------------ the step
     def apply(self, report: TrackReport, *, explain: bool = False) -> StepResult:
@@ -136,10 +139,11 @@ class SessionEngine:
         rows = np.array([pair[0] for pair in decision.pairs], dtype=np.int64)
         cols = np.array([pair[1] for pair in decision.pairs], dtype=np.int64)
         increments = self._hit_increments(states[rows], covariances[rows], incoming, cols, sensor)
-        for row, col, increment in zip(rows, cols, increments, strict=True):
-            fused = live[row]
+        hit = [live[row] for row in rows.tolist()]
+        self._record(hit, cols, report, incoming)
+        for fused, increment in zip(hit, increments.tolist(), strict=True):
             was_tentative = fused.status is TrackStatus.TENTATIVE
-            self._hit(fused, report.tracks[col], float(increment), report)
+            self._hit(fused, increment)
             if was_tentative and fused.status is TrackStatus.CONFIRMED:
                 confirmed.append(fused)
         missed = np.asarray(decision.missed, dtype=np.int64)
@@ -147,9 +151,7 @@ class SessionEngine:
         for row, visible in zip(missed, seen, strict=True):
             if visible:
                 self._miss(live[row], covariances[row], sensor.p_detect)
-        created = [
-            self._start(reported, report) for reported in (report.tracks[i] for i in decision.new)
-        ]
+        created = self._start(np.asarray(decision.new, dtype=np.int64), report, incoming)
         self.tracks.extend(created)
         confirmed.extend(track for track in created if track.status is TrackStatus.CONFIRMED)
 
@@ -253,52 +255,12 @@ class SessionEngine:
     def _fused_at(self, tracks: list[FusedTrack], time: float) -> tuple[FloatArray, FloatArray]:
         """The fused state of every track at ``time``: its sensors' estimates predicted and fused.
 
-        Each track caches its result until one of its estimates changes
-        (:meth:`FusedTrack.set_estimate`), so the several looks of one step
-        at the same time cost one computation per track.
+        The table keeps what it computed at the latest time until an estimate
+        changes (:class:`~core.fusion.table.EstimateTable`), so the several
+        looks of one step at the same time cost one computation per track.
         """
-        dim = self.config.dim
-        fused = np.zeros((len(tracks), dim))
-        fused_cov = np.zeros((len(tracks), dim, dim))
-        missing = []
-        for row, track in enumerate(tracks):
-            cached = track.cached_fusion(time)
-            if cached is None:
-                missing.append(row)
-            else:
-                fused[row], fused_cov[row] = cached
-        if not missing:
-            return fused, fused_cov
-        todo = [tracks[row] for row in missing]
-        stacks = [track.stacked() for track in todo]
-        counts = np.array([len(track_times) for _, _, track_times in stacks])
-        estimate_times = np.concatenate([track_times for _, _, track_times in stacks])
-        predicted, predicted_cov = self.config.motion.predict(
-            np.concatenate([track_states for track_states, _, _ in stacks]),
-            np.concatenate([track_covariances for _, track_covariances, _ in stacks]),
-            time - estimate_times,
-        )
-        if counts.max() == 1:  # one estimate per track: each is its own fusion (ω = 1)
-            computed, computed_cov = predicted, predicted_cov
-        else:  # into the padded (track, sensor slot) layout of fuse_estimates
-            rows = np.repeat(np.arange(len(todo)), counts)
-            slots = np.arange(len(rows)) - np.repeat(np.cumsum(counts) - counts, counts)
-            shape = (len(todo), int(counts.max()))
-            states = np.zeros((*shape, dim))
-            covariances = np.zeros((*shape, dim, dim))
-            present = np.zeros(shape, dtype=bool)
-            times = np.zeros(shape)
-            states[rows, slots] = predicted
-            covariances[rows, slots] = predicted_cov
-            present[rows, slots] = True
-            times[rows, slots] = estimate_times
-            computed, computed_cov, _ = fuse_estimates(
-                states, covariances, present, times, self.config.state_fusion
-            )
-        fused[missing], fused_cov[missing] = computed, computed_cov
-        for k, track in enumerate(todo):
-            track.fused_cache = (time, track.revision, computed[k], computed_cov[k])
-        return fused, fused_cov
+        rows = np.fromiter((track.row for track in tracks), dtype=np.int64, count=len(tracks))
+        return self._table.fused_at(rows, time)
 
     # ------------------------------------------------------- association
     def _associate(
@@ -443,31 +405,39 @@ class SessionEngine:
         score = self.config.management.score_model(sensor.p_detect)
         return score.hit_increment(distance, log_det, len(self._position))
 
-    def _hit(
-        self, fused: FusedTrack, reported: ReportedTrack, increment: float, report: TrackReport
-    ) -> None:
+    def _hit(self, fused: FusedTrack, increment: float) -> None:
         fused.score = min(fused.score + increment, self.config.management.score_ceiling)
         fused.hits += 1
-        self._record(fused, reported, report)
         fused.empty_gate_probability = 1.0
         if fused.status is TrackStatus.COASTING:
             fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
         elif fused.status is TrackStatus.TENTATIVE:
             self._maybe_confirm(fused)
 
-    def _record(self, fused: FusedTrack, reported: ReportedTrack, report: TrackReport) -> None:
-        """The report track becomes its sensor's latest estimate of ``fused``."""
-        previous = fused.estimates.get(report.sensor)
-        fused.set_estimate(
-            report.sensor,
-            SensorEstimate(
-                track=reported.id,
-                time=report.time,
-                state=reported.state.copy(),
-                covariance=reported.covariance.copy(),
-                class_mass=self._class_evidence(reported, previous),
-            ),
-        )
+    def _record(
+        self, tracks: list[FusedTrack], cols: IntArray, report: TrackReport, incoming: Estimates
+    ) -> None:
+        """Report tracks ``cols`` become their sensor's latest estimates of ``tracks``."""
+        if not tracks:
+            return
+        states, covariances = incoming.states, incoming.covariances
+        assert covariances is not None
+        sensor = report.sensor
+        rows = np.fromiter((fused.row for fused in tracks), dtype=np.int64, count=len(tracks))
+        self._table.write(rows, sensor, states[cols], covariances[cols], report.time)
+        for fused, col in zip(tracks, cols.tolist(), strict=True):
+            reported = report.tracks[col]
+            previous = fused.estimates.get(sensor)
+            fused.set_estimate(
+                sensor,
+                SensorEstimate(
+                    track=reported.id,
+                    time=report.time,
+                    state=states[col],  # rows of the report's own arrays (built by _check)
+                    covariance=covariances[col],
+                    class_mass=self._class_evidence(reported, previous),
+                ),
+            )
 
     def _maybe_confirm(self, fused: FusedTrack) -> None:
         management = self.config.management
@@ -534,18 +504,25 @@ class SessionEngine:
             seen &= ~occluded(sensor.fov.origin, missed[:, plane], everyone[:, plane], radius)
         return seen
 
-    def _start(self, reported: ReportedTrack, report: TrackReport) -> FusedTrack:
-        sensor = self.config.sensor(report.sensor)
-        fused = FusedTrack(
-            id=f"F{self.next_number}",
-            status=TrackStatus.TENTATIVE,
-            reason=StatusReason.INITIATED,
-            score=self.config.management.score_model(sensor.p_detect).initial,
-        )
-        self.next_number += 1
-        self._record(fused, reported, report)
-        self._maybe_confirm(fused)
-        return fused
+    def _start(self, cols: IntArray, report: TrackReport, incoming: Estimates) -> list[FusedTrack]:
+        """A tentative fused track for each of the report tracks ``cols``."""
+        initial = self.config.management.score_model(self.config.sensor(report.sensor).p_detect)
+        created = []
+        for row in self._table.add_rows(len(cols)).tolist():
+            created.append(
+                FusedTrack(
+                    id=f"F{self.next_number}",
+                    status=TrackStatus.TENTATIVE,
+                    reason=StatusReason.INITIATED,
+                    score=initial.initial,
+                    row=row,
+                )
+            )
+            self.next_number += 1
+        self._record(created, cols, report, incoming)
+        for fused in created:
+            self._maybe_confirm(fused)
+        return created
 
     def _manage(self, time: float, terminated: list[FusedTrack]) -> None:
         """Deletion, gate emptiness, blind zones, occlusion, out of range, phantom expiry."""
@@ -636,6 +613,13 @@ class SessionEngine:
                 continue  # a sensor that reports both as distinct objects knows better
             for sensor_id, estimate in newcomer.estimates.items():
                 keeper.set_estimate(sensor_id, estimate)
+                self._table.write(
+                    np.array([keeper.row]),
+                    sensor_id,
+                    estimate.state[None],
+                    estimate.covariance[None],
+                    estimate.time,
+                )
             if keeper.status is not TrackStatus.CONFIRMED:
                 keeper.status, keeper.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
             keeper.phantom_since = None
@@ -647,6 +631,8 @@ class SessionEngine:
 
     # ------------------------------------------------------------ output
     def _classify(self, fused: FusedTrack) -> ClassAssessment | None:
+        if self.config.classes is None:
+            return None
         masses = {s: e.class_mass for s, e in fused.estimates.items() if e.class_mass is not None}
         return fuse_sensor_classes(masses, self._reliabilities) if masses else None
 
@@ -674,7 +660,10 @@ class SessionEngine:
             if track.status is not TrackStatus.TERMINATED:
                 track.remember(self.time, state)
             views.append(self._view(track, state, covariance))
-        self.tracks = [track for track in self.tracks if track.status is not TrackStatus.TERMINATED]
+        if terminated:
+            self._keep(
+                [track for track in self.tracks if track.status is not TrackStatus.TERMINATED]
+            )
         association = AssociationView(
             method=decision.method,
             pairs=tuple(
@@ -703,17 +692,21 @@ class SessionEngine:
             association=association,
         )
 
+    def _keep(self, tracks: list[FusedTrack]) -> None:
+        """``tracks`` become the engine's tracks, rows 0, 1, … of the table in that order."""
+        self._table.keep(np.fromiter((track.row for track in tracks), np.int64, len(tracks)))
+        for row, track in enumerate(tracks):
+            track.row = row
+        self.tracks = tracks
+
     def _view(self, track: FusedTrack, state: FloatArray, covariance: FloatArray) -> FusedTrackView:
-        sources = tuple(
-            estimate.source(sensor) for sensor, estimate in sorted(track.estimates.items())
-        )
         return FusedTrackView(
             id=track.id,
             status=track.status,
             reason=track.reason,
             state=state,
             covariance=covariance,
-            sources=sources,
+            sources=track.sources(),
             classification=self._classify(track),
             score=track.score,
         )
@@ -761,10 +754,26 @@ class SessionEngine:
         engine.time = None if state["time"] is None else float(state["time"])
         engine.next_number = int(state["next_number"])
         engine.last_report = {str(k): float(v) for k, v in state["last_report"].items()}
-        engine.tracks = [FusedTrack.from_plain(plain, config.classes) for plain in state["tracks"]]
-        empty = [track.id for track in engine.tracks if not track.estimates]
+        tracks = [FusedTrack.from_plain(plain, config.classes) for plain in state["tracks"]]
+        empty = [track.id for track in tracks if not track.estimates]
         if empty:
             raise InvalidInput(f"exported tracks without any sensor estimate: {empty}")
+        for track, row in zip(tracks, engine._table.add_rows(len(tracks)).tolist(), strict=True):
+            track.row = row
+            for sensor, estimate in track.estimates.items():
+                if sensor not in engine._table.slots:
+                    raise InvalidInput(
+                        f"exported track {track.id} has an estimate of sensor {sensor!r}, "
+                        "which the config does not name"
+                    )
+                engine._table.write(
+                    np.array([row]),
+                    sensor,
+                    estimate.state[None],
+                    estimate.covariance[None],
+                    estimate.time,
+                )
+        engine.tracks = tracks
         for sensor, plain in state["local_trackers"].items():
             tracker_config = config.sensor(sensor).tracker
             if tracker_config is None:

@@ -97,6 +97,23 @@ def fast_ci_weights(covariances: FloatArray, present: BoolArray) -> FloatArray:
     return np.asarray(inverse_trace / inverse_trace.sum(axis=1, keepdims=True), dtype=np.float64)
 
 
+def fuse_information(
+    states: FloatArray, information: FloatArray, weights: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """x, P from P⁻¹ = Σ ω_i P_i⁻¹ and P⁻¹ x = Σ ω_i P_i⁻¹ x_i, given the P_i⁻¹.
+
+    ``information`` (T, S, d, d) holds P_i⁻¹ where ω_i > 0; what it holds
+    elsewhere is ignored. One weighted sum per track, in slot order: a track's
+    result does not depend on the other tracks of the batch.
+    """
+    weighted = np.where(weights[..., None, None] > 0.0, information, 0.0)
+    weighted *= weights[..., None, None]
+    information_state = (weighted @ states[..., None]).sum(axis=1)[..., 0]
+    covariance = np.linalg.inv(weighted.sum(axis=1))
+    covariance = (covariance + np.swapaxes(covariance, -1, -2)) / 2.0
+    return (covariance @ information_state[..., None])[..., 0], covariance
+
+
 def _information_sum(
     states: FloatArray, covariances: FloatArray, weights: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
@@ -117,13 +134,38 @@ def _information_sum(
         chosen = weights[several]
         safe = np.where(chosen[..., None, None] > 0.0, covariances[several], np.eye(dim))
         information = np.linalg.inv(safe)  # per matrix: the same bits whatever the batch
-        information *= chosen[..., None, None]
-        information_state = (information @ states[several][..., None]).sum(axis=1)[..., 0]
-        fused_covariance = np.linalg.inv(information.sum(axis=1))
-        fused_covariance = (fused_covariance + np.swapaxes(fused_covariance, -1, -2)) / 2.0
-        covariance[several] = fused_covariance
-        state[several] = (fused_covariance @ information_state[..., None])[..., 0]
+        state[several], covariance[several] = fuse_information(states[several], information, chosen)
     return state, covariance
+
+
+def fusion_weights(
+    covariances: FloatArray,
+    present: BoolArray,
+    times: FloatArray,
+    rule: StateFusion | str = StateFusion.COVARIANCE_INTERSECTION,
+) -> FloatArray:
+    """The weight ω_i of every sensor slot's estimate, (T, S); 0 where absent.
+
+    ``latest``: 1 on the most recent estimate (ties: the lowest slot);
+    ``independent``: 1 on every estimate; ``covariance_intersection``: the
+    exact trace-minimising ω for two estimates, Niehsen's for more.
+    """
+    rule = StateFusion(rule)
+    if rule is StateFusion.LATEST:
+        chosen = np.argmax(np.where(present, times, -np.inf), axis=1)
+        weights = np.zeros(present.shape)
+        weights[np.arange(len(present)), chosen] = 1.0
+        return weights
+    if rule is StateFusion.INDEPENDENT:
+        return present.astype(np.float64)
+    weights = fast_ci_weights(covariances, present)
+    pairs = np.flatnonzero(present.sum(axis=1) == 2)
+    if len(pairs):
+        slots = np.argsort(~present[pairs], axis=1, kind="stable")[:, :2]
+        omega = optimal_ci_weight(covariances[pairs, slots[:, 0]], covariances[pairs, slots[:, 1]])
+        weights[pairs] = 0.0
+        weights[pairs[:, None], slots] = np.stack([omega, 1.0 - omega], axis=1)
+    return weights
 
 
 def fuse_estimates(
@@ -159,23 +201,6 @@ def fuse_estimates(
         raise InvalidInput("present and times must have shape (T, S)")
     if len(states) and not present.any(axis=1).all():
         raise InvalidInput("every fused track needs at least one sensor estimate")
-    count = present.sum(axis=1)
-    if rule is StateFusion.LATEST:
-        chosen = np.argmax(np.where(present, times, -np.inf), axis=1)
-        weights = np.zeros(present.shape)
-        weights[np.arange(len(states)), chosen] = 1.0
-    elif rule is StateFusion.INDEPENDENT:
-        weights = present.astype(np.float64)
-    else:
-        weights = fast_ci_weights(covariances, present)
-        pairs = np.flatnonzero(count == 2)
-        if len(pairs):
-            slots = np.argsort(~present[pairs], axis=1, kind="stable")[:, :2]
-            rows = pairs[:, None]
-            omega = optimal_ci_weight(
-                covariances[pairs, slots[:, 0]], covariances[pairs, slots[:, 1]]
-            )
-            weights[pairs] = 0.0
-            weights[rows, slots] = np.stack([omega, 1.0 - omega], axis=1)
+    weights = fusion_weights(covariances, present, times, rule)
     state, covariance = _information_sum(states, covariances, weights)
     return state, covariance, weights

@@ -68,8 +68,8 @@ class FusedTrack:
     empty_gate_probability : [HZ] §4.2 product while coasting (1 otherwise).
     phantom_since : when it entered a blind zone or occlusion (None otherwise).
     history : recent (time, fused state) pairs, oldest first.
-    revision, fused_cache : the fused state last computed, valid while no
-        estimate changed (not exported: derived data).
+    row : its row in the engine's :class:`~core.fusion.table.EstimateTable`
+        (not exported: the engine numbers the rows).
     """
 
     id: str
@@ -81,53 +81,21 @@ class FusedTrack:
     empty_gate_probability: float = 1.0
     phantom_since: float | None = None
     history: list[tuple[float, list[float]]] = field(default_factory=list)
-    revision: int = field(default=0, compare=False)
-    fused_cache: tuple[float, int, FloatArray, FloatArray] | None = field(
-        default=None, compare=False, repr=False
-    )
-    stack_cache: tuple[int, FloatArray, FloatArray, FloatArray] | None = field(
-        default=None, compare=False, repr=False
-    )
-
-    def stacked(self) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """The estimates as arrays: states (k, d), covariances (k, d, d), times (k,)."""
-        cache = self.stack_cache
-        if cache is None or cache[0] != self.revision:
-            estimates = list(self.estimates.values())
-            cache = (
-                self.revision,
-                np.array([e.state for e in estimates]),
-                np.array([e.covariance for e in estimates]),
-                np.array([e.time for e in estimates]),
-            )
-            self.stack_cache = cache
-        return cache[1], cache[2], cache[3]
+    row: int = field(default=-1, compare=False, repr=False)
+    _sources: tuple[Source, ...] | None = field(default=None, init=False, compare=False, repr=False)
 
     def set_estimate(self, sensor: str, estimate: SensorEstimate) -> None:
-        """Record a sensor's latest estimate (and forget the cached fused state).
-
-        The stacked arrays follow a replaced estimate (same slot: a dict keeps
-        the position of a key it already holds) instead of being rebuilt.
-        """
-        cache = self.stack_cache
-        slot = list(self.estimates).index(sensor) if sensor in self.estimates else None
+        """Record ``sensor``'s latest estimate of this track."""
         self.estimates[sensor] = estimate
-        self.revision += 1
-        if cache is not None and cache[0] == self.revision - 1 and slot is not None:
-            states, covariances, times = cache[1].copy(), cache[2].copy(), cache[3].copy()
-            states[slot], covariances[slot], times[slot] = (
-                estimate.state,
-                estimate.covariance,
-                estimate.time,
-            )
-            self.stack_cache = (self.revision, states, covariances, times)
+        self._sources = None
 
-    def cached_fusion(self, time: float) -> tuple[FloatArray, FloatArray] | None:
-        """The fused state at ``time`` if it was computed from the current estimates."""
-        cache = self.fused_cache
-        if cache is None or cache[0] != time or cache[1] != self.revision:
-            return None
-        return cache[2], cache[3]
+    def sources(self) -> tuple[Source, ...]:
+        """The contributing sensor tracks, by sensor id (kept until an estimate changes)."""
+        if self._sources is None:
+            self._sources = tuple(
+                estimate.source(sensor) for sensor, estimate in sorted(self.estimates.items())
+            )
+        return self._sources
 
     @property
     def number(self) -> int:
