@@ -24,7 +24,12 @@ from core.evaluation.figures import reproduce as reproduce_figure
 def _serve(args: argparse.Namespace) -> int:
     parse_store_url(args.store)
     settings = get_settings().model_copy(
-        update={"host": args.host, "port": args.port, "store": args.store}
+        update={
+            "host": args.host,
+            "port": args.port,
+            "store": args.store,
+            "access_log": args.access_log,
+        }
     )
     print(
         f"credal-fusion on http://{args.host}:{args.port}\n"
@@ -43,6 +48,7 @@ def _serve(args: argparse.Namespace) -> int:
         ws_ping_interval=settings.ws_ping_interval,
         ws_ping_timeout=settings.ws_ping_timeout,
         proxy_headers=False,
+        access_log=settings.access_log,
     )
     return 0
 
@@ -68,6 +74,12 @@ def build_parser() -> argparse.ArgumentParser:
         type=_store_url,
         default=settings.store,
         help="memory | sqlite[:PATH] | redis[s]://HOST:PORT/DB (default: %(default)s, or CREDAL_STORE)",
+    )
+    serve.add_argument(
+        "--access-log",
+        action=argparse.BooleanOptionalAction,
+        default=settings.access_log,
+        help="log a line per request (default: on, or CREDAL_ACCESS_LOG)",
     )
     serve.set_defaults(handler=_serve)
 

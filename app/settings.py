@@ -34,6 +34,10 @@ class Settings(BaseSettings):
     admin_token: SecretStr | None = Field(
         None, description="opens every session and the admin routes"
     )
+    access_log: bool = Field(
+        True,
+        description="one log line per request (uvicorn's access log); /metrics counts them too",
+    )
 
     max_body_bytes: int = Field(4 * 1024 * 1024, ge=1024)
     max_tracks_per_input: int = Field(2000, ge=1, description="tracks or detections in one input")

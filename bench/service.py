@@ -143,6 +143,7 @@ def service_command(port: int) -> list[str]:
         str(port),
         "--store",
         "memory",
+        "--no-access-log",  # as the bare endpoint (log level warning): no line per request
     ]
 
 

@@ -217,16 +217,27 @@ def _plain_default(value: Any) -> Any:
 def dumps(value: Any) -> str:
     """Canonical JSON text of plain data (non-finite floats are kept as JSON extensions).
 
-    Plain Python data is encoded directly (the C encoder, no walk in Python);
-    numpy arrays and scalars go through :func:`to_plain`.
+    Keys sorted, no spaces. orjson writes it when it writes the same data (see
+    :func:`_orjson_text`); otherwise the json module does: numpy arrays and
+    scalars through :func:`to_plain`, NaN and ±Infinity as ``NaN``/``Infinity``.
     """
-    return json.dumps(
+    return dumps_and_copy(value)[0]
+
+
+def dumps_and_copy(value: Any) -> tuple[str, Any]:
+    """:func:`dumps` and ``loads(dumps(value))`` at once (a store writes the one, returns the other)."""
+    written = _orjson_text(value)
+    if written is not None:
+        return written[0].decode(), written[1]
+    text = json.dumps(
         value, separators=(",", ":"), sort_keys=True, allow_nan=True, default=_plain_default
     )
+    return text, loads(text)
 
 
 def loads(text: str) -> Any:
-    """Parse JSON text written by :func:`dumps`."""
+    """Parse JSON text written by :func:`dumps` (the json module: it reads ``NaN`` and
+    integers beyond 64 bits as they were written)."""
     return json.loads(text)
 
 
@@ -236,29 +247,32 @@ _ORJSON_STRICT = (
     | orjson.OPT_PASSTHROUGH_DATETIME
     | orjson.OPT_PASSTHROUGH_SUBCLASS
 )
-"""Types :func:`dumps` refuses or writes differently stay orjson's errors (then :func:`dumps` decides)."""
+"""Types the json module refuses or writes differently stay orjson's errors (then json decides)."""
 
 
-def copy_plain(value: Any) -> Any:
-    """``loads(dumps(value))``: a copy of JSON data as a store reads it back, made by orjson.
+def _orjson_text(value: Any) -> tuple[bytes, Any] | None:
+    """orjson's text of ``value`` and its parse, when that parse equals ``value``; else ``None``.
 
-    A 20-track input copies in a fifth of the time the json module takes (it
-    spends it formatting floats). Whatever orjson would copy differently goes
-    the json module's way: what it refuses (numpy values, integers beyond 64
-    bits, keys that are not strings, lone surrogates, subclasses, dataclasses,
-    datetimes) and every ``null`` it writes, since NaN and ±Infinity become
-    ``null`` in orjson but stay themselves through :func:`dumps`. Enums and
-    UUIDs, which :func:`dumps` refuses, orjson writes as their values: a
-    store's inputs are JSON data (what ``model_dump(mode="json")`` gives) and
-    have neither.
+    orjson formats floats about 20 times faster than the json module, but it
+    writes NaN and ±Infinity as ``null``, enums and UUIDs as their values, and
+    tuples as lists: whatever does not read back equal to what was given (a
+    comparison in C, all containers and numbers) is left to the json module.
+    What orjson refuses (numpy values, integers beyond 64 bits, keys that are
+    not strings, lone surrogates, subclasses, dataclasses, datetimes) too.
     """
     try:
         text = orjson.dumps(value, option=_ORJSON_STRICT)
     except TypeError:
-        return loads(dumps(value))
-    if b"null" in text:
-        return loads(dumps(value))
-    return orjson.loads(text)
+        return None
+    parsed = orjson.loads(text)
+    if parsed != value:
+        return None
+    return text, parsed
+
+
+def copy_plain(value: Any) -> Any:
+    """``loads(dumps(value))``: a copy of JSON data as a store reads it back."""
+    return dumps_and_copy(value)[1]
 
 
 def check_seq(session_id: str, seq: int, last: int) -> None:

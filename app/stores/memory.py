@@ -102,7 +102,7 @@ class MemoryStore:
         return selected if limit is None else selected[:limit]
 
     def save_snapshot(self, session_id: str, snapshot: Snapshot) -> None:
-        copied = replace(snapshot, state=loads(dumps(snapshot.state)))
+        copied = replace(snapshot, state=copy_plain(snapshot.state))
         with self._lock:
             data = self._require(session_id)
             if data.snapshot is None or snapshot.seq >= data.snapshot.seq:

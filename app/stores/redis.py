@@ -47,6 +47,7 @@ from app.stores.base import (
     SessionRecord,
     Snapshot,
     dumps,
+    dumps_and_copy,
     loads,
 )
 from app.stores.redis_keys import DEFAULT_PREFIX, RedisKeys
@@ -245,7 +246,7 @@ class RedisStore:
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
     ) -> LogEntry:
-        text = dumps(entry_input)
+        text, copied = dumps_and_copy(entry_input)
         reply: list[str] = self._append(
             keys=[self.keys.session(session_id), self.keys.log(session_id)],
             args=[seq, received_at.isoformat(), text],
@@ -256,7 +257,7 @@ class RedisStore:
             raise SessionNotFound(session_id)
         if outcome == "conflict":
             raise SequenceConflict(session_id, seq, int(reply[1]))
-        return LogEntry(seq=seq, received_at=received_at, input=loads(text))
+        return LogEntry(seq=seq, received_at=received_at, input=copied)
 
     def _live_then(self, session_id: str, read: Callable[[Pipeline], object]) -> Any:
         """``read``'s reply, run in one MULTI after the live check; else SessionNotFound."""

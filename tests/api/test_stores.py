@@ -144,12 +144,37 @@ COPIED_AS_JSON_READS_IT = [
 ]
 
 
+def json_module_round_trip(value: object) -> object:
+    """The reference: the json module alone (numpy through to_plain), keys sorted."""
+    text = json.dumps(
+        value, default=to_plain, sort_keys=True, separators=(",", ":"), allow_nan=True
+    )
+    return json.loads(text)
+
+
 @pytest.mark.parametrize("value", COPIED_AS_JSON_READS_IT)
 def test_copy_plain_is_the_json_round_trip(value: dict[str, object]) -> None:
-    copied = copy_plain(value)
-    assert copied == loads(dumps(value))
-    # the same keys in the same order (dumps sorts them): json.dumps keeps dict order
-    assert json.dumps(copied) == json.dumps(loads(dumps(value)))
+    expected = json_module_round_trip(value)
+    for copied in (copy_plain(value), loads(dumps(value))):
+        assert copied == expected
+        # the same keys in the same order: json.dumps keeps dict order
+        assert json.dumps(copied) == json.dumps(expected)
+
+
+@pytest.mark.parametrize(
+    "value",
+    [
+        {"a": [1.0, float("nan")], "b": None},  # NaN would become null in orjson
+        {"a": (1, 2), "b": None},  # a tuple reads back as a list
+        {"when": None, "values": [0.1, 2.5e-300, -0.0], "id": "x"},
+    ],
+)
+def test_dumps_writes_what_the_json_module_reads_back(value: dict[str, object]) -> None:
+    text = dumps(value)
+    assert json.dumps(json.loads(text), allow_nan=True) == json.dumps(
+        json_module_round_trip(value), allow_nan=True
+    )
+    assert json.dumps(loads(text), allow_nan=True) == json.dumps(json.loads(text), allow_nan=True)
 
 
 def test_copy_plain_keeps_non_finite_numbers() -> None:
