@@ -205,10 +205,9 @@ class SessionEngine:
         last = self.last_report.get(report.sensor)
         if last is not None and report.time <= last:
             raise StaleReport(report.sensor, report.time, last)
-        repeated = sorted(
-            track_id for track_id, n in Counter(t.id for t in report.tracks).items() if n > 1
-        )
-        if repeated:
+        ids = [track.id for track in report.tracks]
+        if len(set(ids)) != len(ids):
+            repeated = sorted(track_id for track_id, n in Counter(ids).items() if n > 1)
             raise InvalidInput(f"tracks: ids repeat: {repeated}")
         dim = self.config.dim
         for index, track in enumerate(report.tracks):
@@ -217,7 +216,10 @@ class SessionEngine:
                     f"tracks[{index}] (id {track.id!r}): state must have {dim} components and "
                     f"covariance {dim}×{dim}, got {track.state.shape} and {track.covariance.shape}"
                 )
-            self._check_classes(track, f"tracks[{index}] (id {track.id!r})")
+            if self.config.classes is not None or (
+                track.class_mass is not None or track.class_likelihoods is not None
+            ):
+                self._check_classes(track, f"tracks[{index}] (id {track.id!r})")
         estimates = Estimates.of(
             np.array([track.state for track in report.tracks]).reshape(-1, dim),
             np.array([track.covariance for track in report.tracks]).reshape(-1, dim, dim),
@@ -255,7 +257,7 @@ class SessionEngine:
     def _fused_at(self, tracks: list[FusedTrack], time: float) -> tuple[FloatArray, FloatArray]:
         """The fused state of every track at ``time``: its sensors' estimates predicted and fused.
 
-        The table keeps what it computed at the latest time until an estimate
+        The table keeps what it computed at the latest times until an estimate
         changes (:class:`~core.fusion.table.EstimateTable`), so the several
         looks of one step at the same time cost one computation per track.
         """
@@ -354,7 +356,8 @@ class SessionEngine:
             incoming.states[cols] - states[rows], incoming.covariances[cols] + covariances[rows]
         )
         gate = chi2_quantile(CONTINUITY_GATE_PROBABILITY, self.config.dim)
-        return {int(c): int(r) for c, r, d in zip(cols, rows, distance, strict=True) if d <= gate}
+        passed = distance <= gate
+        return dict(zip(cols[passed].tolist(), rows[passed].tolist(), strict=True))
 
     def _association_classes(
         self, live: list[FusedTrack], report: TrackReport

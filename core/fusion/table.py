@@ -6,11 +6,13 @@ states (R, S, d), covariances (R, S, d, d), report times (R, S) and a
 of the rows asked for to a time and fuses them (ALGORITHMS.md §6 step 4,
 ``core.fusion.state``).
 
-What it computed at the latest time asked for — every slot's prediction and
-information matrix P⁻¹, every row's fused state — is kept until an estimate
-of the row changes. A step that replaces one sensor's estimate of a track at
-that time (the usual step: the report time is the fusion time) then predicts
-and inverts that slot alone before fusing the row again.
+What it computed at the last :data:`KEPT_TIMES` times asked for — every
+slot's prediction and information matrix P⁻¹, every row's fused state — is
+kept until an estimate of the row changes. A step that replaces one sensor's
+estimate of a track at such a time then predicts and inverts that slot alone
+before fusing the row again: the usual step (its report time is the fusion
+time), and a late report's step too (associated at its own time, then fused
+again at the fusion time, which earlier steps already used).
 
 Every number is computed per row and per matrix (LAPACK one matrix at a time,
 sums in slot order), so a row's fused state has the same bits whatever else is
@@ -21,6 +23,7 @@ engine restored from its export continues bit for bit.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -29,17 +32,54 @@ from core.errors import InvalidInput
 from core.fusion.motion import MotionModel
 from core.fusion.state import StateFusion, fuse_information, fusion_weights
 
+KEPT_TIMES = 2
+"""Times whose predictions and fused states are kept (the fusion time and one other)."""
+
+
+class _Kept:
+    """Predictions, information matrices and fused states of the table's rows at one time."""
+
+    def __init__(self, at: float, capacity: int, slots: int, dim: int) -> None:
+        self.at = at
+        self.predicted: FloatArray = np.zeros((capacity, slots, dim))
+        self.predicted_cov: FloatArray = np.zeros((capacity, slots, dim, dim))
+        self.predicted_ok: BoolArray = np.zeros((capacity, slots), dtype=bool)
+        self.information: FloatArray = np.zeros((capacity, slots, dim, dim))
+        self.information_ok: BoolArray = np.zeros((capacity, slots), dtype=bool)
+        self.fused: FloatArray = np.zeros((capacity, dim))
+        self.fused_cov: FloatArray = np.zeros((capacity, dim, dim))
+        self.fused_ok: BoolArray = np.zeros(capacity, dtype=bool)
+
+    def forget(self, rows: IntArray | slice, slot: int | slice = slice(None)) -> None:
+        """Nothing kept for ``slot`` of ``rows`` (and the rows' fused states)."""
+        self.predicted_ok[rows, slot] = False
+        self.information_ok[rows, slot] = False
+        self.fused_ok[rows] = False
+
+
+_KEPT_ARRAYS = (
+    "predicted",
+    "predicted_cov",
+    "predicted_ok",
+    "information",
+    "information_ok",
+    "fused",
+    "fused_cov",
+    "fused_ok",
+)
+_ESTIMATE_ARRAYS = ("states", "covariances", "times", "present")
+
 
 class EstimateTable:
-    """Every fused track's latest estimate from each sensor, and their fusion at one time."""
+    """Every fused track's latest estimate from each sensor, and their fusion at a time."""
 
     def __init__(self, sensors: Sequence[str], motion: MotionModel, rule: StateFusion) -> None:
         self.slots = {sensor: slot for slot, sensor in enumerate(sensors)}
         self.motion = motion
         self.rule = StateFusion(rule)
         self._rows = 0
-        self.at: float | None = None
-        """The time of the kept predictions and fused states."""
+        self._kept: list[_Kept] = []
+        """Most recently used first, at most :data:`KEPT_TIMES`."""
         self._allocate(0)
 
     def _allocate(self, capacity: int) -> None:
@@ -48,30 +88,6 @@ class EstimateTable:
         self.covariances: FloatArray = np.zeros((capacity, slots, dim, dim))
         self.times: FloatArray = np.zeros((capacity, slots))
         self.present: BoolArray = np.zeros((capacity, slots), dtype=bool)
-        # kept at ``self.at``
-        self._predicted: FloatArray = np.zeros((capacity, slots, dim))
-        self._predicted_cov: FloatArray = np.zeros((capacity, slots, dim, dim))
-        self._predicted_ok: BoolArray = np.zeros((capacity, slots), dtype=bool)
-        self._information: FloatArray = np.zeros((capacity, slots, dim, dim))
-        self._information_ok: BoolArray = np.zeros((capacity, slots), dtype=bool)
-        self._fused: FloatArray = np.zeros((capacity, dim))
-        self._fused_cov: FloatArray = np.zeros((capacity, dim, dim))
-        self._fused_ok: BoolArray = np.zeros(capacity, dtype=bool)
-
-    _ARRAYS = (
-        "states",
-        "covariances",
-        "times",
-        "present",
-        "_predicted",
-        "_predicted_cov",
-        "_predicted_ok",
-        "_information",
-        "_information_ok",
-        "_fused",
-        "_fused_cov",
-        "_fused_ok",
-    )
 
     def __len__(self) -> int:
         return self._rows
@@ -81,23 +97,30 @@ class EstimateTable:
         """``count`` new rows without estimates; returns their indices."""
         first = self._rows
         if first + count > len(self.present):
-            kept = {name: getattr(self, name)[:first] for name in self._ARRAYS}
-            self._allocate(max(2 * len(self.present), first + count, 8))
-            for name, values in kept.items():
+            capacity = max(2 * len(self.present), first + count, 8)
+            estimates = [(name, getattr(self, name)[:first]) for name in _ESTIMATE_ARRAYS]
+            self._allocate(capacity)
+            for name, values in estimates:
                 getattr(self, name)[:first] = values
+            for index, old in enumerate(self._kept):
+                grown = _Kept(old.at, capacity, len(self.slots), self.motion.layout.dim)
+                for name in _KEPT_ARRAYS:
+                    getattr(grown, name)[:first] = getattr(old, name)[:first]
+                self._kept[index] = grown
         self._rows = first + count
         rows = np.arange(first, first + count, dtype=np.int64)
         self.present[rows] = False
-        self._predicted_ok[rows] = False
-        self._information_ok[rows] = False
-        self._fused_ok[rows] = False
+        for kept in self._kept:
+            kept.forget(rows)
         return rows
 
     def keep(self, rows: IntArray) -> None:
         """Keep only ``rows``, renumbered 0, 1, … in the order given."""
-        for name in self._ARRAYS:
-            values = getattr(self, name)
-            values[: len(rows)] = values[rows]
+        holders: list[Any] = [self, *self._kept]
+        for holder in holders:
+            for name in _ESTIMATE_ARRAYS if holder is self else _KEPT_ARRAYS:
+                values = getattr(holder, name)
+                values[: len(rows)] = values[rows]
         self._rows = len(rows)
 
     def slot(self, sensor: str) -> int:
@@ -120,9 +143,8 @@ class EstimateTable:
         self.covariances[rows, slot] = covariances
         self.times[rows, slot] = times
         self.present[rows, slot] = True
-        self._predicted_ok[rows, slot] = False
-        self._information_ok[rows, slot] = False
-        self._fused_ok[rows] = False
+        for kept in self._kept:
+            kept.forget(rows, slot)
 
     # ------------------------------------------------------------ fusion
     def fused_at(self, rows: IntArray, time: float) -> tuple[FloatArray, FloatArray]:
@@ -133,19 +155,32 @@ class EstimateTable:
         InvalidInput
             The prediction to ``time`` overflows (``MotionModel.predict``).
         """
-        if self.at != time:
-            self._predicted_ok[:] = False
-            self._information_ok[:] = False
-            self._fused_ok[:] = False
-            self.at = time
-        need = rows[~self._fused_ok[rows]]
+        kept = self._kept_at(time)
+        need = rows[~kept.fused_ok[rows]]
         if len(need):
-            self._fuse(need, time)
-        return self._fused[rows], self._fused_cov[rows]
+            self._fuse(kept, need)
+        return kept.fused[rows], kept.fused_cov[rows]
 
-    def _fuse(self, rows: IntArray, time: float) -> None:
+    def _kept_at(self, time: float) -> _Kept:
+        """What is kept at ``time`` (made the most recent), or a fresh record for it."""
+        for index, kept in enumerate(self._kept):
+            if kept.at == time:
+                self._kept.insert(0, self._kept.pop(index))
+                return kept
+        if len(self._kept) >= KEPT_TIMES:
+            kept = self._kept.pop()  # the least recently used: its arrays are reused
+            kept.at = time
+            kept.forget(slice(None))
+        else:
+            kept = _Kept(time, len(self.present), len(self.slots), self.motion.layout.dim)
+        self._kept.insert(0, kept)
+        return kept
+
+    def _fuse(self, kept: _Kept, rows: IntArray) -> None:
+        """Predict what is not kept of ``rows`` to ``kept.at``, invert, fuse."""
+        time = kept.at
         present = self.present[rows]
-        stale_row, stale_slot = np.nonzero(present & ~self._predicted_ok[rows])
+        stale_row, stale_slot = np.nonzero(present & ~kept.predicted_ok[rows])
         stale = rows[stale_row]
         if len(stale):
             dt = time - self.times[stale, stale_slot]
@@ -153,41 +188,41 @@ class EstimateTable:
             if now.any():
                 rows_now, slots_now = stale[now], stale_slot[now]
                 covariance = self.covariances[rows_now, slots_now]
-                self._predicted[rows_now, slots_now] = self.states[rows_now, slots_now]
-                self._predicted_cov[rows_now, slots_now] = (
+                kept.predicted[rows_now, slots_now] = self.states[rows_now, slots_now]
+                kept.predicted_cov[rows_now, slots_now] = (
                     covariance + np.swapaxes(covariance, -1, -2)
                 ) / 2.0
             if not now.all():
                 later = ~now
                 rows_later, slots_later = stale[later], stale_slot[later]
                 (
-                    self._predicted[rows_later, slots_later],
-                    self._predicted_cov[rows_later, slots_later],
+                    kept.predicted[rows_later, slots_later],
+                    kept.predicted_cov[rows_later, slots_later],
                 ) = self.motion.predict(
                     self.states[rows_later, slots_later],
                     self.covariances[rows_later, slots_later],
                     dt[later],
                 )
-            self._predicted_ok[stale, stale_slot] = True
-        weights = fusion_weights(self._predicted_cov[rows], present, self.times[rows], self.rule)
+            kept.predicted_ok[stale, stale_slot] = True
+        weights = fusion_weights(kept.predicted_cov[rows], present, self.times[rows], self.rule)
         weighted = weights > 0.0
         several = weighted.sum(axis=1) > 1
         single = rows[~several]
         if len(single):  # one weighted estimate (ω = 1): the fusion is that estimate
             slot = np.argmax(weighted[~several], axis=1)
-            self._fused[single] = self._predicted[single, slot]
-            self._fused_cov[single] = self._predicted_cov[single, slot]
+            kept.fused[single] = kept.predicted[single, slot]
+            kept.fused_cov[single] = kept.predicted_cov[single, slot]
         multiple = rows[several]
         if len(multiple):
             chosen = weights[several]
-            todo_row, todo_slot = np.nonzero(weighted[several] & ~self._information_ok[multiple])
+            todo_row, todo_slot = np.nonzero(weighted[several] & ~kept.information_ok[multiple])
             todo = multiple[todo_row]
             if len(todo):  # per matrix: the same bits whatever the batch
-                self._information[todo, todo_slot] = np.linalg.inv(
-                    self._predicted_cov[todo, todo_slot]
+                kept.information[todo, todo_slot] = np.linalg.inv(
+                    kept.predicted_cov[todo, todo_slot]
                 )
-                self._information_ok[todo, todo_slot] = True
-            self._fused[multiple], self._fused_cov[multiple] = fuse_information(
-                self._predicted[multiple], self._information[multiple], chosen
+                kept.information_ok[todo, todo_slot] = True
+            kept.fused[multiple], kept.fused_cov[multiple] = fuse_information(
+                kept.predicted[multiple], kept.information[multiple], chosen
             )
-        self._fused_ok[rows] = True
+        kept.fused_ok[rows] = True

@@ -140,3 +140,30 @@ def test_keep_renumbers_rows_and_growth_keeps_them() -> None:
     assert not table.present[new_rows].any()
     grown_state, _ = table.fused_at(np.arange(3), 4.0)
     assert_array_equal(grown_state, before_state[[4, 1, 2]])
+
+
+@pytest.mark.parametrize("rule", [rule.value for rule in StateFusion])
+def test_a_late_report_fuses_at_both_times_as_a_fresh_table(rule: str) -> None:
+    """Looks at the fusion time and at a late report's time, a write, both times again."""
+    states, covariances, times, present = scene(6)
+    rng = np.random.default_rng(7)
+    table = filled(states, covariances, times, present, rule)
+    rows = np.arange(len(states))
+    table.fused_at(rows, 5.0)  # the fusion time
+    table.fused_at(rows, 4.0)  # a late report's time (kept too)
+    changed = np.array([0, 2, 9, 15])
+    new_states = rng.normal(size=(len(changed), 4))
+    new_covariances = np.array([random_spd(rng) for _ in changed])
+    table.write(changed, "a", new_states, new_covariances, 4.0)
+    at_fusion = table.fused_at(rows, 5.0)
+    at_report = table.fused_at(rows, 4.0)
+    table.fused_at(rows, 6.0)  # a third time: the least recently used one is dropped
+
+    states[changed, 0], covariances[changed, 0] = new_states, new_covariances
+    times[changed, 0], present[changed, 0] = 4.0, True
+    for at, result in ((5.0, at_fusion), (4.0, at_report)):
+        fresh = filled(states, covariances, times, present, rule).fused_at(rows, at)
+        assert_array_equal(result[0], fresh[0])
+        assert_array_equal(result[1], fresh[1])
+    expected = reference(states, covariances, times, present, 5.0, rule)
+    assert_array_equal(table.fused_at(rows, 5.0)[0], expected[0])
