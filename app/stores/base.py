@@ -214,25 +214,48 @@ def _plain_default(value: Any) -> Any:
     return to_plain(value)  # numpy → lists and numbers; anything else: TypeError naming it
 
 
-def dumps(value: Any) -> str:
-    """Canonical JSON text of plain data (non-finite floats are kept as JSON extensions).
+def encode(value: Any) -> bytes | str:
+    """Canonical JSON of plain data: keys sorted, no spaces, non-finite floats as extensions.
 
-    Keys sorted, no spaces. orjson writes it when it writes the same data (see
-    :func:`_orjson_text`); otherwise the json module does: numpy arrays and
-    scalars through :func:`to_plain`, NaN and ±Infinity as ``NaN``/``Infinity``.
+    orjson's bytes when they hold the same data as the json module would write
+    (orjson formats floats about 20 times faster), else the json module's
+    text: numpy arrays and scalars through :func:`to_plain`, NaN and ±Infinity
+    as ``NaN``/``Infinity``, integers beyond 64 bits, lone surrogates. orjson
+    writes NaN and ±Infinity as ``null``, so a text with a ``null`` is kept
+    only when it reads back equal to ``value`` (a comparison in C). Enums and
+    UUIDs, which the json module refuses, orjson writes as their values: a
+    store's data (what ``model_dump(mode="json")`` gives) has neither.
     """
-    return dumps_and_copy(value)[0]
+    try:
+        text = orjson.dumps(value, option=_ORJSON_STRICT)
+    except TypeError:
+        return json.dumps(
+            value, separators=(",", ":"), sort_keys=True, allow_nan=True, default=_plain_default
+        )
+    if b"null" in text and orjson.loads(text) != value:
+        return json.dumps(
+            value, separators=(",", ":"), sort_keys=True, allow_nan=True, default=_plain_default
+        )
+    return text
+
+
+def decode(text: bytes | str) -> Any:
+    """Read what :func:`encode` wrote: its bytes with orjson, its text with the json module."""
+    return orjson.loads(text) if isinstance(text, bytes) else json.loads(text)
+
+
+def dumps(value: Any) -> str:
+    """:func:`encode` as a string (what sqlite and Redis keep)."""
+    text = encode(value)
+    return text.decode() if isinstance(text, bytes) else text
 
 
 def dumps_and_copy(value: Any) -> tuple[str, Any]:
     """:func:`dumps` and ``loads(dumps(value))`` at once (a store writes the one, returns the other)."""
-    written = _orjson_text(value)
-    if written is not None:
-        return written[0].decode(), written[1]
-    text = json.dumps(
-        value, separators=(",", ":"), sort_keys=True, allow_nan=True, default=_plain_default
-    )
-    return text, loads(text)
+    text = encode(value)
+    if isinstance(text, bytes):
+        return text.decode(), orjson.loads(text)
+    return text, json.loads(text)
 
 
 def loads(text: str) -> Any:
@@ -250,29 +273,9 @@ _ORJSON_STRICT = (
 """Types the json module refuses or writes differently stay orjson's errors (then json decides)."""
 
 
-def _orjson_text(value: Any) -> tuple[bytes, Any] | None:
-    """orjson's text of ``value`` and its parse, when that parse equals ``value``; else ``None``.
-
-    orjson formats floats about 20 times faster than the json module, but it
-    writes NaN and ±Infinity as ``null``, enums and UUIDs as their values, and
-    tuples as lists: whatever does not read back equal to what was given (a
-    comparison in C, all containers and numbers) is left to the json module.
-    What orjson refuses (numpy values, integers beyond 64 bits, keys that are
-    not strings, lone surrogates, subclasses, dataclasses, datetimes) too.
-    """
-    try:
-        text = orjson.dumps(value, option=_ORJSON_STRICT)
-    except TypeError:
-        return None
-    parsed = orjson.loads(text)
-    if parsed != value:
-        return None
-    return text, parsed
-
-
 def copy_plain(value: Any) -> Any:
     """``loads(dumps(value))``: a copy of JSON data as a store reads it back."""
-    return dumps_and_copy(value)[1]
+    return decode(encode(value))
 
 
 def check_seq(session_id: str, seq: int, last: int) -> None:

@@ -15,22 +15,46 @@ from app.stores.base import (
     SessionRecord,
     Snapshot,
     check_seq,
-    copy_plain,
+    decode,
     dumps,
+    encode,
     loads,
     require,
 )
 
 
+@dataclass(frozen=True)
+class _Logged:
+    """An input as the store keeps it: its JSON (one object for the collector, not a tree)."""
+
+    seq: int
+    received_at: datetime
+    text: bytes | str
+
+    def entry(self) -> LogEntry:
+        return LogEntry(seq=self.seq, received_at=self.received_at, input=decode(self.text))
+
+
 @dataclass
 class _SessionData:
     record: SessionRecord
-    log: list[LogEntry] = field(default_factory=list)
-    snapshot: Snapshot | None = None
+    log: list[_Logged] = field(default_factory=list)
+    snapshot: tuple[int, datetime, bytes | str] | None = None
+    """The latest snapshot: seq, when it was taken, its state as JSON."""
+
+    def latest_snapshot(self) -> Snapshot | None:
+        if self.snapshot is None:
+            return None
+        seq, taken_at, text = self.snapshot
+        return Snapshot(seq=seq, taken_at=taken_at, state=decode(text))
 
 
 class MemoryStore:
-    """A :class:`~app.stores.base.Store` in memory. Inputs are copied through JSON like the sqlite store."""
+    """A :class:`~app.stores.base.Store` in memory. Inputs are kept as JSON, like the sqlite store.
+
+    Kept as JSON text rather than as parsed lists and dicts, a long log costs
+    the garbage collector one object per input instead of a few hundred.
+    """
 
     def __init__(self) -> None:
         self._lock = threading.Lock()
@@ -73,12 +97,12 @@ class MemoryStore:
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
     ) -> LogEntry:
-        entry = LogEntry(seq=seq, received_at=received_at, input=copy_plain(entry_input))
+        logged = _Logged(seq=seq, received_at=received_at, text=encode(entry_input))
         with self._lock:
             data = self._require(session_id)
             check_seq(session_id, seq, self._last_seq(data))
-            data.log.append(entry)
-        return entry
+            data.log.append(logged)
+        return logged.entry()
 
     def _require(self, session_id: str) -> _SessionData:
         data = self._live(session_id)
@@ -90,7 +114,7 @@ class MemoryStore:
     def _last_seq(data: _SessionData) -> int:
         if data.log:
             return data.log[-1].seq
-        return data.snapshot.seq if data.snapshot is not None else 0
+        return data.snapshot[0] if data.snapshot is not None else 0
 
     def last_seq(self, session_id: str) -> int:
         with self._lock:
@@ -98,24 +122,24 @@ class MemoryStore:
 
     def entries(self, session_id: str, after: int = 0, limit: int | None = None) -> list[LogEntry]:
         with self._lock:
-            selected = [entry for entry in self._require(session_id).log if entry.seq > after]
-        return selected if limit is None else selected[:limit]
+            selected = [logged for logged in self._require(session_id).log if logged.seq > after]
+        return [logged.entry() for logged in (selected if limit is None else selected[:limit])]
 
     def save_snapshot(self, session_id: str, snapshot: Snapshot) -> None:
-        copied = replace(snapshot, state=copy_plain(snapshot.state))
+        kept = (snapshot.seq, snapshot.taken_at, encode(snapshot.state))
         with self._lock:
             data = self._require(session_id)
-            if data.snapshot is None or snapshot.seq >= data.snapshot.seq:
-                data.snapshot = copied
+            if data.snapshot is None or snapshot.seq >= data.snapshot[0]:
+                data.snapshot = kept
 
     def load(self, session_id: str) -> SessionLoad:
         with self._lock:
             data = self._require(session_id)
-            after = data.snapshot.seq if data.snapshot is not None else 0
+            after = data.snapshot[0] if data.snapshot is not None else 0
             return SessionLoad(
                 session=data.record,
-                snapshot=data.snapshot,
-                entries=[entry for entry in data.log if entry.seq > after],
+                snapshot=data.latest_snapshot(),
+                entries=[logged.entry() for logged in data.log if logged.seq > after],
             )
 
     def close(self) -> None:

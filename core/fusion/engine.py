@@ -659,9 +659,11 @@ class SessionEngine:
         )
         states, covariances = self._fused_at(shown, self.time)
         views = []
-        for track, state, covariance in zip(shown, states, covariances, strict=True):
+        for track, state, plain, covariance in zip(
+            shown, states, states.tolist(), covariances, strict=True
+        ):
             if track.status is not TrackStatus.TERMINATED:
-                track.remember(self.time, state)
+                track.remember(self.time, plain)
             views.append(self._view(track, state, covariance))
         if terminated:
             self._keep(

@@ -25,13 +25,6 @@ class SensorEstimate:
     state: FloatArray
     covariance: FloatArray
     class_mass: MassFunction | None = None
-    _source: Source | None = field(default=None, init=False, repr=False, compare=False)
-
-    def source(self, sensor: str) -> Source:
-        """This estimate as a source of its fused track (built once: a step shows every source)."""
-        if self._source is None or self._source.sensor != sensor:
-            self._source = Source(sensor, self.track, self.time)
-        return self._source
 
     def to_plain(self) -> dict[str, Any]:
         return {
@@ -70,6 +63,7 @@ class FusedTrack:
     history : recent (time, fused state) pairs, oldest first.
     row : its row in the engine's :class:`~core.fusion.table.EstimateTable`
         (not exported: the engine numbers the rows).
+    number : the integer part of the id, for a stable order.
     """
 
     id: str
@@ -82,35 +76,38 @@ class FusedTrack:
     phantom_since: float | None = None
     history: list[tuple[float, list[float]]] = field(default_factory=list)
     row: int = field(default=-1, compare=False, repr=False)
-    _sources: tuple[Source, ...] | None = field(default=None, init=False, compare=False, repr=False)
+    number: int = field(default=0, init=False, compare=False, repr=False)
+    _sources: dict[str, Source] = field(default_factory=dict, init=False, compare=False, repr=False)
+    """Each estimate as a source of the track, in sensor order (what every step shows)."""
+
+    def __post_init__(self) -> None:
+        self._sources = {
+            sensor: Source(sensor, estimate.track, estimate.time)
+            for sensor, estimate in sorted(self.estimates.items())
+        }
+        self.number = int(self.id[1:])
 
     def set_estimate(self, sensor: str, estimate: SensorEstimate) -> None:
         """Record ``sensor``'s latest estimate of this track."""
+        known = sensor in self.estimates
         self.estimates[sensor] = estimate
-        self._sources = None
+        self._sources[sensor] = Source(sensor, estimate.track, estimate.time)
+        if not known:
+            self._sources = dict(sorted(self._sources.items()))
 
     def sources(self) -> tuple[Source, ...]:
-        """The contributing sensor tracks, by sensor id (kept until an estimate changes)."""
-        if self._sources is None:
-            self._sources = tuple(
-                estimate.source(sensor) for sensor, estimate in sorted(self.estimates.items())
-            )
-        return self._sources
-
-    @property
-    def number(self) -> int:
-        """The integer part of the id, for a stable order."""
-        return int(self.id[1:])
+        """The contributing sensor tracks, by sensor id."""
+        return tuple(self._sources.values())
 
     @property
     def last_time(self) -> float:
         return max(estimate.time for estimate in self.estimates.values())
 
-    def remember(self, time: float, state: FloatArray) -> None:
+    def remember(self, time: float, state: list[float]) -> None:
         """Append a fused state to the bounded history (replacing one at the same time)."""
         if self.history and self.history[-1][0] == time:
             self.history.pop()
-        self.history.append((time, state.tolist()))
+        self.history.append((time, state))
         del self.history[:-HISTORY_LENGTH]
 
     def to_plain(self) -> dict[str, Any]:
