@@ -124,7 +124,7 @@ class Store(Protocol):
 
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
-    ) -> LogEntry:
+    ) -> None:
         """Log an accepted input; returns only once it is durably committed."""
         ...
 
@@ -248,14 +248,6 @@ def dumps(value: Any) -> str:
     """:func:`encode` as a string (what sqlite and Redis keep)."""
     text = encode(value)
     return text.decode() if isinstance(text, bytes) else text
-
-
-def dumps_and_copy(value: Any) -> tuple[str, Any]:
-    """:func:`dumps` and ``loads(dumps(value))`` at once (a store writes the one, returns the other)."""
-    text = encode(value)
-    if isinstance(text, bytes):
-        return text.decode(), orjson.loads(text)
-    return text, json.loads(text)
 
 
 def loads(text: str) -> Any:

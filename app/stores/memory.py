@@ -96,13 +96,12 @@ class MemoryStore:
 
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
-    ) -> LogEntry:
+    ) -> None:
         logged = _Logged(seq=seq, received_at=received_at, text=encode(entry_input))
         with self._lock:
             data = self._require(session_id)
             check_seq(session_id, seq, self._last_seq(data))
             data.log.append(logged)
-        return logged.entry()
 
     def _require(self, session_id: str) -> _SessionData:
         data = self._live(session_id)

@@ -47,7 +47,6 @@ from app.stores.base import (
     SessionRecord,
     Snapshot,
     dumps,
-    dumps_and_copy,
     loads,
 )
 from app.stores.redis_keys import DEFAULT_PREFIX, RedisKeys
@@ -245,8 +244,8 @@ class RedisStore:
 
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
-    ) -> LogEntry:
-        text, copied = dumps_and_copy(entry_input)
+    ) -> None:
+        text = dumps(entry_input)
         reply: list[str] = self._append(
             keys=[self.keys.session(session_id), self.keys.log(session_id)],
             args=[seq, received_at.isoformat(), text],
@@ -257,7 +256,6 @@ class RedisStore:
             raise SessionNotFound(session_id)
         if outcome == "conflict":
             raise SequenceConflict(session_id, seq, int(reply[1]))
-        return LogEntry(seq=seq, received_at=received_at, input=copied)
 
     def _live_then(self, session_id: str, read: Callable[[Pipeline], object]) -> Any:
         """``read``'s reply, run in one MULTI after the live check; else SessionNotFound."""

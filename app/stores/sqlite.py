@@ -31,7 +31,6 @@ from app.stores.base import (
     Snapshot,
     check_seq,
     dumps,
-    dumps_and_copy,
     loads,
     require,
 )
@@ -198,8 +197,8 @@ class SqliteStore:
 
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
-    ) -> LogEntry:
-        text, copied = dumps_and_copy(entry_input)
+    ) -> None:
+        text = dumps(entry_input)
         with self._write() as connection:
             require(self._live_record(connection, session_id), session_id)
             check_seq(session_id, seq, self._last_seq(connection, session_id))
@@ -207,7 +206,6 @@ class SqliteStore:
                 "INSERT INTO inputs (session_id, seq, received_at, input) VALUES (?, ?, ?, ?)",
                 (session_id, seq, received_at.isoformat(), text),
             )
-        return LogEntry(seq=seq, received_at=received_at, input=copied)
 
     def last_seq(self, session_id: str) -> int:
         connection = self._connection()
