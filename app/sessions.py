@@ -462,9 +462,17 @@ class SessionRegistry:
         """Apply the input, append it to the log, then move the session on (else it is rebuilt)."""
         started = time.perf_counter()
         size = items + len(session.tracks)
-        step = await self._compute(
-            size, functools.partial(self._apply, session, report, explain=explain)
-        )
+        engine_seq = None if session.engine is None else session.engine.seq
+        try:
+            step = await self._compute(
+                size, functools.partial(self._apply, session, report, explain=explain)
+            )
+        except BaseException:
+            if session.engine is not None and session.engine.seq != engine_seq:
+                # the engine refused the input after changing (a bug): rebuild it from the log
+                logger.error("session %s: a refused input changed the engine", session.id)
+                self.discard(session.id)
+            raise
         self.metrics.fusion_step.labels(kind).observe(time.perf_counter() - started)
         received_at = datetime.now(UTC)
         seq = session.seq + 1

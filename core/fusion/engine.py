@@ -132,6 +132,7 @@ class SessionEngine:
         t = float(report.time)
         live = [track for track in self.tracks if track.status in LIVE]
         states, covariances = self._fused_at(live, t)
+        self._check_horizon(t, incoming)
         decision = self._associate(live, states, covariances, report, incoming)
         terminated: list[FusedTrack] = []
         confirmed: list[FusedTrack] = []
@@ -192,9 +193,18 @@ class SessionEngine:
         last = self.last_report.get(sensor.id)
         if last is not None and report.time <= last:
             raise StaleReport(sensor.id, report.time, last)
+        self._check_horizon(float(report.time), None)
+        late = self.time is not None and report.time < self.time
+        before = tracker.export() if late else None  # only a late scan can be refused after it
         scan = tracker.step(report.time, report.measurements, report.covariances)
         tracks = local_track_report(tracker, scan, self.config.motion.layout, self.config.classes)
-        return self.apply(TrackReport(sensor.id, report.time, tracks), explain=explain)
+        try:
+            return self.apply(TrackReport(sensor.id, report.time, tracks), explain=explain)
+        except InvalidInput:
+            if before is not None:
+                assert sensor.tracker is not None
+                self.local_trackers[sensor.id] = LocalTracker.restore(sensor.tracker, before)
+            raise
 
     # ------------------------------------------------------------ checks
     def _check(self, report: TrackReport) -> tuple[SensorSpec, Estimates]:
@@ -227,6 +237,26 @@ class SessionEngine:
             dimension=dim,
         )
         return sensor, estimates
+
+    def _check_horizon(self, time: float, incoming: Estimates | None) -> None:
+        """Refuse, before anything changes, a step at ``time`` whose fusion time some estimate
+        cannot be predicted to (``MotionModel.predict`` overflows: :class:`InvalidInput`).
+
+        The step predicts every track that is not terminated, and the report's
+        own tracks, to the fusion time; the live tracks were just predicted to
+        ``time``, and what was predicted is kept, so this costs nothing more
+        when the report is not late.
+        """
+        fusion_time = time if self.time is None else max(self.time, time)
+        self._fused_at(
+            [track for track in self.tracks if track.status is not TrackStatus.TERMINATED],
+            fusion_time,
+        )
+        if incoming is not None and len(incoming) and fusion_time != time:
+            assert incoming.covariances is not None
+            self.config.motion.predict(
+                incoming.states, incoming.covariances, np.full(len(incoming), fusion_time - time)
+            )
 
     def _check_classes(self, track: ReportedTrack, where: str) -> None:
         frame = self.config.classes
@@ -478,7 +508,11 @@ class SessionEngine:
             fused.status, fused.reason = TrackStatus.COASTING, StatusReason.MISSED
         if fused.status is TrackStatus.COASTING:
             position = self._position
-            newest = max(fused.estimates.values(), key=lambda estimate: estimate.time)
+            # ties by sensor id: not by dict order, which a restore through a store may change
+            newest = max(
+                (fused.estimates[sensor] for sensor in sorted(fused.estimates)),
+                key=lambda estimate: estimate.time,
+            )
             gate_covariance = (
                 predicted_covariance[np.ix_(position, position)]
                 + newest.covariance[np.ix_(position, position)]

@@ -11,7 +11,8 @@ time). Three rules, named as in the API (``state_fusion``):
   fast CI of Niehsen (2002), ω_i ∝ 1 / tr P_i, for three or more.
 - ``independent``: the information sum (ω_i = 1); optimal for independent
   errors, overconfident when they correlate.
-- ``latest``: the most recent estimate, unchanged.
+- ``latest``: the most recent estimate, unchanged (between estimates of one
+  time, the sensor listed first in the session config: its slot in the engine).
 
 Everything is batched over fused tracks: ``states`` (T, S, d),
 ``covariances`` (T, S, d, d) and a ``present`` mask (T, S) saying which

@@ -200,6 +200,12 @@ ROWS = [
     Row("stale time", 409, body=edited(lambda b: b.update(time=12.0)), slug="stale-report"),
     Row("same time again", 409, body=edited(lambda b: b.update(time=12.5)), slug="stale-report"),
     Row(
+        "late report whose tracks cannot be predicted to the fusion time",
+        422,
+        body=edited(lambda b: b.update(sensor="radar-2", time=-1e300)),
+        slug="invalid-input",
+    ),
+    Row(
         "oversize body",
         413,
         body=edited(lambda b: b["tracks"][0].update(id="x" * 64, pad="y" * 70_000)),

@@ -12,7 +12,7 @@ from core.errors import InvalidInput, StaleReport
 from core.fusion.config import FusionConfig, SensorSpec
 from core.fusion.engine import SessionEngine
 from core.fusion.motion import MotionModel
-from core.fusion.reports import DetectionReport, StepResult
+from core.fusion.reports import DetectionReport, StepResult, TrackReport
 from core.simulation import aircraft_scenario
 from core.tracking.config import LocalTrackerConfig
 
@@ -111,3 +111,29 @@ def test_a_track_list_sensor_cannot_send_detections_and_layouts_are_checked() ->
             sensors=(SensorSpec("radar", tracker=LocalTrackerConfig(preset="aircraft")),),
             classes=Frame(["car", "truck"]),
         )
+
+
+def test_late_detections_refused_after_the_local_tracker_ran_leave_it_as_it_was() -> None:
+    """Detections far older than the fusion time: the local tracker's confirmed tracks cannot be
+    predicted to it, so the fusion step refuses them; the tracker's scan is undone too."""
+    config = FusionConfig(
+        motion=MotionModel(LAYOUT, q=100.0),
+        sensors=(
+            SensorSpec("radar", tracker=LocalTrackerConfig(preset="aircraft")),
+            SensorSpec("ais"),
+        ),
+        classes=CLASSES,
+    )
+    engine = SessionEngine(config)
+    engine.apply(TrackReport("ais", 1e200, ()))  # the fusion time jumps far ahead
+    refused = 0
+    for index in range(12):
+        before = json.dumps(engine.export(), sort_keys=True)
+        try:
+            engine.apply_detections(detections(index))
+        except InvalidInput as error:
+            assert "overflows" in str(error)
+            assert json.dumps(engine.export(), sort_keys=True) == before
+            refused += 1
+            break
+    assert refused == 1  # once the radar's local tracks are confirmed, its reports are refused

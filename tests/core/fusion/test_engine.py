@@ -356,3 +356,41 @@ def test_a_bad_association_setting_is_refused_when_the_config_is_made(
     )
     with pytest.raises(InvalidInput, match=message):
         replace(base, **changes)
+
+
+def test_a_report_whose_fusion_time_cannot_be_reached_changes_nothing() -> None:
+    """A late report so far back that its tracks overflow when predicted to the fusion time:
+    refused before anything changes (it used to start its tracks, then fail)."""
+    engine = SessionEngine(make_config(["s1", "s2"]))
+    engine.apply(TrackReport("s1", 5.0, ()))
+    before = json.dumps(engine.export(), sort_keys=True)
+    far_back = TrackReport("s2", -1e300, (ReportedTrack("a", np.zeros(4), np.eye(4)),))
+    with pytest.raises(InvalidInput, match="overflows"):
+        engine.apply(far_back)
+    assert json.dumps(engine.export(), sort_keys=True) == before
+    assert engine.seq == 1 and not engine.tracks and engine.last_report == {"s1": 5.0}
+
+
+def test_a_coasting_track_gates_alike_after_a_restore_that_reorders_its_estimates() -> None:
+    """Two sensors' estimates of one time: the newest is chosen by sensor id, not by the order
+    the estimates were recorded in (a store writes them with sorted keys)."""
+    config = make_config(["s1", "s2", "s3"], method="gnn", options={})
+
+    def report(sensor: str, t: float, sigma: float, tracks: bool = True) -> TrackReport:
+        covariance = np.diag([sigma**2, 1.0, sigma**2, 1.0])
+        reported = ReportedTrack("a", np.array([10.0 * t, 10.0, 0.0, 0.0]), covariance)
+        return TrackReport(sensor, t, (reported,) if tracks else ())
+
+    uninterrupted = SessionEngine(config)
+    uninterrupted.apply(report("s2", 1.0, 1.0))
+    uninterrupted.apply(report("s1", 1.0, 5.0))
+    restored = SessionEngine.restore(
+        config, json.loads(json.dumps(uninterrupted.export(), sort_keys=True))
+    )
+    assert list(restored.tracks[0].estimates) != list(uninterrupted.tracks[0].estimates)
+    for engine in (uninterrupted, restored):
+        engine.apply(report("s3", 2.0, 1.0, tracks=False))  # s3 misses it: the track coasts
+    assert uninterrupted.tracks[0].status is TrackStatus.COASTING
+    assert json.dumps(restored.export(), sort_keys=True) == json.dumps(
+        uninterrupted.export(), sort_keys=True
+    )
