@@ -83,28 +83,39 @@ def test_fused_at_is_the_padded_fusion_of_the_predicted_estimates(rule: str) -> 
     assert_array_equal(sub_covariance, expected_covariance[subset])
 
 
+Scene = tuple[FloatArray, FloatArray, FloatArray, np.ndarray]
+
+
+def replace_estimates(
+    table: EstimateTable, arrays: Scene, changed: np.ndarray, slot: int, time: float, seed: int
+) -> None:
+    """New estimates of ``changed`` from sensor ``SENSORS[slot]`` at ``time``: written to the
+    table and to the scene's arrays (from which a fresh table is built to compare)."""
+    rng = np.random.default_rng(seed)
+    states, covariances, times, present = arrays
+    new_states = rng.normal(size=(len(changed), 4))
+    new_covariances = np.array([random_spd(rng) for _ in changed])
+    table.write(changed, SENSORS[slot], new_states, new_covariances, time)
+    states[changed, slot], covariances[changed, slot] = new_states, new_covariances
+    times[changed, slot], present[changed, slot] = time, True
+
+
 @pytest.mark.parametrize("rule", [rule.value for rule in StateFusion])
 def test_replaced_estimates_fuse_to_the_bits_of_a_fresh_table(rule: str) -> None:
     """The kept predictions and inverses must not change a single bit (restore determinism)."""
-    states, covariances, times, present = scene(2)
-    rng = np.random.default_rng(3)
-    table = filled(states, covariances, times, present, rule)
-    rows = np.arange(len(states))
+    arrays = scene(2)
+    table = filled(*arrays, rule)
+    rows = np.arange(len(arrays[0]))
     table.fused_at(rows, 2.0)  # first look: every slot predicted and inverted at t = 2
     changed = np.array([1, 4, 5, 11, 20, 28])
-    new_states = rng.normal(size=(len(changed), 4))
-    new_covariances = np.array([random_spd(rng) for _ in changed])
-    table.write(changed, "b", new_states, new_covariances, 2.0)  # a report at the fusion time
+    replace_estimates(table, arrays, changed, 1, 2.0, seed=3)  # a report at the fusion time
     kept_state, kept_covariance = table.fused_at(rows, 2.0)
 
-    states[changed, 1], covariances[changed, 1] = new_states, new_covariances
-    times[changed, 1], present[changed, 1] = 2.0, True
-    fresh = filled(states, covariances, times, present, rule)
-    fresh_state, fresh_covariance = fresh.fused_at(rows, 2.0)
+    fresh_state, fresh_covariance = filled(*arrays, rule).fused_at(rows, 2.0)
     assert_array_equal(kept_state, fresh_state)
     assert_array_equal(kept_covariance, fresh_covariance)
     # rows fused alone give the same bits too
-    alone_state, _ = filled(states, covariances, times, present, rule).fused_at(changed[:2], 2.0)
+    alone_state, _ = filled(*arrays, rule).fused_at(changed[:2], 2.0)
     assert_array_equal(alone_state, fresh_state[changed[:2]])
 
 
@@ -145,25 +156,19 @@ def test_keep_renumbers_rows_and_growth_keeps_them() -> None:
 @pytest.mark.parametrize("rule", [rule.value for rule in StateFusion])
 def test_a_late_report_fuses_at_both_times_as_a_fresh_table(rule: str) -> None:
     """Looks at the fusion time and at a late report's time, a write, both times again."""
-    states, covariances, times, present = scene(6)
-    rng = np.random.default_rng(7)
-    table = filled(states, covariances, times, present, rule)
-    rows = np.arange(len(states))
+    arrays = scene(6)
+    table = filled(*arrays, rule)
+    rows = np.arange(len(arrays[0]))
     table.fused_at(rows, 5.0)  # the fusion time
     table.fused_at(rows, 4.0)  # a late report's time (kept too)
-    changed = np.array([0, 2, 9, 15])
-    new_states = rng.normal(size=(len(changed), 4))
-    new_covariances = np.array([random_spd(rng) for _ in changed])
-    table.write(changed, "a", new_states, new_covariances, 4.0)
+    replace_estimates(table, arrays, np.array([0, 2, 9, 15]), 0, 4.0, seed=7)
     at_fusion = table.fused_at(rows, 5.0)
     at_report = table.fused_at(rows, 4.0)
     table.fused_at(rows, 6.0)  # a third time: the least recently used one is dropped
 
-    states[changed, 0], covariances[changed, 0] = new_states, new_covariances
-    times[changed, 0], present[changed, 0] = 4.0, True
     for at, result in ((5.0, at_fusion), (4.0, at_report)):
-        fresh = filled(states, covariances, times, present, rule).fused_at(rows, at)
+        fresh = filled(*arrays, rule).fused_at(rows, at)
         assert_array_equal(result[0], fresh[0])
         assert_array_equal(result[1], fresh[1])
-    expected = reference(states, covariances, times, present, 5.0, rule)
+    expected = reference(*arrays, 5.0, rule)
     assert_array_equal(table.fused_at(rows, 5.0)[0], expected[0])
