@@ -265,11 +265,6 @@ _ORJSON_STRICT = (
 """Types the json module refuses or writes differently stay orjson's errors (then json decides)."""
 
 
-def copy_plain(value: Any) -> Any:
-    """``loads(dumps(value))``: a copy of JSON data as a store reads it back."""
-    return decode(encode(value))
-
-
 def check_seq(session_id: str, seq: int, last: int) -> None:
     """Raise :class:`SequenceConflict` unless ``seq`` follows ``last``."""
     if seq != last + 1:

@@ -33,7 +33,7 @@ from app.stores import (
     parse_store_url,
     to_plain,
 )
-from app.stores.base import copy_plain, dumps, loads
+from app.stores.base import decode, dumps, encode, loads
 from tests.api.redis_support import REDIS_URL, redis_prefix, redis_store
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -153,9 +153,9 @@ def json_module_round_trip(value: object) -> object:
 
 
 @pytest.mark.parametrize("value", COPIED_AS_JSON_READS_IT)
-def test_copy_plain_is_the_json_round_trip(value: dict[str, object]) -> None:
+def test_what_stores_keep_reads_back_as_the_json_round_trip(value: dict[str, object]) -> None:
     expected = json_module_round_trip(value)
-    for copied in (copy_plain(value), loads(dumps(value))):
+    for copied in (decode(encode(value)), loads(dumps(value))):
         assert copied == expected
         # the same keys in the same order: json.dumps keeps dict order
         assert json.dumps(copied) == json.dumps(expected)
@@ -177,8 +177,8 @@ def test_dumps_writes_what_the_json_module_reads_back(value: dict[str, object]) 
     assert json.dumps(loads(text), allow_nan=True) == json.dumps(json.loads(text), allow_nan=True)
 
 
-def test_copy_plain_keeps_non_finite_numbers() -> None:
-    copied = copy_plain({"values": [float("nan"), float("inf"), -float("inf")]})
+def test_stores_keep_non_finite_numbers() -> None:
+    copied = decode(encode({"values": [float("nan"), float("inf"), -float("inf")]}))
     assert dumps(copied) == '{"values":[NaN,Infinity,-Infinity]}'
 
 
@@ -188,13 +188,14 @@ class Reading:
 
 
 @pytest.mark.parametrize("value", [object(), Reading(1.0), datetime(2026, 1, 1, tzinfo=UTC)])
-def test_copy_plain_refuses_what_dumps_refuses(value: object) -> None:
-    with pytest.raises(TypeError) as by_dumps:
-        dumps({"engine": value})
-    with pytest.raises(TypeError) as by_copy:
-        copy_plain({"engine": value})
-    assert str(by_copy.value) == str(by_dumps.value)
-    assert str(by_copy.value).endswith("is not plain data")
+def test_encode_refuses_what_the_json_module_refuses(value: object) -> None:
+    with pytest.raises(TypeError) as by_json:
+        json.dumps({"engine": value}, default=to_plain)
+    for writer in (encode, dumps):
+        with pytest.raises(TypeError) as refused:
+            writer({"engine": value})
+        assert str(refused.value) == str(by_json.value)
+        assert str(refused.value).endswith("is not plain data")
 
 
 def test_to_plain_refuses_objects() -> None:
