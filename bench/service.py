@@ -51,8 +51,8 @@ THROUGHPUT_SECONDS = 6.0
 THROUGHPUT_ROUNDS = 6
 WORKERS = 8
 WS_WINDOW = 16
-WS_SECONDS = 3.0
 """Messages in flight on one WebSocket during the throughput run (pipelining, bounded)."""
+WS_SECONDS = 3.0
 PREPARED_PER_WORKER = 3000
 """Service bodies built per client before the throughput run (more than 6 s can use here)."""
 BIG_TRACKS = 1000

@@ -229,14 +229,16 @@ def encode(value: Any) -> bytes | str:
     try:
         text = orjson.dumps(value, option=_ORJSON_STRICT)
     except TypeError:
-        return json.dumps(
-            value, separators=(",", ":"), sort_keys=True, allow_nan=True, default=_plain_default
-        )
+        return _json_module_text(value)
     if b"null" in text and orjson.loads(text) != value:
-        return json.dumps(
-            value, separators=(",", ":"), sort_keys=True, allow_nan=True, default=_plain_default
-        )
+        return _json_module_text(value)
     return text
+
+
+def _json_module_text(value: Any) -> str:
+    return json.dumps(
+        value, separators=(",", ":"), sort_keys=True, allow_nan=True, default=_plain_default
+    )
 
 
 def decode(text: bytes | str) -> Any:

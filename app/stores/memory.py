@@ -24,29 +24,26 @@ from app.stores.base import (
 
 
 @dataclass(frozen=True)
-class _Logged:
-    """An input as the store keeps it: its JSON (one object for the collector, not a tree)."""
+class _Stored:
+    """An input or a snapshot as the store keeps it: its JSON (one object for the collector,
+    not a tree of lists and dicts)."""
 
     seq: int
-    received_at: datetime
+    at: datetime
     text: bytes | str
 
     def entry(self) -> LogEntry:
-        return LogEntry(seq=self.seq, received_at=self.received_at, input=decode(self.text))
+        return LogEntry(seq=self.seq, received_at=self.at, input=decode(self.text))
+
+    def snapshot(self) -> Snapshot:
+        return Snapshot(seq=self.seq, taken_at=self.at, state=decode(self.text))
 
 
 @dataclass
 class _SessionData:
     record: SessionRecord
-    log: list[_Logged] = field(default_factory=list)
-    snapshot: tuple[int, datetime, bytes | str] | None = None
-    """The latest snapshot: seq, when it was taken, its state as JSON."""
-
-    def latest_snapshot(self) -> Snapshot | None:
-        if self.snapshot is None:
-            return None
-        seq, taken_at, text = self.snapshot
-        return Snapshot(seq=seq, taken_at=taken_at, state=decode(text))
+    log: list[_Stored] = field(default_factory=list)
+    snapshot: _Stored | None = None
 
 
 class MemoryStore:
@@ -97,7 +94,7 @@ class MemoryStore:
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
     ) -> None:
-        logged = _Logged(seq=seq, received_at=received_at, text=encode(entry_input))
+        logged = _Stored(seq=seq, at=received_at, text=encode(entry_input))
         with self._lock:
             data = self._require(session_id)
             check_seq(session_id, seq, self._last_seq(data))
@@ -113,7 +110,7 @@ class MemoryStore:
     def _last_seq(data: _SessionData) -> int:
         if data.log:
             return data.log[-1].seq
-        return data.snapshot[0] if data.snapshot is not None else 0
+        return data.snapshot.seq if data.snapshot is not None else 0
 
     def last_seq(self, session_id: str) -> int:
         with self._lock:
@@ -125,19 +122,19 @@ class MemoryStore:
         return [logged.entry() for logged in (selected if limit is None else selected[:limit])]
 
     def save_snapshot(self, session_id: str, snapshot: Snapshot) -> None:
-        kept = (snapshot.seq, snapshot.taken_at, encode(snapshot.state))
+        kept = _Stored(seq=snapshot.seq, at=snapshot.taken_at, text=encode(snapshot.state))
         with self._lock:
             data = self._require(session_id)
-            if data.snapshot is None or snapshot.seq >= data.snapshot[0]:
+            if data.snapshot is None or snapshot.seq >= data.snapshot.seq:
                 data.snapshot = kept
 
     def load(self, session_id: str) -> SessionLoad:
         with self._lock:
             data = self._require(session_id)
-            after = data.snapshot[0] if data.snapshot is not None else 0
+            after = data.snapshot.seq if data.snapshot is not None else 0
             return SessionLoad(
                 session=data.record,
-                snapshot=data.latest_snapshot(),
+                snapshot=None if data.snapshot is None else data.snapshot.snapshot(),
                 entries=[logged.entry() for logged in data.log if logged.seq > after],
             )
 

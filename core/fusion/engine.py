@@ -650,13 +650,7 @@ class SessionEngine:
                 continue  # a sensor that reports both as distinct objects knows better
             for sensor_id, estimate in newcomer.estimates.items():
                 keeper.set_estimate(sensor_id, estimate)
-                self._table.write(
-                    np.array([keeper.row]),
-                    sensor_id,
-                    estimate.state[None],
-                    estimate.covariance[None],
-                    estimate.time,
-                )
+                self._write_estimate(keeper.row, sensor_id, estimate)
             if keeper.status is not TrackStatus.CONFIRMED:
                 keeper.status, keeper.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
             keeper.phantom_since = None
@@ -729,6 +723,12 @@ class SessionEngine:
             sensor=report.sensor,
             tracks=tuple(views),
             association=association,
+        )
+
+    def _write_estimate(self, row: int, sensor: str, estimate: SensorEstimate) -> None:
+        """One sensor estimate into the table's ``row`` (a merge, a restore; steps write in bulk)."""
+        self._table.write(
+            np.array([row]), sensor, estimate.state[None], estimate.covariance[None], estimate.time
         )
 
     def _keep(self, tracks: list[FusedTrack]) -> None:
@@ -805,13 +805,7 @@ class SessionEngine:
                         f"exported track {track.id} has an estimate of sensor {sensor!r}, "
                         "which the config does not name"
                     )
-                engine._table.write(
-                    np.array([row]),
-                    sensor,
-                    estimate.state[None],
-                    estimate.covariance[None],
-                    estimate.time,
-                )
+                engine._write_estimate(row, sensor, estimate)
         engine.tracks = tracks
         for sensor, plain in state["local_trackers"].items():
             tracker_config = config.sensor(sensor).tracker

@@ -23,7 +23,6 @@ engine restored from its export continues bit for bit.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
@@ -49,6 +48,20 @@ class _Kept:
         self.fused: FloatArray = np.zeros((capacity, dim))
         self.fused_cov: FloatArray = np.zeros((capacity, dim, dim))
         self.fused_ok: BoolArray = np.zeros(capacity, dtype=bool)
+
+    def grown(self, capacity: int, used: int) -> _Kept:
+        """A copy with room for ``capacity`` rows, of which the first ``used`` are kept."""
+        predicted = self.predicted
+        grown = _Kept(self.at, capacity, predicted.shape[1], predicted.shape[2])
+        for name in _KEPT_ARRAYS:
+            getattr(grown, name)[:used] = getattr(self, name)[:used]
+        return grown
+
+    def keep(self, rows: IntArray) -> None:
+        """Keep only ``rows``, renumbered 0, 1, … in the order given."""
+        for name in _KEPT_ARRAYS:
+            values = getattr(self, name)
+            values[: len(rows)] = values[rows]
 
     def forget(self, rows: IntArray | slice, slot: int | slice = slice(None)) -> None:
         """Nothing kept for ``slot`` of ``rows`` (and the rows' fused states)."""
@@ -102,11 +115,7 @@ class EstimateTable:
             self._allocate(capacity)
             for name, values in estimates:
                 getattr(self, name)[:first] = values
-            for index, old in enumerate(self._kept):
-                grown = _Kept(old.at, capacity, len(self.slots), self.motion.layout.dim)
-                for name in _KEPT_ARRAYS:
-                    getattr(grown, name)[:first] = getattr(old, name)[:first]
-                self._kept[index] = grown
+            self._kept = [kept.grown(capacity, first) for kept in self._kept]
         self._rows = first + count
         rows = np.arange(first, first + count, dtype=np.int64)
         self.present[rows] = False
@@ -116,11 +125,11 @@ class EstimateTable:
 
     def keep(self, rows: IntArray) -> None:
         """Keep only ``rows``, renumbered 0, 1, … in the order given."""
-        holders: list[Any] = [self, *self._kept]
-        for holder in holders:
-            for name in _ESTIMATE_ARRAYS if holder is self else _KEPT_ARRAYS:
-                values = getattr(holder, name)
-                values[: len(rows)] = values[rows]
+        for name in _ESTIMATE_ARRAYS:
+            values = getattr(self, name)
+            values[: len(rows)] = values[rows]
+        for kept in self._kept:
+            kept.keep(rows)
         self._rows = len(rows)
 
     def slot(self, sensor: str) -> int:
