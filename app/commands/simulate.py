@@ -54,10 +54,10 @@ def summarise(run: ScenarioRun, results: list[Body]) -> str:
             if fused is not None:
                 ids.setdefault(target, set()).add(fused)
     final = results[-1]
-    decisions = {
-        t["id"]: t["classification"]["decision"]
+    decisions = {  # the class, or why there is none ("tied", "undefined")
+        t["id"]: t["classification"]["decision"] or t["classification"]["decision_state"]
         for t in final["tracks"]
-        if t.get("classification") and t["classification"].get("decision")
+        if t.get("classification")
     }
     lines = [
         f"scenario {run.name}, seed {run.seed}: {len(results)} inputs, fusion time {final['time']:.6g}",
