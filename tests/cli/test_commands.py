@@ -14,6 +14,7 @@ from app.commands.replay import export_events, read_events
 from app.commands.runner import run_locally, run_on_server
 from app.commands.scenarios import build
 from tests.api.conftest import LiveServer, live_server
+from tests.api.examples import SESSION_CONFIG, TRACK_REPORT
 
 __all__ = ["live_server"]
 
@@ -86,5 +87,16 @@ def test_bench_refuses_an_unknown_benchmark(capsys: pytest.CaptureFixture[str]) 
 
 
 def test_read_events_refuses_a_file_without_its_session_line() -> None:
+    line = json.dumps({"type": "tracks", "seq": 1, "report": TRACK_REPORT})
     with pytest.raises(ValueError, match="no session line"):
-        read_events(io.StringIO('{"type": "tracks", "seq": 1, "report": {}}\n'))
+        read_events(io.StringIO(line + "\n"))
+
+
+def test_read_events_names_the_invalid_field_of_a_line() -> None:
+    report = dict(TRACK_REPORT, time="soon")
+    lines = [
+        json.dumps({"type": "session", "config": SESSION_CONFIG}),
+        json.dumps({"type": "tracks", "seq": 1, "report": report}),
+    ]
+    with pytest.raises(ValueError, match=r"^line 2: invalid report: time: Input should be"):
+        read_events(io.StringIO("\n".join(lines)))
