@@ -70,6 +70,10 @@ def one_line(error: BaseException) -> str:
         if isinstance(error, httpx.TimeoutException):
             return f"{server} did not answer in time: check that it is the credal-fusion service"
         return f"the connection to {server} failed ({type(error).__name__}: {error})"
+    from core.errors import CredalError
+
+    if isinstance(error, CredalError):  # the engine refused an input (as the server would: 4xx)
+        return f"the engine refused an input: {error}"
     if isinstance(error, FileNotFoundError):
         return f"no such file: {error.filename} (check the path)"
     if isinstance(error, OSError):
