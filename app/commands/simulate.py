@@ -84,8 +84,15 @@ def command(args: argparse.Namespace) -> int:
     """
     run = build(args.scenario, args.seed)
     print(f"seed {run.seed}", file=sys.stderr)
-    paced = run.inputs if args.speed is None else _paced(run.inputs, args.speed)
-    inputs = tqdm(paced, desc=run.name, unit="input", file=sys.stderr, disable=args.quiet)
+    timed = run.inputs if args.speed is None else paced(run.inputs, args.speed)
+    inputs = tqdm(
+        timed,
+        total=len(run.inputs),
+        desc=run.name,
+        unit="input",
+        file=sys.stderr,
+        disable=args.quiet,
+    )
     if not args.server:
         print(summarise(run, list(run_locally(run.config, inputs))))
         return 0
@@ -116,7 +123,7 @@ def viewer_url(server: str, session: str, token: str) -> str:
     return f"{server}/#{urlencode({'session': session, 'token': token})}"
 
 
-def _paced(inputs: Sequence[Input], speed: float) -> Iterator[Input]:
+def paced(inputs: Sequence[Input], speed: float) -> Iterator[Input]:
     """``inputs`` released at ``speed`` times the scenario's own clock (their ``time``)."""
     if not inputs:
         return

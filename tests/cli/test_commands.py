@@ -10,6 +10,7 @@ import pytest
 
 from api_schemas.reports import TrackReport
 from app.cli import main
+from app.commands import simulate
 from app.commands.replay import export_events, read_events
 from app.commands.runner import run_locally, run_on_server
 from app.commands.scenarios import build
@@ -100,3 +101,22 @@ def test_read_events_names_the_invalid_field_of_a_line() -> None:
     ]
     with pytest.raises(ValueError, match=r"^line 2: invalid report: time: Input should be"):
         read_events(io.StringIO("\n".join(lines)))
+
+
+def test_speed_releases_the_inputs_on_the_scenario_clock(monkeypatch: pytest.MonkeyPatch) -> None:
+    clock = [100.0]  # a fake monotonic clock: sleeping advances it, nothing else does
+    slept: list[float] = []
+
+    def sleep(seconds: float) -> None:
+        slept.append(seconds)
+        clock[0] += seconds
+
+    monkeypatch.setattr(simulate.time, "monotonic", lambda: clock[0])
+    monkeypatch.setattr(simulate.time, "sleep", sleep)
+    inputs = [("tracks", {"time": t}) for t in (10.0, 10.0, 12.0, 13.0)]
+    released = []
+    for _kind, body in simulate.paced(inputs, speed=2.0):
+        released.append((clock[0], body["time"]))
+    # At twice the scenario's speed: 0, 0, 1 and 1.5 s after the start.
+    assert released == [(100.0, 10.0), (100.0, 10.0), (101.0, 12.0), (101.5, 13.0)]
+    assert slept == [1.0, 0.5]
