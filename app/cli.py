@@ -11,20 +11,19 @@ from pathlib import Path
 
 import uvicorn
 
-from app.commands.errors import one_line
+from app.commands.errors import CommandError, one_line
 from app.commands.replay import export_command, replay_command
 from app.commands.scenarios import names as scenario_names
 from app.commands.simulate import command as simulate_command
 from app.main import create_app
 from app.runtime import tune_garbage_collector
 from app.settings import get_settings
-from app.stores import parse_store_url
+from app.stores import open_store, parse_store_url
 from core.evaluation.figures import FIGURES
 from core.evaluation.figures import reproduce as reproduce_figure
 
 
 def _serve(args: argparse.Namespace) -> int:
-    parse_store_url(args.store)
     settings = get_settings().model_copy(
         update={
             "host": args.host,
@@ -33,6 +32,7 @@ def _serve(args: argparse.Namespace) -> int:
             "access_log": args.access_log,
         }
     )
+    _check_store(args.store, settings.redis_prefix)
     print(
         f"credal-fusion on http://{args.host}:{args.port}\n"
         f"  live viewer: http://{args.host}:{args.port}/\n"
@@ -53,6 +53,22 @@ def _serve(args: argparse.Namespace) -> int:
         access_log=settings.access_log,
     )
     return 0
+
+
+def _check_store(url: str, redis_prefix: str) -> None:
+    """Open the store once before serving: a store that cannot be used is one line, not a
+    traceback from the application's start-up."""
+    try:
+        store = open_store(url, redis_prefix=redis_prefix)
+        try:
+            store.count_sessions()
+        finally:
+            store.close()
+    except Exception as error:
+        raise CommandError(
+            f"cannot use the store {url} ({type(error).__name__}: {error}): start it, "
+            "or choose another with --store (memory | sqlite[:PATH] | redis://HOST:PORT/DB)"
+        ) from error
 
 
 def _store_url(text: str) -> str:

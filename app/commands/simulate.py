@@ -83,7 +83,6 @@ def command(args: argparse.Namespace) -> int:
     unless ``--keep``.
     """
     run = build(args.scenario, args.seed)
-    print(f"seed {run.seed}", file=sys.stderr)
     timed = run.inputs if args.speed is None else paced(run.inputs, args.speed)
     inputs = tqdm(
         timed,

@@ -66,10 +66,18 @@ def test_a_server_that_is_not_running_is_named_with_what_to_do() -> None:
     with socket.socket() as probe:  # a port nobody listens on: bound, never listening
         probe.bind(("127.0.0.1", 0))
         url = f"http://127.0.0.1:{probe.getsockname()[1]}"
-        done = cli("export", "--server", url, "--session", "s", "--token", "t")
+        done = cli("simulate", "t2t-four", "--server", url, "--quiet")
     line = one_line_failure(done)
-    assert line.startswith(f"credal-fusion export: cannot connect to {url}")
+    assert line.startswith(f"credal-fusion simulate: cannot connect to {url}")
     assert "credal-fusion serve" in line
+    assert done.stdout == ""
+
+
+def test_serve_with_a_store_it_cannot_open_says_so_before_serving() -> None:
+    done = cli("serve", "--store", "redis://127.0.0.1:1/0", "--port", "1")
+    line = one_line_failure(done)
+    assert line.startswith("credal-fusion serve: cannot use the store redis://127.0.0.1:1/0")
+    assert "--store" in line
 
 
 def test_replay_of_a_malformed_line_names_the_line(live_server: LiveServer, tmp_path: Path) -> None:
