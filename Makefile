@@ -6,14 +6,20 @@ STAMP  := $(VENV)/.installed-stamp
 
 .PHONY: run test lint bench openapi figures clean
 
+# Each step says what it does, and pip names every package it installs (the
+# first run takes about two minutes).
 $(STAMP): pyproject.toml
-	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
-	touch $(STAMP)
+	@test -x $(BIN)/python || { echo "==> creating the virtual environment $(VENV)/ ($(PYTHON))"; $(PYTHON) -m venv $(VENV); }
+	@echo "==> upgrading pip in $(VENV)/"
+	@$(BIN)/python -m pip install --quiet --upgrade pip
+	@echo "==> installing credal-fusion and its dependencies from pyproject.toml (first time: about 2 minutes)"
+	@$(BIN)/python -m pip install --progress-bar off -e '.[dev]'
+	@touch $(STAMP)
+	@echo "==> $(VENV)/ is ready"
 
 run: $(STAMP)
-	mkdir -p data
+	@mkdir -p data
+	@echo "==> starting the service (sqlite store in data/); Ctrl-C stops it"
 	$(BIN)/credal-fusion serve --host 127.0.0.1 --port 8000
 
 lint: $(STAMP)

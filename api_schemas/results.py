@@ -20,6 +20,7 @@ class TrackSource(WireModel):
 
 
 ClassificationState = Literal["defined", "total_conflict"]
+DecisionState = Literal["decided", "tied", "undefined"]
 
 
 class FusedClassification(WireModel):
@@ -29,6 +30,12 @@ class FusedClassification(WireModel):
     normalisation removed. ``state`` is ``total_conflict`` when the sensors'
     evidence contradicts itself totally: then ``mass``, ``pignistic``,
     ``belief``, ``plausibility`` and ``decision`` are ``null``.
+
+    ``decision`` is the class of largest BetP, and ``decision_state`` says
+    whether there is one: ``decided`` (one class leads by more than 1e-9),
+    ``tied`` (two or more classes share the top BetP within 1e-9: ``decision``
+    is ``null``, no class is preferred) or ``undefined`` (no BetP: total
+    conflict; ``decision`` is ``null``).
     """
 
     state: ClassificationState
@@ -38,6 +45,7 @@ class FusedClassification(WireModel):
     plausibility: dict[Label, UnitFloat] | None
     conflict: UnitFloat
     decision: Label | None
+    decision_state: DecisionState
 
 
 class FusedTrack(WireModel):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import subprocess
 import sys
 from collections.abc import Sequence
@@ -10,19 +11,19 @@ from pathlib import Path
 
 import uvicorn
 
+from app.commands.errors import CommandError, one_line
 from app.commands.replay import export_command, replay_command
 from app.commands.scenarios import names as scenario_names
 from app.commands.simulate import command as simulate_command
 from app.main import create_app
 from app.runtime import tune_garbage_collector
 from app.settings import get_settings
-from app.stores import parse_store_url
+from app.stores import open_store, parse_store_url
 from core.evaluation.figures import FIGURES
 from core.evaluation.figures import reproduce as reproduce_figure
 
 
 def _serve(args: argparse.Namespace) -> int:
-    parse_store_url(args.store)
     settings = get_settings().model_copy(
         update={
             "host": args.host,
@@ -31,6 +32,7 @@ def _serve(args: argparse.Namespace) -> int:
             "access_log": args.access_log,
         }
     )
+    _check_store(args.store, settings.redis_prefix)
     print(
         f"credal-fusion on http://{args.host}:{args.port}\n"
         f"  live viewer: http://{args.host}:{args.port}/\n"
@@ -53,6 +55,22 @@ def _serve(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_store(url: str, redis_prefix: str) -> None:
+    """Open the store once before serving: a store that cannot be used is one line, not a
+    traceback from the application's start-up."""
+    try:
+        store = open_store(url, redis_prefix=redis_prefix)
+        try:
+            store.count_sessions()
+        finally:
+            store.close()
+    except Exception as error:
+        raise CommandError(
+            f"cannot use the store {url} ({type(error).__name__}: {error}): start it, "
+            "or choose another with --store (memory | sqlite[:PATH] | redis://HOST:PORT/DB)"
+        ) from error
+
+
 def _store_url(text: str) -> str:
     try:
         parse_store_url(text)
@@ -61,12 +79,26 @@ def _store_url(text: str) -> str:
     return text
 
 
+def _positive(text: str) -> float:
+    value = float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, not {text}")
+    return value
+
+
+DEBUG_HELP = "on failure, show the Python traceback (default: one line saying what to do)"
+
+
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser with every subcommand."""
+    """The argument parser with every subcommand (``--debug`` before or after it)."""
     settings = get_settings()
     parser = argparse.ArgumentParser(prog="credal-fusion", description=__doc__)
+    parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=DEBUG_HELP)
     commands = parser.add_subparsers(dest="command", required=True)
-    serve = commands.add_parser("serve", help="start the HTTP/WebSocket service")
+    add_parser = functools.partial(commands.add_parser, parents=[common])
+    serve = add_parser("serve", help="start the HTTP/WebSocket service")
     serve.add_argument("--host", default=settings.host)
     serve.add_argument("--port", type=int, default=settings.port)
     serve.add_argument(
@@ -83,34 +115,49 @@ def build_parser() -> argparse.ArgumentParser:
     )
     serve.set_defaults(handler=_serve)
 
-    simulate = commands.add_parser(
+    simulate = add_parser(
         "simulate", help="run a paper scenario through the engine (or a running server)"
     )
     simulate.add_argument("scenario", choices=scenario_names())
     simulate.add_argument("--seed", type=int, default=0)
-    simulate.add_argument("--server", help="URL of a running service, e.g. http://127.0.0.1:8000")
+    simulate.add_argument(
+        "--server",
+        help="URL of a running service, e.g. http://127.0.0.1:8000: prints the session, "
+        "its token and the viewer URL first",
+    )
+    simulate.add_argument(
+        "--keep",
+        action="store_true",
+        help="with --server: leave the session open at the end (default: delete it)",
+    )
+    simulate.add_argument(
+        "--speed",
+        type=_positive,
+        help="play the inputs at SPEED times the scenario's clock (1: real time, to watch "
+        "in the viewer; default: as fast as possible)",
+    )
     simulate.add_argument("--quiet", action="store_true", help="no progress bar")
     simulate.set_defaults(handler=simulate_command)
 
-    reproduce = commands.add_parser("reproduce", help="regenerate one paper figure (PNG)")
+    reproduce = add_parser("reproduce", help="regenerate one paper figure (PNG)")
     reproduce.add_argument("figure", choices=sorted(FIGURES))
     reproduce.add_argument("--out", default="docs/figures", help="directory (default: %(default)s)")
     reproduce.add_argument("--reduced", action="store_true", help="small sizes, for a quick look")
     reproduce.set_defaults(handler=_reproduce)
 
-    export = commands.add_parser("export", help="write a session's event log as JSON lines")
+    export = add_parser("export", help="write a session's event log as JSON lines")
     export.add_argument("--server", required=True)
     export.add_argument("--session", required=True)
     export.add_argument("--token", required=True, help="the session's token (or the admin token)")
     export.set_defaults(handler=export_command)
 
-    replay = commands.add_parser("replay", help="apply an exported event log, print the results")
+    replay = add_parser("replay", help="apply an exported event log, print the results")
     replay.add_argument("events", help="EVENTS.jsonl written by `credal-fusion export`")
     replay.add_argument("--server", help="replay through a running service instead of in process")
     replay.add_argument("--quiet", action="store_true", help="no progress bar")
     replay.set_defaults(handler=replay_command)
 
-    bench = commands.add_parser("bench", help="run the benchmarks of bench/ (from a checkout)")
+    bench = add_parser("bench", help="run the benchmarks of bench/ (from a checkout)")
     bench.add_argument("names", nargs="*", help="benchmarks to run (default: all)")
     bench.set_defaults(handler=_bench)
     return parser
@@ -145,10 +192,20 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the console script."""
+    """Entry point of the console script: a failure is one line on stderr and exit status 1."""
     args = build_parser().parse_args(argv)
-    handler = args.handler
-    return int(handler(args))
+    try:
+        return int(args.handler(args))
+    except KeyboardInterrupt:
+        if args.debug:
+            raise
+        print("credal-fusion: interrupted", file=sys.stderr)
+        return 130
+    except Exception as error:  # every failure is told in one line, unless --debug
+        if args.debug:
+            raise
+        print(f"credal-fusion {args.command}: {one_line(error)}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

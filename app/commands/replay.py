@@ -20,32 +20,67 @@ from pathlib import Path
 from typing import Any, TextIO
 
 import httpx
+from pydantic import BaseModel, ValidationError
 from tqdm import tqdm
 
-from app.commands.runner import Input, run_locally, run_on_server
+from api_schemas.config import SessionConfig
+from api_schemas.reports import DetectionReport, TrackReport
+from app.commands.errors import CommandError, pydantic_line
+from app.commands.runner import Input, raise_for_problem, run_locally, run_on_server
 from app.responses import dumps
 
 Body = dict[str, Any]
 
 
+EVENT_LINE = '{"type": "tracks" | "detections", "seq": n, "report": {...}}'
+REPORT_MODELS: dict[str, type[TrackReport] | type[DetectionReport]] = {
+    "tracks": TrackReport,
+    "detections": DetectionReport,
+}
+
+
 def read_events(lines: TextIO) -> tuple[Body, list[Input]]:
-    """The session config and the inputs of an event file."""
+    """The session config and the inputs of an event file, each line checked.
+
+    Raises
+    ------
+    ValueError
+        Naming the first malformed line and what it lacks.
+    """
     config: Body | None = None
     inputs: list[Input] = []
     for number, line in enumerate(lines, start=1):
         if not line.strip():
             continue
-        event = json.loads(line)
-        kind = event.get("type")
+        try:
+            event = json.loads(line)
+        except ValueError as error:
+            raise ValueError(f"line {number} is not JSON ({error})") from None
+        kind = event.get("type") if isinstance(event, dict) else None
         if kind == "session":
-            config = event["config"]
-        elif kind in ("tracks", "detections"):
-            inputs.append((kind, event["report"]))
+            config = _checked(number, event, "config", SessionConfig)
+        elif kind in REPORT_MODELS:
+            inputs.append((kind, _checked(number, event, "report", REPORT_MODELS[kind])))
         else:
-            raise ValueError(f"line {number}: unknown event type {kind!r}")
+            raise ValueError(
+                f"line {number}: unknown event type {kind!r} (expected 'session', "
+                f"then one {EVENT_LINE} per input)"
+            )
     if config is None:
-        raise ValueError("the event file has no session line")
+        raise ValueError('the event file has no session line ({"type": "session", "config": …})')
     return config, inputs
+
+
+def _checked(number: int, event: Body, key: str, model: type[BaseModel]) -> Body:
+    """``event[key]``, validated by ``model`` (the plain body is kept: it is what is sent)."""
+    if not isinstance(event.get(key), dict):
+        raise ValueError(f"line {number}: a {event['type']!r} event needs a {key!r} object")
+    body: Body = event[key]
+    try:
+        model.model_validate(body)
+    except ValidationError as error:
+        raise ValueError(f"line {number}: invalid {key}: {pydantic_line(error)}") from None
+    return body
 
 
 def export_events(server: str, session: str, token: str) -> Iterator[str]:
@@ -53,12 +88,12 @@ def export_events(server: str, session: str, token: str) -> Iterator[str]:
     headers = {"Authorization": f"Bearer {token}"}
     with httpx.Client(base_url=server.rstrip("/"), headers=headers, timeout=60.0) as client:
         summary = client.get(f"/v1/sessions/{session}")
-        summary.raise_for_status()
+        raise_for_problem(summary)
         yield dumps({"type": "session", "config": summary.json()["config"]})
         after = 0
         while True:
             page = client.get(f"/v1/sessions/{session}/events", params={"after": after})
-            page.raise_for_status()
+            raise_for_problem(page)
             events = page.json()["events"]
             if not events:
                 return
@@ -75,11 +110,22 @@ def export_command(args: argparse.Namespace) -> int:
 
 def replay_command(args: argparse.Namespace) -> int:
     with Path(args.events).open(encoding="utf-8") as events:
-        config, inputs = read_events(events)
+        try:
+            config, inputs = read_events(events)
+        except ValueError as error:
+            raise CommandError(
+                f"{args.events}: {error}; replay reads the JSON lines `credal-fusion export` writes"
+            ) from None
     shown = tqdm(inputs, desc="replay", unit="input", file=sys.stderr, disable=args.quiet)
     results = (
-        run_on_server(args.server, config, shown) if args.server else run_locally(config, shown)
+        run_on_server(args.server, config, shown, on_session=_tell_session)
+        if args.server
+        else run_locally(config, shown)
     )
     for result in results:
         print(dumps(result))
     return 0
+
+
+def _tell_session(session: str, token: str) -> None:
+    print(f"replaying into session {session} (token {token}), left open", file=sys.stderr)

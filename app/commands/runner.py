@@ -7,6 +7,7 @@ engine is deterministic and the server is that engine behind HTTP.
 
 from __future__ import annotations
 
+import contextlib
 import json
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
@@ -15,6 +16,7 @@ import httpx
 
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport, TrackReport
+from app.commands.errors import http_failure
 from app.responses import dumps
 from app.translate import (
     class_frame,
@@ -50,31 +52,40 @@ def run_on_server(
     inputs: Iterable[Input],
     *,
     on_session: Callable[[str, str], None] | None = None,
+    keep: bool = True,
 ) -> Iterator[Body]:
     """Create a session on ``server`` and post every input; yields each result.
 
     ``on_session(id, token)`` is told the new session's id and bearer token.
+    Unless ``keep``, the session is deleted when the run ends (or fails); a
+    server that cannot be reached then leaves it to its idle timeout.
     """
     with httpx.Client(base_url=server.rstrip("/"), timeout=60.0) as client:
         created = client.post("/v1/sessions", json=config)
-        _raise_for_problem(created)
+        raise_for_problem(created)
         session = created.json()
         if on_session is not None:
             on_session(session["id"], session["token"])
         headers = {"Authorization": f"Bearer {session['token']}"}
-        for kind, body in inputs:
-            answer = client.post(f"/v1/sessions/{session['id']}/{kind}", json=body, headers=headers)
-            _raise_for_problem(answer)
-            yield answer.json()
+        try:
+            for kind, body in inputs:
+                answer = client.post(
+                    f"/v1/sessions/{session['id']}/{kind}", json=body, headers=headers
+                )
+                raise_for_problem(answer)
+                yield answer.json()
+        finally:
+            if not keep:
+                with contextlib.suppress(httpx.TransportError):
+                    client.delete(f"/v1/sessions/{session['id']}", headers=headers)
 
 
-def _raise_for_problem(answer: httpx.Response) -> None:
+def raise_for_problem(answer: httpx.Response) -> None:
+    """Raise a one-line :class:`CommandError` if ``answer`` is not a success."""
     if answer.is_success:
         return
     try:
-        detail = answer.json().get("detail", answer.text)
+        body = answer.json()
     except ValueError:
-        detail = answer.text
-    raise RuntimeError(
-        f"{answer.request.method} {answer.request.url.path}: {answer.status_code} {detail}"
-    )
+        body = answer.text
+    raise http_failure(answer.request.method, answer.request.url.path, answer.status_code, body)

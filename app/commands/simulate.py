@@ -4,12 +4,15 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
+from collections.abc import Iterator, Sequence
 from typing import Any
+from urllib.parse import urlencode
 
 import numpy as np
 from tqdm import tqdm
 
-from app.commands.runner import run_locally, run_on_server
+from app.commands.runner import Input, run_locally, run_on_server
 from app.commands.scenarios import ScenarioRun, build
 from core.metrics import identity_switches, ospa
 
@@ -54,10 +57,10 @@ def summarise(run: ScenarioRun, results: list[Body]) -> str:
             if fused is not None:
                 ids.setdefault(target, set()).add(fused)
     final = results[-1]
-    decisions = {
-        t["id"]: t["classification"]["decision"]
+    decisions = {  # the class, or why there is none ("tied", "undefined")
+        t["id"]: t["classification"]["decision"] or t["classification"]["decision_state"]
         for t in final["tracks"]
-        if t.get("classification") and t["classification"].get("decision")
+        if t.get("classification")
     }
     lines = [
         f"scenario {run.name}, seed {run.seed}: {len(results)} inputs, fusion time {final['time']:.6g}",
@@ -73,13 +76,59 @@ def summarise(run: ScenarioRun, results: list[Body]) -> str:
 
 
 def command(args: argparse.Namespace) -> int:
-    """Run the scenario and print its summary (progress on stderr)."""
+    """Run the scenario and print its summary (progress on stderr).
+
+    With ``--server`` the session's id, token and viewer URL are printed
+    first, so the run can be watched; the session is deleted at the end
+    unless ``--keep``.
+    """
     run = build(args.scenario, args.seed)
-    print(f"seed {run.seed}", file=sys.stderr)
-    inputs = tqdm(run.inputs, desc=run.name, unit="input", file=sys.stderr, disable=args.quiet)
-    if args.server:
-        results = list(run_on_server(args.server, run.config, inputs))
-    else:
-        results = list(run_locally(run.config, inputs))
+    timed = run.inputs if args.speed is None else paced(run.inputs, args.speed)
+    inputs = tqdm(
+        timed,
+        total=len(run.inputs),
+        desc=run.name,
+        unit="input",
+        file=sys.stderr,
+        disable=args.quiet,
+    )
+    if not args.server:
+        print(summarise(run, list(run_locally(run.config, inputs))))
+        return 0
+    server = args.server.rstrip("/")
+    sessions: list[str] = []
+
+    def tell(session: str, token: str) -> None:
+        sessions.append(session)
+        print(
+            f"session {session} (token {token})\nviewer: {viewer_url(server, session, token)}",
+            flush=True,
+        )
+
+    results = list(run_on_server(server, run.config, inputs, on_session=tell, keep=args.keep))
     print(summarise(run, results))
+    if args.keep:
+        print(
+            f"session {sessions[0]} left open: it ends after the server's idle timeout "
+            f"(CREDAL_SESSION_IDLE_SECONDS) or with DELETE {server}/v1/sessions/{sessions[0]}"
+        )
+    else:
+        print(f"session {sessions[0]} deleted at the end of the run (--keep leaves it open)")
     return 0
+
+
+def viewer_url(server: str, session: str, token: str) -> str:
+    """The live viewer of ``session``: id and token in the fragment, never sent to the server."""
+    return f"{server}/#{urlencode({'session': session, 'token': token})}"
+
+
+def paced(inputs: Sequence[Input], speed: float) -> Iterator[Input]:
+    """``inputs`` released at ``speed`` times the scenario's own clock (their ``time``)."""
+    if not inputs:
+        return
+    start, first = time.monotonic(), float(inputs[0][1]["time"])
+    for kind, body in inputs:
+        wait = (float(body["time"]) - first) / speed - (time.monotonic() - start)
+        if wait > 0:
+            time.sleep(wait)
+        yield kind, body

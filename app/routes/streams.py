@@ -124,13 +124,18 @@ def _ref_of(text: str) -> str | None:
 def _message_problem(error: ValidationError, path: str) -> Problem:
     """A validation problem located in the message (the union's tag is left out of the path)."""
     errors = []
+    allowed = " or ".join(repr(tag) for tag in MESSAGE_TAGS)
     for entry in error.errors():
         loc = list(entry.get("loc", ()))
+        message = entry.get("msg", "")
         if loc and loc[0] in MESSAGE_TAGS:
             loc = loc[1:]
-        errors.append(
-            {"loc": tuple(loc), "msg": entry.get("msg", ""), "type": entry.get("type", "")}
-        )
+        elif entry.get("type") == "union_tag_not_found":  # pydantic: "Unable to extract tag …"
+            loc, message = ["type"], f"Field required: every message has a 'type', {allowed}"
+        elif entry.get("type") == "union_tag_invalid":
+            tag = entry.get("ctx", {}).get("tag")
+            loc, message = ["type"], f"{tag!r} is not a message type: 'type' is {allowed}"
+        errors.append({"loc": tuple(loc), "msg": message, "type": entry.get("type", "")})
     return problem_for(RequestValidationError(errors), path)
 
 

@@ -1,11 +1,13 @@
 """Belief functions on finite frames (ALGORITHMS.md §1).
 
 Frames, sparse mass functions, Pl / Bel / BetP, the conjunctive and Dempster
-rules, discounting, the GBT with its exact O(N²) pignistic probabilities, and
-multi-valued mappings between frames.
+rules, discounting, the GBT with its exact O(N²) pignistic probabilities,
+multi-valued mappings between frames, and the pignistic decision (ties
+admitted).
 """
 
 from core.belief.combination import conflict, conjunctive, conjunctive_all, dempster
+from core.belief.decision import TIE_TOLERANCE, DecisionState, pignistic_decision
 from core.belief.frame import MAX_FRAME_SIZE, Frame, popcount
 from core.belief.gbt import (
     gbt_betp,
@@ -21,6 +23,8 @@ __all__ = [
     "CONFLICT_TOLERANCE",
     "MASS_TOLERANCE",
     "MAX_FRAME_SIZE",
+    "TIE_TOLERANCE",
+    "DecisionState",
     "Frame",
     "FrameError",
     "MassError",
@@ -35,5 +39,6 @@ __all__ = [
     "gbt_betp_rows",
     "gbt_mass",
     "pairwise_evidence_betp_rows",
+    "pignistic_decision",
     "popcount",
 ]

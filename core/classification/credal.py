@@ -59,7 +59,15 @@ from typing import Literal
 import numpy as np
 
 from core.arrays import BoolArray, FloatArray
-from core.belief import CONFLICT_TOLERANCE, Frame, MassFunction, Relation, conjunctive, gbt_mass
+from core.belief import (
+    CONFLICT_TOLERANCE,
+    Frame,
+    MassFunction,
+    Relation,
+    conjunctive,
+    gbt_mass,
+    pignistic_decision,
+)
 from core.classification.behaviours import LIKELIHOOD_SCALES, BehaviourModels, LikelihoodScale
 from core.errors import ClassificationError
 
@@ -112,10 +120,8 @@ class CredalClassification:
         return float(-np.expm1(self.log_normaliser))
 
     def decision(self) -> str | None:
-        """The class of largest BetP (None when BetP is undefined)."""
-        if self.pignistic is None:
-            return None
-        return self.class_mass.frame.labels[int(np.argmax(self.pignistic))]
+        """The class of largest BetP (None when BetP is undefined or tied: core.belief.decision)."""
+        return pignistic_decision(self.class_mass.frame.labels, self.pignistic)[0]
 
 
 class CredalClassifier:

@@ -27,7 +27,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.arrays import FloatArray
-from core.belief import Frame, MassFunction, conjunctive_all, gbt_mass
+from core.belief import (
+    DecisionState,
+    Frame,
+    MassFunction,
+    conjunctive_all,
+    gbt_mass,
+    pignistic_decision,
+)
 from core.errors import TotalConflict
 
 
@@ -48,7 +55,9 @@ class ClassAssessment:
     mass : the normalised fused mass function.
     pignistic, belief, plausibility : BetP, Bel({c}) and Pl({c}) per class, in frame order.
     conflict : m(∅) of the unnormalised combination.
-    decision : the class of largest BetP (ties: first in frame order).
+    decision : the class of largest BetP; None when BetP is tied or undefined.
+    decision_state : DECIDED, TIED (top BetP within 1e-9) or UNDEFINED (no BetP):
+        see :mod:`core.belief.decision`.
     """
 
     state: ClassState
@@ -58,6 +67,7 @@ class ClassAssessment:
     plausibility: FloatArray
     conflict: float
     decision: str | None
+    decision_state: DecisionState
 
 
 def assess(combined: MassFunction) -> ClassAssessment:
@@ -67,10 +77,18 @@ def assess(combined: MassFunction) -> ClassAssessment:
     except TotalConflict:
         empty = np.zeros(0)
         return ClassAssessment(
-            ClassState.TOTAL_CONFLICT, None, empty, empty, empty, combined.conflict, None
+            ClassState.TOTAL_CONFLICT,
+            None,
+            empty,
+            empty,
+            empty,
+            combined.conflict,
+            None,
+            DecisionState.UNDEFINED,
         )
     betp = normalised.pignistic()
     assert betp is not None  # a normalised mass has m(∅) = 0
+    decision, decision_state = pignistic_decision(combined.frame.labels, betp)
     return ClassAssessment(
         state=ClassState.DEFINED,
         mass=normalised,
@@ -78,7 +96,8 @@ def assess(combined: MassFunction) -> ClassAssessment:
         belief=normalised.singleton_belief(),
         plausibility=normalised.singleton_plausibility(),
         conflict=combined.conflict,
-        decision=combined.frame.labels[int(np.argmax(betp))],
+        decision=decision,
+        decision_state=decision_state,
     )
 
 

@@ -76,7 +76,8 @@ STEP_RESULT: dict[str, Any] = {
                 "belief": {"liner": 0.0, "bomber": 0.0, "fighter": 0.0},
                 "plausibility": {"liner": 0.3, "bomber": 1.0, "fighter": 1.0},
                 "conflict": 0.05,
-                "decision": "bomber",
+                "decision": None,  # BetP 0.45 / 0.45: tied
+                "decision_state": "tied",
             },
             "score": 12.3,
             "reason": None,

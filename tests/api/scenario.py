@@ -89,6 +89,7 @@ CLASSIFICATION_KEYS = {
     "plausibility",
     "conflict",
     "decision",
+    "decision_state",
 }
 
 
@@ -104,7 +105,9 @@ def check_fused_track(track: dict[str, Any]) -> None:
     assert math.isclose(math.fsum(f["mass"] for f in classification["mass"]), 1.0, abs_tol=1e-9)
     assert math.isclose(math.fsum(classification["pignistic"].values()), 1.0, abs_tol=1e-9)
     assert set(classification["pignistic"]) == set(CLASSES)
-    assert classification["decision"] in CLASSES
+    assert (classification["decision"] in CLASSES) == (
+        classification["decision_state"] == "decided"
+    )
     for label in CLASSES:
         assert classification["belief"][label] <= classification["pignistic"][label] + 1e-12
         assert classification["pignistic"][label] <= classification["plausibility"][label] + 1e-12

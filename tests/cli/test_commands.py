@@ -10,10 +10,12 @@ import pytest
 
 from api_schemas.reports import TrackReport
 from app.cli import main
+from app.commands import simulate
 from app.commands.replay import export_events, read_events
 from app.commands.runner import run_locally, run_on_server
 from app.commands.scenarios import build
 from tests.api.conftest import LiveServer, live_server
+from tests.api.examples import SESSION_CONFIG, TRACK_REPORT
 
 __all__ = ["live_server"]
 
@@ -86,5 +88,35 @@ def test_bench_refuses_an_unknown_benchmark(capsys: pytest.CaptureFixture[str]) 
 
 
 def test_read_events_refuses_a_file_without_its_session_line() -> None:
+    line = json.dumps({"type": "tracks", "seq": 1, "report": TRACK_REPORT})
     with pytest.raises(ValueError, match="no session line"):
-        read_events(io.StringIO('{"type": "tracks", "seq": 1, "report": {}}\n'))
+        read_events(io.StringIO(line + "\n"))
+
+
+def test_read_events_names_the_invalid_field_of_a_line() -> None:
+    report = dict(TRACK_REPORT, time="soon")
+    lines = [
+        json.dumps({"type": "session", "config": SESSION_CONFIG}),
+        json.dumps({"type": "tracks", "seq": 1, "report": report}),
+    ]
+    with pytest.raises(ValueError, match=r"^line 2: invalid report: time: Input should be"):
+        read_events(io.StringIO("\n".join(lines)))
+
+
+def test_speed_releases_the_inputs_on_the_scenario_clock(monkeypatch: pytest.MonkeyPatch) -> None:
+    clock = [100.0]  # a fake monotonic clock: sleeping advances it, nothing else does
+    slept: list[float] = []
+
+    def sleep(seconds: float) -> None:
+        slept.append(seconds)
+        clock[0] += seconds
+
+    monkeypatch.setattr(simulate.time, "monotonic", lambda: clock[0])
+    monkeypatch.setattr(simulate.time, "sleep", sleep)
+    inputs = [("tracks", {"time": t}) for t in (10.0, 10.0, 12.0, 13.0)]
+    released = []
+    for _kind, body in simulate.paced(inputs, speed=2.0):
+        released.append((clock[0], body["time"]))
+    # At twice the scenario's speed: 0, 0, 1 and 1.5 s after the start.
+    assert released == [(100.0, 10.0), (100.0, 10.0), (101.0, 12.0), (101.5, 13.0)]
+    assert slept == [1.0, 0.5]

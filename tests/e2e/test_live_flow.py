@@ -65,8 +65,12 @@ def test_two_sensors_fuse_over_rest(live_server: LiveServer) -> None:
             for track in final["tracks"]
         )
         assert {pair["basis"] for pair in final["association"]["pairs"]} == {"continuity"}
-        decisions = {track["classification"]["decision"] for track in final["tracks"]}
-        assert decisions == {"bomber", "liner", "fighter"}
+        # Target 0's evidence is all on {bomber, fighter}: BetP ties them, nothing is decided.
+        decisions = [
+            (track["classification"]["decision"], track["classification"]["decision_state"])
+            for track in final["tracks"]
+        ]
+        assert decisions == [(None, "tied"), ("liner", "decided"), ("fighter", "decided")]
 
         picture = FusedPicture.model_validate(
             client.get(f"/v1/sessions/{sid}/tracks", headers=headers).json()

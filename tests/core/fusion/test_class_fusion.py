@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from core.belief import Frame, MassFunction, TotalConflict
+from core.belief import TIE_TOLERANCE, DecisionState, Frame, MassFunction, TotalConflict
 from core.fusion.classes import ClassState, accumulate_likelihoods, fuse_sensor_classes
 from tests.core.belief.references import to_pybelief
 from tests.core.belief.strategies import mass_functions
@@ -54,7 +54,13 @@ def test_fusion_equals_pybelief_combination_of_discounted_masses(
         result.plausibility, [normalised.plausibility({c}) for c in CLASSES.labels], atol=1e-12
     )
     assert_allclose(result.belief, [normalised.belief({c}) for c in CLASSES.labels], atol=1e-12)
-    assert result.decision == CLASSES.labels[int(np.argmax(result.pignistic))]
+    # The decision from the reference BetP: a tie (top two within 1e-9) decides nothing.
+    ranked = sorted(CLASSES.labels, key=lambda label: -pignistic[label])
+    gap = pignistic[ranked[0]] - pignistic[ranked[1]]
+    if abs(gap - TIE_TOLERANCE) > 1e-11:  # clear of the boundary, where rounding could tip it
+        tied = gap <= TIE_TOLERANCE
+        assert result.decision == (None if tied else ranked[0])
+        assert result.decision_state is (DecisionState.TIED if tied else DecisionState.DECIDED)
 
 
 def test_no_class_information_gives_none() -> None:
@@ -74,6 +80,26 @@ def test_hand_worked_two_sensor_fusion() -> None:
     assert result.mass.mass(["bomber", "fighter"]) == pytest.approx(3 / 7)
     assert_allclose(result.pignistic, [8 / 21, 13 / 42, 13 / 42])
     assert result.decision == "liner"
+    assert result.decision_state is DecisionState.DECIDED
+
+
+def test_a_tie_decides_nothing() -> None:
+    # [T2T]/README example: radar-1 (λ = 0.9) says m({bomber, fighter}) = 0.6, m(Ω) = 0.4.
+    # Discounted: {b,f} 0.54, Ω 0.46. BetP(bomber) = BetP(fighter) = 0.54/2 + 0.46/3
+    # = 0.42333…, BetP(liner) = 0.46/3 = 0.15333…: a tie at the top.
+    radar = MassFunction.from_sets(CLASSES, [(["bomber", "fighter"], 0.6), (CLASSES.labels, 0.4)])
+    result = fuse_sensor_classes({"radar-1": radar}, {"radar-1": 0.9})
+    assert result is not None
+    assert_allclose(result.pignistic, [0.46 / 3, 0.27 + 0.46 / 3, 0.27 + 0.46 / 3], atol=1e-12)
+    assert result.decision is None
+    assert result.decision_state is DecisionState.TIED
+    # One more sensor leaning to the fighter breaks the tie.
+    fighter = MassFunction.from_sets(CLASSES, [(["fighter"], 0.1), (CLASSES.labels, 0.9)])
+    broken = fuse_sensor_classes(
+        {"radar-1": radar, "radar-2": fighter}, {"radar-1": 0.9, "radar-2": 1.0}
+    )
+    assert broken is not None
+    assert broken.decision == "fighter" and broken.decision_state is DecisionState.DECIDED
 
 
 def test_total_conflict_between_certain_sensors_is_a_state_not_an_error() -> None:
@@ -83,6 +109,7 @@ def test_total_conflict_between_certain_sensors_is_a_state_not_an_error() -> Non
     assert result is not None
     assert result.state is ClassState.TOTAL_CONFLICT
     assert result.conflict == 1.0 and result.decision is None
+    assert result.decision_state is DecisionState.UNDEFINED
 
 
 def test_likelihood_accumulation_equals_pyds_gbt_and_dempster() -> None:

@@ -1,0 +1,141 @@
+"""The installed ``credal-fusion`` console script, run as a subprocess against a live server.
+
+Failures are one line on stderr (what failed, what to do) with a non-zero
+exit status and no traceback unless ``--debug``; ``simulate --server`` tells
+the session, its token and the viewer URL that opens it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import subprocess
+import sys
+from pathlib import Path
+from urllib.parse import parse_qs, urlsplit
+
+import httpx
+import pytest
+
+from app.cli import build_parser, main
+from app.commands.errors import CommandError
+from app.commands.replay import export_events
+from tests.api.conftest import ADMIN_TOKEN, LiveServer, live_server
+from tests.api.examples import SESSION_CONFIG, TRACK_REPORT
+
+__all__ = ["live_server"]
+
+SCRIPT = Path(sys.executable).with_name("credal-fusion")
+TIMEOUT_S = 120.0
+
+
+def cli(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [str(SCRIPT), *args],
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT_S,
+        check=False,
+        env={**os.environ, "COLUMNS": "200"},
+    )
+
+
+def one_line_failure(done: subprocess.CompletedProcess[str]) -> str:
+    """The single stderr line of a failed run (asserting there is exactly one, and no traceback)."""
+    assert done.returncode != 0, done.stdout
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert "Traceback" not in done.stderr
+    return lines[0]
+
+
+def session(server: LiveServer) -> tuple[str, str]:
+    created = httpx.post(f"{server.url}/v1/sessions", json=SESSION_CONFIG).json()
+    return created["id"], created["token"]
+
+
+def test_export_with_a_wrong_token_says_so_in_one_line(live_server: LiveServer) -> None:
+    sid, _ = session(live_server)
+    done = cli("export", "--server", live_server.url, "--session", sid, "--token", "wrong")
+    line = one_line_failure(done)
+    assert line.startswith(f"credal-fusion export: GET /v1/sessions/{sid} answered 403")
+    assert "check --token" in line
+    assert done.stdout == ""
+
+
+def test_a_server_that_is_not_running_is_named_with_what_to_do() -> None:
+    with socket.socket() as probe:  # a port nobody listens on: bound, never listening
+        probe.bind(("127.0.0.1", 0))
+        url = f"http://127.0.0.1:{probe.getsockname()[1]}"
+        done = cli("simulate", "t2t-four", "--server", url, "--quiet")
+    line = one_line_failure(done)
+    assert line.startswith(f"credal-fusion simulate: cannot connect to {url}")
+    assert "credal-fusion serve" in line
+    assert done.stdout == ""
+
+
+def test_serve_with_a_store_it_cannot_open_says_so_before_serving() -> None:
+    done = cli("serve", "--store", "redis://127.0.0.1:1/0", "--port", "1")
+    line = one_line_failure(done)
+    assert line.startswith("credal-fusion serve: cannot use the store redis://127.0.0.1:1/0")
+    assert "--store" in line
+
+
+def test_replay_of_a_malformed_line_names_the_line(live_server: LiveServer, tmp_path: Path) -> None:
+    sid, token = session(live_server)
+    posted = httpx.post(
+        f"{live_server.url}/v1/sessions/{sid}/tracks",
+        json=TRACK_REPORT,
+        headers={"Authorization": f"Bearer {token}"},
+    )
+    assert posted.status_code == 200
+    session_line, input_line = export_events(live_server.url, sid, token)
+    broken = json.loads(input_line)
+    del broken["report"]
+    events = tmp_path / "events.jsonl"
+    events.write_text(f"{session_line}\n{json.dumps(broken)}\n")
+    line = one_line_failure(cli("replay", str(events), "--quiet"))
+    assert line == (
+        f"credal-fusion replay: {events}: line 2: a 'tracks' event needs a 'report' object; "
+        "replay reads the JSON lines `credal-fusion export` writes"
+    )
+    with pytest.raises(CommandError, match="line 2: a 'tracks' event needs a 'report'"):
+        main(["replay", str(events), "--quiet", "--debug"])  # --debug: the exception itself
+
+
+def test_debug_goes_before_or_after_the_command() -> None:
+    parser = build_parser()
+    assert parser.parse_args(["--debug", "replay", "e.jsonl"]).debug
+    assert parser.parse_args(["replay", "e.jsonl", "--debug"]).debug
+    assert not parser.parse_args(["replay", "e.jsonl"]).debug
+
+
+def test_simulate_against_a_server_tells_the_session_and_its_viewer(
+    live_server: LiveServer, capsys: pytest.CaptureFixture[str]
+) -> None:
+    kept = cli("simulate", "t2t-four", "--server", live_server.url, "--keep", "--quiet")
+    assert kept.returncode == 0, kept.stderr
+    lines = kept.stdout.splitlines()
+    assert lines[0].startswith("session ") and lines[1].startswith("viewer: ")
+    sid, token = lines[0].split()[1], lines[0].split("(token ")[1].rstrip(")")
+    viewer = urlsplit(lines[1].removeprefix("viewer: "))
+    assert f"{viewer.scheme}://{viewer.netloc}{viewer.path}" == f"{live_server.url}/"
+    assert parse_qs(viewer.fragment) == {"session": [sid], "token": [token]}
+    assert "identity switches: 0" in kept.stdout
+    assert lines[-1].startswith(f"session {sid} left open")
+    # The printed token opens the session, which holds all 40 inputs of t2t-four.
+    summary = httpx.get(
+        f"{live_server.url}/v1/sessions/{sid}", headers={"Authorization": f"Bearer {token}"}
+    )
+    assert summary.status_code == 200 and summary.json()["seq"] == 40
+
+    # Without --keep (in process, to spare a start-up): deleted at the end, and it says so.
+    assert main(["simulate", "t2t-four", "--server", live_server.url, "--quiet"]) == 0
+    deleted = capsys.readouterr().out.splitlines()
+    other = deleted[0].split()[1]
+    assert deleted[-1] == f"session {other} deleted at the end of the run (--keep leaves it open)"
+    admin = {"Authorization": f"Bearer {ADMIN_TOKEN}"}
+    listed = httpx.get(f"{live_server.url}/v1/sessions", headers=admin).json()
+    ids = {entry["id"] for entry in listed["sessions"]}
+    assert sid in ids and other not in ids
