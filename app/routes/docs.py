@@ -3,12 +3,12 @@
 FastAPI's own pages fetch Swagger UI and ReDoc from a CDN, so without
 internet they stay blank. Here the same pages load their scripts, styles and
 icon from the ``fastapi-offline`` package's copy, mounted at
-:data:`ASSETS_URL`: no request leaves the machine (``tests/e2e/test_browser.py``
+:data:`ASSETS_URL`: no request leaves the machine (``tests/e2e/test_docs_offline.py``
 loads ``/docs`` and ``/redoc`` with every other host blocked). Two things in
 them would still call out: Swagger UI's validator badge (switched off) and the
 Redocly logo in ReDoc's sidebar, an ``<img>`` on Redocly's CDN (the page points
-it at the local icon before ReDoc runs). Both pages also carry a
-Content-Security-Policy that lets the browser load nothing from elsewhere.
+it at the local icon before ReDoc runs). Both pages also carry the
+policy of :mod:`app.page_policy`, which lets the browser load nothing from elsewhere.
 """
 
 from __future__ import annotations
@@ -22,17 +22,14 @@ from fastapi.openapi.docs import get_swagger_ui_html
 from fastapi.responses import HTMLResponse, Response
 from fastapi.staticfiles import StaticFiles
 
+from app.page_policy import local_only
+
 router = APIRouter(include_in_schema=False)
 
 ASSETS_URL = "/docs-assets"
 ASSETS_PACKAGE = "fastapi_offline"
 ICON = "favicon.png"
 OPENAPI_URL = "/openapi.json"
-CONTENT_SECURITY_POLICY = (
-    "default-src 'self'; img-src 'self' data:; style-src 'self' 'unsafe-inline'; "
-    "script-src 'self' 'unsafe-inline'; worker-src 'self' blob:; font-src 'self' data:"
-)
-"""Only this server: scripts, styles, images, fonts, fetches (ReDoc's search runs in a blob: worker)."""
 REDOCLY_CDN = "https://cdn.redoc.ly/"
 REDOC_PAGE = f"""<!doctype html>
 <html lang="en">
@@ -72,12 +69,6 @@ def install_docs(app: FastAPI) -> None:
     """Serve the pages and their assets (the app is built with ``docs_url=None, redoc_url=None``)."""
     app.mount(ASSETS_URL, StaticFiles(directory=assets_directory()), name="docs-assets")
     app.include_router(router)
-
-
-def local_only(page: HTMLResponse) -> HTMLResponse:
-    """The page with the policy that keeps the browser on this server."""
-    page.headers["Content-Security-Policy"] = CONTENT_SECURITY_POLICY
-    return page
 
 
 @router.get("/docs")

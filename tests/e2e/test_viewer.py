@@ -37,7 +37,7 @@ SECTOR = {
     "half_angle_deg": 60.0,
     "range": [0.0, 10_000.0],
 }
-SEEDED_TRAILS = "Object.values(window.__viewer.state().trails).every(length => length >= 2)"
+SEEDED_TRAILS = "() => Object.values(window.__viewer.state().trails).every(length => length >= 2)"
 POLYGON = {"kind": "polygon", "vertices": [[-500.0, 0.0], [5000.0, 0.0], [5000.0, 2000.0]]}
 
 
@@ -61,6 +61,11 @@ def wait_for_seq(page: Page, seq: int) -> dict[str, Any]:
         "seq => document.getElementById('seq').textContent === String(seq)", arg=seq
     )
     return viewer_state(page)
+
+
+def wait_for_connection(page: Page, connection: str) -> None:
+    """Wait until the page says its connection is ``connection`` (live, refused, ended, ...)."""
+    page.wait_for_function("c => window.__viewer.state().connection === c", arg=connection)
 
 
 def post(client: httpx.Client, sid: str, headers: dict[str, str], bodies: list[Any]) -> None:
@@ -104,7 +109,8 @@ def test_the_viewer_draws_a_live_session(
         for _ in range(3):
             page.mouse.wheel(0, -600)
         page.wait_for_function(
-            f"window.__viewer.state().metresPerPixel < {opened['metresPerPixel'] / 10}"
+            "limit => window.__viewer.state().metresPerPixel < limit",
+            arg=opened["metresPerPixel"] / 10,
         )
         zoomed = viewer_state(page)["metresPerPixel"]
 
@@ -145,7 +151,7 @@ def test_the_viewer_draws_a_live_session(
         page.mouse.click(
             canvas["x"] + drawn[liner["id"]]["x"], canvas["y"] + drawn[liner["id"]]["y"]
         )
-        page.wait_for_function(f"window.__viewer.state().selected === {json.dumps(liner['id'])}")
+        page.wait_for_function("id => window.__viewer.state().selected === id", arg=liner["id"])
         details = page.locator("#details").inner_text()
         assert f"track {liner['id']}" in details and "liner" in details and "conflict" in details
         for source in liner["sources"]:
@@ -156,18 +162,36 @@ def test_the_viewer_draws_a_live_session(
         page.evaluate("link.socket.close(4001, 'test drops the connection')")
         post(client, sid, headers, bodies[STEPS_BEFORE + STEPS_AFTER :])
         caught_up = wait_for_seq(page, server_seq + STEPS_AFTER_RECONNECT)
-        page.wait_for_function("window.__viewer.state().connection === 'live'")
+        wait_for_connection(page, "live")
         assert caught_up["seq"] == server_seq + STEPS_AFTER_RECONNECT
+        subscriptions = [url for url in log.requests if url.startswith("ws://")]
+        assert len(subscriptions) == 2  # the first one and the reconnection
 
-    subscriptions = [url for url in log.requests if url.startswith("ws://")]
-    assert len(subscriptions) == 2  # the first one and the reconnection
-    assert not log.console_errors, log.console_errors
-    assert not log.failures, log.failures
-    local = (live_server.url, live_server.url.replace("http://", "ws://"))
-    assert log.requests and all(url.startswith(local) for url in log.requests), log.requests
-    assert not [url for url in log.requests if token in url]
-    assert token not in page.url  # the fragment lost its token once read
-    assert page.evaluate(f"sessionStorage.getItem('credal-fusion.token.{sid}')") == token
+        # the fragment lost its token once read; the tab keeps it: a reload needs no retyping
+        assert token not in page.url and page.url.endswith(f"#session={sid}")
+        assert page.evaluate(f"sessionStorage.getItem('credal-fusion.token.{sid}')") == token
+        page.reload()
+        wait_for_seq(page, server_seq + STEPS_AFTER_RECONNECT)
+        wait_for_connection(page, "live")
+
+        assert not log.console_errors, log.console_errors
+        assert not log.failures, log.failures
+        local = (live_server.url, live_server.url.replace("http://", "ws://"))
+        assert log.requests and all(url.startswith(local) for url in log.requests), log.requests
+        assert not [url for url in log.requests if token in url]
+
+        # a wrong token is refused and not retried; the tab's token stays the good one
+        page.evaluate(f"location.hash = 'session={sid}&token=not-the-token'")
+        wait_for_connection(page, "refused")
+        assert "403" in viewer_state(page)["status"]
+        assert page.evaluate(f"sessionStorage.getItem('credal-fusion.token.{sid}')") == token
+
+        # the session's end is shown as such
+        page.evaluate(f"location.hash = 'session={sid}&token={token}'")
+        wait_for_connection(page, "live")
+        assert client.delete(f"/v1/sessions/{sid}", headers=headers).status_code == 204
+        wait_for_connection(page, "ended")
+        assert "session ended" in viewer_state(page)["status"]
 
 
 def test_the_viewer_login_subscribes_with_the_bearer_subprotocol(live_server: LiveServer) -> None:
