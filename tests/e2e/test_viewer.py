@@ -158,6 +158,20 @@ def test_the_viewer_draws_a_live_session(
             assert source["sensor"] in details and source["track"] in details
         page.screenshot(path=tmp_path / "viewer-zoomed.png")
 
+        # a drag pans the picture by as many pixels; the trail length is the user's to set
+        before = {mark["id"]: mark for mark in viewer_state(page)["drawn"]}
+        start = (canvas["x"] + 300, canvas["y"] + 600)
+        page.mouse.move(*start)
+        page.mouse.down()
+        page.mouse.move(start[0] + 120, start[1] - 40, steps=5)
+        page.mouse.up()
+        for mark in viewer_state(page)["drawn"]:
+            assert mark["x"] - before[mark["id"]]["x"] == pytest.approx(120, abs=0.01)
+            assert mark["y"] - before[mark["id"]]["y"] == pytest.approx(-40, abs=0.01)
+        page.fill("#trail", "3")
+        page.dispatch_event("#trail", "change")
+        assert set(viewer_state(page)["trails"].values()) == {3}
+
         # a dropped connection comes back by itself and the page catches up
         page.evaluate("link.socket.close(4001, 'test drops the connection')")
         post(client, sid, headers, bodies[STEPS_BEFORE + STEPS_AFTER :])
