@@ -15,7 +15,7 @@ from app.limits import BodySizeLimit
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
 from app.rate_limit import RateLimit, parse_rates
-from app.routes import associate, fusion, health, metrics, sessions, streams, viewer
+from app.routes import associate, docs, fusion, health, metrics, sessions, streams, viewer
 from app.sessions import SessionRegistry
 from app.settings import Settings, get_settings
 from app.stores import open_store
@@ -56,6 +56,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         description="Multi-sensor track fusion with belief-function association and classification.",
         lifespan=lifespan,
         generate_unique_id_function=operation_id,
+        docs_url=None,  # app.routes.docs serves /docs and /redoc with local assets
+        redoc_url=None,
     )
     app.state.settings = settings
     app.state.metrics = service_metrics
@@ -67,6 +69,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(associate.router)
     app.include_router(streams.router)
     app.include_router(viewer.router)
+    docs.install_docs(app)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     app.add_middleware(RateLimit, rates=parse_rates(settings.rate_limit))  # before the body is read
     app.add_middleware(HttpMetrics, metrics=service_metrics)

@@ -1,9 +1,15 @@
-"""The live viewer at ``/``: one static page (HTML + JS, no build step, nothing fetched from outside).
+"""The live viewer at ``/``: one static page (HTML + JS + canvas, no build step, nothing fetched from outside).
 
-It asks for a session id and token, reads the session's config (sensors'
-fields of view) and current picture over REST, then draws every result of
-the ``subscribe`` WebSocket: fused tracks, their 2-σ position ellipses and
-each track's class BetP.
+It opens the session named in its URL fragment (``/#session=ID&token=TOKEN``:
+a fragment never reaches the server; the token is then kept in the tab's
+sessionStorage and dropped from the address bar) or typed in its form. It
+reads the session's config (sensors' fields of view) over REST, subscribes
+to its results (WebSocket ``subscribe``, reconnecting with backoff), reads
+the current picture and each track's history, and draws the fused tracks
+with trails, 2-σ position ellipses to scale (never under 4 px), axes, a
+scale bar and a legend; a click shows a track's sources, state, covariance,
+masses, BetP and conflict. A track whose top BetP values tie is drawn
+undecided. ``window.__viewer.state()`` is what tests read of it.
 """
 
 from __future__ import annotations
@@ -13,6 +19,8 @@ from importlib.resources import files
 
 from fastapi import APIRouter
 from fastapi.responses import HTMLResponse
+
+from app.page_policy import local_only
 
 router = APIRouter(include_in_schema=False)
 
@@ -28,4 +36,4 @@ def viewer_page() -> str:
 @router.get("/", response_class=HTMLResponse)
 def get_viewer() -> HTMLResponse:
     """The live viewer page."""
-    return HTMLResponse(viewer_page())
+    return local_only(HTMLResponse(viewer_page()))

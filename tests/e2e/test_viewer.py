@@ -1,41 +1,215 @@
-"""The live viewer: served at ``/`` by the real server, self-contained, and its WebSocket login works.
+"""The live viewer in a real browser: headless Chromium on a live uvicorn server.
 
-No browser runs here (none is installed by the project): the test checks the
-page loads, fetches nothing from outside, reads the contract's field names,
-and that the way the page authenticates its ``subscribe`` WebSocket — the
-subprotocols ``["bearer", token]``, since browsers cannot set headers on an
-upgrade — is accepted and delivers results.
+The session is fed over REST while the page is open; every check reads the
+page itself (its ``window.__viewer.state()`` hook, the DOM, the mouse) and
+compares it with the server's REST answers and with values worked out here:
+screen offsets from the tracks' positions, ellipse sizes from numpy's
+eigenvalues, the tie of a target whose evidence is symmetric in two classes.
 """
 
 from __future__ import annotations
 
 import json
-import re
+import math
+from pathlib import Path
+from typing import Any
 
 import httpx
+import numpy as np
 import pytest
+from playwright.sync_api import Page
 from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
 from tests.api.conftest import LiveServer
-from tests.api.scenario import reports, session_config
+from tests.api.scenario import reports, session_config, truth
+from tests.e2e.browser import BrowserPage
 
 RECEIVE_TIMEOUT_S = 20.0
+STEPS_BEFORE = 6  # fed before the page opens: its trails start from the tracks' history
+STEPS_AFTER = 6  # fed while the page is open
+STEPS_AFTER_RECONNECT = 2
+MIN_SEMI_AXIS_PX = 4  # the page's floor for a 2-σ ellipse on screen
+SECTOR = {
+    "kind": "sector",
+    "origin": [-1000.0, -1500.0],
+    "heading_deg": 45.0,
+    "half_angle_deg": 60.0,
+    "range": [0.0, 10_000.0],
+}
+SEEDED_TRAILS = "() => Object.values(window.__viewer.state().trails).every(length => length >= 2)"
+POLYGON = {"kind": "polygon", "vertices": [[-500.0, 0.0], [5000.0, 0.0], [5000.0, 2000.0]]}
 
 
-def test_the_viewer_page_loads_and_is_self_contained(live_server: LiveServer) -> None:
-    answer = httpx.get(f"{live_server.url}/")
-    assert answer.status_code == 200
-    assert answer.headers["content-type"].startswith("text/html")
-    page = answer.text
-    assert "<canvas" in page and "/subscribe" in page
-    for field in ("covariance", "pignistic", "fov", "heading_deg", "half_angle_deg", "position"):
-        assert field in page, field
-    assert not re.search(r"""(src|href)\s*=\s*["']?(https?:)?//""", page), "fetches from outside"
-    assert "/" not in httpx.get(f"{live_server.url}/openapi.json").json()["paths"]
+def viewer_config() -> dict[str, Any]:
+    """The scenario's two radars, each with a field of view that the page draws."""
+    config = session_config()
+    for sensor, fov in zip(config["sensors"], (SECTOR, POLYGON), strict=True):
+        sensor["fov"] = fov
+    return config
+
+
+def viewer_state(page: Page) -> dict[str, Any]:
+    state = page.evaluate("window.__viewer.state()")
+    assert isinstance(state, dict)
+    return state
+
+
+def wait_for_seq(page: Page, seq: int) -> dict[str, Any]:
+    """Wait until the page shows ``seq`` (in its status line) and return its state."""
+    page.wait_for_function(
+        "seq => document.getElementById('seq').textContent === String(seq)", arg=seq
+    )
+    return viewer_state(page)
+
+
+def wait_for_connection(page: Page, connection: str) -> None:
+    """Wait until the page says its connection is ``connection`` (live, refused, ended, ...)."""
+    page.wait_for_function("c => window.__viewer.state().connection === c", arg=connection)
+
+
+def post(client: httpx.Client, sid: str, headers: dict[str, str], bodies: list[Any]) -> None:
+    for body in bodies:
+        answer = client.post(f"/v1/sessions/{sid}/tracks", json=body, headers=headers)
+        assert answer.status_code == 200, answer.text
+
+
+def nearest_track(picture: dict[str, Any], target: int) -> dict[str, Any]:
+    """The fused track closest to ``target``'s true position at the picture's time."""
+    x, _, y, _ = truth(target, picture["time"])
+    tracks: list[dict[str, Any]] = picture["tracks"]
+    return min(tracks, key=lambda t: math.hypot(t["state"][0] - x, t["state"][2] - y))
+
+
+def test_the_viewer_draws_a_live_session(
+    live_server: LiveServer, browser_page: BrowserPage, tmp_path: Path
+) -> None:
+    page, log = browser_page.page, browser_page.log
+    bodies = reports(STEPS_BEFORE + STEPS_AFTER + STEPS_AFTER_RECONNECT)
+    with httpx.Client(base_url=live_server.url, timeout=30) as client:
+        created = client.post("/v1/sessions", json=viewer_config()).json()
+        sid, token = created["id"], created["token"]
+        headers = {"Authorization": f"Bearer {token}"}
+        post(client, sid, headers, bodies[:STEPS_BEFORE])
+
+        page.goto(f"{live_server.url}/#session={sid}&token={token}")
+        wait_for_seq(page, STEPS_BEFORE)
+        page.wait_for_function(SEEDED_TRAILS)  # the page asks for each track's history
+        opened = viewer_state(page)
+        assert opened["connection"] == "live"
+        assert len(opened["trails"]) == len(opened["drawn"]) > 0
+        page.screenshot(path=tmp_path / "viewer-overview.png")
+
+        # zoom in on one track with the wheel: new results must not re-zoom the view
+        canvas = page.locator("#plot").bounding_box()
+        assert canvas is not None
+        early = client.get(f"/v1/sessions/{sid}/tracks", headers=headers).json()
+        mark = next(m for m in opened["drawn"] if m["id"] == nearest_track(early, 1)["id"])
+        page.mouse.move(canvas["x"] + mark["x"], canvas["y"] + mark["y"])
+        for _ in range(3):
+            page.mouse.wheel(0, -600)
+        page.wait_for_function(
+            "limit => window.__viewer.state().metresPerPixel < limit",
+            arg=opened["metresPerPixel"] / 10,
+        )
+        zoomed = viewer_state(page)["metresPerPixel"]
+
+        post(client, sid, headers, bodies[STEPS_BEFORE : STEPS_BEFORE + STEPS_AFTER])
+        server_seq = client.get(f"/v1/sessions/{sid}", headers=headers).json()["seq"]
+        assert server_seq == STEPS_BEFORE + STEPS_AFTER
+        shown = wait_for_seq(page, server_seq)
+        picture = client.get(f"/v1/sessions/{sid}/tracks", headers=headers).json()
+        assert picture["seq"] == server_seq
+        assert shown["connection"] == "live" and shown["status"] == "live"
+        assert shown["metresPerPixel"] == zoomed
+
+        # the tracks drawn are the server's, where their positions put them
+        drawn = {mark["id"]: mark for mark in shown["drawn"]}
+        tracks = {track["id"]: track for track in picture["tracks"]}
+        assert len(shown["drawn"]) == len(picture["tracks"]) > 0
+        assert set(drawn) == set(tracks)
+        first = picture["tracks"][0]
+        for track_id, track in tracks.items():
+            dx = (track["state"][0] - first["state"][0]) / zoomed
+            dy = (track["state"][2] - first["state"][2]) / zoomed
+            assert drawn[track_id]["x"] - drawn[first["id"]]["x"] == pytest.approx(dx, abs=0.01)
+            assert drawn[track_id]["y"] - drawn[first["id"]]["y"] == pytest.approx(-dy, abs=0.01)
+            position = np.array(track["covariance"])[np.ix_([0, 2], [0, 2])]
+            semi_axes = 2 * np.sqrt(np.linalg.eigvalsh(position)) / zoomed  # 2-σ, in pixels
+            assert drawn[track_id]["rx"] == pytest.approx(max(semi_axes[1], MIN_SEMI_AXIS_PX))
+            assert drawn[track_id]["ry"] == pytest.approx(max(semi_axes[0], MIN_SEMI_AXIS_PX))
+        assert all(length >= 2 for length in shown["trails"].values())
+
+        # target 0's evidence is symmetric in bomber and fighter: a tie, drawn as undecided;
+        # target 1's is mostly liner
+        tied = drawn[nearest_track(picture, 0)["id"]]["label"]
+        assert tied.startswith("undecided") and "bomber" in tied and "fighter" in tied
+        liner = nearest_track(picture, 1)
+        assert drawn[liner["id"]]["label"].startswith("liner ")
+
+        # a click on a track shows its details
+        page.mouse.click(
+            canvas["x"] + drawn[liner["id"]]["x"], canvas["y"] + drawn[liner["id"]]["y"]
+        )
+        page.wait_for_function("id => window.__viewer.state().selected === id", arg=liner["id"])
+        details = page.locator("#details").inner_text()
+        assert f"track {liner['id']}" in details and "liner" in details and "conflict" in details
+        for source in liner["sources"]:
+            assert source["sensor"] in details and source["track"] in details
+        page.screenshot(path=tmp_path / "viewer-zoomed.png")
+
+        # a drag pans the picture by as many pixels; the trail length is the user's to set
+        before = {mark["id"]: mark for mark in viewer_state(page)["drawn"]}
+        start = (canvas["x"] + 300, canvas["y"] + 600)
+        page.mouse.move(*start)
+        page.mouse.down()
+        page.mouse.move(start[0] + 120, start[1] - 40, steps=5)
+        page.mouse.up()
+        for mark in viewer_state(page)["drawn"]:
+            assert mark["x"] - before[mark["id"]]["x"] == pytest.approx(120, abs=0.01)
+            assert mark["y"] - before[mark["id"]]["y"] == pytest.approx(-40, abs=0.01)
+        page.fill("#trail", "3")
+        page.dispatch_event("#trail", "change")
+        assert set(viewer_state(page)["trails"].values()) == {3}
+
+        # a dropped connection comes back by itself and the page catches up
+        page.evaluate("link.socket.close(4001, 'test drops the connection')")
+        post(client, sid, headers, bodies[STEPS_BEFORE + STEPS_AFTER :])
+        caught_up = wait_for_seq(page, server_seq + STEPS_AFTER_RECONNECT)
+        wait_for_connection(page, "live")
+        assert caught_up["seq"] == server_seq + STEPS_AFTER_RECONNECT
+        subscriptions = [url for url in log.requests if url.startswith("ws://")]
+        assert len(subscriptions) == 2  # the first one and the reconnection
+
+        # the fragment lost its token once read; the tab keeps it: a reload needs no retyping
+        assert token not in page.url and page.url.endswith(f"#session={sid}")
+        assert page.evaluate(f"sessionStorage.getItem('credal-fusion.token.{sid}')") == token
+        page.reload()
+        wait_for_seq(page, server_seq + STEPS_AFTER_RECONNECT)
+        wait_for_connection(page, "live")
+
+        assert not log.console_errors, log.console_errors
+        assert not log.failures, log.failures
+        local = (live_server.url, live_server.url.replace("http://", "ws://"))
+        assert log.requests and all(url.startswith(local) for url in log.requests), log.requests
+        assert not [url for url in log.requests if token in url]
+
+        # a wrong token is refused and not retried; the tab's token stays the good one
+        page.evaluate(f"location.hash = 'session={sid}&token=not-the-token'")
+        wait_for_connection(page, "refused")
+        assert "403" in viewer_state(page)["status"]
+        assert page.evaluate(f"sessionStorage.getItem('credal-fusion.token.{sid}')") == token
+
+        # the session's end is shown as such
+        page.evaluate(f"location.hash = 'session={sid}&token={token}'")
+        wait_for_connection(page, "live")
+        assert client.delete(f"/v1/sessions/{sid}", headers=headers).status_code == 204
+        wait_for_connection(page, "ended")
+        assert "session ended" in viewer_state(page)["status"]
 
 
 def test_the_viewer_login_subscribes_with_the_bearer_subprotocol(live_server: LiveServer) -> None:
+    """The page's WebSocket login, ``["bearer", token]`` as subprotocols, is accepted; a wrong token is not."""
     with httpx.Client(base_url=live_server.url, timeout=30) as client:
         created = client.post("/v1/sessions", json=session_config()).json()
         sid, token = created["id"], created["token"]
