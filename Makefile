@@ -9,7 +9,7 @@ STAMP  := $(VENV)/.installed-stamp
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,figures]'
 	touch $(STAMP)
 
 run: $(STAMP)
@@ -29,7 +29,7 @@ openapi: $(STAMP)
 	$(BIN)/python -m app.asyncapi docs/asyncapi.yaml
 
 figures: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m core.evaluation.figures --out docs/figures
+	MPLBACKEND=Agg $(BIN)/python -m evaluation.figures --out docs/figures
 
 bench: $(STAMP)
 	@for b in bench/*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done

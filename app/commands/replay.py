@@ -14,14 +14,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, TextIO
 
 import httpx
-from tqdm import tqdm
 
+from app.commands.progress import shown as progress
 from app.commands.runner import Input, run_locally, run_on_server
 from app.responses import dumps
 
@@ -76,7 +75,7 @@ def export_command(args: argparse.Namespace) -> int:
 def replay_command(args: argparse.Namespace) -> int:
     with Path(args.events).open(encoding="utf-8") as events:
         config, inputs = read_events(events)
-    shown = tqdm(inputs, desc="replay", unit="input", file=sys.stderr, disable=args.quiet)
+    shown = progress(inputs, "replay", args.quiet)
     results = (
         run_on_server(args.server, config, shown) if args.server else run_locally(config, shown)
     )

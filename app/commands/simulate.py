@@ -7,8 +7,8 @@ import sys
 from typing import Any
 
 import numpy as np
-from tqdm import tqdm
 
+from app.commands.progress import shown as progress
 from app.commands.runner import run_locally, run_on_server
 from app.commands.scenarios import ScenarioRun, build
 from core.metrics import identity_switches, ospa
@@ -76,7 +76,7 @@ def command(args: argparse.Namespace) -> int:
     """Run the scenario and print its summary (progress on stderr)."""
     run = build(args.scenario, args.seed)
     print(f"seed {run.seed}", file=sys.stderr)
-    inputs = tqdm(run.inputs, desc=run.name, unit="input", file=sys.stderr, disable=args.quiet)
+    inputs = progress(run.inputs, run.name, args.quiet)
     if args.server:
         results = list(run_on_server(args.server, run.config, inputs))
     else:

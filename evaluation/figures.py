@@ -1,12 +1,12 @@
 """The papers' figures, regenerated: a registry of figure names and :func:`reproduce`.
 
-Each entry of :data:`FIGURES` runs one experiment of :mod:`core.evaluation`
+Each entry of :data:`FIGURES` runs one experiment of :mod:`evaluation`
 (full size, or reduced for the tests) and writes one PNG titled with the
 command that regenerates it. Matplotlib is used through its object API with
 the Agg canvas only (no pyplot, no global state), so figures can be made from
 any thread.
 
-``python -m core.evaluation.figures [NAME ...] [--out DIR] [--reduced]``
+``python -m evaluation.figures [NAME ...] [--out DIR] [--reduced]``
 writes the named figures (all by default) — what ``make figures`` runs.
 """
 
@@ -27,22 +27,23 @@ from numpy.typing import ArrayLike
 
 from core.arrays import FloatArray
 from core.errors import InvalidInput
-from core.evaluation.accelerating import CASES as ACCELERATING_CASES
-from core.evaluation.accelerating import SCENES as ACCELERATING_SCENES
-from core.evaluation.accelerating import AcceleratingStudy, accelerating_study
-from core.evaluation.aircraft import AircraftClassification, aircraft_classification
-from core.evaluation.close_pair import ClosePairStudy, close_pair_study
-from core.evaluation.crossing import CrossingStudy, crossing_study
-from core.evaluation.four_targets import ThresholdSweep, threshold_sweep
-from core.evaluation.overtaking import CASES as OVERTAKING_CASES
-from core.evaluation.overtaking import OvertakingStudy, overtaking_study
-from core.evaluation.pedestrian import PedestrianClassification, pedestrian_classification
-from core.evaluation.road_four import RoadFourStudy, road_four_study
-from core.evaluation.two_class import ClassComparison, class_comparison
-from core.evaluation.units import NoiseStudy, UnitSweep, noise_study, unit_sweep
 from core.simulation.scenario import TargetTruth
 from core.simulation.tracklists import SensorTrackList, t2t_four
 from core.simulation.two_class import t2t_two_class
+from evaluation.accelerating import CASES as ACCELERATING_CASES
+from evaluation.accelerating import SCENES as ACCELERATING_SCENES
+from evaluation.accelerating import AcceleratingStudy, accelerating_study
+from evaluation.aircraft import AircraftClassification, aircraft_classification
+from evaluation.catalogue import CATALOGUE, FigureEntry
+from evaluation.close_pair import ClosePairStudy, close_pair_study
+from evaluation.crossing import CrossingStudy, crossing_study
+from evaluation.four_targets import ThresholdSweep, threshold_sweep
+from evaluation.overtaking import CASES as OVERTAKING_CASES
+from evaluation.overtaking import OvertakingStudy, overtaking_study
+from evaluation.pedestrian import PedestrianClassification, pedestrian_classification
+from evaluation.road_four import RoadFourStudy, road_four_study
+from evaluation.two_class import ClassComparison, class_comparison
+from evaluation.units import NoiseStudy, UnitSweep, noise_study, unit_sweep
 
 COMMAND = "credal-fusion reproduce"
 """The command printed in every figure's title (``{COMMAND} NAME``)."""
@@ -52,24 +53,26 @@ Echo = Callable[[str], None]
 
 @dataclass(frozen=True)
 class FigureSpec:
-    """One reproducible figure.
+    """A catalogue entry and the function that runs its experiment and draws it.
 
     Attributes
     ----------
-    name : str
-        Registry key and PNG file stem.
-    paper : str
-        The figures of the papers it reproduces.
-    summary : str
-        One line: what it shows.
+    entry : FigureEntry
+        Name, paper figures and summary (:mod:`evaluation.catalogue`).
     draw : callable (reduced, echo) → Figure
         Runs the experiment (reduced: a few seeds and steps) and draws it.
     """
 
-    name: str
-    paper: str
-    summary: str
+    entry: FigureEntry
     draw: Callable[[bool, Echo], Figure]
+
+    @property
+    def name(self) -> str:
+        return self.entry.name
+
+    @property
+    def paper(self) -> str:
+        return self.entry.paper
 
 
 def _seeds(count: int, reduced: bool, small: int = 2) -> tuple[int, ...]:
@@ -756,70 +759,22 @@ def _plot_overtaking_bars(axes: Axes, study: OvertakingStudy) -> None:
     axes.legend(fontsize=7, loc="upper center")
 
 
+DRAWINGS: dict[str, Callable[[bool, Echo], Figure]] = {
+    "t2t-four": draw_t2t_four,
+    "t2t-two-class": draw_t2t_two_class,
+    "aircraft": draw_aircraft,
+    "pedestrian": draw_pedestrian,
+    "unit-study": draw_unit_study,
+    "close-pair": draw_close_pair,
+    "crossing": draw_crossing,
+    "road-four": draw_road_four,
+    "accelerating": draw_accelerating,
+    "overtaking": draw_overtaking,
+}
+"""Figure name → its drawing: one per entry of :data:`~evaluation.catalogue.CATALOGUE`."""
+
 FIGURES: dict[str, FigureSpec] = {
-    spec.name: spec
-    for spec in (
-        FigureSpec(
-            "t2t-four",
-            "[T2T] Fig 3–4",
-            "false decision rate vs λ (gnn), γ (denoeux) and hachour",
-            draw_t2t_four,
-        ),
-        FigureSpec(
-            "t2t-two-class",
-            "[T2T] Fig 5–6",
-            "false decision rate with and without class information",
-            draw_t2t_two_class,
-        ),
-        FigureSpec(
-            "aircraft",
-            "[MTT] Fig 12, 14–15",
-            "target 2: behaviours, Bayesian vs credal classification",
-            draw_aircraft,
-        ),
-        FigureSpec(
-            "pedestrian",
-            "[MTT] Fig 20–23",
-            "pedestrian 1: standard vs instantaneous vs cumulative discounting",
-            draw_pedestrian,
-        ),
-        FigureSpec(
-            "unit-study",
-            "ALGORITHMS.md §3.3",
-            "hachour density vs relative vs gnn/denoeux in metres and kilometres",
-            draw_unit_study,
-        ),
-        FigureSpec(
-            "close-pair",
-            "[MTT] Fig 16",
-            "false assignment rate vs noise, closest-model vs combined IMM distance",
-            draw_close_pair,
-        ),
-        FigureSpec(
-            "crossing",
-            "[MTT] Fig 17–18",
-            "a fighter crosses an unknown aircraft: false assignments and classes",
-            draw_crossing,
-        ),
-        FigureSpec(
-            "road-four",
-            "[DH] Fig 1–5",
-            "RMS position/velocity error of four vehicles in clutter vs cheap JPDA",
-            draw_road_four,
-        ),
-        FigureSpec(
-            "accelerating",
-            "[HZ] Fig 5",
-            "plain vs modified distance, with and without termination",
-            draw_accelerating,
-        ),
-        FigureSpec(
-            "overtaking",
-            "[HZ] Fig 6",
-            "identity through the blind zone with and without phantoms",
-            draw_overtaking,
-        ),
-    )
+    name: FigureSpec(entry, DRAWINGS[name]) for name, entry in CATALOGUE.items()
 }
 """Figure name → spec; ``reproduce(name, ...)`` accepts exactly these names."""
 
@@ -856,7 +811,7 @@ def reproduce(name: str, out_dir: str | Path, reduced: bool = False, echo: Echo 
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m core.evaluation.figures [NAME ...] [--out DIR] [--reduced]``."""
+    """``python -m evaluation.figures [NAME ...] [--out DIR] [--reduced]``."""
     parser = argparse.ArgumentParser(description="Regenerate the papers' figures as PNG.")
     parser.add_argument("names", nargs="*", help=f"default: all of {', '.join(FIGURES)}")
     parser.add_argument("--out", default="docs/figures", help="output directory")

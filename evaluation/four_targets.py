@@ -2,7 +2,7 @@
 
 Four nearby targets seen by two sensors (:func:`core.simulation.tracklists.t2t_four`);
 sensor 1's estimates are matched to sensor 2's at every step
-(:mod:`core.evaluation.pairing`) with the distance of [T2T] eq 1–2 (the
+(:mod:`evaluation.pairing`) with the distance of [T2T] eq 1–2 (the
 ``mean`` covariance). ``gnn`` is swept over its maximum distance λ,
 ``denoeux`` over γ = ln 2 / λ ([T2T] eq 11, α = 1), and the parameterless
 ``hachour`` is run once per realisation with each ``likelihood`` reading
@@ -14,7 +14,7 @@ The paper's claim: the parameter-dependent methods' rate rises when λ is too
 small (γ too large), since they then declare true partners new; ``hachour``
 does as well as the others at their best parameter. The extra ``"density,
 km"`` run is the same scene in kilometres (the unit study,
-:mod:`core.evaluation.units`).
+:mod:`evaluation.units`).
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.arrays import FloatArray
-from core.evaluation.pairing import decision_error_rate, list_pairs
 from core.simulation.tracklists import t2t_four
+from evaluation.pairing import decision_error_rate, list_pairs
 
 HACHOUR_VARIANTS: dict[str, tuple[dict[str, object], float]] = {
     "density": ({"likelihood": "density"}, 1.0),

@@ -35,8 +35,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.arrays import FloatArray
-from core.evaluation.pairing import ListPair, decision_error_rate, list_pairs, partially_observed
 from core.simulation.tracklists import t2t_four
+from evaluation.pairing import ListPair, decision_error_rate, list_pairs, partially_observed
 
 METHODS: dict[str, tuple[str, dict[str, object], str]] = {
     "hachour density": ("hachour", {"likelihood": "density"}, "mean"),

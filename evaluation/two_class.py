@@ -2,7 +2,7 @@
 
 Two nearby targets of different classes (:func:`core.simulation.two_class.t2t_two_class`);
 sensor 1's estimates are matched to sensor 2's at every step
-(:mod:`core.evaluation.pairing`, ``mean`` covariance of [T2T] eq 2).
+(:mod:`evaluation.pairing`, ``mean`` covariance of [T2T] eq 2).
 "Mono-information" uses the distance only, "multi-information" adds the
 class conflict of the two tracks' mass functions (ALGORITHMS.md §3.6:
 ``denoeux`` adds ln(1 − K) to its weight, ``hachour`` and ``mercier`` multiply
@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.arrays import FloatArray
-from core.evaluation.pairing import ListPair, decision_error_rate, list_pairs
 from core.simulation.two_class import t2t_two_class
+from evaluation.pairing import ListPair, decision_error_rate, list_pairs
 
 TUNING_THRESHOLDS = np.geomspace(1.0, 300.0, 16)
 
