@@ -38,6 +38,7 @@ from evaluation.catalogue import CATALOGUE, FigureEntry
 from evaluation.close_pair import ClosePairStudy, close_pair_study
 from evaluation.crossing import CrossingStudy, crossing_study
 from evaluation.four_targets import ThresholdSweep, threshold_sweep
+from evaluation.intervals import rate_interval
 from evaluation.overtaking import CASES as OVERTAKING_CASES
 from evaluation.overtaking import OvertakingStudy, overtaking_study
 from evaluation.pedestrian import PedestrianClassification, pedestrian_classification
@@ -155,23 +156,38 @@ def _reciprocal_ln2(value: ArrayLike) -> FloatArray:
     return np.asarray(math.log(2.0) / np.maximum(magnitude, 1e-300), dtype=np.float64)
 
 
+def _intervals(per_run: FloatArray, decisions: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Low and high ends of the 95 % interval of each column of per-run rates."""
+    ends = [rate_interval(per_run[:, col], decisions) for col in range(per_run.shape[1])]
+    return np.array([end.low for end in ends]), np.array([end.high for end in ends])
+
+
 def _plot_sweep(axes: Axes, sweep: ThresholdSweep) -> None:
-    axes.plot(sweep.gammas, sweep.gnn.mean(axis=0), "-", label="gnn (λ = ln 2 / γ)")
-    axes.plot(sweep.gammas, sweep.denoeux.mean(axis=0), "--", label="denoeux (γ), α = 1")
+    for rates, style, label in (
+        (sweep.gnn, "-", "gnn (λ = ln 2 / γ)"),
+        (sweep.denoeux, "--", "denoeux (γ), α = 1"),
+    ):
+        (line,) = axes.plot(sweep.gammas, rates.mean(axis=0), style, label=label)
+        low, high = _intervals(rates, sweep.decisions)
+        axes.fill_between(sweep.gammas, low, high, color=line.get_color(), alpha=0.15, lw=0)
     styles = {"density": ":", "relative": "-.", "density, km": (0, (5, 1, 1, 1))}
     for label, rates in sweep.hachour.items():
+        interval = rate_interval(rates, sweep.decisions)
         axes.axhline(
-            float(rates.mean()),
+            interval.estimate,
             linestyle=styles.get(label, ":"),
             color="k",
             lw=1,
-            label=f"hachour {label}: {rates.mean():.2f}",
+            label=f"hachour {label}: {interval} (ties {sweep.ties[label].mean():.2f})",
         )
     axes.set_xscale("log")
     axes.set_xlabel("γ  (λ = ln 2 / γ)")
     axes.set_ylabel("false decision rate")
     axes.set_ylim(-0.02, 1.02)
-    axes.set_title("Fig 4: distance [T2T] eq 1–2 (mean covariance)", fontsize=9)
+    axes.set_title(
+        "Fig 4: distance [T2T] eq 1–2 (mean covariance); lists shuffled per run, 95 % bands",
+        fontsize=9,
+    )
     top = axes.secondary_xaxis("top", functions=(_reciprocal_ln2, _reciprocal_ln2))
     top.set_xlabel("λ", fontsize=8)
     axes.legend(fontsize=7, loc="center right")
@@ -206,21 +222,43 @@ def draw_t2t_two_class(reduced: bool, echo: Echo) -> Figure:
 def _plot_classes(axes: Axes, comparison: ClassComparison) -> None:
     positions = np.arange(len(comparison.labels))
     width = 0.38
-    mono = [comparison.mono[label].mean() for label in comparison.labels]
-    multi = [
-        comparison.multi[label].mean() if label in comparison.multi else np.nan
-        for label in comparison.labels
-    ]
-    bars = axes.bar(positions - width / 2, mono, width, label="mono-information (distance)")
-    axes.bar_label(bars, fmt="%.2f", fontsize=7)
-    bars = axes.bar(positions + width / 2, multi, width, label="multi-information (+ class)")
-    axes.bar_label(bars, fmt="%.2f", fontsize=7)
+    for offset, rates, ties, name in (
+        (-width / 2, comparison.mono, comparison.mono_ties, "mono-information (distance)"),
+        (width / 2, comparison.multi, comparison.multi_ties, "multi-information (+ class)"),
+    ):
+        intervals = [
+            rate_interval(rates[label], comparison.decisions) if label in rates else None
+            for label in comparison.labels
+        ]
+        heights = [np.nan if i is None else i.estimate for i in intervals]
+        errors = np.array(
+            [
+                [0.0, 0.0] if i is None else [i.estimate - i.low, i.high - i.estimate]
+                for i in intervals
+            ]
+        ).T
+        bars = axes.bar(
+            positions + offset, heights, width, yerr=errors, capsize=2, label=name, alpha=0.9
+        )
+        axes.bar_label(
+            bars,
+            labels=[
+                ""
+                if label not in ties
+                else f"{rates[label].mean():.2f}\nt {ties[label].mean():.2f}"
+                for label in comparison.labels
+            ],
+            fontsize=6,
+        )
     tuned = ", ".join(f"{m} λ = {t:.0f}" for m, t in comparison.thresholds.items())
     axes.set_xticks(positions, [textwrap.fill(label, 10) for label in comparison.labels])
     axes.tick_params(axis="x", labelsize=7)
     axes.set_ylabel("false decision rate")
     axes.set_ylim(0, 1.1)
-    axes.set_title(f"Fig 6 (tuned: {tuned}; gnn cannot use classes)", fontsize=9)
+    axes.set_title(
+        f"Fig 6 (tuned: {tuned}; gnn cannot use classes); 95 % intervals, t = tie rate",
+        fontsize=9,
+    )
     axes.legend(fontsize=7, loc="upper left")
 
 
@@ -347,7 +385,12 @@ def draw_unit_study(reduced: bool, echo: Echo) -> Figure:
 
 def _plot_unit_sweep(axes: Axes, sweep: UnitSweep) -> None:
     for label, rates in sweep.rates.items():
-        axes.plot(sweep.scales, rates, marker=".", label=label)
+        (line,) = axes.plot(sweep.scales, rates, marker=".", label=label)
+        low, high = _intervals(sweep.run_rates[label], sweep.decisions)
+        axes.fill_between(sweep.scales, low, high, color=line.get_color(), alpha=0.15, lw=0)
+        tied = sweep.ties[label].mean(axis=0)
+        if tied.max() > 0.05:  # where ties decide, say so on the curve
+            axes.plot(sweep.scales, tied, ":", color=line.get_color(), lw=1, label=f"{label}: ties")
     axes.set_xscale("log")
     axes.invert_xaxis()
     axes.set_xlabel("length unit: lengths × s  (s = 1: metres, 1e-3: kilometres)")
