@@ -194,6 +194,10 @@ class NoiseStudy:
         ``"gnn tuned"`` and ``"denoeux tuned"``; units ``"m"``, ``"km"``.
     ties : dict of (str, str) to ndarray, shape (k,)
         Mean tie rate, keyed as ``rates``.
+    run_rates : dict of (str, str) to ndarray, shape (len(seeds), k)
+        The rate of each realisation, keyed as ``rates``.
+    decisions : ndarray of int, shape (len(seeds), k)
+        Decisions per realisation and noise level.
     best_thresholds : dict of str to ndarray, shape (k,)
         The tuned λ per noise level of ``gnn`` and ``denoeux``.
     separation, unseen : float
@@ -203,6 +207,8 @@ class NoiseStudy:
     sigmas: FloatArray
     rates: dict[tuple[str, str], FloatArray]
     ties: dict[tuple[str, str], FloatArray]
+    run_rates: dict[tuple[str, str], FloatArray]
+    decisions: IntArray
     best_thresholds: dict[str, FloatArray]
     separation: float
     unseen: float
@@ -227,11 +233,14 @@ def noise_study(
     grid = np.asarray(tuning_thresholds, dtype=np.float64)
     rates: dict[tuple[str, str], FloatArray] = {}
     ties: dict[tuple[str, str], FloatArray] = {}
+    run_rates: dict[tuple[str, str], FloatArray] = {}
+    decisions = np.zeros((len(seeds), len(levels)), dtype=np.int64)
     best: dict[str, FloatArray] = {method: np.empty(len(levels)) for method in TUNED}
     for unit in SCALES:
         for label in (*METHODS, *(f"{method} tuned" for method in TUNED)):
             rates[(label, unit)] = np.empty(len(levels))
             ties[(label, unit)] = np.empty(len(levels))
+            run_rates[(label, unit)] = np.empty((len(seeds), len(levels)))
     for index, sigma in enumerate(levels):
         realisations = scene(seeds, n_steps, float(sigma), separation, unseen)
         for method in TUNED:
@@ -251,11 +260,15 @@ def noise_study(
                 outcomes = _outcomes(realisations, method, options, distance, scale, order)
                 rates[(label, unit)][index] = _mean_rate(outcomes)
                 ties[(label, unit)][index] = np.mean([o.tie_rate for o in outcomes])
+                run_rates[(label, unit)][:, index] = [o.rate for o in outcomes]
+                decisions[:, index] = [o.decisions for o in outcomes]
     return NoiseStudy(
         seeds=tuple(seeds),
         sigmas=levels,
         rates=rates,
         ties=ties,
+        run_rates=run_rates,
+        decisions=decisions,
         best_thresholds=best,
         separation=separation,
         unseen=unseen,
