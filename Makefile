@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	@echo "==> upgrading pip in $(VENV)/"
 	@$(BIN)/python -m pip install --quiet --upgrade pip
 	@echo "==> installing credal-fusion and its dependencies from pyproject.toml (first time: about 2 minutes)"
-	@$(BIN)/python -m pip install --progress-bar off -e '.[dev]'
+	@$(BIN)/python -m pip install --progress-bar off -e '.[dev,figures]'
 	@touch $(STAMP)
 	@echo "==> $(VENV)/ is ready"
 
@@ -35,7 +35,7 @@ openapi: $(STAMP)
 	$(BIN)/python -m app.asyncapi docs/asyncapi.yaml
 
 figures: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m core.evaluation.figures --out docs/figures
+	MPLBACKEND=Agg $(BIN)/python -m evaluation.figures --out docs/figures
 
 bench: $(STAMP)
 	@for b in bench/*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done

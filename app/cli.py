@@ -1,4 +1,10 @@
-"""The ``credal-fusion`` command line."""
+"""The ``credal-fusion`` command line.
+
+Only the standard library is imported up front: each subcommand imports what
+it needs when it runs, so ``--help`` answers at once and ``serve`` loads no
+plotting code. Options left out take their value from the settings
+(``CREDAL_*`` variables, :mod:`app.settings`).
+"""
 
 from __future__ import annotations
 
@@ -9,43 +15,37 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-import uvicorn
-
 from app.commands.errors import CommandError, one_line
-from app.commands.replay import export_command, replay_command
-from app.commands.scenarios import names as scenario_names
-from app.commands.simulate import command as simulate_command
-from app.main import create_app
-from app.runtime import tune_garbage_collector
-from app.settings import get_settings
-from app.stores import open_store, parse_store_url
-from core.evaluation.figures import FIGURES
-from core.evaluation.figures import reproduce as reproduce_figure
+from evaluation.catalogue import CATALOGUE
 
 
 def _serve(args: argparse.Namespace) -> int:
-    settings = get_settings().model_copy(
-        update={
-            "host": args.host,
-            "port": args.port,
-            "store": args.store,
-            "access_log": args.access_log,
-        }
-    )
-    _check_store(args.store, settings.redis_prefix)
+    import uvicorn
+
+    from app.main import create_app
+    from app.runtime import tune_garbage_collector
+    from app.settings import get_settings
+
+    given = {
+        name: value
+        for name in ("host", "port", "store", "access_log")
+        if (value := getattr(args, name)) is not None
+    }
+    settings = get_settings().model_copy(update=given)
+    _check_store(settings.store, settings.redis_prefix)
     print(
-        f"credal-fusion on http://{args.host}:{args.port}\n"
-        f"  live viewer: http://{args.host}:{args.port}/\n"
-        f"  API docs: http://{args.host}:{args.port}/docs\n"
-        f"  store: {args.store}",
+        f"credal-fusion on http://{settings.host}:{settings.port}\n"
+        f"  live viewer: http://{settings.host}:{settings.port}/\n"
+        f"  API docs: http://{settings.host}:{settings.port}/docs\n"
+        f"  store: {settings.store}",
         flush=True,
     )
     application = create_app(settings)
     tune_garbage_collector()
     uvicorn.run(
         application,
-        host=args.host,
-        port=args.port,
+        host=settings.host,
+        port=settings.port,
         ws_max_size=settings.max_body_bytes,
         ws_ping_interval=settings.ws_ping_interval,
         ws_ping_timeout=settings.ws_ping_timeout,
@@ -58,6 +58,8 @@ def _serve(args: argparse.Namespace) -> int:
 def _check_store(url: str, redis_prefix: str) -> None:
     """Open the store once before serving: a store that cannot be used is one line, not a
     traceback from the application's start-up."""
+    from app.stores import open_store
+
     try:
         store = open_store(url, redis_prefix=redis_prefix)
         try:
@@ -72,6 +74,8 @@ def _check_store(url: str, redis_prefix: str) -> None:
 
 
 def _store_url(text: str) -> str:
+    from app.stores import parse_store_url
+
     try:
         parse_store_url(text)
     except ValueError as error:
@@ -89,28 +93,54 @@ def _positive(text: str) -> float:
 DEBUG_HELP = "on failure, show the Python traceback (default: one line saying what to do)"
 
 
+def _scenario_name(text: str) -> str:
+    from app.commands.scenarios import names
+
+    if text not in names():
+        raise argparse.ArgumentTypeError(f"unknown scenario {text!r}; choose from {names()}")
+    return text
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from app.commands.simulate import command
+
+    return command(args)
+
+
+def _export(args: argparse.Namespace) -> int:
+    from app.commands.replay import export_command
+
+    return export_command(args)
+
+
+def _replay(args: argparse.Namespace) -> int:
+    from app.commands.replay import replay_command
+
+    return replay_command(args)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand (``--debug`` before or after it)."""
-    settings = get_settings()
-    parser = argparse.ArgumentParser(prog="credal-fusion", description=__doc__)
+    parser = argparse.ArgumentParser(
+        prog="credal-fusion",
+        description="Fuse multi-sensor tracks and classify them with belief functions.",
+    )
     parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=DEBUG_HELP)
     commands = parser.add_subparsers(dest="command", required=True)
     add_parser = functools.partial(commands.add_parser, parents=[common])
     serve = add_parser("serve", help="start the HTTP/WebSocket service")
-    serve.add_argument("--host", default=settings.host)
-    serve.add_argument("--port", type=int, default=settings.port)
+    serve.add_argument("--host", help="default: 127.0.0.1, or CREDAL_HOST")
+    serve.add_argument("--port", type=int, help="default: 8000, or CREDAL_PORT")
     serve.add_argument(
         "--store",
         type=_store_url,
-        default=settings.store,
-        help="memory | sqlite[:PATH] | redis[s]://HOST:PORT/DB (default: %(default)s, or CREDAL_STORE)",
+        help="memory | sqlite[:PATH] | redis[s]://HOST:PORT/DB (default: sqlite:data/credal-fusion.db, or CREDAL_STORE)",
     )
     serve.add_argument(
         "--access-log",
         action=argparse.BooleanOptionalAction,
-        default=settings.access_log,
         help="log a line per request (default: on, or CREDAL_ACCESS_LOG)",
     )
     serve.set_defaults(handler=_serve)
@@ -118,7 +148,9 @@ def build_parser() -> argparse.ArgumentParser:
     simulate = add_parser(
         "simulate", help="run a paper scenario through the engine (or a running server)"
     )
-    simulate.add_argument("scenario", choices=scenario_names())
+    simulate.add_argument(
+        "scenario", type=_scenario_name, help="e.g. aircraft, crossing (a wrong name lists them)"
+    )
     simulate.add_argument("--seed", type=int, default=0)
     simulate.add_argument(
         "--server",
@@ -137,10 +169,10 @@ def build_parser() -> argparse.ArgumentParser:
         "in the viewer; default: as fast as possible)",
     )
     simulate.add_argument("--quiet", action="store_true", help="no progress bar")
-    simulate.set_defaults(handler=simulate_command)
+    simulate.set_defaults(handler=_simulate)
 
     reproduce = add_parser("reproduce", help="regenerate one paper figure (PNG)")
-    reproduce.add_argument("figure", choices=sorted(FIGURES))
+    reproduce.add_argument("figure", choices=sorted(CATALOGUE))
     reproduce.add_argument("--out", default="docs/figures", help="directory (default: %(default)s)")
     reproduce.add_argument("--reduced", action="store_true", help="small sizes, for a quick look")
     reproduce.set_defaults(handler=_reproduce)
@@ -149,13 +181,13 @@ def build_parser() -> argparse.ArgumentParser:
     export.add_argument("--server", required=True)
     export.add_argument("--session", required=True)
     export.add_argument("--token", required=True, help="the session's token (or the admin token)")
-    export.set_defaults(handler=export_command)
+    export.set_defaults(handler=_export)
 
     replay = add_parser("replay", help="apply an exported event log, print the results")
     replay.add_argument("events", help="EVENTS.jsonl written by `credal-fusion export`")
     replay.add_argument("--server", help="replay through a running service instead of in process")
     replay.add_argument("--quiet", action="store_true", help="no progress bar")
-    replay.set_defaults(handler=replay_command)
+    replay.set_defaults(handler=_replay)
 
     bench = add_parser("bench", help="run the benchmarks of bench/ (from a checkout)")
     bench.add_argument("names", nargs="*", help="benchmarks to run (default: all)")
@@ -164,6 +196,18 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _reproduce(args: argparse.Namespace) -> int:
+    """One figure; the plotting code is imported here only (the ``figures`` extra)."""
+    try:
+        from evaluation.figures import reproduce as reproduce_figure
+    except ModuleNotFoundError as missing:
+        if (missing.name or "").partition(".")[0] != "matplotlib":
+            raise
+        print(
+            f"reproduce needs the figures extra ({missing.name} is missing): "
+            "pip install 'credal-fusion[figures]'",
+            file=sys.stderr,
+        )
+        return 2
     path = reproduce_figure(args.figure, args.out, reduced=args.reduced)
     print(path)
     return 0

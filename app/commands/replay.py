@@ -21,11 +21,11 @@ from typing import Any, TextIO
 
 import httpx
 from pydantic import BaseModel, ValidationError
-from tqdm import tqdm
 
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport, TrackReport
 from app.commands.errors import CommandError, pydantic_line
+from app.commands.progress import shown as progress
 from app.commands.runner import Input, raise_for_problem, run_locally, run_on_server
 from app.responses import dumps
 
@@ -116,7 +116,7 @@ def replay_command(args: argparse.Namespace) -> int:
             raise CommandError(
                 f"{args.events}: {error}; replay reads the JSON lines `credal-fusion export` writes"
             ) from None
-    shown = tqdm(inputs, desc="replay", unit="input", file=sys.stderr, disable=args.quiet)
+    shown = progress(inputs, "replay", args.quiet)
     results = (
         run_on_server(args.server, config, shown, on_session=_tell_session)
         if args.server

@@ -3,15 +3,14 @@
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from collections.abc import Iterator, Sequence
 from typing import Any
 from urllib.parse import urlencode
 
 import numpy as np
-from tqdm import tqdm
 
+from app.commands.progress import shown as progress
 from app.commands.runner import Input, run_locally, run_on_server
 from app.commands.scenarios import ScenarioRun, build
 from core.metrics import identity_switches, ospa
@@ -84,14 +83,7 @@ def command(args: argparse.Namespace) -> int:
     """
     run = build(args.scenario, args.seed)
     timed = run.inputs if args.speed is None else paced(run.inputs, args.speed)
-    inputs = tqdm(
-        timed,
-        total=len(run.inputs),
-        desc=run.name,
-        unit="input",
-        file=sys.stderr,
-        disable=args.quiet,
-    )
+    inputs = progress(timed, run.name, args.quiet, total=len(run.inputs))
     if not args.server:
         print(summarise(run, list(run_locally(run.config, inputs))))
         return 0

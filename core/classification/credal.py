@@ -11,10 +11,17 @@ At each step where a track is updated with a measurement:
    optionally discounted ([MTT] eq 7, §6.3.3);
 4. mapping to classes through the relation Γ ([MTT] eq 23) and BetP (eq 8).
 
-The cumulative mass is kept normalised after each step (Dempster's rule is
-associative, so BetP is unchanged) and the conflict that normalisation
-removes is kept: the step conflict ``K_k`` and the running conflict
-``1 − Π_k (1 − K_k)`` (the m(∅) of the unnormalised accumulation). When a
+The cumulative mass is kept normalised after each step and the conflict that
+normalisation removes is kept: the step conflict ``K_k`` and the running
+conflict ``1 − Π_k (1 − K_k)`` (the m(∅) of the unnormalised accumulation).
+With ``discount="none"`` or ``"instantaneous"`` this leaves BetP unchanged:
+the conjunctive rule is bilinear, so scaling the prior's non-empty focal sets
+scales the result's, and BetP divides by 1 − m(∅). With
+``discount="cumulative"`` it does not: discounting moves a fixed 1 − λ to Ω,
+not a share proportional to the mass, so normalising before discounting
+changes the result. There the classifier is, by definition, the accumulation
+normalised at every step (``tests/core/classification/test_normalisation.py``
+checks both statements against a brute force). When a
 step's conflict is total (``1 − K_k ≤ 1e-12``) the state becomes
 ``total_conflict``: the cumulative mass is m(∅) = 1 and there is no BetP. Under
 the conjunctive rule that state is absorbing, as in [MTT] Fig 20;

@@ -4,7 +4,7 @@ Two nearby targets of different classes, both seen at every step by two
 sensors that report track lists; each reported track carries the class mass
 function of that sensor's own classifier ([T2T] §2 Fig 2: "local
 classification feedbacks"). The experiment compares association on distance
-only with association on distance and class (:mod:`core.evaluation.two_class`).
+only with association on distance and class (:mod:`evaluation.two_class`).
 
 **Reading:** [T2T] gives neither coordinates, nor noise, nor the class
 masses (Fig 5 is not in the text). Here:

@@ -2,7 +2,7 @@
 
 Two nearby targets of different classes (:func:`core.simulation.two_class.t2t_two_class`);
 sensor 1's estimates are matched to sensor 2's at every step
-(:mod:`core.evaluation.pairing`, ``mean`` covariance of [T2T] eq 2).
+(:mod:`evaluation.pairing`, ``mean`` covariance of [T2T] eq 2).
 "Mono-information" uses the distance only, "multi-information" adds the
 class conflict of the two tracks' mass functions (ALGORITHMS.md §3.6:
 ``denoeux`` adds ln(1 − K) to its weight, ``hachour`` and ``mercier`` multiply
@@ -25,9 +25,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.arrays import FloatArray
-from core.evaluation.pairing import ListPair, decision_error_rate, list_pairs
+from core.arrays import FloatArray, IntArray
 from core.simulation.two_class import t2t_two_class
+from evaluation.pairing import ListPair, decision_outcome, list_pairs
 
 TUNING_THRESHOLDS = np.geomspace(1.0, 300.0, 16)
 
@@ -85,7 +85,12 @@ class ClassComparison:
         Variant labels, in :data:`VARIANTS` order.
     mono, multi : dict of str to ndarray, shape (len(seeds),)
         Rate per realisation without and with class information (``multi``
-        has no ``gnn`` entry: it cannot use classes).
+        has no ``gnn`` entry: it cannot use classes), lists in a random order
+        (:func:`~evaluation.pairing.decision_outcome`).
+    mono_ties, multi_ties : dict of str to ndarray, shape (len(seeds),)
+        Tie rates, keyed as the rates.
+    decisions : ndarray of int, shape (len(seeds),)
+        Decisions per realisation.
     thresholds : dict of str to float
         The tuned λ of ``gnn`` and ``denoeux``.
     position_sigma, separation : float
@@ -96,6 +101,9 @@ class ClassComparison:
     labels: tuple[str, ...]
     mono: dict[str, FloatArray]
     multi: dict[str, FloatArray]
+    mono_ties: dict[str, FloatArray]
+    multi_ties: dict[str, FloatArray]
+    decisions: IntArray
     thresholds: dict[str, float]
     position_sigma: float
     separation: float
@@ -108,13 +116,18 @@ def _tuned_options(method: str, threshold: float) -> dict[str, object]:
 
 
 def _best_threshold(
-    realisations: Sequence[Sequence[ListPair]], method: str, grid: FloatArray
+    realisations: Sequence[tuple[int, Sequence[ListPair]]],
+    method: str,
+    grid: FloatArray,
+    order: int,
 ) -> float:
     rates = [
         np.mean(
             [
-                decision_error_rate(pairs, method, _tuned_options(method, t))
-                for pairs in realisations
+                decision_outcome(
+                    pairs, method, _tuned_options(method, t), seed=seed, order=order
+                ).rate
+                for seed, pairs in realisations
             ]
         )
         for t in grid
@@ -130,6 +143,7 @@ def class_comparison(
     class_confidence: float = 0.9,
     class_error: float = 0.05,
     tuning_thresholds: Sequence[float] | FloatArray = TUNING_THRESHOLDS,
+    order: int = 0,
 ) -> ClassComparison:
     """Mono- and multi-information false decision rates of every variant of :data:`VARIANTS`.
 
@@ -143,51 +157,56 @@ def class_comparison(
         The scene (:func:`core.simulation.two_class.t2t_two_class`).
     tuning_thresholds : sequence of float
         The λ grid the parameter-dependent methods are tuned on.
+    order : int
+        Which family of random list orders (:func:`~evaluation.pairing.decision_outcome`).
     """
-    realisations = [
-        list_pairs(scenario.reports, class_masses=scenario.class_masses)
-        for scenario in (
-            t2t_two_class(
-                seed=seed,
-                position_sigma=position_sigma,
-                separation=separation,
-                n_steps=n_steps,
-                class_confidence=class_confidence,
-                class_error=class_error,
-            )
-            for seed in seeds
+    realisations: list[tuple[int, list[ListPair]]] = []
+    for seed in seeds:
+        scenario = t2t_two_class(
+            seed=seed,
+            position_sigma=position_sigma,
+            separation=separation,
+            n_steps=n_steps,
+            class_confidence=class_confidence,
+            class_error=class_error,
         )
-    ]
+        realisations.append(
+            (seed, list_pairs(scenario.reports, class_masses=scenario.class_masses))
+        )
     grid = np.asarray(tuning_thresholds, dtype=np.float64)
     thresholds: dict[str, float] = {}
-    mono: dict[str, FloatArray] = {}
-    multi: dict[str, FloatArray] = {}
+    rates: dict[bool, dict[str, FloatArray]] = {False: {}, True: {}}
+    ties: dict[bool, dict[str, FloatArray]] = {False: {}, True: {}}
+    decisions = np.zeros(len(seeds), dtype=np.int64)
     for variant in VARIANTS:
         options = dict(variant.options)
         if variant.tuned:
-            thresholds[variant.method] = _best_threshold(realisations, variant.method, grid)
+            thresholds[variant.method] = _best_threshold(realisations, variant.method, grid, order)
             options.update(_tuned_options(variant.method, thresholds[variant.method]))
-        scaled = [[pair.scaled(variant.scale) for pair in pairs] for pairs in realisations]
-        mono[variant.label] = np.array(
-            [
-                decision_error_rate(pairs, variant.method, options, variant.distance)
-                for pairs in scaled
+        for use_classes in (False, True) if variant.method != "gnn" else (False,):
+            outcomes = [
+                decision_outcome(
+                    [pair.scaled(variant.scale) for pair in pairs],
+                    variant.method,
+                    options,
+                    variant.distance,
+                    use_classes,
+                    seed=seed,
+                    order=order,
+                )
+                for seed, pairs in realisations
             ]
-        )
-        if variant.method != "gnn":
-            multi[variant.label] = np.array(
-                [
-                    decision_error_rate(
-                        pairs, variant.method, options, variant.distance, use_classes=True
-                    )
-                    for pairs in scaled
-                ]
-            )
+            rates[use_classes][variant.label] = np.array([o.rate for o in outcomes])
+            ties[use_classes][variant.label] = np.array([o.tie_rate for o in outcomes])
+            decisions[:] = [o.decisions for o in outcomes]
     return ClassComparison(
         seeds=tuple(seeds),
         labels=tuple(variant.label for variant in VARIANTS),
-        mono=mono,
-        multi=multi,
+        mono=rates[False],
+        multi=rates[True],
+        mono_ties=ties[False],
+        multi_ties=ties[True],
+        decisions=decisions,
         thresholds=thresholds,
         position_sigma=position_sigma,
         separation=separation,

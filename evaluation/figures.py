@@ -1,12 +1,12 @@
 """The papers' figures, regenerated: a registry of figure names and :func:`reproduce`.
 
-Each entry of :data:`FIGURES` runs one experiment of :mod:`core.evaluation`
+Each entry of :data:`FIGURES` runs one experiment of :mod:`evaluation`
 (full size, or reduced for the tests) and writes one PNG titled with the
 command that regenerates it. Matplotlib is used through its object API with
 the Agg canvas only (no pyplot, no global state), so figures can be made from
 any thread.
 
-``python -m core.evaluation.figures [NAME ...] [--out DIR] [--reduced]``
+``python -m evaluation.figures [NAME ...] [--out DIR] [--reduced]``
 writes the named figures (all by default) — what ``make figures`` runs.
 """
 
@@ -27,22 +27,24 @@ from numpy.typing import ArrayLike
 
 from core.arrays import FloatArray
 from core.errors import InvalidInput
-from core.evaluation.accelerating import CASES as ACCELERATING_CASES
-from core.evaluation.accelerating import SCENES as ACCELERATING_SCENES
-from core.evaluation.accelerating import AcceleratingStudy, accelerating_study
-from core.evaluation.aircraft import AircraftClassification, aircraft_classification
-from core.evaluation.close_pair import ClosePairStudy, close_pair_study
-from core.evaluation.crossing import CrossingStudy, crossing_study
-from core.evaluation.four_targets import ThresholdSweep, threshold_sweep
-from core.evaluation.overtaking import CASES as OVERTAKING_CASES
-from core.evaluation.overtaking import OvertakingStudy, overtaking_study
-from core.evaluation.pedestrian import PedestrianClassification, pedestrian_classification
-from core.evaluation.road_four import RoadFourStudy, road_four_study
-from core.evaluation.two_class import ClassComparison, class_comparison
-from core.evaluation.units import NoiseStudy, UnitSweep, noise_study, unit_sweep
 from core.simulation.scenario import TargetTruth
 from core.simulation.tracklists import SensorTrackList, t2t_four
 from core.simulation.two_class import t2t_two_class
+from evaluation.accelerating import CASES as ACCELERATING_CASES
+from evaluation.accelerating import SCENES as ACCELERATING_SCENES
+from evaluation.accelerating import AcceleratingStudy, accelerating_study
+from evaluation.aircraft import AircraftClassification, aircraft_classification
+from evaluation.catalogue import CATALOGUE, FigureEntry
+from evaluation.close_pair import ClosePairStudy, close_pair_study
+from evaluation.crossing import CrossingStudy, crossing_study
+from evaluation.four_targets import ThresholdSweep, threshold_sweep
+from evaluation.intervals import rate_interval
+from evaluation.overtaking import CASES as OVERTAKING_CASES
+from evaluation.overtaking import OvertakingStudy, overtaking_study
+from evaluation.pedestrian import PedestrianClassification, pedestrian_classification
+from evaluation.road_four import RoadFourStudy, road_four_study
+from evaluation.two_class import ClassComparison, class_comparison
+from evaluation.units import NoiseStudy, UnitSweep, noise_study, unit_sweep
 
 COMMAND = "credal-fusion reproduce"
 """The command printed in every figure's title (``{COMMAND} NAME``)."""
@@ -52,24 +54,26 @@ Echo = Callable[[str], None]
 
 @dataclass(frozen=True)
 class FigureSpec:
-    """One reproducible figure.
+    """A catalogue entry and the function that runs its experiment and draws it.
 
     Attributes
     ----------
-    name : str
-        Registry key and PNG file stem.
-    paper : str
-        The figures of the papers it reproduces.
-    summary : str
-        One line: what it shows.
+    entry : FigureEntry
+        Name, paper figures and summary (:mod:`evaluation.catalogue`).
     draw : callable (reduced, echo) → Figure
         Runs the experiment (reduced: a few seeds and steps) and draws it.
     """
 
-    name: str
-    paper: str
-    summary: str
+    entry: FigureEntry
     draw: Callable[[bool, Echo], Figure]
+
+    @property
+    def name(self) -> str:
+        return self.entry.name
+
+    @property
+    def paper(self) -> str:
+        return self.entry.paper
 
 
 def _seeds(count: int, reduced: bool, small: int = 2) -> tuple[int, ...]:
@@ -152,23 +156,38 @@ def _reciprocal_ln2(value: ArrayLike) -> FloatArray:
     return np.asarray(math.log(2.0) / np.maximum(magnitude, 1e-300), dtype=np.float64)
 
 
+def _intervals(per_run: FloatArray, decisions: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Low and high ends of the 95 % interval of each column of per-run rates."""
+    ends = [rate_interval(per_run[:, col], decisions) for col in range(per_run.shape[1])]
+    return np.array([end.low for end in ends]), np.array([end.high for end in ends])
+
+
 def _plot_sweep(axes: Axes, sweep: ThresholdSweep) -> None:
-    axes.plot(sweep.gammas, sweep.gnn.mean(axis=0), "-", label="gnn (λ = ln 2 / γ)")
-    axes.plot(sweep.gammas, sweep.denoeux.mean(axis=0), "--", label="denoeux (γ), α = 1")
+    for rates, style, label in (
+        (sweep.gnn, "-", "gnn (λ = ln 2 / γ)"),
+        (sweep.denoeux, "--", "denoeux (γ), α = 1"),
+    ):
+        (line,) = axes.plot(sweep.gammas, rates.mean(axis=0), style, label=label)
+        low, high = _intervals(rates, sweep.decisions)
+        axes.fill_between(sweep.gammas, low, high, color=line.get_color(), alpha=0.15, lw=0)
     styles = {"density": ":", "relative": "-.", "density, km": (0, (5, 1, 1, 1))}
     for label, rates in sweep.hachour.items():
+        interval = rate_interval(rates, sweep.decisions)
         axes.axhline(
-            float(rates.mean()),
+            interval.estimate,
             linestyle=styles.get(label, ":"),
             color="k",
             lw=1,
-            label=f"hachour {label}: {rates.mean():.2f}",
+            label=f"hachour {label}: {interval} (ties {sweep.ties[label].mean():.2f})",
         )
     axes.set_xscale("log")
     axes.set_xlabel("γ  (λ = ln 2 / γ)")
     axes.set_ylabel("false decision rate")
     axes.set_ylim(-0.02, 1.02)
-    axes.set_title("Fig 4: distance [T2T] eq 1–2 (mean covariance)", fontsize=9)
+    axes.set_title(
+        "Fig 4: distance [T2T] eq 1–2 (mean covariance); lists shuffled per run, 95 % bands",
+        fontsize=9,
+    )
     top = axes.secondary_xaxis("top", functions=(_reciprocal_ln2, _reciprocal_ln2))
     top.set_xlabel("λ", fontsize=8)
     axes.legend(fontsize=7, loc="center right")
@@ -203,21 +222,43 @@ def draw_t2t_two_class(reduced: bool, echo: Echo) -> Figure:
 def _plot_classes(axes: Axes, comparison: ClassComparison) -> None:
     positions = np.arange(len(comparison.labels))
     width = 0.38
-    mono = [comparison.mono[label].mean() for label in comparison.labels]
-    multi = [
-        comparison.multi[label].mean() if label in comparison.multi else np.nan
-        for label in comparison.labels
-    ]
-    bars = axes.bar(positions - width / 2, mono, width, label="mono-information (distance)")
-    axes.bar_label(bars, fmt="%.2f", fontsize=7)
-    bars = axes.bar(positions + width / 2, multi, width, label="multi-information (+ class)")
-    axes.bar_label(bars, fmt="%.2f", fontsize=7)
+    for offset, rates, ties, name in (
+        (-width / 2, comparison.mono, comparison.mono_ties, "mono-information (distance)"),
+        (width / 2, comparison.multi, comparison.multi_ties, "multi-information (+ class)"),
+    ):
+        intervals = [
+            rate_interval(rates[label], comparison.decisions) if label in rates else None
+            for label in comparison.labels
+        ]
+        heights = [np.nan if i is None else i.estimate for i in intervals]
+        errors = np.array(
+            [
+                [0.0, 0.0] if i is None else [i.estimate - i.low, i.high - i.estimate]
+                for i in intervals
+            ]
+        ).T
+        bars = axes.bar(
+            positions + offset, heights, width, yerr=errors, capsize=2, label=name, alpha=0.9
+        )
+        axes.bar_label(
+            bars,
+            labels=[
+                ""
+                if label not in ties
+                else f"{rates[label].mean():.2f}\nt {ties[label].mean():.2f}"
+                for label in comparison.labels
+            ],
+            fontsize=6,
+        )
     tuned = ", ".join(f"{m} λ = {t:.0f}" for m, t in comparison.thresholds.items())
     axes.set_xticks(positions, [textwrap.fill(label, 10) for label in comparison.labels])
     axes.tick_params(axis="x", labelsize=7)
     axes.set_ylabel("false decision rate")
     axes.set_ylim(0, 1.1)
-    axes.set_title(f"Fig 6 (tuned: {tuned}; gnn cannot use classes)", fontsize=9)
+    axes.set_title(
+        f"Fig 6 (tuned: {tuned}; gnn cannot use classes); 95 % intervals, t = tie rate",
+        fontsize=9,
+    )
     axes.legend(fontsize=7, loc="upper left")
 
 
@@ -344,7 +385,12 @@ def draw_unit_study(reduced: bool, echo: Echo) -> Figure:
 
 def _plot_unit_sweep(axes: Axes, sweep: UnitSweep) -> None:
     for label, rates in sweep.rates.items():
-        axes.plot(sweep.scales, rates, marker=".", label=label)
+        (line,) = axes.plot(sweep.scales, rates, marker=".", label=label)
+        low, high = _intervals(sweep.run_rates[label], sweep.decisions)
+        axes.fill_between(sweep.scales, low, high, color=line.get_color(), alpha=0.15, lw=0)
+        tied = sweep.ties[label].mean(axis=0)
+        if tied.max() > 0.05:  # where ties decide, say so on the curve
+            axes.plot(sweep.scales, tied, ":", color=line.get_color(), lw=1, label=f"{label}: ties")
     axes.set_xscale("log")
     axes.invert_xaxis()
     axes.set_xlabel("length unit: lengths × s  (s = 1: metres, 1e-3: kilometres)")
@@ -756,70 +802,22 @@ def _plot_overtaking_bars(axes: Axes, study: OvertakingStudy) -> None:
     axes.legend(fontsize=7, loc="upper center")
 
 
+DRAWINGS: dict[str, Callable[[bool, Echo], Figure]] = {
+    "t2t-four": draw_t2t_four,
+    "t2t-two-class": draw_t2t_two_class,
+    "aircraft": draw_aircraft,
+    "pedestrian": draw_pedestrian,
+    "unit-study": draw_unit_study,
+    "close-pair": draw_close_pair,
+    "crossing": draw_crossing,
+    "road-four": draw_road_four,
+    "accelerating": draw_accelerating,
+    "overtaking": draw_overtaking,
+}
+"""Figure name → its drawing: one per entry of :data:`~evaluation.catalogue.CATALOGUE`."""
+
 FIGURES: dict[str, FigureSpec] = {
-    spec.name: spec
-    for spec in (
-        FigureSpec(
-            "t2t-four",
-            "[T2T] Fig 3–4",
-            "false decision rate vs λ (gnn), γ (denoeux) and hachour",
-            draw_t2t_four,
-        ),
-        FigureSpec(
-            "t2t-two-class",
-            "[T2T] Fig 5–6",
-            "false decision rate with and without class information",
-            draw_t2t_two_class,
-        ),
-        FigureSpec(
-            "aircraft",
-            "[MTT] Fig 12, 14–15",
-            "target 2: behaviours, Bayesian vs credal classification",
-            draw_aircraft,
-        ),
-        FigureSpec(
-            "pedestrian",
-            "[MTT] Fig 20–23",
-            "pedestrian 1: standard vs instantaneous vs cumulative discounting",
-            draw_pedestrian,
-        ),
-        FigureSpec(
-            "unit-study",
-            "ALGORITHMS.md §3.3",
-            "hachour density vs relative vs gnn/denoeux in metres and kilometres",
-            draw_unit_study,
-        ),
-        FigureSpec(
-            "close-pair",
-            "[MTT] Fig 16",
-            "false assignment rate vs noise, closest-model vs combined IMM distance",
-            draw_close_pair,
-        ),
-        FigureSpec(
-            "crossing",
-            "[MTT] Fig 17–18",
-            "a fighter crosses an unknown aircraft: false assignments and classes",
-            draw_crossing,
-        ),
-        FigureSpec(
-            "road-four",
-            "[DH] Fig 1–5",
-            "RMS position/velocity error of four vehicles in clutter vs cheap JPDA",
-            draw_road_four,
-        ),
-        FigureSpec(
-            "accelerating",
-            "[HZ] Fig 5",
-            "plain vs modified distance, with and without termination",
-            draw_accelerating,
-        ),
-        FigureSpec(
-            "overtaking",
-            "[HZ] Fig 6",
-            "identity through the blind zone with and without phantoms",
-            draw_overtaking,
-        ),
-    )
+    name: FigureSpec(entry, DRAWINGS[name]) for name, entry in CATALOGUE.items()
 }
 """Figure name → spec; ``reproduce(name, ...)`` accepts exactly these names."""
 
@@ -856,7 +854,7 @@ def reproduce(name: str, out_dir: str | Path, reduced: bool = False, echo: Echo 
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m core.evaluation.figures [NAME ...] [--out DIR] [--reduced]``."""
+    """``python -m evaluation.figures [NAME ...] [--out DIR] [--reduced]``."""
     parser = argparse.ArgumentParser(description="Regenerate the papers' figures as PNG.")
     parser.add_argument("names", nargs="*", help=f"default: all of {', '.join(FIGURES)}")
     parser.add_argument("--out", default="docs/figures", help="output directory")

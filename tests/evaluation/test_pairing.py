@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from core.association import associate
-from core.evaluation.pairing import decision_error_rate, list_pairs, partially_observed
-from core.evaluation.units import implicit_gate
 from core.simulation.tracklists import t2t_four
 from core.simulation.two_class import t2t_two_class
+from evaluation.pairing import decision_error_rate, list_pairs, partially_observed
+from evaluation.units import implicit_gate
 
 
 def test_one_problem_per_step_incoming_is_sensor_one_predicted_to_sensor_two() -> None:

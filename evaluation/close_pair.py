@@ -31,9 +31,9 @@ import numpy as np
 from scipy.stats import norm
 
 from core.arrays import FloatArray
-from core.evaluation.tracking import track_scenario
 from core.simulation import close_pair_scenario
 from core.tracking.config import IMM_DISTANCES, LocalTrackerConfig
+from evaluation.tracking import track_scenario
 
 NOISE_FLOOR = 1e-6
 """Smallest R variance given to the tracker (m²), for the 0 % point."""

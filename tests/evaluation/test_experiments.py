@@ -5,14 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core.evaluation import (
-    aircraft_classification,
-    class_comparison,
-    noise_study,
-    pedestrian_classification,
-    threshold_sweep,
-    unit_sweep,
-)
+from evaluation.aircraft import aircraft_classification
+from evaluation.four_targets import threshold_sweep
+from evaluation.pedestrian import pedestrian_classification
+from evaluation.two_class import class_comparison
+from evaluation.units import noise_study, unit_sweep
 
 RAMBLER, SPORTSMAN = 0, 1
 

@@ -28,10 +28,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.arrays import FloatArray
-from core.evaluation.tracking import TrackedRun, track_scenario
 from core.simulation import crossing_scenario
 from core.tracking.config import IMM_DISTANCES, LocalTrackerConfig
 from core.tracking.presets import aircraft
+from evaluation.tracking import TrackedRun, track_scenario
 
 IDENTITY_STEPS = (2, 20)
 """Steps whose detections name each target's own track (before the crossing)."""

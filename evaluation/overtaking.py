@@ -37,8 +37,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.arrays import FloatArray
-from core.evaluation.tracking import rectangle, road_config, track_scenario
 from core.simulation import CLUTTER, overtaking_scenario
+from evaluation.tracking import rectangle, road_config, track_scenario
 
 CASES: Mapping[str, Mapping[str, object]] = {
     "(a) plain, no phantoms": {"distance": "plain", "phantoms": False},

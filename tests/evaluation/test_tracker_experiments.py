@@ -8,15 +8,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.evaluation.accelerating import CASES as ACCELERATING_CASES
-from core.evaluation.accelerating import accelerating_study
-from core.evaluation.close_pair import close_pair_study
-from core.evaluation.crossing import crossing_study
-from core.evaluation.overtaking import CASES as OVERTAKING_CASES
-from core.evaluation.overtaking import overtaking_study
-from core.evaluation.road_four import METHODS, road_four_study
 from core.simulation import road_four_scenario
 from core.simulation.road import ROAD_FOUR_VARIANCE
+from evaluation.accelerating import CASES as ACCELERATING_CASES
+from evaluation.accelerating import accelerating_study
+from evaluation.close_pair import close_pair_study
+from evaluation.crossing import crossing_study
+from evaluation.overtaking import CASES as OVERTAKING_CASES
+from evaluation.overtaking import overtaking_study
+from evaluation.road_four import METHODS, road_four_study
 
 LINER, BOMBER, FIGHTER = 0, 1, 2
 

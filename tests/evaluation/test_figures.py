@@ -7,7 +7,8 @@ from pathlib import Path
 import pytest
 
 from core.errors import InvalidInput
-from core.evaluation.figures import FIGURES, main, reproduce
+from evaluation.catalogue import CATALOGUE
+from evaluation.figures import DRAWINGS, FIGURES, main, reproduce
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -38,6 +39,7 @@ def test_the_registry_names_the_papers_figures() -> None:
         "overtaking",
     }
     assert all(spec.name == name and spec.paper for name, spec in FIGURES.items())
+    assert set(DRAWINGS) == set(CATALOGUE) == set(FIGURES)  # a drawing for every name
 
 
 def test_unknown_figures_are_refused(tmp_path: Path) -> None:

@@ -34,9 +34,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.arrays import FloatArray
-from core.evaluation.pairing import ListPair, decision_error_rate, list_pairs, partially_observed
+from core.arrays import FloatArray, IntArray
 from core.simulation.tracklists import t2t_four
+from evaluation.pairing import ListPair, Outcome, decision_outcome, list_pairs, partially_observed
 
 METHODS: dict[str, tuple[str, dict[str, object], str]] = {
     "hachour density": ("hachour", {"likelihood": "density"}, "mean"),
@@ -53,9 +53,13 @@ UNIT_SCALES = np.geomspace(10.0, 1e-4, 16)
 """Length scale factors s of :func:`unit_sweep`: lengths × 10 down to lengths × 1e-4."""
 
 
+Realisations = list[tuple[int, list[ListPair]]]
+"""(seed, association problems) of each realisation."""
+
+
 def scene(
     seeds: Sequence[int], n_steps: int, position_sigma: float, separation: float, unseen: float
-) -> list[list[ListPair]]:
+) -> Realisations:
     """The association problems of each realisation (one per seed), in metres."""
     realisations = []
     for seed in seeds:
@@ -63,7 +67,7 @@ def scene(
             seed=seed, position_sigma=position_sigma, separation=separation, n_steps=n_steps
         )
         rng = np.random.default_rng([seed, 7])  # the misses: their own stream, same seed
-        realisations.append(partially_observed(list_pairs(scenario.reports), unseen, rng))
+        realisations.append((seed, partially_observed(list_pairs(scenario.reports), unseen, rng)))
     return realisations
 
 
@@ -73,23 +77,30 @@ def _tuned_options(method: str, threshold: float) -> dict[str, object]:
     return {"gamma": math.log(2.0) / threshold, "alpha": 1.0}
 
 
-def _mean_rate(
-    realisations: Sequence[Sequence[ListPair]],
+def _outcomes(
+    realisations: Realisations,
     method: str,
     options: dict[str, object],
     distance: str,
     scale: float = 1.0,
-) -> float:
-    return float(
-        np.mean(
-            [
-                decision_error_rate(
-                    [pair.scaled(scale) for pair in pairs], method, options, distance
-                )
-                for pairs in realisations
-            ]
+    order: int = 0,
+) -> list[Outcome]:
+    """One outcome per realisation, the lists in a random order (:mod:`evaluation.pairing`)."""
+    return [
+        decision_outcome(
+            [pair.scaled(scale) for pair in pairs],
+            method,
+            options,
+            distance,
+            seed=seed,
+            order=order,
         )
-    )
+        for seed, pairs in realisations
+    ]
+
+
+def _mean_rate(outcomes: Sequence[Outcome]) -> float:
+    return float(np.mean([outcome.rate for outcome in outcomes]))
 
 
 @dataclass(frozen=True)
@@ -103,6 +114,10 @@ class UnitSweep:
         Lengths are multiplied by s (s = 1e-3: the scene in kilometres).
     rates : dict of str to ndarray, shape (k,)
         Mean rate over the realisations per method label (:data:`METHODS`).
+    run_rates, ties : dict of str to ndarray, shape (len(seeds), k)
+        The rate and the tie rate of each realisation.
+    decisions : ndarray of int, shape (len(seeds),)
+        Decisions per realisation.
     implicit_gates : ndarray, shape (k,)
         hachour-density's implicit gate on D at each scale (scene covariances).
     position_sigma, separation, unseen : float
@@ -111,6 +126,9 @@ class UnitSweep:
     seeds: tuple[int, ...]
     scales: FloatArray
     rates: dict[str, FloatArray]
+    run_rates: dict[str, FloatArray]
+    ties: dict[str, FloatArray]
+    decisions: IntArray
     implicit_gates: FloatArray
     position_sigma: float
     separation: float
@@ -135,18 +153,26 @@ def unit_sweep(
     position_sigma: float = 0.5,
     separation: float = 2.0,
     unseen: float = 0.2,
+    order: int = 0,
 ) -> UnitSweep:
     """Rate of every method of :data:`METHODS` on the same scene expressed at each scale."""
     realisations = scene(seeds, n_steps, position_sigma, separation, unseen)
     factors = np.asarray(scales, dtype=np.float64)
-    rates = {
-        label: np.array([_mean_rate(realisations, method, options, distance, s) for s in factors])
-        for label, (method, options, distance) in METHODS.items()
-    }
+    run_rates: dict[str, FloatArray] = {}
+    ties: dict[str, FloatArray] = {}
+    decisions = np.zeros(len(seeds), dtype=np.int64)
+    for label, (method, options, distance) in METHODS.items():
+        outcomes = [_outcomes(realisations, method, options, distance, s, order) for s in factors]
+        run_rates[label] = np.array([[o.rate for o in at] for at in outcomes]).T
+        ties[label] = np.array([[o.tie_rate for o in at] for at in outcomes]).T
+        decisions[:] = [o.decisions for o in outcomes[0]]
     return UnitSweep(
         seeds=tuple(seeds),
         scales=factors,
-        rates=rates,
+        rates={label: values.mean(axis=0) for label, values in run_rates.items()},
+        run_rates=run_rates,
+        ties=ties,
+        decisions=decisions,
         implicit_gates=np.array([implicit_gate(position_sigma, s) for s in factors]),
         position_sigma=position_sigma,
         separation=separation,
@@ -166,6 +192,12 @@ class NoiseStudy:
     rates : dict of (str, str) to ndarray, shape (k,)
         ``(label, unit)`` → mean rate; labels of :data:`METHODS` plus
         ``"gnn tuned"`` and ``"denoeux tuned"``; units ``"m"``, ``"km"``.
+    ties : dict of (str, str) to ndarray, shape (k,)
+        Mean tie rate, keyed as ``rates``.
+    run_rates : dict of (str, str) to ndarray, shape (len(seeds), k)
+        The rate of each realisation, keyed as ``rates``.
+    decisions : ndarray of int, shape (len(seeds), k)
+        Decisions per realisation and noise level.
     best_thresholds : dict of str to ndarray, shape (k,)
         The tuned λ per noise level of ``gnn`` and ``denoeux``.
     separation, unseen : float
@@ -174,6 +206,9 @@ class NoiseStudy:
     seeds: tuple[int, ...]
     sigmas: FloatArray
     rates: dict[tuple[str, str], FloatArray]
+    ties: dict[tuple[str, str], FloatArray]
+    run_rates: dict[tuple[str, str], FloatArray]
+    decisions: IntArray
     best_thresholds: dict[str, FloatArray]
     separation: float
     unseen: float
@@ -191,36 +226,49 @@ def noise_study(
     separation: float = 10.0,
     unseen: float = 0.2,
     tuning_thresholds: Sequence[float] | FloatArray = TUNING_THRESHOLDS,
+    order: int = 0,
 ) -> NoiseStudy:
     """Every method in metres and kilometres at each noise level (module docstring)."""
     levels = np.asarray(sigmas, dtype=np.float64)
     grid = np.asarray(tuning_thresholds, dtype=np.float64)
     rates: dict[tuple[str, str], FloatArray] = {}
+    ties: dict[tuple[str, str], FloatArray] = {}
+    run_rates: dict[tuple[str, str], FloatArray] = {}
+    decisions = np.zeros((len(seeds), len(levels)), dtype=np.int64)
     best: dict[str, FloatArray] = {method: np.empty(len(levels)) for method in TUNED}
     for unit in SCALES:
         for label in (*METHODS, *(f"{method} tuned" for method in TUNED)):
             rates[(label, unit)] = np.empty(len(levels))
+            ties[(label, unit)] = np.empty(len(levels))
+            run_rates[(label, unit)] = np.empty((len(seeds), len(levels)))
     for index, sigma in enumerate(levels):
         realisations = scene(seeds, n_steps, float(sigma), separation, unseen)
         for method in TUNED:
             on_grid = [
-                _mean_rate(realisations, method, _tuned_options(method, t), "mean") for t in grid
+                _mean_rate(
+                    _outcomes(realisations, method, _tuned_options(method, t), "mean", order=order)
+                )
+                for t in grid
             ]
             best[method][index] = grid[int(np.argmin(on_grid))]
         for unit, scale in SCALES.items():
-            for label, (method, options, distance) in METHODS.items():
-                rates[(label, unit)][index] = _mean_rate(
-                    realisations, method, options, distance, scale
-                )
+            runs: dict[str, tuple[str, dict[str, object], str]] = dict(METHODS)
             for method in TUNED:
-                options = _tuned_options(method, float(best[method][index]))
-                rates[(f"{method} tuned", unit)][index] = _mean_rate(
-                    realisations, method, options, "mean", scale
-                )
+                tuned = _tuned_options(method, float(best[method][index]))
+                runs[f"{method} tuned"] = (method, tuned, "mean")
+            for label, (method, options, distance) in runs.items():
+                outcomes = _outcomes(realisations, method, options, distance, scale, order)
+                rates[(label, unit)][index] = _mean_rate(outcomes)
+                ties[(label, unit)][index] = np.mean([o.tie_rate for o in outcomes])
+                run_rates[(label, unit)][:, index] = [o.rate for o in outcomes]
+                decisions[:, index] = [o.decisions for o in outcomes]
     return NoiseStudy(
         seeds=tuple(seeds),
         sigmas=levels,
         rates=rates,
+        ties=ties,
+        run_rates=run_rates,
+        decisions=decisions,
         best_thresholds=best,
         separation=separation,
         unseen=unseen,

@@ -10,6 +10,15 @@ targets already known by sensor j (eq 3–5), so here sensor 1's tracks are the
 A decision is wrong when an incoming track is paired with a track of another
 target, or declared new although its target is in the known list, or paired
 although it is not (:func:`core.metrics.false_decision_rate`).
+
+**Ties are not decisions.** The simulated lists come in truth order (track i
+of each list is target i). A method whose scores tie (e.g. ``hachour`` with
+every plausibility clipped to 1) is then decided by its solver's tie-break on
+that order, which may happen to favour the truth or not. So
+:func:`decision_outcome` puts both lists of every problem in a random order
+(seeded per run: ``[seed, ORDER_STREAM, order]``) before deciding, and counts
+as *tied* each decision that another random order of the same lists changes
+(:data:`TIE_PROBES` further orders: a lower bound on the ties).
 """
 
 from __future__ import annotations
@@ -27,6 +36,11 @@ from core.simulation.tracklists import SensorTrackList
 
 Decision = dict[int, int | None]
 """Incoming index → the known index it was paired with (``None``: declared new)."""
+
+ORDER_STREAM = 11
+"""Second word of the seed of the list orders (the noise uses the run seed alone)."""
+TIE_PROBES = 2
+"""Further random orders in which each decision is re-taken to find the ties."""
 
 
 @dataclass(frozen=True)
@@ -91,6 +105,27 @@ class ListPair:
                 else tuple(self.incoming_classes[int(i)] for i in incoming)
             ),
         )
+
+    def reordered(self, rng: np.random.Generator) -> ListPair:
+        """Both lists in a random order (the truth travels with the tracks)."""
+        return self.keep(
+            rng.permutation(len(self.known_targets)).astype(np.int64),
+            rng.permutation(len(self.incoming_targets)).astype(np.int64),
+        )
+
+    def decide_targets(
+        self,
+        method: str,
+        options: Mapping[str, object] | None = None,
+        distance: str = "mean",
+        use_classes: bool = False,
+    ) -> dict[int, int | None]:
+        """:meth:`decide`, told in targets: incoming track's target → partner's target."""
+        decision = self.decide(method, options, distance, use_classes)
+        return {
+            int(self.incoming_targets[col]): None if row is None else int(self.known_targets[row])
+            for col, row in decision.items()
+        }
 
     def decide(
         self,
@@ -178,6 +213,63 @@ def decision_error_rate(
     """False decision rate of one method over the problems ([T2T] §4, core.metrics)."""
     decisions = [pair.decide(method, options, distance, use_classes) for pair in pairs]
     return false_decision_rate(decisions, [pair.truth() for pair in pairs])
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One method on one run's problems, the lists in a random order.
+
+    Attributes
+    ----------
+    rate : float
+        False decision rate ([T2T] §4).
+    tie_rate : float
+        Share of the decisions that another order of the same lists changes.
+    decisions : int
+        Incoming tracks decided (the denominator of both rates).
+    """
+
+    rate: float
+    tie_rate: float
+    decisions: int
+
+
+def decision_outcome(
+    pairs: Sequence[ListPair],
+    method: str,
+    options: Mapping[str, object] | None = None,
+    distance: str = "mean",
+    use_classes: bool = False,
+    *,
+    seed: int,
+    order: int = 0,
+) -> Outcome:
+    """False decision rate and tie rate of one method, the lists shuffled per run.
+
+    ``seed`` is the run's (the same permutations for every method of a run:
+    comparisons between methods are paired); ``order`` picks another family
+    of random orders, for the check that the order changes nothing.
+    """
+    rngs = [
+        np.random.default_rng([seed, ORDER_STREAM, order, probe]) for probe in range(1 + TIE_PROBES)
+    ]
+    wrong = tied = decisions = 0
+    for pair in pairs:
+        decided = [
+            pair.reordered(rng).decide_targets(method, options, distance, use_classes)
+            for rng in rngs
+        ]
+        known = set(pair.known_targets.tolist())
+        truth = {
+            int(target): int(target) if target in known else None
+            for target in pair.incoming_targets.tolist()
+        }
+        decisions += len(truth)
+        wrong += sum(decided[0][target] != partner for target, partner in truth.items())
+        tied += sum(len({probe[target] for probe in decided}) > 1 for target in truth)
+    if decisions == 0:
+        return Outcome(0.0, 0.0, 0)
+    return Outcome(wrong / decisions, tied / decisions, decisions)
 
 
 def partially_observed(

@@ -3,7 +3,7 @@
 Each Monte Carlo run of :func:`~core.simulation.road.road_four_scenario`
 (T = 0.1 s, σ² = 0.5 m², Poisson clutter) is tracked by the
 :class:`LocalTracker` with the road filter of
-:func:`~core.evaluation.tracking.road_config` and one association method
+:func:`~evaluation.tracking.road_config` and one association method
 per curve: the evidential method of [DH] itself (``dang_han``), our
 ``gnn`` and ``denoeux`` (the session default) and the cheap JPDA baseline
 ([DH] eq 16, B = 0, PDA update). A vehicle's track is the one most of its
@@ -27,10 +27,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.arrays import FloatArray
-from core.evaluation.tracking import TrackedRun, road_config, track_scenario
 from core.metrics import coverage, false_tracks, track_losses
 from core.simulation import road_four_scenario
 from core.simulation.scenario import Scenario
+from evaluation.tracking import TrackedRun, road_config, track_scenario
 
 METHODS: Mapping[str, tuple[str, Mapping[str, object]]] = {
     "dang_han [DH]": ("dang_han", {}),

@@ -2,7 +2,7 @@
 
 Four nearby targets seen by two sensors (:func:`core.simulation.tracklists.t2t_four`);
 sensor 1's estimates are matched to sensor 2's at every step
-(:mod:`core.evaluation.pairing`) with the distance of [T2T] eq 1–2 (the
+(:mod:`evaluation.pairing`) with the distance of [T2T] eq 1–2 (the
 ``mean`` covariance). ``gnn`` is swept over its maximum distance λ,
 ``denoeux`` over γ = ln 2 / λ ([T2T] eq 11, α = 1), and the parameterless
 ``hachour`` is run once per realisation with each ``likelihood`` reading
@@ -14,7 +14,7 @@ The paper's claim: the parameter-dependent methods' rate rises when λ is too
 small (γ too large), since they then declare true partners new; ``hachour``
 does as well as the others at their best parameter. The extra ``"density,
 km"`` run is the same scene in kilometres (the unit study,
-:mod:`core.evaluation.units`).
+:mod:`evaluation.units`).
 """
 
 from __future__ import annotations
@@ -25,9 +25,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.arrays import FloatArray
-from core.evaluation.pairing import decision_error_rate, list_pairs
+from core.arrays import FloatArray, IntArray
 from core.simulation.tracklists import t2t_four
+from evaluation.pairing import decision_outcome, list_pairs
 
 HACHOUR_VARIANTS: dict[str, tuple[dict[str, object], float]] = {
     "density": ({"likelihood": "density"}, 1.0),
@@ -52,9 +52,15 @@ class ThresholdSweep:
     gammas : ndarray, shape (k,)
         γ = ln 2 / λ for denoeux.
     gnn, denoeux : ndarray, shape (len(seeds), k)
-        Rate per realisation and parameter value.
+        Rate per realisation and parameter value (lists in a random order,
+        :func:`~evaluation.pairing.decision_outcome`).
     hachour : dict of str to ndarray, shape (len(seeds),)
         Rate per realisation for each variant of :data:`HACHOUR_VARIANTS`.
+    ties : dict of str to ndarray
+        Tie rate, shaped as the rates: keys ``"gnn"``, ``"denoeux"`` and the
+        hachour variants.
+    decisions : ndarray of int, shape (len(seeds),)
+        Decisions per realisation (for the intervals, :mod:`evaluation.intervals`).
     position_sigma, separation : float
         The scene (m).
     """
@@ -65,6 +71,8 @@ class ThresholdSweep:
     gnn: FloatArray
     denoeux: FloatArray
     hachour: dict[str, FloatArray]
+    ties: dict[str, FloatArray]
+    decisions: IntArray
     position_sigma: float
     separation: float
 
@@ -81,6 +89,7 @@ def threshold_sweep(
     n_steps: int = 20,
     position_sigma: float = 0.5,
     separation: float = 2.0,
+    order: int = 0,
 ) -> ThresholdSweep:
     """False decision rates per realisation for every λ (gnn), γ (denoeux) and hachour variant.
 
@@ -94,25 +103,35 @@ def threshold_sweep(
         Steps per realisation (4 decisions each).
     position_sigma, separation : float
         Reported and actual position σ (m), side of the square of targets (m).
+    order : int
+        Which family of random list orders (:func:`~evaluation.pairing.decision_outcome`).
     """
     lambdas = np.asarray(thresholds, dtype=np.float64)
     gammas = math.log(2.0) / lambdas
     gnn = np.empty((len(seeds), len(lambdas)))
     denoeux = np.empty_like(gnn)
     hachour = {label: np.empty(len(seeds)) for label in HACHOUR_VARIANTS}
+    ties: dict[str, FloatArray] = {"gnn": np.empty_like(gnn), "denoeux": np.empty_like(gnn)}
+    ties.update({label: np.empty(len(seeds)) for label in HACHOUR_VARIANTS})
+    decisions = np.empty(len(seeds), dtype=np.int64)
     for row, seed in enumerate(seeds):
         scenario = t2t_four(
             seed=seed, position_sigma=position_sigma, separation=separation, n_steps=n_steps
         )
         pairs = list_pairs(scenario.reports)
         for col, (threshold, gamma) in enumerate(zip(lambdas, gammas, strict=True)):
-            gnn[row, col] = decision_error_rate(pairs, "gnn", {"threshold": float(threshold)})
-            denoeux[row, col] = decision_error_rate(
-                pairs, "denoeux", {"gamma": float(gamma), "alpha": 1.0}
+            swept: tuple[tuple[str, dict[str, object], FloatArray], ...] = (
+                ("gnn", {"threshold": float(threshold)}, gnn),
+                ("denoeux", {"gamma": float(gamma), "alpha": 1.0}, denoeux),
             )
-        for label, (options, scale) in HACHOUR_VARIANTS.items():
+            for method, options, rates in swept:
+                outcome = decision_outcome(pairs, method, options, seed=seed, order=order)
+                rates[row, col], ties[method][row, col] = outcome.rate, outcome.tie_rate
+        for label, (variant, scale) in HACHOUR_VARIANTS.items():
             scaled = [pair.scaled(scale) for pair in pairs]
-            hachour[label][row] = decision_error_rate(scaled, "hachour", options)
+            outcome = decision_outcome(scaled, "hachour", variant, seed=seed, order=order)
+            hachour[label][row], ties[label][row] = outcome.rate, outcome.tie_rate
+            decisions[row] = outcome.decisions
     return ThresholdSweep(
         seeds=tuple(seeds),
         thresholds=lambdas,
@@ -120,6 +139,8 @@ def threshold_sweep(
         gnn=gnn,
         denoeux=denoeux,
         hachour=hachour,
+        ties=ties,
+        decisions=decisions,
         position_sigma=position_sigma,
         separation=separation,
     )

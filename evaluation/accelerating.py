@@ -30,9 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.arrays import FloatArray
-from core.evaluation.tracking import NO_TERMINATION, TrackedRun, road_config, track_scenario
 from core.simulation import CLUTTER, accelerating_scenario, stealing_scenario
 from core.simulation.scenario import Scenario
+from evaluation.tracking import NO_TERMINATION, TrackedRun, road_config, track_scenario
 
 CASES: Mapping[str, Mapping[str, object]] = {
     "(a) plain": {"distance": "plain", **NO_TERMINATION},
