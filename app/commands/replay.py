@@ -3,7 +3,10 @@
 An event file (``EVENTS.jsonl``) is one JSON object per line: first
 ``{"type": "session", "config": {...}}`` (the resolved session config), then
 every accepted input in order, ``{"type": "tracks" | "detections", "seq": n,
-"report": {...}}`` (the items of ``GET /v1/sessions/{sid}/events``).
+"report": {...}}`` (the items of ``GET /v1/sessions/{sid}/events``). When the
+server had compacted the session's older inputs behind a snapshot, the
+session line is followed by ``{"type": "snapshot", "seq": n, "state": {...}}``
+and the inputs after ``n``: a local replay restores it, then continues.
 
 ``replay`` applies them in order, through an engine in this process or
 through a running server, and prints one result per line: since the engine
@@ -41,6 +44,8 @@ def read_events(lines: TextIO) -> tuple[Body, list[Input]]:
             config = event["config"]
         elif kind in ("tracks", "detections"):
             inputs.append((kind, event["report"]))
+        elif kind == "snapshot" and not inputs:
+            inputs.append((kind, {"seq": event["seq"], "state": event["state"]}))
         else:
             raise ValueError(f"line {number}: unknown event type {kind!r}")
     if config is None:
@@ -59,9 +64,17 @@ def export_events(server: str, session: str, token: str) -> Iterator[str]:
         while True:
             page = client.get(f"/v1/sessions/{session}/events", params={"after": after})
             page.raise_for_status()
-            events = page.json()["events"]
+            body = page.json()
+            snapshot, events = body.get("snapshot"), body["events"]
+            if snapshot is not None:  # the inputs up to it were compacted
+                yield dumps(
+                    {"type": "snapshot", "seq": snapshot["seq"], "state": snapshot["state"]}
+                )
+                after = snapshot["seq"]
             if not events:
-                return
+                if snapshot is None:
+                    return
+                continue
             for event in events:
                 yield dumps({"type": event["type"], "seq": event["seq"], "report": event["report"]})
             after = events[-1]["seq"]
@@ -76,6 +89,13 @@ def export_command(args: argparse.Namespace) -> int:
 def replay_command(args: argparse.Namespace) -> int:
     with Path(args.events).open(encoding="utf-8") as events:
         config, inputs = read_events(events)
+    if args.server and inputs and inputs[0][0] == "snapshot":
+        print(
+            f"{args.events} starts from a snapshot (the server had compacted the older inputs): "
+            "a server cannot be given a state, replay it locally (without --server)",
+            file=sys.stderr,
+        )
+        return 2
     shown = tqdm(inputs, desc="replay", unit="input", file=sys.stderr, disable=args.quiet)
     results = (
         run_on_server(args.server, config, shown) if args.server else run_locally(config, shown)

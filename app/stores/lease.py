@@ -50,8 +50,8 @@ from typing import Protocol, runtime_checkable
 
 import redis
 
-from app.stores.base import Store
-from app.stores.redis import RedisStore
+from app.stores.base import Store, unavailable_on
+from app.stores.redis import UNREACHABLE, RedisStore
 from app.stores.redis_keys import RedisKeys
 
 DEFAULT_LEASE_TTL_MS = 10_000
@@ -137,17 +137,21 @@ class RedisLeases:
 
     def acquire(self, session_id: str, owner: str, ttl_ms: int) -> bool:
         _check_ttl(ttl_ms)
-        return bool(self._acquire(keys=[self.keys.lease(session_id)], args=[owner, ttl_ms]))
+        with unavailable_on(UNREACHABLE, "redis"):
+            return bool(self._acquire(keys=[self.keys.lease(session_id)], args=[owner, ttl_ms]))
 
     def renew(self, session_id: str, owner: str, ttl_ms: int) -> bool:
         _check_ttl(ttl_ms)
-        return bool(self._renew(keys=[self.keys.lease(session_id)], args=[owner, ttl_ms]))
+        with unavailable_on(UNREACHABLE, "redis"):
+            return bool(self._renew(keys=[self.keys.lease(session_id)], args=[owner, ttl_ms]))
 
     def release(self, session_id: str, owner: str) -> bool:
-        return bool(self._release(keys=[self.keys.lease(session_id)], args=[owner]))
+        with unavailable_on(UNREACHABLE, "redis"):
+            return bool(self._release(keys=[self.keys.lease(session_id)], args=[owner]))
 
     def holder(self, session_id: str) -> str | None:
-        value = self.client.get(self.keys.lease(session_id))
+        with unavailable_on(UNREACHABLE, "redis"):
+            value = self.client.get(self.keys.lease(session_id))
         return str(value) if value is not None else None
 
 

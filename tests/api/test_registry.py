@@ -8,7 +8,7 @@ from datetime import UTC, datetime, timedelta
 from typing import Any
 
 from api_schemas.reports import TrackReport
-from app.hub import Hub
+from app.hub import SESSION_ENDED, Hub
 from app.metrics import ServiceMetrics
 from app.sessions import SessionRegistry
 from app.stores import MemoryStore, SessionRecord
@@ -111,7 +111,7 @@ def test_slow_subscriber_gets_the_latest_results_never_a_backlog() -> None:
         hub.publish("result 101")
         assert await slow.next() == "result 101"
         hub.close()
-        assert await slow.next() is None and len(hub) == 0
+        assert await slow.next() == SESSION_ENDED and len(hub) == 0
 
     asyncio.run(scenario())
 
