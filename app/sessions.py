@@ -26,7 +26,7 @@ log after it (:meth:`SessionRegistry.restore_all`); a session without input
 for ``session_idle_seconds`` is ended (:meth:`SessionRegistry.expire_idle`).
 
 With the ``redis`` store several instances share the sessions
-(:mod:`app.stores.lease`, :mod:`app.stores.fanout`): before applying an input
+(:mod:`app.cluster.lease`, :mod:`app.cluster.fanout`): before applying an input
 the instance takes (or renews) the session's lease — a session another live
 instance holds answers 503 with ``Retry-After``; an instance that (re)takes a
 lease first rebuilds the engine from the store if the log moved on meanwhile.
@@ -66,6 +66,8 @@ import anyio
 from api_schemas.config import SessionConfig
 from api_schemas.consistency import detection_report_issues, track_report_issues
 from api_schemas.reports import DetectionReport, TrackReport
+from app.cluster.fanout import ResultFanout, open_fanout
+from app.cluster.lease import SessionLeases, new_owner_id, open_leases
 from app.errors import (
     LimitExceeded,
     SessionLeased,
@@ -90,8 +92,6 @@ from app.stores import (
     Snapshot,
     Store,
 )
-from app.stores.fanout import ResultFanout, open_fanout
-from app.stores.lease import SessionLeases, new_owner_id, open_leases
 from app.translate import (
     PlainObject,
     core_detection_report,

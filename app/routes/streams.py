@@ -153,6 +153,8 @@ async def _answer(session: LiveSession, registry: SessionRegistry, text: str, pa
         return _error(_message_problem(error, path), _ref_of(text))
     ref = message.ref
     try:
+        if session.closed:  # evicted (store down, or a failed step): the registry reloads it
+            session = await registry.get(session.id)
         if isinstance(message, DetectionsMessage):
             detections = DetectionReport.model_construct(
                 sensor=message.sensor, time=message.time, detections=message.detections

@@ -1,7 +1,7 @@
 """The ``redis`` store: sessions as hashes, each input log a Redis Stream, snapshots by seq.
 
-For several service instances sharing one Redis (see :mod:`app.stores.lease`
-for who may apply a session's inputs and :mod:`app.stores.fanout` for
+For several service instances sharing one Redis (see :mod:`app.cluster.lease`
+for who may apply a session's inputs and :mod:`app.cluster.fanout` for
 results reaching subscribers on any instance). The key layout is in
 :mod:`app.stores.redis_keys`; every value is JSON text, nothing is pickled.
 

@@ -69,10 +69,19 @@ def test_redis_down_answers_503_and_the_service_recovers_without_losing_anything
         ws_url = url.replace("http://", "ws://") + f"/v1/sessions/{sid}/subscribe"
         subscriber = stack.enter_context(connect(ws_url, additional_headers=headers))
         assert json.loads(subscriber.recv(timeout=10))["seq"] == BEFORE
+        stream_url = url.replace("http://", "ws://") + f"/v1/sessions/{sid}/stream"
+        stream = stack.enter_context(connect(stream_url, additional_headers=headers))
+        assert json.loads(stream.recv(timeout=10))["seq"] == BEFORE
 
         server.kill()
+        killed = time.monotonic()
         refused = client.post(path, json=bodies[BEFORE], headers=headers)
+        print(f"first 503 {time.monotonic() - killed:.3f} s after Redis was killed")
         assert_store_unavailable(refused)
+        stream.send(json.dumps({"type": "tracks", "ref": "during", **bodies[BEFORE]}))
+        answer = json.loads(stream.recv(timeout=RECOVERY_TIMEOUT_S))
+        assert (answer["type"], answer["ref"]) == ("error", "during")
+        assert answer["problem"]["type"] == STORE_UNAVAILABLE and answer["problem"]["status"] == 503
         with pytest.raises(ConnectionClosed) as closed:
             while True:
                 subscriber.recv(timeout=RECOVERY_TIMEOUT_S)

@@ -43,8 +43,9 @@ from typing import Protocol, Self, runtime_checkable
 import redis.asyncio
 from redis.asyncio.client import PubSub
 
+from app.cluster import shared_redis
 from app.stores.base import Store, unavailable_on
-from app.stores.redis import CONNECT_TIMEOUT_S, UNREACHABLE, RedisStore
+from app.stores.redis import CONNECT_TIMEOUT_S, UNREACHABLE
 from app.stores.redis_keys import DEFAULT_PREFIX, RedisKeys
 
 DEFAULT_MAX_PENDING = 64
@@ -296,7 +297,8 @@ class RedisFanout:
 
 
 def open_fanout(store: Store, max_pending: int = DEFAULT_MAX_PENDING) -> ResultFanout:
-    """The fan-out that goes with ``store``: Redis pub/sub for the redis store, else local."""
-    if isinstance(store, RedisStore):
-        return RedisFanout(store.url, store.prefix, max_pending)
+    """The fan-out that goes with ``store``: Redis pub/sub for a shared store, else local."""
+    backing = shared_redis(store)
+    if backing is not None:
+        return RedisFanout(backing.url, backing.keys.prefix, max_pending)
     return LocalFanout(max_pending)

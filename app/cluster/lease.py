@@ -20,7 +20,7 @@ once per process, then for each input of session ``sid``::
     seq = store.last_seq(sid) + 1
     store.append(sid, seq, input, received_at)  # SequenceConflict: we were overtaken,
                                                 # drop the engine, reload, retry once
-    apply, publish the result (app.stores.fanout)
+    apply, publish the result (app.cluster.fanout)
 
 ``acquire`` by the holder renews (it is re-entrant), so calling it before
 every input is enough while inputs keep coming; a session streaming over a
@@ -50,8 +50,9 @@ from typing import Protocol, runtime_checkable
 
 import redis
 
+from app.cluster import shared_redis
 from app.stores.base import Store, unavailable_on
-from app.stores.redis import UNREACHABLE, RedisStore
+from app.stores.redis import UNREACHABLE
 from app.stores.redis_keys import RedisKeys
 
 DEFAULT_LEASE_TTL_MS = 10_000
@@ -201,7 +202,8 @@ class LocalLeases:
 
 
 def open_leases(store: Store) -> SessionLeases:
-    """The leases that go with ``store``: shared through Redis for the redis store, else local."""
-    if isinstance(store, RedisStore):
-        return RedisLeases(store.client, store.keys)
+    """The leases that go with ``store``: through Redis for a shared store, else local."""
+    backing = shared_redis(store)
+    if backing is not None:
+        return RedisLeases(backing.client, backing.keys)
     return LocalLeases()
