@@ -244,7 +244,7 @@ class SessionRegistry:
 
     def discard(self, session_id: str, ending: Ending = SESSION_ENDED) -> None:
         """Forget a session (deleted, or to be rebuilt from the store): its subscribers are
-        told why, waiting inputs get 404 (and load it again)."""
+        told why; inputs waiting for its lock go to the session as the store has it."""
         session = self._sessions.pop(session_id, None)
         if session is not None:
             session.closed = True
@@ -445,31 +445,47 @@ class SessionRegistry:
         *,
         explain: bool,
     ) -> str:
-        """Under the session lock: (lease,) apply, log durably, then publish and return the result."""
+        """Under the session lock: (lease,) apply, log durably, then publish and return the result.
+
+        An input that waited for the lock of a session evicted meanwhile goes to the session
+        as the store has it now: 404 if it was deleted, 503 if the store is down.
+        """
         kind = "tracks" if isinstance(report, TrackReport) else "detections"
         async with session.lock:
-            if session.closed:
-                raise SessionNotFound(session.id)
-            with anyio.CancelScope(shield=True):
-                if self.shared:
-                    await self._hold_lease(session)
-                try:
-                    step = await self._apply_and_log(session, report, items, kind, explain=explain)
-                except SequenceConflict:
-                    if not self.shared:
-                        raise
-                    # overtaken by another instance: rebuild from the store, apply once more
-                    await self._refresh(session)
-                    step = await self._apply_and_log(session, report, items, kind, explain=explain)
-                self.metrics.inputs.labels(kind).inc()
-                message = result_message(step.result)
-                if self.shared:
-                    await self._publish(session, message)
-                elif len(session.hub):
-                    session.hub.publish(message)
-                session.since_snapshot += 1
-                if session.since_snapshot >= self.settings.snapshot_every:
-                    await self._snapshot(session)
+            if not session.closed:
+                return await self._submit_locked(session, report, items, kind, explain=explain)
+        return await self._submit(await self.get(session.id), report, items, explain=explain)
+
+    async def _submit_locked(
+        self,
+        session: LiveSession,
+        report: TrackReport | DetectionReport,
+        items: int,
+        kind: str,
+        *,
+        explain: bool,
+    ) -> str:
+        """:meth:`_submit` once the session's lock is held."""
+        with anyio.CancelScope(shield=True):
+            if self.shared:
+                await self._hold_lease(session)
+            try:
+                step = await self._apply_and_log(session, report, items, kind, explain=explain)
+            except SequenceConflict:
+                if not self.shared:
+                    raise
+                # overtaken by another instance: rebuild from the store, apply once more
+                await self._refresh(session)
+                step = await self._apply_and_log(session, report, items, kind, explain=explain)
+            self.metrics.inputs.labels(kind).inc()
+            message = result_message(step.result)
+            if self.shared:
+                await self._publish(session, message)
+            elif len(session.hub):
+                session.hub.publish(message)
+            session.since_snapshot += 1
+            if session.since_snapshot >= self.settings.snapshot_every:
+                await self._snapshot(session)
         return step.result
 
     async def _apply_and_log(

@@ -14,12 +14,15 @@ from collections.abc import Iterator
 from contextlib import ExitStack
 from pathlib import Path
 
+import httpx
 import pytest
 
 from app.errors import SessionNotFound, StoreUnavailable
 from app.stores import MemoryStore, Snapshot, SqliteStore, Store
 from app.stores.base import history
+from tests.api.conftest import make_settings, serving
 from tests.api.redis_support import remaining_keys
+from tests.api.scenario import reports, session_config
 from tests.api.test_stores import STORE_KINDS, now, open_kind, record
 
 CYCLES = 20
@@ -132,3 +135,30 @@ def test_a_sqlite_error_is_an_outage_and_changes_nothing(tmp_path: Path) -> None
         assert [entry.seq for entry in store.entries("s1")] == [1, 2, 3]
     finally:
         store.close()
+
+
+def gauge(metrics: str, name: str) -> float:
+    line = next(line for line in metrics.splitlines() if line.startswith(f"{name} "))
+    return float(line.split()[1])
+
+
+def test_deleted_sessions_free_the_servers_store(tmp_path: Path) -> None:
+    settings = make_settings(session_idle_seconds=3600, snapshot_every=4)
+    with serving(settings) as server, httpx.Client(base_url=server.url, timeout=30) as client:
+        empty = client.get("/metrics").text
+        assert gauge(empty, "credal_store_bytes") == 0 and gauge(empty, "credal_store_inputs") == 0
+        for _ in range(5):
+            created = client.post("/v1/sessions", json=session_config()).json()
+            headers = {"Authorization": f"Bearer {created['token']}"}
+            for body in reports(6):
+                answer = client.post(
+                    f"/v1/sessions/{created['id']}/tracks", json=body, headers=headers
+                )
+                assert answer.status_code == 200, answer.text
+            full = client.get("/metrics").text
+            assert gauge(full, "credal_store_inputs") == 6 and gauge(full, "credal_store_bytes") > 0
+            deleted = client.delete(f"/v1/sessions/{created['id']}", headers=headers)
+            assert deleted.status_code == 204
+            after = client.get("/metrics").text
+            assert gauge(after, "credal_store_bytes") == 0
+            assert gauge(after, "credal_store_inputs") == 0
