@@ -164,7 +164,7 @@ def list_session_events(
     log = EventLog(
         session=session.id,
         events=[event_from_entry(entry) for entry in page.entries],
-        last_seq=store.last_seq(session.id),
+        last_seq=page.last_seq,
     ).model_dump(mode="json", exclude_none=True)
     if snapshot is not None:  # the state as stored, not validated again
         log["snapshot"] = SnapshotEvent.model_construct(

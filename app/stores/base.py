@@ -132,6 +132,8 @@ class History:
 
     snapshot: Snapshot | None
     entries: list[LogEntry]
+    last_seq: int
+    """The session's latest sequence number when the history was read."""
 
 
 @runtime_checkable
@@ -325,15 +327,17 @@ def history(store: Store, session_id: str, after: int, limit: int) -> History:
     """Inputs with ``seq > after`` (at most ``limit``), led by the latest snapshot when the
     log no longer holds input ``after + 1`` (compacted): replaying the answer continues
     the session exactly from ``after``, or from the snapshot when ``after`` precedes it."""
+    last = store.last_seq(session_id)
+    if after >= last:  # nothing after it (a number past the log never reaches the backend)
+        return History(snapshot=None, entries=[], last_seq=last)
     entries = store.entries(session_id, after=after, limit=limit)
-    if (entries and entries[0].seq == after + 1) or (
-        not entries and store.last_seq(session_id) <= after
-    ):
-        return History(snapshot=None, entries=entries)
+    if entries and entries[0].seq == after + 1:
+        return History(snapshot=None, entries=entries, last_seq=last)
     load = store.load(session_id)
     if load.snapshot is None or load.snapshot.seq <= after:  # compacted meanwhile: read again
-        return History(None, store.entries(session_id, after=after, limit=limit))
-    return History(snapshot=load.snapshot, entries=load.entries[:limit])
+        entries = store.entries(session_id, after=after, limit=limit)
+        return History(snapshot=None, entries=entries, last_seq=load.last_seq)
+    return History(snapshot=load.snapshot, entries=load.entries[:limit], last_seq=load.last_seq)
 
 
 @contextmanager
