@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: run test lint bench openapi figures clean
+.PHONY: run test lint bench soak openapi figures clean
 
 # Each step says what it does, and pip names every package it installs (the
 # first run takes about two minutes).
@@ -38,7 +38,11 @@ figures: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m evaluation.figures --out docs/figures
 
 bench: $(STAMP)
-	@for b in bench/*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done
+	@for b in $(filter-out bench/soak.py,$(wildcard bench/*.py)); do echo "== $$b"; $(BIN)/python $$b || exit 1; done
+
+# A few minutes per store of steady load on a live server: RSS and store size must stay flat.
+soak: $(STAMP)
+	$(BIN)/python bench/soak.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache .hypothesis

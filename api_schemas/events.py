@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import Field
 
@@ -31,9 +31,28 @@ class DetectionsEvent(WireModel):
 SessionEvent = Annotated[TracksEvent | DetectionsEvent, Field(discriminator="type")]
 
 
+class SnapshotEvent(WireModel):
+    """The session's state after input ``seq`` (the engine export and the service's counters).
+
+    A page starts with one when the log no longer holds the inputs after
+    ``after`` (they were compacted behind this snapshot): a replay restores the
+    state, then applies the events that follow.
+    """
+
+    type: Literal["snapshot"]
+    seq: int
+    taken_at: Timestamp
+    state: dict[str, Any]
+
+
 class EventLog(WireModel):
-    """A page of the log: events with ``seq > after``, oldest first; ``last_seq`` is the session's latest."""
+    """A page of the log: events with ``seq > after``, oldest first; ``last_seq`` is the session's latest.
+
+    ``snapshot`` is set when inputs after ``after`` were compacted away (see
+    ``CREDAL_LOG_RETENTION``): ``events`` then follow the snapshot's ``seq``.
+    """
 
     session: str
+    snapshot: SnapshotEvent | None = None
     events: list[SessionEvent]
     last_seq: int

@@ -1,4 +1,4 @@
-"""Liveness answer."""
+"""Liveness and readiness answers."""
 
 from __future__ import annotations
 
@@ -12,3 +12,24 @@ class Health(BaseModel):
 
     status: Literal["ok"] = "ok"
     version: str
+
+
+class ComponentState(BaseModel):
+    """One thing the service needs to take inputs, and whether it answers now."""
+
+    name: Literal["store", "fanout"]
+    ready: bool
+    detail: str | None = None
+
+
+class Readiness(BaseModel):
+    """``GET /readyz``: whether the service can take inputs now (the store answers).
+
+    ``leases_held`` counts the sessions whose lease this instance holds (redis
+    store: it applies their inputs); 0 for the single-process stores.
+    """
+
+    ready: bool
+    store: str
+    components: list[ComponentState]
+    leases_held: int

@@ -71,8 +71,12 @@ A `detections` message runs the sensor's local tracker (the sensor needs a
 server sends every later `result` of the session, in order, with `ref` null.
 A subscriber that cannot keep up is not queued without bound: it keeps the
 latest 64 results and skips older ones (`seq` shows the gap). Messages sent by
-the client on this channel are ignored. When the session ends the server
-closes the connection (code 1000).
+the client on this channel are ignored. When the session ends (deleted or
+expired) the server closes the connection with code 1000, reason `session
+ended`; when the session store (or, with Redis, its pub/sub connection) fails
+it closes with code 1013, reason `store unavailable`: subscribe again once
+`GET /readyz` answers 200. An input sent on `stream` while the store is down
+gets an `error` with the 503 `store-unavailable` problem and is not applied.
 
 Both channels need the session's bearer token (or the admin token) in the
 `Authorization` header of the upgrade request, or, from a browser (which

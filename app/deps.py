@@ -134,3 +134,13 @@ async def live_session(sid: SessionId, token: BearerToken, request: Request) -> 
 
 
 LiveSessionDep = Annotated[LiveSession, Depends(live_session)]
+
+
+async def current_session(sid: SessionId, token: BearerToken, request: Request) -> LiveSession:
+    """The authorized session at the store's latest state, for reads (no stale ``seq`` when
+    several instances share the store: :meth:`~app.sessions.SessionRegistry.current`)."""
+    session = await live_session(sid, token, request)
+    return await _registry_of(request).current(session)
+
+
+CurrentSessionDep = Annotated[LiveSession, Depends(current_session)]

@@ -140,6 +140,29 @@ class SessionLeased(ServiceError):  # noqa: N818 - HTTP vocabulary
         return {"Retry-After": str(self.retry_after_s)}
 
 
+class StoreUnavailable(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """The session store cannot be reached (or cannot write): nothing was stored, retry later.
+
+    Raised by the stores for their backend's connection and I/O errors, so an
+    outage answers 503 with ``Retry-After`` and is never mistaken for a bug.
+    """
+
+    status = HTTPStatus.SERVICE_UNAVAILABLE
+    slug = "store-unavailable"
+    title = "Session store unavailable"
+    retry_after_s: ClassVar[int] = 2
+
+    def __init__(self, store: str, reason: str) -> None:
+        super().__init__(
+            f"the {store} store is unavailable ({reason}); nothing was stored, retry later",
+            store=store,
+            retry_after=self.retry_after_s,
+        )
+
+    def headers(self) -> dict[str, str]:
+        return {"Retry-After": str(self.retry_after_s)}
+
+
 class TrackNotFound(ServiceError):  # noqa: N818 - HTTP vocabulary
     """The session has no live fused track with this id."""
 
@@ -380,7 +403,8 @@ PROBLEM_STATUSES: dict[int, str] = {
     413: "Body too large",
     422: "Invalid request (every invalid field is listed in `errors`) or a limit exceeded",
     429: "Too many requests (``rate_limit``, with ``Retry-After``) or too many sessions",
-    503: "Another service instance applies this session's inputs (``Retry-After``)",
+    503: "The session store is unavailable, or another service instance applies this "
+    "session's inputs (both with ``Retry-After``)",
 }
 
 

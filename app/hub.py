@@ -5,25 +5,45 @@ subscriber's queue is full its oldest result is dropped to make room, so a
 slow subscriber skips ahead to the latest state (the ``seq`` numbers show the
 gap) and a fast one receives every result in order. Everything runs on the
 event loop thread.
+
+A subscription ends with an :class:`Ending`, the WebSocket close code and
+reason its subscriber is told: the session ended (1000), or the store is
+unavailable (1013, "try again later": subscribe again once ``/readyz`` says
+the store is back).
 """
 
 from __future__ import annotations
 
 import asyncio
+from dataclasses import dataclass
 
 SUBSCRIBER_QUEUE = 64
 """Results kept for a subscriber that has not read them yet."""
 
 
+@dataclass(frozen=True)
+class Ending:
+    """Why a subscription ended: the WebSocket close code and reason."""
+
+    code: int
+    reason: str
+
+
+SESSION_ENDED = Ending(1000, "session ended")
+STORE_UNAVAILABLE = Ending(1013, "store unavailable")
+SESSION_RELOADED = Ending(1013, "session reloaded from the store")
+"""The session was evicted from memory after a failed step; subscribe again."""
+
+
 class Subscriber:
-    """One subscriber's queue of serialised messages; ``None`` marks the end."""
+    """One subscriber's queue of serialised messages, closed by an :class:`Ending`."""
 
     def __init__(self, capacity: int = SUBSCRIBER_QUEUE) -> None:
-        self.queue: asyncio.Queue[str | None] = asyncio.Queue(maxsize=capacity)
+        self.queue: asyncio.Queue[str | Ending] = asyncio.Queue(maxsize=capacity)
         self.dropped = 0
         self.closed = False
 
-    def offer(self, message: str | None) -> None:
+    def offer(self, message: str | Ending) -> None:
         """Queue ``message``, dropping the oldest queued ones if the queue is full."""
         if self.closed:
             return
@@ -31,11 +51,11 @@ class Subscriber:
             self.queue.get_nowait()
             self.dropped += 1
         self.queue.put_nowait(message)
-        if message is None:
+        if isinstance(message, Ending):
             self.closed = True
 
-    async def next(self) -> str | None:
-        """The next message (``None``: the session ended)."""
+    async def next(self) -> str | Ending:
+        """The next message, or why the subscription ended."""
         return await self.queue.get()
 
 
@@ -60,10 +80,10 @@ class Hub:
         for subscriber in self._subscribers:
             subscriber.offer(message)
 
-    def close(self) -> None:
-        """End every subscription (the session ended)."""
+    def close(self, ending: Ending = SESSION_ENDED) -> None:
+        """End every subscription, telling each subscriber why."""
         for subscriber in self._subscribers:
-            subscriber.offer(None)
+            subscriber.offer(ending)
         self._subscribers.clear()
 
     def __len__(self) -> int:

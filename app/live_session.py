@@ -110,16 +110,27 @@ def new_session(record: SessionRecord) -> LiveSession:
     )
 
 
+def engine_from_snapshot(
+    config: SessionConfig, state: PlainObject, fusion: FusionConfig | None
+) -> tuple[FusionConfig | None, SessionEngine | None]:
+    """The fusion config and engine a snapshot's ``state`` holds (``fusion``: the config's own)."""
+    if state.get("format") != SNAPSHOT_FORMAT:
+        raise ValueError(f"unknown snapshot format {state.get('format')!r}")
+    joined = [str(sensor) for sensor in state["joined_sensors"]]
+    if not config.sensors and joined:
+        fusion = fusion_config(config, joined)
+    if state["engine"] is None:
+        return fusion, None
+    assert fusion is not None
+    return fusion, SessionEngine.restore(fusion, state["engine"])
+
+
 def restore_snapshot(session: LiveSession, snapshot: Snapshot) -> None:
     state = snapshot.state
-    if state.get("format") != SNAPSHOT_FORMAT:
-        raise ValueError(f"session {session.id}: unknown snapshot format {state.get('format')!r}")
-    joined = [str(sensor) for sensor in state["joined_sensors"]]
-    if session.open_sensors and joined:
-        session.fusion = fusion_config(session.config, joined)
-    if state["engine"] is not None:
-        assert session.fusion is not None
-        session.engine = SessionEngine.restore(session.fusion, state["engine"])
+    fusion, engine = engine_from_snapshot(session.config, state, session.fusion)
+    session.fusion = fusion
+    if engine is not None:
+        session.engine = engine
     session.seq = snapshot.seq
     session.sensor_inputs = {str(k): int(v) for k, v in state["sensor_inputs"].items()}
     last = state["last_input_at"]

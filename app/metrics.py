@@ -49,6 +49,8 @@ class ServiceMetrics:
     sessions: Gauge
     inputs: Counter
     fusion_step: Histogram
+    store_bytes: Gauge
+    store_inputs: Gauge
 
     @classmethod
     def create(cls) -> ServiceMetrics:
@@ -74,6 +76,16 @@ class ServiceMetrics:
                 "credal_inputs",
                 "Accepted inputs by kind (tracks, detections).",
                 ("kind",),
+                registry=registry,
+            ),
+            store_bytes=Gauge(
+                "credal_store_bytes",
+                "What the session store holds, in its own measure (read at each scrape).",
+                registry=registry,
+            ),
+            store_inputs=Gauge(
+                "credal_store_inputs",
+                "Inputs held in the store's logs (compacted behind snapshots).",
                 registry=registry,
             ),
             fusion_step=Histogram(

@@ -12,14 +12,21 @@ for subscribers. One input (:meth:`SessionRegistry.submit_tracks`):
    cancellation (a client that goes away cannot leave the engine ahead of the
    log); if the append fails anyway, the session is evicted from memory and
    rebuilt from the store on its next use;
-4. every ``snapshot_every`` inputs the engine state is snapshotted.
+4. every ``snapshot_every`` inputs the engine state is snapshotted, and the
+   log is compacted to the ``log_retention`` inputs behind that snapshot.
+
+Outages: a store that cannot be reached raises
+:class:`~app.errors.StoreUnavailable` (503 with ``Retry-After``); an input
+whose append failed is not acknowledged, and its session is evicted (its
+subscribers are closed with 1013 "store unavailable") and rebuilt from the
+store on its next use, once the store answers again.
 
 On start every stored session is restored from its latest snapshot plus the
 log after it (:meth:`SessionRegistry.restore_all`); a session without input
 for ``session_idle_seconds`` is ended (:meth:`SessionRegistry.expire_idle`).
 
 With the ``redis`` store several instances share the sessions
-(:mod:`app.stores.lease`, :mod:`app.stores.fanout`): before applying an input
+(:mod:`app.cluster.lease`, :mod:`app.cluster.fanout`): before applying an input
 the instance takes (or renews) the session's lease — a session another live
 instance holds answers 503 with ``Retry-After``; an instance that (re)takes a
 lease first rebuilds the engine from the store if the log moved on meanwhile.
@@ -30,8 +37,11 @@ through Redis pub/sub, and each instance forwards the results of a session
 with local subscribers into that session's hub, so a ``subscribe`` client on
 any instance receives every result in order. Leases are released when a
 session is deleted and when the instance shuts down. Reads (the picture, the
-summary) answer from the instance's memory: with session affinity that is
-the instance applying the session's inputs.
+summary) first ask the store for the session's ``last_seq``
+(:meth:`SessionRegistry.current`): a session deleted through another instance
+is gone (404) and one moved on by another instance is caught up from the log
+first, so no instance answers an old ``seq``; when the store cannot be asked,
+the read answers 503 with ``Retry-After`` rather than a state that may be old.
 
 A session whose config names no sensor accepts any sensor id: each new one
 joins the engine (default reliability and P_D, no field of view) when its
@@ -56,14 +66,17 @@ import anyio
 from api_schemas.config import SessionConfig
 from api_schemas.consistency import detection_report_issues, track_report_issues
 from api_schemas.reports import DetectionReport, TrackReport
+from app.cluster.fanout import ResultFanout, open_fanout
+from app.cluster.lease import SessionLeases, new_owner_id, open_leases
 from app.errors import (
     LimitExceeded,
     SessionLeased,
     SessionNotFound,
     StaleReport,
+    StoreUnavailable,
     request_validation_error,
 )
-from app.hub import Subscriber
+from app.hub import SESSION_ENDED, SESSION_RELOADED, STORE_UNAVAILABLE, Ending, Subscriber
 from app.limits import check_report_limits
 from app.live_session import LiveSession, new_session, restore_snapshot
 from app.metrics import ServiceMetrics
@@ -71,16 +84,14 @@ from app.responses import dumps
 from app.session_log import event_from_entry, log_input
 from app.settings import Settings
 from app.stores import (
+    LogEntry,
     MemoryStore,
-    RedisStore,
     SequenceConflict,
     SessionLoad,
     SessionRecord,
     Snapshot,
     Store,
 )
-from app.stores.fanout import ResultFanout, open_fanout
-from app.stores.lease import SessionLeases, new_owner_id, open_leases
 from app.translate import (
     PlainObject,
     core_detection_report,
@@ -129,8 +140,8 @@ class SessionRegistry:
         self.store = store
         self.settings = settings
         self.metrics = metrics
-        self.shared = isinstance(store, RedisStore)
-        """Several instances share the store: leases, fan-out through Redis."""
+        self.shared = store.shared
+        """Several instances share the store: leases, fan-out through it, fresh reads."""
         self.leases = leases or open_leases(store)
         self.fanout = fanout or open_fanout(store)
         self.owner = owner or new_owner_id()
@@ -201,7 +212,14 @@ class SessionRegistry:
         session = new_session(record)
         if load.snapshot is not None:
             restore_snapshot(session, load.snapshot)
-        for entry in load.entries:
+        self._replay(session, load.entries)
+        session.seq = max(session.seq, load.last_seq)
+        return session
+
+    def _replay(self, session: LiveSession, entries: list[LogEntry]) -> None:
+        """Apply logged inputs to the session in order (a worker thread, under its lock)."""
+        record = session.record
+        for entry in entries:
             event = event_from_entry(entry)
             try:
                 step = self._apply(session, event.report, explain=False)
@@ -213,8 +231,6 @@ class SessionRegistry:
             session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
             session.seq = entry.seq
             session.last_input_at = entry.received_at
-        session.seq = max(session.seq, load.last_seq)
-        return session
 
     async def restore_all(self) -> int:
         """Load every stored session (on start); returns how many."""
@@ -226,12 +242,13 @@ class SessionRegistry:
                 logger.exception("session %s could not be restored", record.id)
         return len(self._sessions)
 
-    def discard(self, session_id: str) -> None:
-        """Forget a session (deleted): its subscribers are told, waiting inputs get 404."""
+    def discard(self, session_id: str, ending: Ending = SESSION_ENDED) -> None:
+        """Forget a session (deleted, or to be rebuilt from the store): its subscribers are
+        told why; inputs waiting for its lock go to the session as the store has it."""
         session = self._sessions.pop(session_id, None)
         if session is not None:
             session.closed = True
-            session.hub.close()
+            session.hub.close(ending)
         forwarder = self._forwarders.pop(session_id, None)
         if forwarder is not None:
             forwarder.cancel()
@@ -309,6 +326,11 @@ class SessionRegistry:
             except Exception:
                 logger.exception("idle expiry failed")
 
+    def leases_held(self) -> int:
+        """Sessions whose lease this instance surely holds now (0 without a shared store)."""
+        now = time.monotonic()
+        return sum(session.lease_deadline > now for session in self) if self.shared else 0
+
     # ------------------------------------------------------------ subscribers
     async def subscribe(self, session: LiveSession) -> Subscriber:
         """A subscriber of every result of the session published from now on, on any instance."""
@@ -347,7 +369,7 @@ class SessionRegistry:
                     subscribed.set_exception(error)
                 else:
                     logger.exception("session %s: result forwarding failed", session.id)
-                    session.hub.close()
+                    self.discard(session.id, STORE_UNAVAILABLE)
 
         self._forwarders[session.id] = asyncio.create_task(
             forward(), name=f"forward-results:{session.id}"
@@ -423,31 +445,47 @@ class SessionRegistry:
         *,
         explain: bool,
     ) -> str:
-        """Under the session lock: (lease,) apply, log durably, then publish and return the result."""
+        """Under the session lock: (lease,) apply, log durably, then publish and return the result.
+
+        An input that waited for the lock of a session evicted meanwhile goes to the session
+        as the store has it now: 404 if it was deleted, 503 if the store is down.
+        """
         kind = "tracks" if isinstance(report, TrackReport) else "detections"
         async with session.lock:
-            if session.closed:
-                raise SessionNotFound(session.id)
-            with anyio.CancelScope(shield=True):
-                if self.shared:
-                    await self._hold_lease(session)
-                try:
-                    step = await self._apply_and_log(session, report, items, kind, explain=explain)
-                except SequenceConflict:
-                    if not self.shared:
-                        raise
-                    # overtaken by another instance: rebuild from the store, apply once more
-                    await self._refresh(session)
-                    step = await self._apply_and_log(session, report, items, kind, explain=explain)
-                self.metrics.inputs.labels(kind).inc()
-                message = result_message(step.result)
-                if self.shared:
-                    await self._publish(session, message)
-                elif len(session.hub):
-                    session.hub.publish(message)
-                session.since_snapshot += 1
-                if session.since_snapshot >= self.settings.snapshot_every:
-                    await self._snapshot(session)
+            if not session.closed:
+                return await self._submit_locked(session, report, items, kind, explain=explain)
+        return await self._submit(await self.get(session.id), report, items, explain=explain)
+
+    async def _submit_locked(
+        self,
+        session: LiveSession,
+        report: TrackReport | DetectionReport,
+        items: int,
+        kind: str,
+        *,
+        explain: bool,
+    ) -> str:
+        """:meth:`_submit` once the session's lock is held."""
+        with anyio.CancelScope(shield=True):
+            if self.shared:
+                await self._hold_lease(session)
+            try:
+                step = await self._apply_and_log(session, report, items, kind, explain=explain)
+            except SequenceConflict:
+                if not self.shared:
+                    raise
+                # overtaken by another instance: rebuild from the store, apply once more
+                await self._refresh(session)
+                step = await self._apply_and_log(session, report, items, kind, explain=explain)
+            self.metrics.inputs.labels(kind).inc()
+            message = result_message(step.result)
+            if self.shared:
+                await self._publish(session, message)
+            elif len(session.hub):
+                session.hub.publish(message)
+            session.since_snapshot += 1
+            if session.since_snapshot >= self.settings.snapshot_every:
+                await self._snapshot(session)
         return step.result
 
     async def _apply_and_log(
@@ -471,7 +509,7 @@ class SessionRegistry:
             if session.engine is not None and session.engine.seq != engine_seq:
                 # the engine refused the input after changing (a bug): rebuild it from the log
                 logger.error("session %s: a refused input changed the engine", session.id)
-                self.discard(session.id)
+                self.discard(session.id, SESSION_RELOADED)
             raise
         self.metrics.fusion_step.labels(kind).observe(time.perf_counter() - started)
         received_at = datetime.now(UTC)
@@ -480,10 +518,16 @@ class SessionRegistry:
             await self._io(self.store.append, session.id, seq, log_input(report), received_at)
         except SequenceConflict:
             if not self.shared:
-                self.discard(session.id)
+                self.discard(session.id, SESSION_RELOADED)
             raise  # shared: the caller rebuilds the engine in place from the store
+        except SessionNotFound:
+            self.discard(session.id)  # deleted (through another instance)
+            raise
+        except StoreUnavailable:
+            self.discard(session.id, STORE_UNAVAILABLE)  # not logged: rebuilt when it is back
+            raise
         except BaseException:
-            self.discard(session.id)  # the engine holds an unlogged step: rebuild on next use
+            self.discard(session.id, SESSION_RELOADED)  # an unlogged step: rebuild on next use
             raise
         session.engine, session.fusion = step.engine, step.fusion
         session.seq = seq
@@ -500,8 +544,39 @@ class SessionRegistry:
             session.lease_deadline = 0.0
             raise SessionLeased(session.id, math.ceil(ttl_ms / 1000))
         session.lease_deadline = now + 0.8 * ttl_ms / 1000  # a margin for clock and round trips
-        if not held and await self._io(self.store.last_seq, session.id) != session.seq:
+        if not held:
+            last = await self._io(self.store.last_seq, session.id)
+            if last != session.seq:
+                await self._catch_up(session, last)
+
+    async def current(self, session: LiveSession) -> LiveSession:
+        """The session at the store's latest ``seq`` (several instances): 404 if it was deleted
+        through another instance, caught up from the log if another instance moved it on."""
+        if not self.shared:
+            return session  # this process applies every input: its memory is the current state
+        try:
+            last = await self._io(self.store.last_seq, session.id)
+        except SessionNotFound:
+            self.discard(session.id)
+            raise
+        if last > session.seq:
+            async with session.lock:
+                if session.closed:
+                    raise SessionNotFound(session.id)
+                if last > session.seq:
+                    await self._catch_up(session, last)
+        return session
+
+    async def _catch_up(self, session: LiveSession, last: int) -> None:
+        """Apply the inputs logged after the session's ``seq`` (under its lock); rebuild from
+        the snapshot instead when the log no longer holds them all (compacted) or went back."""
+        entries = await self._io(self.store.entries, session.id, session.seq)
+        contiguous = bool(entries) and entries[0].seq == session.seq + 1
+        if not contiguous or entries[-1].seq < last or last < session.seq:
             await self._refresh(session)
+            return
+        await anyio.to_thread.run_sync(functools.partial(self._replay, session, entries))
+        session.since_snapshot = 0
 
     async def _refresh(self, session: LiveSession) -> None:
         """Rebuild the session's engine in place from the store (another instance moved it on)."""
@@ -522,15 +597,18 @@ class SessionRegistry:
             logger.exception("session %s: publishing result %d failed", session.id, session.seq)
 
     async def _snapshot(self, session: LiveSession) -> None:
+        """Snapshot the engine, then compact the log to ``log_retention`` inputs behind it."""
         snapshot = Snapshot(
             seq=session.seq, taken_at=datetime.now(UTC), state=session.snapshot_state()
         )
         try:
             await self._io(self.store.save_snapshot, session.id, snapshot)
+            session.since_snapshot = 0
+            through = snapshot.seq - self.settings.log_retention
+            if through > 0:
+                await self._io(self.store.compact, session.id, through)
         except Exception:
             logger.exception("session %s: snapshot at seq %d failed", session.id, session.seq)
-        else:
-            session.since_snapshot = 0
 
     # ------------------------------------------------------------ reads
     async def picture(

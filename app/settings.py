@@ -46,6 +46,12 @@ class Settings(BaseSettings):
     max_sessions: int = Field(1000, ge=1)
     session_idle_seconds: float = Field(3600.0, ge=0.0, description="0: sessions never expire")
     snapshot_every: int = Field(100, ge=1, description="snapshot the engine every N inputs")
+    log_retention: int = Field(
+        1000,
+        ge=0,
+        description="inputs kept in a session's log behind its latest snapshot; older ones are "
+        "deleted after each snapshot (GET …/events then starts with that snapshot)",
+    )
     ws_ping_interval: float = Field(20.0, gt=0.0, description="seconds between WebSocket pings")
     ws_ping_timeout: float = Field(20.0, gt=0.0, description="a peer silent this long is dropped")
     lease_ttl_ms: int = Field(

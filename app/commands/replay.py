@@ -3,7 +3,10 @@
 An event file (``EVENTS.jsonl``) is one JSON object per line: first
 ``{"type": "session", "config": {...}}`` (the resolved session config), then
 every accepted input in order, ``{"type": "tracks" | "detections", "seq": n,
-"report": {...}}`` (the items of ``GET /v1/sessions/{sid}/events``).
+"report": {...}}`` (the items of ``GET /v1/sessions/{sid}/events``). When the
+server had compacted the session's older inputs behind a snapshot, the
+session line is followed by ``{"type": "snapshot", "seq": n, "state": {...}}``
+and the inputs after ``n``: a local replay restores it, then continues.
 
 ``replay`` applies them in order, through an engine in this process or
 through a running server, and prints one result per line: since the engine
@@ -61,6 +64,8 @@ def read_events(lines: TextIO) -> tuple[Body, list[Input]]:
             config = _checked(number, event, "config", SessionConfig)
         elif kind in REPORT_MODELS:
             inputs.append((kind, _checked(number, event, "report", REPORT_MODELS[kind])))
+        elif kind == "snapshot" and not inputs:
+            inputs.append((kind, {"seq": event["seq"], "state": event["state"]}))
         else:
             raise ValueError(
                 f"line {number}: unknown event type {kind!r} (expected 'session', "
@@ -94,9 +99,17 @@ def export_events(server: str, session: str, token: str) -> Iterator[str]:
         while True:
             page = client.get(f"/v1/sessions/{session}/events", params={"after": after})
             raise_for_problem(page)
-            events = page.json()["events"]
+            body = page.json()
+            snapshot, events = body.get("snapshot"), body["events"]
+            if snapshot is not None:  # the inputs up to it were compacted
+                yield dumps(
+                    {"type": "snapshot", "seq": snapshot["seq"], "state": snapshot["state"]}
+                )
+                after = snapshot["seq"]
             if not events:
-                return
+                if snapshot is None:
+                    return
+                continue
             for event in events:
                 yield dumps({"type": event["type"], "seq": event["seq"], "report": event["report"]})
             after = events[-1]["seq"]
@@ -116,6 +129,13 @@ def replay_command(args: argparse.Namespace) -> int:
             raise CommandError(
                 f"{args.events}: {error}; replay reads the JSON lines `credal-fusion export` writes"
             ) from None
+    if args.server and inputs and inputs[0][0] == "snapshot":
+        print(
+            f"{args.events} starts from a snapshot (the server had compacted the older inputs): "
+            "a server cannot be given a state, replay it locally (without --server)",
+            file=sys.stderr,
+        )
+        return 2
     shown = progress(inputs, "replay", args.quiet)
     results = (
         run_on_server(args.server, config, shown, on_session=_tell_session)

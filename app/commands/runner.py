@@ -17,6 +17,7 @@ import httpx
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport, TrackReport
 from app.commands.errors import http_failure
+from app.live_session import engine_from_snapshot
 from app.responses import dumps
 from app.translate import (
     class_frame,
@@ -28,15 +29,30 @@ from app.translate import (
 from core.fusion.engine import SessionEngine
 
 Body = dict[str, Any]
-Input = tuple[str, Body]  # ("tracks" | "detections", body)
+Input = tuple[str, Body]
+"""``("tracks" | "detections", report)``, or ``("snapshot", {"seq": n, "state": {...}})``
+first, for a history whose older inputs were compacted behind a snapshot."""
 
 
 def run_locally(config: Body, inputs: Iterable[Input]) -> Iterator[Body]:
-    """The results of ``inputs`` applied by an engine in this process (as the server would)."""
+    """The results of ``inputs`` applied by an engine in this process (as the server would).
+
+    A leading ``snapshot`` input restores the session's state at its ``seq``
+    (nothing is yielded for it); the inputs after it continue from there.
+    """
     session = SessionConfig.model_validate(config)
     engine = SessionEngine(fusion_config(session))
     frame = class_frame(session.classes)
-    for seq, (kind, body) in enumerate(inputs, start=1):
+    seq = 0
+    for kind, body in inputs:
+        if kind == "snapshot":
+            if seq:
+                raise ValueError("a snapshot can only start a history")
+            _, restored = engine_from_snapshot(session, body["state"], engine.config)
+            engine = restored if restored is not None else engine
+            seq = int(body["seq"])
+            continue
+        seq += 1
         if kind == "tracks":
             step = engine.apply(core_track_report(TrackReport.model_validate(body), frame))
         else:
@@ -69,6 +85,11 @@ def run_on_server(
         headers = {"Authorization": f"Bearer {session['token']}"}
         try:
             for kind, body in inputs:
+                if kind == "snapshot":
+                    raise ValueError(
+                        "this history starts from a snapshot (its older inputs were compacted): "
+                        "replay it locally"
+                    )
                 answer = client.post(
                     f"/v1/sessions/{session['id']}/{kind}", json=body, headers=headers
                 )

@@ -9,7 +9,7 @@ from fastapi import APIRouter, Path, Query
 from api_schemas.base import FiniteFloat
 from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
-from app.deps import LiveSessionDep, RegistryDep
+from app.deps import CurrentSessionDep, LiveSessionDep, RegistryDep
 from app.errors import (
     TrackNotFound,
     problem_responses,
@@ -68,10 +68,12 @@ async def submit_detections(
 
 
 @router.get(
-    "/{sid}/tracks", response_model=FusedPicture, responses=problem_responses(401, 403, 404, 422)
+    "/{sid}/tracks",
+    response_model=FusedPicture,
+    responses=problem_responses(401, 403, 404, 422, 503),
 )
 async def list_fused_tracks(
-    session: LiveSessionDep,
+    session: CurrentSessionDep,
     registry: RegistryDep,
     time: Annotated[
         FiniteFloat | None,
@@ -86,10 +88,10 @@ async def list_fused_tracks(
 @router.get(
     "/{sid}/tracks/{tid}",
     response_model=FusedTrackDetail,
-    responses=problem_responses(401, 403, 404),
+    responses=problem_responses(401, 403, 404, 503),
 )
 async def get_fused_track(
-    tid: TrackId, session: LiveSessionDep, registry: RegistryDep
+    tid: TrackId, session: CurrentSessionDep, registry: RegistryDep
 ) -> PlainJSONResponse:
     """One live fused track with its recent history (fused states, oldest first)."""
     detail = await registry.track_detail(session, tid)

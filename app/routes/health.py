@@ -1,16 +1,73 @@
-"""Liveness."""
+"""Liveness (``/healthz``) and readiness (``/readyz``).
+
+``/healthz`` says the process is up (a restart would not help while the
+store is down, so it stays 200); ``/readyz`` says whether the service can
+take inputs now: the store answers a ping (and, with the redis store, the
+pub/sub connection too). Not ready is 503 with ``Retry-After``; it turns
+ready again by itself once the store is back.
+"""
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+from collections.abc import Awaitable
+from http import HTTPStatus
+from typing import Literal
 
-from api_schemas.health import Health
+import anyio
+from fastapi import APIRouter, Request
+
+from api_schemas.health import ComponentState, Health, Readiness
+from app.errors import StoreUnavailable
+from app.responses import PlainJSONResponse
+from app.sessions import SessionRegistry
 from core import __version__
 
 router = APIRouter(tags=["health"])
+
+Component = Literal["store", "fanout"]
+PING_TIMEOUT_S = 3.0
+"""A store that has not answered a ping by then is not ready."""
 
 
 @router.get("/healthz", operation_id="get_health")
 def get_health() -> Health:
     """Liveness and version; needs no token."""
     return Health(version=__version__)
+
+
+async def _state(name: Component, ping: Awaitable[None]) -> ComponentState:
+    """Whether ``ping`` answers within :data:`PING_TIMEOUT_S`."""
+    try:
+        with anyio.fail_after(PING_TIMEOUT_S):
+            await ping
+    except StoreUnavailable as error:
+        return ComponentState(name=name, ready=False, detail=error.detail)
+    except TimeoutError:
+        return ComponentState(name=name, ready=False, detail=f"no answer in {PING_TIMEOUT_S} s")
+    return ComponentState(name=name, ready=True)
+
+
+@router.get(
+    "/readyz",
+    operation_id="get_readiness",
+    response_model=Readiness,
+    responses={503: {"model": Readiness, "description": "Not ready (``Retry-After``)"}},
+)
+async def get_readiness(request: Request) -> PlainJSONResponse:
+    """Whether the service can take inputs now: the store (and its pub/sub) answers; no token."""
+    registry: SessionRegistry = request.app.state.registry
+    store = registry.store
+    components = [await _state("store", anyio.to_thread.run_sync(store.ping))]
+    if registry.shared:
+        components.append(await _state("fanout", registry.fanout.ping()))
+    readiness = Readiness(
+        ready=all(component.ready for component in components),
+        store=store.kind,
+        components=components,
+        leases_held=registry.leases_held(),
+    )
+    return PlainJSONResponse(
+        readiness.model_dump(mode="json"),
+        status_code=HTTPStatus.OK if readiness.ready else HTTPStatus.SERVICE_UNAVAILABLE,
+        headers={} if readiness.ready else {"Retry-After": str(StoreUnavailable.retry_after_s)},
+    )

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from fastapi import APIRouter, Response
 
-from app.deps import MetricsDep
-from app.errors import problem_responses
+from app.deps import MetricsDep, StoreDep
+from app.errors import StoreUnavailable, problem_responses
 
 router = APIRouter(tags=["health"])
 
@@ -21,7 +21,14 @@ router = APIRouter(tags=["health"])
         **problem_responses(),
     },
 )
-def get_metrics(metrics: MetricsDep) -> Response:
+def get_metrics(metrics: MetricsDep, store: StoreDep) -> Response:
     """Prometheus metrics of the service (text exposition format)."""
+    try:
+        usage = store.usage()
+    except StoreUnavailable:
+        pass  # the gauges keep their last values; /readyz says the store is down
+    else:
+        metrics.store_bytes.set(usage.bytes)
+        metrics.store_inputs.set(usage.inputs)
     body, content_type = metrics.exposition()
     return Response(content=body, media_type=content_type)

@@ -10,7 +10,7 @@ from typing import Annotated
 from fastapi import APIRouter, Query, Response
 
 from api_schemas.config import SessionConfig
-from api_schemas.events import EventLog
+from api_schemas.events import EventLog, SnapshotEvent
 from api_schemas.sessions import (
     SensorActivity,
     SessionCreated,
@@ -22,7 +22,7 @@ from api_schemas.sessions import (
 from app.deps import (
     AdminDep,
     AuthorizedSession,
-    LiveSessionDep,
+    CurrentSessionDep,
     MetricsDep,
     RegistryDep,
     SettingsDep,
@@ -31,9 +31,11 @@ from app.deps import (
 from app.errors import LimitExceeded, problem_responses
 from app.limits import check_config_limits
 from app.live_session import LiveSession
+from app.responses import PlainJSONResponse
 from app.security import hash_token, issue_token
 from app.session_log import event_from_entry
 from app.stores import SessionRecord
+from app.stores.base import history
 
 router = APIRouter(prefix="/v1/sessions", tags=["sessions"])
 
@@ -43,7 +45,7 @@ MAX_EVENTS_PAGE = 10_000
 @router.post(
     "",
     status_code=HTTPStatus.CREATED,
-    responses=problem_responses(400, 413, 422, 429),
+    responses=problem_responses(400, 413, 422, 429, 503),
 )
 def create_session(
     config: SessionConfig,
@@ -77,7 +79,7 @@ def create_session(
     return SessionCreated(id=record.id, token=token, config=config, created_at=record.created_at)
 
 
-@router.get("", responses=problem_responses(401, 403))
+@router.get("", responses=problem_responses(401, 403, 503))
 def list_sessions(_admin: AdminDep, store: StoreDep) -> SessionList:
     """Every live session (admin token only)."""
     items = [
@@ -96,7 +98,7 @@ def list_sessions(_admin: AdminDep, store: StoreDep) -> SessionList:
     "/{sid}",
     status_code=HTTPStatus.NO_CONTENT,
     response_class=Response,
-    responses=problem_responses(401, 403, 404),
+    responses=problem_responses(401, 403, 404, 503),
 )
 async def delete_session(session: AuthorizedSession, registry: RegistryDep) -> Response:
     """End a session: it no longer accepts inputs nor answers (its token stops working)."""
@@ -133,24 +135,39 @@ def summary(session: LiveSession) -> SessionSummary:
     )
 
 
-@router.get("/{sid}", responses=problem_responses(401, 403, 404))
-async def get_session(session: LiveSessionDep) -> SessionSummary:
+@router.get("/{sid}", responses=problem_responses(401, 403, 404, 503))
+async def get_session(session: CurrentSessionDep) -> SessionSummary:
     """The session's summary: config, sensors with their activity, track counts, time and seq."""
     async with session.lock:
         return summary(session)
 
 
-@router.get("/{sid}/events", responses=problem_responses(401, 403, 404, 422))
+@router.get(
+    "/{sid}/events",
+    response_model=EventLog,
+    responses=problem_responses(401, 403, 404, 422, 503),
+)
 def list_session_events(
     session: AuthorizedSession,
     store: StoreDep,
     after: Annotated[int, Query(ge=0, description="only events with seq > after")] = 0,
     limit: Annotated[int, Query(ge=1, le=MAX_EVENTS_PAGE, description="page size")] = 1000,
-) -> EventLog:
-    """The accepted inputs in order (export and replay); page with ``after``."""
-    entries = store.entries(session.id, after=after, limit=limit)
-    return EventLog(
+) -> PlainJSONResponse:
+    """The accepted inputs in order (export and replay); page with ``after``.
+
+    The log keeps ``log_retention`` inputs behind the latest snapshot; a page
+    whose ``after`` is older starts with that ``snapshot``, then the inputs
+    after it, so every page sequence from ``after=0`` replays the session.
+    """
+    page = history(store, session.id, after, limit)
+    snapshot = page.snapshot
+    log = EventLog(
         session=session.id,
-        events=[event_from_entry(entry) for entry in entries],
-        last_seq=store.last_seq(session.id),
-    )
+        events=[event_from_entry(entry) for entry in page.entries],
+        last_seq=page.last_seq,
+    ).model_dump(mode="json", exclude_none=True)
+    if snapshot is not None:  # the state as stored, not validated again
+        log["snapshot"] = SnapshotEvent.model_construct(
+            type="snapshot", seq=snapshot.seq, taken_at=snapshot.taken_at, state=snapshot.state
+        ).model_dump(mode="json")
+    return PlainJSONResponse(log)

@@ -16,7 +16,10 @@ queue fills, the reader stops reading and TCP pushes back: nothing grows
 without bound. ``subscribe``: the session's hub gives each subscriber a
 bounded queue that keeps the latest results (:mod:`app.hub`); with the
 redis store the hub is fed from Redis pub/sub, so results applied on any
-instance arrive (:meth:`app.sessions.SessionRegistry.subscribe`).
+instance arrive (:meth:`app.sessions.SessionRegistry.subscribe`). The server
+closes a subscription with 1000 "session ended" when the session is deleted
+or expires, and with 1013 "store unavailable" when the store (or its
+pub/sub connection) fails: subscribe again once ``/readyz`` is ready.
 """
 
 from __future__ import annotations
@@ -34,7 +37,14 @@ from api_schemas.problem import Problem
 from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.ws import DetectionsMessage, client_message_adapter
 from app.deps import open_record
-from app.errors import ServiceError, Unauthorized, problem_for, problem_response
+from app.errors import (
+    ServiceError,
+    StoreUnavailable,
+    Unauthorized,
+    problem_for,
+    problem_response,
+)
+from app.hub import STORE_UNAVAILABLE, Ending
 from app.live_session import LiveSession
 from app.responses import dumps
 from app.sessions import SessionRegistry, result_message
@@ -82,7 +92,7 @@ async def _open(websocket: WebSocket, sid: str) -> LiveSession | None:
     try:
         token = _bearer(websocket)
         record = open_record(sid, await registry.record(sid), token, app.state.settings)
-        return await registry.get(record.id)
+        return await registry.current(await registry.get(record.id))
     except ServiceError as error:
         if "websocket.http.response" in websocket.scope.get("extensions", {}):
             response = problem_response(
@@ -148,6 +158,8 @@ async def _answer(session: LiveSession, registry: SessionRegistry, text: str, pa
         return _error(_message_problem(error, path), _ref_of(text))
     ref = message.ref
     try:
+        if session.closed:  # evicted (store down, or a failed step): the registry reloads it
+            session = await registry.get(session.id)
         if isinstance(message, DetectionsMessage):
             detections = DetectionReport.model_construct(
                 sensor=message.sensor, time=message.time, detections=message.detections
@@ -207,13 +219,17 @@ async def subscribe_session(websocket: WebSocket, sid: str) -> None:
         return
     registry: SessionRegistry = websocket.app.state.registry
     await websocket.accept(subprotocol=_subprotocol(websocket))
-    subscriber = await registry.subscribe(session)  # in place before the ack: nothing missed
+    try:
+        subscriber = await registry.subscribe(session)  # in place before the ack: nothing missed
+    except StoreUnavailable:
+        await websocket.close(code=STORE_UNAVAILABLE.code, reason=STORE_UNAVAILABLE.reason)
+        return
     await websocket.send_text(_ack(session))
 
     async def pump() -> None:
-        while (message := await subscriber.next()) is not None:
+        while not isinstance(message := await subscriber.next(), Ending):
             await websocket.send_text(message)
-        await websocket.close(code=1000, reason="session ended")
+        await websocket.close(code=message.code, reason=message.reason)
 
     try:
         async with anyio.create_task_group() as tasks:

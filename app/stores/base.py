@@ -9,12 +9,25 @@ nested lists through :func:`to_plain`; nothing is ever pickled).
 Sequence numbers start at 1 and are contiguous: :meth:`Store.append` accepts
 only ``last_seq + 1`` and raises :class:`SequenceConflict` otherwise, so two
 writers can never both log the same step.
+
+Retention: a snapshot makes the inputs before it unnecessary for a restore,
+so :meth:`Store.compact` drops the inputs up to a sequence number, never past
+the latest snapshot (the registry keeps ``log_retention`` inputs behind it).
+A history therefore always replays: the full log while it is retained, or
+the latest snapshot and the log after it (:func:`history`). A deleted
+session's data is freed at once; only a store that has never held its id
+would accept it again.
+
+Outages: every store raises :class:`~app.errors.StoreUnavailable` for its
+backend's connection and I/O errors (:func:`unavailable_on`), never a raw
+driver error, so the service answers 503 instead of 500.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime
 from typing import Any, Protocol, runtime_checkable
@@ -22,7 +35,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 import orjson
 
-from app.errors import Conflict, SessionNotFound
+from app.errors import Conflict, SessionNotFound, StoreUnavailable
 
 JsonObject = dict[str, Any]
 _PLAIN_KINDS = frozenset("biuf")
@@ -98,9 +111,40 @@ class SessionLoad:
         return self.snapshot.seq if self.snapshot is not None else 0
 
 
+@dataclass(frozen=True)
+class StoreUsage:
+    """What a store holds now: live sessions, logged inputs, snapshots and their bytes.
+
+    ``bytes`` is the store's own measure of what it keeps (JSON text for the
+    memory store, pages in use for sqlite, ``MEMORY USAGE`` of the keys for
+    Redis), so a test or a soak can see data freed without looking at RSS.
+    """
+
+    sessions: int
+    inputs: int
+    snapshots: int
+    bytes: int
+
+
+@dataclass(frozen=True)
+class History:
+    """A replayable stretch of a session's log: an optional snapshot, then inputs after it."""
+
+    snapshot: Snapshot | None
+    entries: list[LogEntry]
+    last_seq: int
+    """The session's latest sequence number when the history was read."""
+
+
 @runtime_checkable
 class Store(Protocol):
     """Durable (or not) keeping of sessions, their input logs and snapshots. Thread-safe."""
+
+    kind: str
+    """``memory``, ``sqlite`` or ``redis`` (what the store URL names)."""
+    shared: bool
+    """Whether several service instances may share the store: then the registry takes
+    leases, fans results out through it and checks reads against it."""
 
     def create_session(self, record: SessionRecord) -> None:
         """Store a new session; :class:`SessionExists` if the id is taken."""
@@ -142,6 +186,18 @@ class Store(Protocol):
 
     def load(self, session_id: str) -> SessionLoad:
         """The latest snapshot and the log after it; :class:`SessionNotFound` if absent."""
+        ...
+
+    def compact(self, session_id: str, through: int) -> int:
+        """Drop logged inputs with ``seq <= through`` (never past the latest snapshot); how many."""
+        ...
+
+    def usage(self) -> StoreUsage:
+        """What the store holds now (sessions, inputs, snapshots, bytes)."""
+        ...
+
+    def ping(self) -> None:
+        """Return if the store answers now; :class:`~app.errors.StoreUnavailable` if not."""
         ...
 
     def close(self) -> None:
@@ -265,6 +321,32 @@ _ORJSON_STRICT = (
     | orjson.OPT_PASSTHROUGH_SUBCLASS
 )
 """Types the json module refuses or writes differently stay orjson's errors (then json decides)."""
+
+
+def history(store: Store, session_id: str, after: int, limit: int) -> History:
+    """Inputs with ``seq > after`` (at most ``limit``), led by the latest snapshot when the
+    log no longer holds input ``after + 1`` (compacted): replaying the answer continues
+    the session exactly from ``after``, or from the snapshot when ``after`` precedes it."""
+    last = store.last_seq(session_id)
+    if after >= last:  # nothing after it (a number past the log never reaches the backend)
+        return History(snapshot=None, entries=[], last_seq=last)
+    entries = store.entries(session_id, after=after, limit=limit)
+    if entries and entries[0].seq == after + 1:
+        return History(snapshot=None, entries=entries, last_seq=last)
+    load = store.load(session_id)
+    if load.snapshot is None or load.snapshot.seq <= after:  # compacted meanwhile: read again
+        entries = store.entries(session_id, after=after, limit=limit)
+        return History(snapshot=None, entries=entries, last_seq=load.last_seq)
+    return History(snapshot=load.snapshot, entries=load.entries[:limit], last_seq=load.last_seq)
+
+
+@contextmanager
+def unavailable_on(errors: tuple[type[BaseException], ...], store: str) -> Iterator[None]:
+    """Raise :class:`~app.errors.StoreUnavailable` for the backend's ``errors``."""
+    try:
+        yield
+    except errors as error:
+        raise StoreUnavailable(store, f"{type(error).__name__}: {error}"[:200]) from error
 
 
 def check_seq(session_id: str, seq: int, last: int) -> None:

@@ -1,4 +1,9 @@
-"""The ``memory`` store: dictionaries under a lock; nothing survives the process."""
+"""The ``memory`` store: dictionaries under a lock; nothing survives the process.
+
+A deleted session is removed whole (record, log, snapshot), and a compacted
+log drops its entries: what the store holds is what :meth:`MemoryStore.usage`
+counts, the JSON text of the live sessions' configs, inputs and snapshots.
+"""
 
 from __future__ import annotations
 
@@ -14,6 +19,7 @@ from app.stores.base import (
     SessionLoad,
     SessionRecord,
     Snapshot,
+    StoreUsage,
     check_seq,
     decode,
     dumps,
@@ -53,21 +59,25 @@ class MemoryStore:
     the garbage collector one object per input instead of a few hundred.
     """
 
+    kind = "memory"
+    shared = False
+    """Whether several service instances may share this store (leases, fan-out, fresh reads)."""
+
     def __init__(self) -> None:
         self._lock = threading.Lock()
         self._sessions: dict[str, _SessionData] = {}
 
     def _live(self, session_id: str) -> _SessionData | None:
-        data = self._sessions.get(session_id)
-        return data if data is not None and not data.record.deleted else None
+        return self._sessions.get(session_id)
 
     def create_session(self, record: SessionRecord) -> None:
         with self._lock:
             if record.id in self._sessions:
                 raise SessionExists(record.id)
-            self._sessions[record.id] = _SessionData(
-                replace(record, config=loads(dumps(record.config)))
-            )
+            if not record.deleted:
+                self._sessions[record.id] = _SessionData(
+                    replace(record, config=loads(dumps(record.config)))
+                )
 
     def get_session(self, session_id: str) -> SessionRecord | None:
         with self._lock:
@@ -76,20 +86,16 @@ class MemoryStore:
 
     def list_sessions(self) -> list[SessionRecord]:
         with self._lock:
-            records = [data.record for data in self._sessions.values() if not data.record.deleted]
+            records = [data.record for data in self._sessions.values()]
         return sorted(records, key=lambda record: (record.created_at, record.id))
 
     def count_sessions(self) -> int:
         with self._lock:
-            return sum(1 for data in self._sessions.values() if not data.record.deleted)
+            return len(self._sessions)
 
     def delete_session(self, session_id: str) -> bool:
         with self._lock:
-            data = self._live(session_id)
-            if data is None:
-                return False
-            data.record = replace(data.record, deleted=True)
-            return True
+            return self._sessions.pop(session_id, None) is not None
 
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
@@ -137,6 +143,33 @@ class MemoryStore:
                 snapshot=None if data.snapshot is None else data.snapshot.snapshot(),
                 entries=[logged.entry() for logged in data.log if logged.seq > after],
             )
+
+    def compact(self, session_id: str, through: int) -> int:
+        with self._lock:
+            data = self._require(session_id)
+            limit = min(through, data.snapshot.seq if data.snapshot is not None else 0)
+            kept = [logged for logged in data.log if logged.seq > limit]
+            dropped = len(data.log) - len(kept)
+            data.log = kept
+            return dropped
+
+    def usage(self) -> StoreUsage:
+        with self._lock:
+            sessions = list(self._sessions.values())
+            return StoreUsage(
+                sessions=len(sessions),
+                inputs=sum(len(data.log) for data in sessions),
+                snapshots=sum(data.snapshot is not None for data in sessions),
+                bytes=sum(
+                    len(dumps(data.record.config))
+                    + sum(len(logged.text) for logged in data.log)
+                    + (len(data.snapshot.text) if data.snapshot is not None else 0)
+                    for data in sessions
+                ),
+            )
+
+    def ping(self) -> None:
+        return None
 
     def close(self) -> None:
         with self._lock:

@@ -1,7 +1,7 @@
 """The ``redis`` store: sessions as hashes, each input log a Redis Stream, snapshots by seq.
 
-For several service instances sharing one Redis (see :mod:`app.stores.lease`
-for who may apply a session's inputs and :mod:`app.stores.fanout` for
+For several service instances sharing one Redis (see :mod:`app.cluster.lease`
+for who may apply a session's inputs and :mod:`app.cluster.fanout` for
 results reaching subscribers on any instance). The key layout is in
 :mod:`app.stores.redis_keys`; every value is JSON text, nothing is pickled.
 
@@ -23,6 +23,13 @@ errors) finds its own entry at ``last_seq`` with the same ``received_at`` and
 input and succeeds again without writing; any other input at a taken seq is
 a :class:`~app.stores.base.SequenceConflict`.
 
+Retention: deleting a session unlinks its record, log and snapshots;
+:meth:`RedisStore.compact` trims the log stream (``XTRIM MINID``) behind the
+latest snapshot. Outages: redis-py retries a failed command three times
+(backoff with jitter, a 5 s socket timeout), then its connection and timeout
+errors are raised as :class:`~app.errors.StoreUnavailable`; the next command
+after Redis is back reconnects by itself.
+
 Durability: an append returns once Redis has applied it. That is durable in
 the sense of the sqlite store only if Redis persists before answering
 (``appendonly yes`` with ``appendfsync always``, as ``docker/compose.yaml``
@@ -31,6 +38,7 @@ runs it); with ``everysec`` a crash of Redis itself may lose the last second.
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable, Mapping
 from datetime import UTC, datetime, timedelta
 from typing import Any, cast
@@ -46,8 +54,10 @@ from app.stores.base import (
     SessionLoad,
     SessionRecord,
     Snapshot,
+    StoreUsage,
     dumps,
     loads,
+    unavailable_on,
 )
 from app.stores.redis_keys import DEFAULT_PREFIX, RedisKeys
 
@@ -55,6 +65,10 @@ SNAPSHOTS_KEPT = 2
 DEFAULT_URL = "redis://127.0.0.1:6379/0"
 _EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
 _SCAN_BATCH = 500
+CONNECT_TIMEOUT_S = 2.0
+SOCKET_TIMEOUT_S = 5.0
+UNREACHABLE = (redis.ConnectionError, redis.TimeoutError)
+"""redis-py's errors of a server that does not answer (after its retries)."""
 
 # KEYS: session, index. ARGV: id, config, token_hash, created_at, deleted, score.
 _CREATE = """
@@ -65,12 +79,26 @@ if ARGV[5] == '0' then redis.call('ZADD', KEYS[2], ARGV[6], ARGV[1]) end
 return 1
 """
 
-# KEYS: session, index. ARGV: id.
+# KEYS: session, index, log, snapshots. ARGV: id. Frees everything the session held.
 _DELETE = """
-if redis.call('HGET', KEYS[1], 'deleted') ~= '0' then return 0 end
-redis.call('HSET', KEYS[1], 'deleted', '1')
+local live = redis.call('HGET', KEYS[1], 'deleted') == '0'
 redis.call('ZREM', KEYS[2], ARGV[1])
-return 1
+redis.call('UNLINK', KEYS[1], KEYS[3], KEYS[4])
+if live then return 1 end
+return 0
+"""
+
+# KEYS: session, snapshots, log. ARGV: through. Trims the log to seq > min(through, latest
+# snapshot); replies how many entries went, or -1 without a live session.
+_COMPACT = """
+if redis.call('HGET', KEYS[1], 'deleted') ~= '0' then return -1 end
+local latest = 0
+for _, seq in ipairs(redis.call('HKEYS', KEYS[2])) do
+  if tonumber(seq) > latest then latest = tonumber(seq) end
+end
+local through = math.min(tonumber(ARGV[1]), latest)
+if through < 1 then return 0 end
+return redis.call('XTRIM', KEYS[3], 'MINID', '=', (through + 1) .. '-0')
 """
 
 # KEYS: session, log. ARGV: seq, received_at, input.
@@ -178,17 +206,27 @@ class RedisStore:
     first request.
     """
 
+    kind = "redis"
+    shared = True
+    """Whether several service instances may share this store (leases, fan-out, fresh reads)."""
+
     def __init__(self, url: str = DEFAULT_URL, prefix: str = DEFAULT_PREFIX) -> None:
         self.url = url
         self.keys = RedisKeys(prefix)
-        self.client: redis.Redis = redis.Redis.from_url(url, decode_responses=True)
+        self.client: redis.Redis = redis.Redis.from_url(
+            url,
+            decode_responses=True,
+            socket_connect_timeout=CONNECT_TIMEOUT_S,
+            socket_timeout=SOCKET_TIMEOUT_S,
+        )
         self._closed = False
         self._create = self.client.register_script(_CREATE)
         self._delete = self.client.register_script(_DELETE)
         self._append = self.client.register_script(_APPEND)
         self._snapshot = self.client.register_script(_SNAPSHOT)
         self._load = self.client.register_script(_LOAD)
-        self.client.ping()
+        self._compact = self.client.register_script(_COMPACT)
+        self.ping()
 
     @property
     def prefix(self) -> str:
@@ -200,57 +238,72 @@ class RedisStore:
             raise RuntimeError("the store is closed")
         return self.client
 
+    @staticmethod
+    def _reachable() -> contextlib.AbstractContextManager[None]:
+        return unavailable_on(UNREACHABLE, "redis")
+
     def create_session(self, record: SessionRecord) -> None:
-        created = self._create(
-            keys=[self.keys.session(record.id), self.keys.sessions()],
-            args=[
-                record.id,
-                dumps(record.config),
-                record.token_hash,
-                record.created_at.isoformat(),
-                "1" if record.deleted else "0",
-                creation_score(record.created_at),
-            ],
-            client=self._redis(),
-        )
+        with self._reachable():
+            created = self._create(
+                keys=[self.keys.session(record.id), self.keys.sessions()],
+                args=[
+                    record.id,
+                    dumps(record.config),
+                    record.token_hash,
+                    record.created_at.isoformat(),
+                    "1" if record.deleted else "0",
+                    creation_score(record.created_at),
+                ],
+                client=self._redis(),
+            )
         if not created:
             raise SessionExists(record.id)
 
     def get_session(self, session_id: str) -> SessionRecord | None:
-        fields = cast(dict[str, str], self._redis().hgetall(self.keys.session(session_id)))
+        with self._reachable():
+            fields = cast(dict[str, str], self._redis().hgetall(self.keys.session(session_id)))
         if not fields or fields["deleted"] != "0":
             return None
         return _record(fields)
 
     def list_sessions(self) -> list[SessionRecord]:
         client = self._redis()
-        ids = cast(list[str], client.zrange(self.keys.sessions(), 0, -1))
-        pipeline = client.pipeline(transaction=False)
-        for session_id in ids:
-            pipeline.hgetall(self.keys.session(session_id))
-        rows: list[dict[str, str]] = pipeline.execute()
+        with self._reachable():
+            ids = cast(list[str], client.zrange(self.keys.sessions(), 0, -1))
+            pipeline = client.pipeline(transaction=False)
+            for session_id in ids:
+                pipeline.hgetall(self.keys.session(session_id))
+            rows: list[dict[str, str]] = pipeline.execute()
         return [_record(fields) for fields in rows if fields and fields["deleted"] == "0"]
 
     def count_sessions(self) -> int:
-        return int(self._redis().zcard(self.keys.sessions()))
+        with self._reachable():
+            return int(self._redis().zcard(self.keys.sessions()))
 
     def delete_session(self, session_id: str) -> bool:
-        deleted = self._delete(
-            keys=[self.keys.session(session_id), self.keys.sessions()],
-            args=[session_id],
-            client=self._redis(),
-        )
+        with self._reachable():
+            deleted = self._delete(
+                keys=[
+                    self.keys.session(session_id),
+                    self.keys.sessions(),
+                    self.keys.log(session_id),
+                    self.keys.snapshots(session_id),
+                ],
+                args=[session_id],
+                client=self._redis(),
+            )
         return bool(deleted)
 
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
     ) -> None:
         text = dumps(entry_input)
-        reply: list[str] = self._append(
-            keys=[self.keys.session(session_id), self.keys.log(session_id)],
-            args=[seq, received_at.isoformat(), text],
-            client=self._redis(),
-        )
+        with self._reachable():
+            reply: list[str] = self._append(
+                keys=[self.keys.session(session_id), self.keys.log(session_id)],
+                args=[seq, received_at.isoformat(), text],
+                client=self._redis(),
+            )
         outcome = reply[0]
         if outcome == "missing":
             raise SessionNotFound(session_id)
@@ -259,10 +312,11 @@ class RedisStore:
 
     def _live_then(self, session_id: str, read: Callable[[Pipeline], object]) -> Any:
         """``read``'s reply, run in one MULTI after the live check; else SessionNotFound."""
-        pipeline = self._redis().pipeline(transaction=True)
-        pipeline.hget(self.keys.session(session_id), "deleted")
-        read(pipeline)
-        deleted, answer = pipeline.execute()
+        with self._reachable():
+            pipeline = self._redis().pipeline(transaction=True)
+            pipeline.hget(self.keys.session(session_id), "deleted")
+            read(pipeline)
+            deleted, answer = pipeline.execute()
         if deleted != "0":
             raise SessionNotFound(session_id)
         return answer
@@ -285,23 +339,25 @@ class RedisStore:
             "taken_at": snapshot.taken_at.isoformat(),
             "state": snapshot.state,
         }
-        saved = self._snapshot(
-            keys=[self.keys.session(session_id), self.keys.snapshots(session_id)],
-            args=[snapshot.seq, dumps(document), SNAPSHOTS_KEPT],
-            client=self._redis(),
-        )
+        with self._reachable():
+            saved = self._snapshot(
+                keys=[self.keys.session(session_id), self.keys.snapshots(session_id)],
+                args=[snapshot.seq, dumps(document), SNAPSHOTS_KEPT],
+                client=self._redis(),
+            )
         if not saved:
             raise SessionNotFound(session_id)
 
     def load(self, session_id: str) -> SessionLoad:
-        reply: list[Any] = self._load(
-            keys=[
-                self.keys.session(session_id),
-                self.keys.snapshots(session_id),
-                self.keys.log(session_id),
-            ],
-            client=self._redis(),
-        )
+        with self._reachable():
+            reply: list[Any] = self._load(
+                keys=[
+                    self.keys.session(session_id),
+                    self.keys.snapshots(session_id),
+                    self.keys.log(session_id),
+                ],
+                client=self._redis(),
+            )
         if not reply:
             raise SessionNotFound(session_id)
         fields, snapshot, rows = reply
@@ -310,6 +366,52 @@ class RedisStore:
             snapshot=_snapshot(snapshot) if snapshot is not None else None,
             entries=[_entry(stream_id, _pairs(entry)) for stream_id, entry in rows],
         )
+
+    def compact(self, session_id: str, through: int) -> int:
+        with self._reachable():
+            dropped = int(
+                self._compact(
+                    keys=[
+                        self.keys.session(session_id),
+                        self.keys.snapshots(session_id),
+                        self.keys.log(session_id),
+                    ],
+                    args=[through],
+                    client=self._redis(),
+                )
+            )
+        if dropped < 0:
+            raise SessionNotFound(session_id)
+        return dropped
+
+    def usage(self) -> StoreUsage:
+        client = self._redis()
+        with self._reachable():
+            keys = list(client.scan_iter(match=self.keys.pattern(), count=_SCAN_BATCH))
+            pipeline = client.pipeline(transaction=False)
+            for key in keys:
+                pipeline.memory_usage(key, samples=0)
+            logs = [key for key in keys if key.endswith(":log")]
+            snapshots = [key for key in keys if key.endswith(":snapshots")]
+            for key in logs:
+                pipeline.xlen(key)
+            for key in snapshots:
+                pipeline.hlen(key)
+            pipeline.zcard(self.keys.sessions())
+            replies: list[Any] = pipeline.execute()
+        sizes = replies[: len(keys)]
+        lengths = replies[len(keys) : len(keys) + len(logs)]
+        counts = replies[len(keys) + len(logs) : -1]
+        return StoreUsage(
+            sessions=int(replies[-1]),
+            inputs=sum(int(length) for length in lengths),
+            snapshots=sum(int(count) for count in counts),
+            bytes=sum(int(size or 0) for size in sizes),
+        )
+
+    def ping(self) -> None:
+        with self._reachable():
+            self._redis().ping()
 
     def purge(self) -> int:
         """Delete every key under the prefix (tests, decommissioning); how many there were."""

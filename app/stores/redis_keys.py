@@ -20,6 +20,9 @@ name                           type    holds
 ``P:{sid}:lease``              string  the owner holding the session's lease (PX TTL)
 ``P:{sid}:results`` (channel)  pubsub  result JSON of every applied input
 =============================  ======  ================================================
+
+Deleting a session unlinks its record, log and snapshots and removes it from
+the index (its lease expires by itself); compaction trims the log stream.
 """
 
 from __future__ import annotations

@@ -7,6 +7,14 @@ crash — of the process or of the machine — loses no acknowledged input.
 (``NORMAL`` would survive a process crash but could lose the last commits
 on power loss; one fsync per input is the price of the guarantee.)
 
+Retention: a deleted session's rows are deleted, and :meth:`SqliteStore.compact`
+deletes the inputs behind a snapshot; sqlite reuses the freed pages, so the
+file stops growing once a session's retained log has its size (the WAL is
+checkpointed automatically and truncated to ``JOURNAL_SIZE_LIMIT``).
+sqlite's ``OperationalError`` (I/O error, full disk, a lock held past the
+busy timeout, a file that cannot be opened) is raised as
+:class:`~app.errors.StoreUnavailable`.
+
 Threads: each thread gets its own connection (sqlite3 connections are not
 shared across threads); writes are serialised by a process lock and
 ``BEGIN IMMEDIATE`` (which also guards against another process on the same
@@ -17,11 +25,11 @@ from __future__ import annotations
 
 import sqlite3
 import threading
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from datetime import datetime
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
 from app.stores.base import (
     LogEntry,
@@ -29,15 +37,20 @@ from app.stores.base import (
     SessionLoad,
     SessionRecord,
     Snapshot,
+    StoreUsage,
     check_seq,
     dumps,
     loads,
     require,
+    unavailable_on,
 )
 
 SCHEMA_VERSION = 1
 SNAPSHOTS_KEPT = 2
 BUSY_TIMEOUT_MS = 30_000
+JOURNAL_SIZE_LIMIT = 16 * 1024 * 1024
+"""Bytes the WAL file is truncated to after a checkpoint."""
+T = TypeVar("T")
 Synchronous = Literal["FULL", "NORMAL"]
 
 SCHEMA = """
@@ -65,6 +78,10 @@ CREATE TABLE IF NOT EXISTS snapshots (
 """
 
 
+_ID = {"inputs": "session_id", "snapshots": "session_id", "sessions": "id"}
+"""The column holding the session id, per table."""
+
+
 def _record(row: sqlite3.Row) -> SessionRecord:
     return SessionRecord(
         id=row["id"],
@@ -85,6 +102,10 @@ def _entry(row: sqlite3.Row) -> LogEntry:
 
 class SqliteStore:
     """A :class:`~app.stores.base.Store` in one SQLite file."""
+
+    kind = "sqlite"
+    shared = False
+    """Whether several service instances may share this store (leases, fan-out, fresh reads)."""
 
     def __init__(self, path: Path | str, synchronous: Synchronous = "FULL") -> None:
         self.path = Path(path)
@@ -123,6 +144,7 @@ class SqliteStore:
             connection.execute(f"PRAGMA synchronous = {self._synchronous}")
             connection.execute("PRAGMA foreign_keys = ON")
             connection.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
+            connection.execute(f"PRAGMA journal_size_limit = {JOURNAL_SIZE_LIMIT}")
             self._local.connection = connection
             with self._connections_lock:
                 self._connections.append(connection)
@@ -130,15 +152,21 @@ class SqliteStore:
 
     @contextmanager
     def _write(self) -> Iterator[sqlite3.Connection]:
-        with self._write_lock:
+        with self._write_lock, unavailable_on((sqlite3.OperationalError,), "sqlite"):
             connection = self._connection()
             connection.execute("BEGIN IMMEDIATE")
             try:
                 yield connection
             except BaseException:
-                connection.execute("ROLLBACK")
+                if connection.in_transaction:
+                    connection.execute("ROLLBACK")
                 raise
             connection.execute("COMMIT")
+
+    def _read(self, read: Callable[[sqlite3.Connection], T]) -> T:
+        """``read`` on this thread's connection; sqlite's operational errors as StoreUnavailable."""
+        with unavailable_on((sqlite3.OperationalError,), "sqlite"):
+            return read(self._connection())
 
     def _live_record(self, connection: sqlite3.Connection, session_id: str) -> SessionRecord | None:
         row = connection.execute(
@@ -174,26 +202,31 @@ class SqliteStore:
             )
 
     def get_session(self, session_id: str) -> SessionRecord | None:
-        return self._live_record(self._connection(), session_id)
+        return self._read(lambda connection: self._live_record(connection, session_id))
 
     def list_sessions(self) -> list[SessionRecord]:
-        rows = self._connection().execute(
-            "SELECT * FROM sessions WHERE deleted = 0 ORDER BY created_at, id"
+        return self._read(
+            lambda connection: [
+                _record(row)
+                for row in connection.execute(
+                    "SELECT * FROM sessions WHERE deleted = 0 ORDER BY created_at, id"
+                )
+            ]
         )
-        return [_record(row) for row in rows]
 
     def count_sessions(self) -> int:
-        row = (
-            self._connection().execute("SELECT count(*) FROM sessions WHERE deleted = 0").fetchone()
+        return self._read(
+            lambda connection: int(
+                connection.execute("SELECT count(*) FROM sessions WHERE deleted = 0").fetchone()[0]
+            )
         )
-        return int(row[0])
 
     def delete_session(self, session_id: str) -> bool:
         with self._write() as connection:
-            cursor = connection.execute(
-                "UPDATE sessions SET deleted = 1 WHERE id = ? AND deleted = 0", (session_id,)
-            )
-            return cursor.rowcount > 0
+            live = self._live_record(connection, session_id) is not None
+            for table in ("inputs", "snapshots", "sessions"):
+                connection.execute(f"DELETE FROM {table} WHERE {_ID[table]} = ?", (session_id,))
+            return live
 
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
@@ -208,18 +241,23 @@ class SqliteStore:
             )
 
     def last_seq(self, session_id: str) -> int:
-        connection = self._connection()
-        require(self._live_record(connection, session_id), session_id)
-        return self._last_seq(connection, session_id)
+        def read(connection: sqlite3.Connection) -> int:
+            require(self._live_record(connection, session_id), session_id)
+            return self._last_seq(connection, session_id)
+
+        return self._read(read)
 
     def entries(self, session_id: str, after: int = 0, limit: int | None = None) -> list[LogEntry]:
-        connection = self._connection()
-        require(self._live_record(connection, session_id), session_id)
-        rows = connection.execute(
-            "SELECT seq, received_at, input FROM inputs WHERE session_id = ? AND seq > ? ORDER BY seq LIMIT ?",
-            (session_id, after, -1 if limit is None else limit),
-        )
-        return [_entry(row) for row in rows]
+        def read(connection: sqlite3.Connection) -> list[LogEntry]:
+            require(self._live_record(connection, session_id), session_id)
+            rows = connection.execute(
+                "SELECT seq, received_at, input FROM inputs WHERE session_id = ? AND seq > ?"
+                " ORDER BY seq LIMIT ?",
+                (session_id, after, -1 if limit is None else limit),
+            )
+            return [_entry(row) for row in rows]
+
+        return self._read(read)
 
     def save_snapshot(self, session_id: str, snapshot: Snapshot) -> None:
         text = dumps(snapshot.state)
@@ -236,7 +274,9 @@ class SqliteStore:
             )
 
     def load(self, session_id: str) -> SessionLoad:
-        connection = self._connection()
+        return self._read(lambda connection: self._load(connection, session_id))
+
+    def _load(self, connection: sqlite3.Connection, session_id: str) -> SessionLoad:
         connection.execute("BEGIN")
         try:
             record = require(self._live_record(connection, session_id), session_id)
@@ -260,8 +300,37 @@ class SqliteStore:
             )
             entries = [_entry(entry) for entry in rows]
         finally:
-            connection.execute("COMMIT")
+            if connection.in_transaction:
+                connection.execute("COMMIT")
         return SessionLoad(session=record, snapshot=snapshot, entries=entries)
+
+    def compact(self, session_id: str, through: int) -> int:
+        with self._write() as connection:
+            require(self._live_record(connection, session_id), session_id)
+            cursor = connection.execute(
+                "DELETE FROM inputs WHERE session_id = ? AND seq <= min(?, coalesce("
+                "(SELECT max(seq) FROM snapshots WHERE session_id = ?), 0))",
+                (session_id, through, session_id),
+            )
+            return cursor.rowcount
+
+    def usage(self) -> StoreUsage:
+        def read(connection: sqlite3.Connection) -> StoreUsage:
+            def count(sql: str) -> int:
+                return int(connection.execute(sql).fetchone()[0])
+
+            pages = count("PRAGMA page_count") - count("PRAGMA freelist_count")
+            return StoreUsage(
+                sessions=count("SELECT count(*) FROM sessions WHERE deleted = 0"),
+                inputs=count("SELECT count(*) FROM inputs"),
+                snapshots=count("SELECT count(*) FROM snapshots"),
+                bytes=pages * count("PRAGMA page_size"),
+            )
+
+        return self._read(read)
+
+    def ping(self) -> None:
+        self._read(lambda connection: connection.execute("SELECT 1").fetchone())
 
     def close(self) -> None:
         with self._connections_lock:

@@ -9,14 +9,14 @@ from contextlib import AsyncExitStack, asynccontextmanager
 
 import pytest
 
-from app.stores import MemoryStore, RedisStore
-from app.stores.fanout import (
+from app.cluster.fanout import (
     LocalFanout,
     RedisFanout,
     ResultFanout,
     Subscription,
     open_fanout,
 )
+from app.stores import MemoryStore, RedisStore
 from tests.api.redis_support import REDIS_URL, redis_prefix
 
 RECEIVE_TIMEOUT_S = 5.0

@@ -9,14 +9,14 @@ from datetime import UTC, datetime
 
 import pytest
 
-from app.stores import MemoryStore, RedisStore, SequenceConflict, SessionRecord
-from app.stores.lease import (
+from app.cluster.lease import (
     LocalLeases,
     RedisLeases,
     SessionLeases,
     new_owner_id,
     open_leases,
 )
+from app.stores import MemoryStore, RedisStore, SequenceConflict, SessionRecord
 from tests.api.redis_support import REDIS_URL, redis_prefix, remaining_keys
 
 SHORT_TTL_MS = 150

@@ -48,8 +48,10 @@ def test_a_new_store_object_sees_everything_and_goes_on() -> None:
         assert second.last_seq("s1") == 7
         second.append("s1", 8, {"n": 8}, now())
         assert [entry.seq for entry in second.entries("s1")] == list(range(1, 9))
+        second.create_session(record("s2"))  # a deleted session left nothing, its id included
+        assert second.last_seq("s2") == 0 and second.entries("s2") == []
         with pytest.raises(SessionExists):
-            second.create_session(record("s2"))  # deleted ids stay taken, as in sqlite
+            second.create_session(record("s2"))
         second.close()
 
 

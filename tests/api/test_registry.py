@@ -8,10 +8,11 @@ from datetime import UTC, datetime, timedelta
 from typing import Any
 
 from api_schemas.reports import TrackReport
-from app.hub import Hub
+from app.hub import SESSION_ENDED, Hub
 from app.metrics import ServiceMetrics
 from app.sessions import SessionRegistry
 from app.stores import MemoryStore, SessionRecord
+from app.stores.base import StoreUsage
 from tests.api.conftest import make_settings
 from tests.api.scenario import reports, session_config
 
@@ -96,6 +97,10 @@ def test_idle_sessions_expire() -> None:
         assert await target.expire_idle(later) == ["idle"]
         assert target.store.get_session("idle") is None
         assert target.store.get_session("busy") is not None
+        busy.last_input_at = None  # idle since its creation: it expires too, and frees it all
+        assert await target.expire_idle(later) == ["busy"]
+        assert len(target) == 0
+        assert target.store.usage() == StoreUsage(sessions=0, inputs=0, snapshots=0, bytes=0)
 
     asyncio.run(scenario())
 
@@ -111,7 +116,7 @@ def test_slow_subscriber_gets_the_latest_results_never_a_backlog() -> None:
         hub.publish("result 101")
         assert await slow.next() == "result 101"
         hub.close()
-        assert await slow.next() is None and len(hub) == 0
+        assert await slow.next() == SESSION_ENDED and len(hub) == 0
 
     asyncio.run(scenario())
 

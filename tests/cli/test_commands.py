@@ -6,6 +6,7 @@ import io
 import json
 from pathlib import Path
 
+import httpx
 import pytest
 
 from api_schemas.reports import TrackReport
@@ -14,7 +15,7 @@ from app.commands import simulate
 from app.commands.replay import export_events, read_events
 from app.commands.runner import run_locally, run_on_server
 from app.commands.scenarios import build
-from tests.api.conftest import LiveServer, live_server
+from tests.api.conftest import LiveServer, live_server, make_settings, serving
 from tests.api.examples import SESSION_CONFIG, TRACK_REPORT
 
 __all__ = ["live_server"]
@@ -120,3 +121,55 @@ def test_speed_releases_the_inputs_on_the_scenario_clock(monkeypatch: pytest.Mon
     # At twice the scenario's speed: 0, 0, 1 and 1.5 s after the start.
     assert released == [(100.0, 10.0), (100.0, 10.0), (101.0, 12.0), (101.5, 13.0)]
     assert slept == [1.0, 0.5]
+
+
+def test_a_compacted_session_exports_replays_and_restores_to_identical_results(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run = build("crossing-traffic", seed=3)
+    inputs, later = run.inputs[:30], run.inputs[30:40]
+    uninterrupted = list(run_locally(run.config, [*inputs, *later]))
+    # snapshots at 7, 14, 21, 28; each compacts the log to 3 inputs behind it: 26..30 remain
+    settings = make_settings(
+        store=f"sqlite:{tmp_path / 'store.db'}",
+        snapshot_every=7,
+        log_retention=3,
+        max_body_bytes=1 << 20,
+    )
+    sessions: list[tuple[str, str]] = []
+    with serving(settings) as server:
+        recorded = list(
+            run_on_server(
+                server.url,
+                run.config,
+                inputs,
+                on_session=lambda i, t: sessions.append((i, t)),
+                keep=True,
+            )
+        )
+        session_id, token = sessions[0]
+        headers = {"Authorization": f"Bearer {token}"}
+        page = httpx.get(
+            f"{server.url}/v1/sessions/{session_id}/events", params={"after": 0}, headers=headers
+        ).json()
+        assert page["snapshot"]["seq"] == 28 and page["last_seq"] == 30
+        assert [event["seq"] for event in page["events"]] == [29, 30]
+        retained = httpx.get(
+            f"{server.url}/v1/sessions/{session_id}/events", params={"after": 25}, headers=headers
+        ).json()
+        assert "snapshot" not in retained
+        assert [event["seq"] for event in retained["events"]] == [26, 27, 28, 29, 30]
+        events = tmp_path / "events.jsonl"
+        events.write_text("\n".join(export_events(server.url, session_id, token)) + "\n")
+    assert recorded == uninterrupted[:30]
+    lines = [json.loads(line) for line in events.read_text().splitlines()]
+    assert [line["type"] for line in lines] == ["session", "snapshot", "tracks", "tracks"]
+    assert main(["replay", str(events), "--quiet"]) == 0
+    replayed = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert replayed == uninterrupted[28:30]  # the snapshot's state, then inputs 29 and 30
+    assert main(["replay", str(events), "--server", "http://127.0.0.1:9", "--quiet"]) == 2
+    assert "replay it locally" in capsys.readouterr().err
+    with serving(settings) as server:  # restored from the compacted file: snapshot + 29, 30
+        path = f"{server.url}/v1/sessions/{session_id}/tracks"
+        continued = [httpx.post(path, json=body, headers=headers).json() for _, body in later]
+    assert continued == uninterrupted[30:40]

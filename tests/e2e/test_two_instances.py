@@ -12,15 +12,10 @@ skips, without it); every key lives under a prefix of this test, deleted after.
 from __future__ import annotations
 
 import json
-import os
 import signal
-import socket
 import subprocess
-import sys
 import time
-from collections.abc import Iterator
-from contextlib import ExitStack, contextmanager
-from pathlib import Path
+from contextlib import AbstractContextManager, ExitStack
 from typing import Any
 
 import httpx
@@ -28,63 +23,27 @@ from fastapi.testclient import TestClient
 from websockets.sync.client import ClientConnection, connect
 
 from app.main import create_app
-from tests.api.conftest import ADMIN_TOKEN, make_settings
+from tests.api.conftest import make_settings
 from tests.api.redis_support import REDIS_URL, redis_prefix
 from tests.api.scenario import reports, session_config
+from tests.e2e.service_process import instance as serve
 
-ROOT = Path(__file__).resolve().parents[2]
-START_TIMEOUT_S = 30.0
 LEASE_TTL_MS = 1000
 STEPS = 10
 ON_A = 6
 RECEIVE_TIMEOUT_S = 20.0
 
 
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return int(probe.getsockname()[1])
-
-
-@contextmanager
-def instance(prefix: str) -> Iterator[tuple[str, subprocess.Popen[bytes]]]:
-    """``credal-fusion serve`` on the shared Redis under ``prefix``; killed on exit if alive."""
-    port = free_port()
-    environment = os.environ | {
-        "CREDAL_ADMIN_TOKEN": ADMIN_TOKEN,
-        "CREDAL_REDIS_PREFIX": prefix,
-        "CREDAL_LEASE_TTL_MS": str(LEASE_TTL_MS),
-        "CREDAL_SNAPSHOT_EVERY": "4",
-    }
-    command = [sys.executable, "-m", "app.cli", "serve", "--host", "127.0.0.1"]
-    process = subprocess.Popen(
-        [*command, "--port", str(port), "--store", REDIS_URL],
-        cwd=ROOT,
-        env=environment,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
+def instance(prefix: str) -> AbstractContextManager[tuple[str, subprocess.Popen[bytes]]]:
+    """An instance on the shared Redis under ``prefix``, with a short lease."""
+    return serve(
+        REDIS_URL,
+        {
+            "CREDAL_REDIS_PREFIX": prefix,
+            "CREDAL_LEASE_TTL_MS": str(LEASE_TTL_MS),
+            "CREDAL_SNAPSHOT_EVERY": "4",
+        },
     )
-    url = f"http://127.0.0.1:{port}"
-    try:
-        deadline = time.monotonic() + START_TIMEOUT_S
-        while True:
-            assert process.poll() is None, "the instance exited at start"
-            try:
-                if httpx.get(f"{url}/healthz", timeout=1).status_code == 200:
-                    break
-            except httpx.TransportError:
-                pass
-            assert time.monotonic() < deadline, "the instance did not start"
-            time.sleep(0.05)
-        yield url, process
-    finally:
-        if process.poll() is None:
-            process.send_signal(signal.SIGTERM)
-            try:
-                process.wait(timeout=START_TIMEOUT_S)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
 
 
 def uninterrupted(bodies: list[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -43,8 +43,9 @@ from typing import Protocol, Self, runtime_checkable
 import redis.asyncio
 from redis.asyncio.client import PubSub
 
-from app.stores.base import Store
-from app.stores.redis import RedisStore
+from app.cluster import shared_redis
+from app.stores.base import Store, unavailable_on
+from app.stores.redis import CONNECT_TIMEOUT_S, UNREACHABLE
 from app.stores.redis_keys import DEFAULT_PREFIX, RedisKeys
 
 DEFAULT_MAX_PENDING = 64
@@ -136,6 +137,10 @@ class ResultFanout(Protocol):
         """A subscription to the session's results (enter it with ``async with``)."""
         ...
 
+    async def ping(self) -> None:
+        """Return if results can be published now; :class:`~app.errors.StoreUnavailable` if not."""
+        ...
+
     async def aclose(self) -> None:
         """Release connections; subscriptions end."""
         ...
@@ -174,6 +179,9 @@ class LocalFanout:
     def subscribe(self, session_id: str) -> Subscription:
         return _LocalSubscription(self, session_id, self.max_pending)
 
+    async def ping(self) -> None:
+        return None
+
     async def aclose(self) -> None:
         for subscribers in list(self._subscriptions.values()):
             for subscription in list(subscribers):
@@ -200,16 +208,20 @@ class _RedisSubscription(Subscription):
         pubsub = self._client.pubsub()
         self._pubsub = pubsub
         try:
-            await pubsub.subscribe(self._channel)
-            async with asyncio.timeout(SUBSCRIBE_TIMEOUT_S):
-                while True:  # the server confirms: from now on, every publish reaches us
-                    message = await pubsub.get_message(timeout=SUBSCRIBE_TIMEOUT_S)
-                    if message is not None and message["type"] == "subscribe":
-                        break
+            with unavailable_on((*UNREACHABLE, OSError), "redis"):
+                await self._subscribe(pubsub)
         except BaseException:
             await self.aclose()
             raise
         self._reader = asyncio.create_task(self._read(pubsub), name=f"fanout:{self._channel}")
+
+    async def _subscribe(self, pubsub: PubSub) -> None:
+        await pubsub.subscribe(self._channel)
+        async with asyncio.timeout(SUBSCRIBE_TIMEOUT_S):
+            while True:  # the server confirms: from now on, every publish reaches us
+                message = await pubsub.get_message(timeout=SUBSCRIBE_TIMEOUT_S)
+                if message is not None and message["type"] == "subscribe":
+                    break
 
     async def _read(self, pubsub: PubSub) -> None:
         try:
@@ -255,7 +267,9 @@ class RedisFanout:
     ) -> None:
         self.keys = RedisKeys(prefix)
         self.max_pending = max_pending
-        self.client: redis.asyncio.Redis = redis.asyncio.Redis.from_url(url, decode_responses=True)
+        self.client: redis.asyncio.Redis = redis.asyncio.Redis.from_url(
+            url, decode_responses=True, socket_connect_timeout=CONNECT_TIMEOUT_S
+        )
         self._subscriptions: set[_RedisSubscription] = set()
 
     async def publish(self, session_id: str, result_json: str) -> int:
@@ -272,6 +286,10 @@ class RedisFanout:
         self._subscriptions.add(subscription)
         return subscription
 
+    async def ping(self) -> None:
+        with unavailable_on(UNREACHABLE, "redis"):
+            await self.client.ping()
+
     async def aclose(self) -> None:
         for subscription in list(self._subscriptions):
             await subscription.aclose()
@@ -279,7 +297,8 @@ class RedisFanout:
 
 
 def open_fanout(store: Store, max_pending: int = DEFAULT_MAX_PENDING) -> ResultFanout:
-    """The fan-out that goes with ``store``: Redis pub/sub for the redis store, else local."""
-    if isinstance(store, RedisStore):
-        return RedisFanout(store.url, store.prefix, max_pending)
+    """The fan-out that goes with ``store``: Redis pub/sub for a shared store, else local."""
+    backing = shared_redis(store)
+    if backing is not None:
+        return RedisFanout(backing.url, backing.keys.prefix, max_pending)
     return LocalFanout(max_pending)

@@ -20,7 +20,7 @@ once per process, then for each input of session ``sid``::
     seq = store.last_seq(sid) + 1
     store.append(sid, seq, input, received_at)  # SequenceConflict: we were overtaken,
                                                 # drop the engine, reload, retry once
-    apply, publish the result (app.stores.fanout)
+    apply, publish the result (app.cluster.fanout)
 
 ``acquire`` by the holder renews (it is re-entrant), so calling it before
 every input is enough while inputs keep coming; a session streaming over a
@@ -50,8 +50,9 @@ from typing import Protocol, runtime_checkable
 
 import redis
 
-from app.stores.base import Store
-from app.stores.redis import RedisStore
+from app.cluster import shared_redis
+from app.stores.base import Store, unavailable_on
+from app.stores.redis import UNREACHABLE
 from app.stores.redis_keys import RedisKeys
 
 DEFAULT_LEASE_TTL_MS = 10_000
@@ -137,17 +138,21 @@ class RedisLeases:
 
     def acquire(self, session_id: str, owner: str, ttl_ms: int) -> bool:
         _check_ttl(ttl_ms)
-        return bool(self._acquire(keys=[self.keys.lease(session_id)], args=[owner, ttl_ms]))
+        with unavailable_on(UNREACHABLE, "redis"):
+            return bool(self._acquire(keys=[self.keys.lease(session_id)], args=[owner, ttl_ms]))
 
     def renew(self, session_id: str, owner: str, ttl_ms: int) -> bool:
         _check_ttl(ttl_ms)
-        return bool(self._renew(keys=[self.keys.lease(session_id)], args=[owner, ttl_ms]))
+        with unavailable_on(UNREACHABLE, "redis"):
+            return bool(self._renew(keys=[self.keys.lease(session_id)], args=[owner, ttl_ms]))
 
     def release(self, session_id: str, owner: str) -> bool:
-        return bool(self._release(keys=[self.keys.lease(session_id)], args=[owner]))
+        with unavailable_on(UNREACHABLE, "redis"):
+            return bool(self._release(keys=[self.keys.lease(session_id)], args=[owner]))
 
     def holder(self, session_id: str) -> str | None:
-        value = self.client.get(self.keys.lease(session_id))
+        with unavailable_on(UNREACHABLE, "redis"):
+            value = self.client.get(self.keys.lease(session_id))
         return str(value) if value is not None else None
 
 
@@ -197,7 +202,8 @@ class LocalLeases:
 
 
 def open_leases(store: Store) -> SessionLeases:
-    """The leases that go with ``store``: shared through Redis for the redis store, else local."""
-    if isinstance(store, RedisStore):
-        return RedisLeases(store.client, store.keys)
+    """The leases that go with ``store``: through Redis for a shared store, else local."""
+    backing = shared_redis(store)
+    if backing is not None:
+        return RedisLeases(backing.client, backing.keys)
     return LocalLeases()

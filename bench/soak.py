@@ -1,0 +1,315 @@
+"""Soak: a few minutes of steady load on a live server per store; RSS and store size stay flat.
+
+Run with ``make soak`` (not part of ``make test`` nor ``make bench``). For each
+store (memory, sqlite on a fresh file, redis under a prefix of its own on
+``CREDAL_SOAK_REDIS_URL``, default the local server) a ``credal-fusion serve``
+subprocess takes, for ``SOAK_SECONDS`` (default 100 s per store):
+
+* :data:`LONG_SESSIONS` sessions of :data:`SENSORS` sensors × :data:`TRACKS`
+  tracks, each sensor reporting at :data:`REPORTS_PER_S` per second (paced;
+  slower if the server is), with snapshots every :data:`SNAPSHOT_EVERY` inputs
+  and :data:`LOG_RETENTION` inputs kept behind each snapshot;
+* a churn of short sessions: create, :data:`CHURN_INPUTS` inputs, delete.
+
+Every :data:`SAMPLE_EVERY_S` it samples the server's RSS (``/proc/PID/status``),
+the store's own size (``credal_store_bytes`` of ``/metrics``), the inputs the
+store holds and, for sqlite, the file size (database + WAL). It prints the
+samples, then checks the two rules and exits 1 if one fails:
+
+* RSS grows less than :data:`MAX_GROWTH` over the second half (the median of
+  the last three samples against the median of the three around the middle);
+* the store is flat: its size over the second half never exceeds by more than
+  :data:`MAX_GROWTH` its largest size between 25 % and 50 % of the run (the
+  retained log rises and falls by one snapshot period; it must not creep up).
+
+Speed is not measured here (``bench/service.py`` does that).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import re
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import httpx
+import numpy as np
+import redis
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from machine import describe_machine
+
+ROOT = Path(__file__).resolve().parents[1]
+SOAK_SECONDS = float(os.environ.get("SOAK_SECONDS", "100"))
+REDIS_URL = os.environ.get("CREDAL_SOAK_REDIS_URL", "redis://127.0.0.1:6379/0")
+LONG_SESSIONS = 2
+SENSORS = 3
+TRACKS = 30
+REPORTS_PER_S = 8.0
+"""Per sensor of a long session."""
+CHURN_INPUTS = 5
+SNAPSHOT_EVERY = 25
+LOG_RETENTION = 100
+SAMPLE_EVERY_S = 4.0
+MAX_GROWTH = 0.05
+START_TIMEOUT_S = 30.0
+COVARIANCE = [[4, 0, 0, 0], [0, 1, 0, 0], [0, 0, 4, 0], [0, 0, 0, 1]]
+
+
+def track_list(sensor: str, time_s: float, count: int) -> dict[str, Any]:
+    """``count`` targets on a grid, each reported by ``sensor`` at ``time_s``."""
+    rng = np.random.default_rng(int(time_s * 1000) % 2**31)
+    tracks = []
+    for index in range(count):
+        x0, y0 = 300.0 * (index % 40), 300.0 * (index // 40)
+        state = np.array([x0 + 5.0 * time_s, 5.0, y0 - 2.0 * time_s, -2.0]) + rng.normal(0, 1, 4)
+        tracks.append(
+            {
+                "id": f"t{index}",
+                "state": [round(float(v), 4) for v in state],
+                "covariance": COVARIANCE,
+            }
+        )
+    return {"sensor": sensor, "time": time_s, "tracks": tracks}
+
+
+def config(sensors: list[str]) -> dict[str, Any]:
+    return {
+        "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+        "sensors": [{"id": sensor} for sensor in sensors],
+    }
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+@contextmanager
+def serving(store: str, environment: dict[str, str]) -> Iterator[tuple[str, int]]:
+    """``credal-fusion serve --store STORE``: its URL and pid, stopped on exit."""
+    port = free_port()
+    process = subprocess.Popen(
+        [
+            *(sys.executable, "-m", "app.cli", "serve", "--host", "127.0.0.1"),
+            *("--port", str(port), "--store", store, "--no-access-log"),
+        ],
+        cwd=ROOT,
+        env=os.environ
+        | environment
+        | {
+            "CREDAL_ADMIN_TOKEN": "soak-admin-token-0123456789abcdef",
+            "CREDAL_SNAPSHOT_EVERY": str(SNAPSHOT_EVERY),
+            "CREDAL_LOG_RETENTION": str(LOG_RETENTION),
+            "CREDAL_RATE_LIMIT": "none",
+        },
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    url = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while True:
+            try:
+                if httpx.get(f"{url}/readyz", timeout=1).status_code == 200:
+                    break
+            except httpx.TransportError:
+                pass
+            if process.poll() is not None or time.monotonic() > deadline:
+                raise RuntimeError(f"the server on {store} did not start")
+            time.sleep(0.05)
+        yield url, process.pid
+    finally:
+        process.terminate()
+        process.wait(timeout=START_TIMEOUT_S)
+
+
+@dataclass(frozen=True)
+class Sample:
+    at_s: float
+    rss_bytes: int
+    store_bytes: int
+    store_inputs: int
+    file_bytes: int | None
+    inputs_sent: int
+
+
+def rss_of(pid: int) -> int:
+    status = Path(f"/proc/{pid}/status").read_text()
+    match = re.search(r"^VmRSS:\s+(\d+) kB", status, re.MULTILINE)
+    assert match is not None
+    return int(match.group(1)) * 1024
+
+
+def gauge(metrics: str, name: str) -> int:
+    match = re.search(rf"^{name} (\S+)$", metrics, re.MULTILINE)
+    return int(float(match.group(1))) if match else 0
+
+
+class Load:
+    """The load generator: long sessions at a paced rate, and a churn of short ones."""
+
+    def __init__(self, url: str, deadline: float) -> None:
+        self.url = url
+        self.deadline = deadline
+        self.sent = 0
+        self.failures = 0
+
+    async def long_session(self, client: httpx.AsyncClient, number: int) -> None:
+        sensors = [f"s{number}-{k}" for k in range(SENSORS)]
+        created = (await client.post("/v1/sessions", json=config(sensors))).json()
+        headers = {"Authorization": f"Bearer {created['token']}"}
+        path = f"/v1/sessions/{created['id']}/tracks"
+        await asyncio.gather(
+            *(self.sensor(client, path, headers, sensor, k) for k, sensor in enumerate(sensors))
+        )
+
+    async def sensor(
+        self, client: httpx.AsyncClient, path: str, headers: dict[str, str], sensor: str, k: int
+    ) -> None:
+        step = 0
+        started = time.monotonic()
+        while time.monotonic() < self.deadline:
+            body = track_list(sensor, 1.0 + step / REPORTS_PER_S + k / (SENSORS * 100), TRACKS)
+            answer = await client.post(path, json=body, headers=headers)
+            self.sent += 1
+            self.failures += answer.status_code != 200
+            step += 1
+            pause = started + step / REPORTS_PER_S - time.monotonic()
+            if pause > 0:
+                await asyncio.sleep(pause)
+
+    async def churn(self, client: httpx.AsyncClient) -> None:
+        cycle = 0
+        while time.monotonic() < self.deadline:
+            created = (await client.post("/v1/sessions", json=config(["c"]))).json()
+            headers = {"Authorization": f"Bearer {created['token']}"}
+            path = f"/v1/sessions/{created['id']}"
+            for step in range(CHURN_INPUTS):
+                answer = await client.post(
+                    f"{path}/tracks", json=track_list("c", 1.0 + step, 10), headers=headers
+                )
+                self.sent += 1
+                self.failures += answer.status_code != 200
+            self.failures += (await client.delete(path, headers=headers)).status_code != 204
+            cycle += 1
+            await asyncio.sleep(0.25)
+
+    async def run(self) -> None:
+        limits = httpx.Limits(max_connections=LONG_SESSIONS * SENSORS + 2)
+        async with httpx.AsyncClient(base_url=self.url, timeout=60, limits=limits) as client:
+            await asyncio.gather(
+                *(self.long_session(client, number) for number in range(LONG_SESSIONS)),
+                self.churn(client),
+            )
+
+
+async def soak(url: str, pid: int, database: Path | None) -> list[Sample]:
+    started = time.monotonic()
+    load = Load(url, started + SOAK_SECONDS)
+    samples: list[Sample] = []
+
+    async def sample() -> None:
+        async with httpx.AsyncClient(base_url=url, timeout=60) as client:
+            while time.monotonic() < load.deadline:
+                await asyncio.sleep(SAMPLE_EVERY_S)
+                metrics = (await client.get("/metrics")).text
+                files = None
+                if database is not None:
+                    files = sum(
+                        path.stat().st_size
+                        for path in (database, database.with_name(database.name + "-wal"))
+                        if path.exists()
+                    )
+                samples.append(
+                    Sample(
+                        at_s=time.monotonic() - started,
+                        rss_bytes=rss_of(pid),
+                        store_bytes=gauge(metrics, "credal_store_bytes"),
+                        store_inputs=gauge(metrics, "credal_store_inputs"),
+                        file_bytes=files,
+                        inputs_sent=load.sent,
+                    )
+                )
+
+    await asyncio.gather(load.run(), sample())
+    if load.failures:
+        raise RuntimeError(f"{load.failures} requests failed during the soak")
+    return samples
+
+
+def verdict(samples: list[Sample]) -> tuple[float, float, bool]:
+    """(RSS growth over the second half, store growth past its 25-50 % peak, both within bounds)."""
+    middle = len(samples) // 2
+    rss_middle = statistics.median(s.rss_bytes for s in samples[middle - 1 : middle + 2])
+    rss_end = statistics.median(s.rss_bytes for s in samples[-3:])
+    rss_growth = rss_end / rss_middle - 1.0
+    settled = max(s.store_bytes for s in samples[len(samples) // 4 : middle + 1])
+    store_growth = max(s.store_bytes for s in samples[middle:]) / settled - 1.0
+    return rss_growth, store_growth, rss_growth < MAX_GROWTH and store_growth <= MAX_GROWTH
+
+
+def report(name: str, samples: list[Sample]) -> bool:
+    print(f"\n== {name}: {SOAK_SECONDS:.0f} s")
+    print(
+        f"{'t (s)':>6} {'inputs sent':>11} {'RSS (MB)':>9} {'store (KB)':>11} {'logged':>7} {'file (KB)':>10}"
+    )
+    for s in samples:
+        file_kb = "" if s.file_bytes is None else f"{s.file_bytes / 1024:.0f}"
+        print(
+            f"{s.at_s:6.0f} {s.inputs_sent:11d} {s.rss_bytes / 2**20:9.1f} "
+            f"{s.store_bytes / 1024:11.0f} {s.store_inputs:7d} {file_kb:>10}"
+        )
+    rss_growth, store_growth, ok = verdict(samples)
+    rate = samples[-1].inputs_sent / samples[-1].at_s
+    print(
+        f"{name}: {rate:.0f} inputs/s; RSS growth over the second half {rss_growth:+.1%}; "
+        f"store size past its settled peak {store_growth:+.1%} -> {'ok' if ok else 'FAILED'}"
+    )
+    return ok
+
+
+def main() -> int:
+    print(describe_machine())
+    print(
+        f"soak: {LONG_SESSIONS} sessions × {SENSORS} sensors × {TRACKS} tracks at "
+        f"{REPORTS_PER_S:g} reports/s per sensor, churn of {CHURN_INPUTS}-input sessions; "
+        f"snapshot every {SNAPSHOT_EVERY}, log retention {LOG_RETENTION}"
+    )
+    results = []
+    with tempfile.TemporaryDirectory(prefix="credal-soak-") as directory:
+        database = Path(directory) / "soak.db"
+        prefix = f"credal-fusion-soak:{uuid.uuid4().hex[:12]}"
+        stores = [
+            ("memory", "memory", {}, None),
+            ("sqlite", f"sqlite:{database}", {}, database),
+            ("redis", REDIS_URL, {"CREDAL_REDIS_PREFIX": prefix}, None),
+        ]
+        try:
+            for name, store, environment, path in stores:
+                with serving(store, environment) as (url, pid):
+                    results.append(report(name, asyncio.run(soak(url, pid, path))))
+        finally:
+            client = redis.Redis.from_url(REDIS_URL)
+            keys = list(client.scan_iter(match=f"{prefix}:*"))
+            if keys:
+                client.unlink(*keys)
+            client.close()
+    return 0 if all(results) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
