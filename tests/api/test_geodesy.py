@@ -20,18 +20,9 @@ from app.geodesy import (
     rotate_covariances,
     sensor_to_session,
 )
+from tests.api.proj_oracle import proj_enu
 
 ORIGINS = [(0.0, 0.0, 0.0), (45.2, 5.7, 210.0), (-33.9, 151.2, 40.0), (80.0, -120.0, 1500.0)]
-
-
-def proj_enu(origin: tuple[float, float, float]) -> Transformer:
-    """PROJ's geodetic (lon, lat, h) → topocentric ENU at ``origin``."""
-    lat0, lon0, h0 = origin
-    return Transformer.from_pipeline(
-        "+proj=pipeline +step +proj=axisswap +order=2,1 +step +proj=unitconvert "
-        "+xy_in=deg +xy_out=rad +step +proj=cart +ellps=WGS84 "
-        f"+step +proj=topocentric +ellps=WGS84 +lat_0={lat0} +lon_0={lon0} +h_0={h0}"
-    )
 
 
 def scatter(origin: tuple[float, float, float], count: int, seed: int) -> np.ndarray:
