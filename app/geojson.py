@@ -1,0 +1,77 @@
+"""Fused tracks as GeoJSON (RFC 7946) and with geodetic positions.
+
+``GET …/tracks?format=geojson`` answers a FeatureCollection of Point
+features, coordinates ``[lon°, lat°, alt m]`` (RFC 7946 §3.1.1 order) on
+WGS84, with the track's id, status, decision, BetP and velocity as
+properties. The velocity is east/north/up in m/s *at the track's point* (the
+session-frame velocity turned into the point's tangent plane), the same
+convention as a geodetic track-list report.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from app.geodesy import LocalFrame
+
+GEOJSON_MEDIA_TYPE = "application/geo+json"
+
+PlainTrack = dict[str, Any]
+
+
+def _positions(tracks: Sequence[PlainTrack], position_indices: tuple[int, ...]) -> np.ndarray:
+    """Session ENU positions (N, 3); a 2-D session's tracks sit at the origin's height (z = 0)."""
+    positions = np.zeros((len(tracks), 3))
+    if tracks:
+        states = np.array([track["state"] for track in tracks], dtype=np.float64)
+        positions[:, : len(position_indices)] = states[:, list(position_indices)]
+    return positions
+
+
+def with_geodetic(
+    tracks: Sequence[PlainTrack], frame: LocalFrame, position_indices: tuple[int, ...]
+) -> list[PlainTrack]:
+    """The tracks with ``geodetic: {lat, lon, alt}`` added (``?frame=geodetic``)."""
+    geodetic = frame.to_geodetic(_positions(tracks, position_indices))
+    return [
+        {**track, "geodetic": {"lat": float(lat), "lon": float(lon), "alt": float(alt)}}
+        for track, (lat, lon, alt) in zip(tracks, geodetic.tolist(), strict=True)
+    ]
+
+
+def feature_collection(
+    tracks: Sequence[PlainTrack],
+    frame: LocalFrame,
+    position_indices: tuple[int, ...],
+    velocity_indices: tuple[int, ...],
+) -> dict[str, Any]:
+    """A FeatureCollection of the tracks' positions (module docstring)."""
+    geodetic = frame.to_geodetic(_positions(tracks, position_indices))
+    velocities = np.zeros((len(tracks), 3))
+    if tracks and velocity_indices:
+        states = np.array([track["state"] for track in tracks], dtype=np.float64)
+        velocities[:, : len(velocity_indices)] = states[:, list(velocity_indices)]
+    local = np.einsum("tij,tj->ti", frame.rotation_to(geodetic[:, 0], geodetic[:, 1]), velocities)
+    features = []
+    for track, (lat, lon, alt), velocity in zip(
+        tracks, geodetic.tolist(), local.tolist(), strict=True
+    ):
+        classification = track.get("classification") or {}
+        features.append(
+            {
+                "type": "Feature",
+                "id": track["id"],
+                "geometry": {"type": "Point", "coordinates": [lon, lat, alt]},
+                "properties": {
+                    "id": track["id"],
+                    "status": track["status"],
+                    "decision": classification.get("decision"),
+                    "pignistic": classification.get("pignistic"),
+                    "velocity_enu": velocity[: max(len(velocity_indices), 2)],
+                },
+            }
+        )
+    return {"type": "FeatureCollection", "features": features}
