@@ -36,12 +36,14 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from core.arrays import BoolArray, FloatArray, IntArray
+from core.arrays import FloatArray, IntArray
 from core.association import ScoreMatrix, associate
 from core.belief import MassFunction
 from core.distance import Estimates, chi2_quantile
@@ -60,8 +62,22 @@ from core.fusion.reports import (
 )
 from core.fusion.table import EstimateTable
 from core.fusion.track import FusedTrack, SensorEstimate
-from core.geometry import Sector, Visibility, occluded
-from core.lifecycle import StatusReason, TrackStatus, gate_emptiness_factor, gate_volume
+from core.lifecycle import (
+    COASTING,
+    CONFIRMED,
+    REASONS,
+    STATUSES,
+    TERMINATED,
+    Evidence,
+    LifeState,
+    StatusReason,
+    TrackStatus,
+    advance,
+    everywhere,
+    hand_over,
+    sensor_view,
+)
+from core.numerics import MAX_TIME, check_magnitudes
 from core.tracking.tracker import LocalTracker
 
 EXPORT_VERSION = 1
@@ -110,7 +126,6 @@ class SessionEngine:
         layout = config.motion.layout
         self._position = np.asarray(layout.position, dtype=np.int64)
         self._coverage = config.coverage
-        self._gate = chi2_quantile(config.management.gate_probability, len(layout.position))
         self._reliabilities = {sensor.id: sensor.reliability for sensor in config.sensors}
         self._table = EstimateTable(
             [sensor.id for sensor in config.sensors], config.motion, config.state_fusion
@@ -128,41 +143,8 @@ class SessionEngine:
         StaleReport
             The report is not newer than the sensor's previous report.
         """
-        sensor, incoming = self._check(report)
-        t = float(report.time)
-        live = [track for track in self.tracks if track.status in LIVE]
-        states, covariances = self._fused_at(live, t)
-        self._check_horizon(t, incoming)
-        decision = self._associate(live, states, covariances, report, incoming)
-        terminated: list[FusedTrack] = []
-        confirmed: list[FusedTrack] = []
-
-        rows = np.array([pair[0] for pair in decision.pairs], dtype=np.int64)
-        cols = np.array([pair[1] for pair in decision.pairs], dtype=np.int64)
-        increments = self._hit_increments(states[rows], covariances[rows], incoming, cols, sensor)
-        hit = [live[row] for row in rows.tolist()]
-        self._record(hit, cols, report, incoming)
-        for fused, increment in zip(hit, increments.tolist(), strict=True):
-            was_tentative = fused.status is TrackStatus.TENTATIVE
-            self._hit(fused, increment)
-            if was_tentative and fused.status is TrackStatus.CONFIRMED:
-                confirmed.append(fused)
-        missed = np.asarray(decision.missed, dtype=np.int64)
-        seen = self._seen_by(sensor, states[missed], states) if len(missed) else np.zeros(0, bool)
-        for row, visible in zip(missed, seen, strict=True):
-            if visible:
-                self._miss(live[row], covariances[row], sensor.p_detect)
-        created = self._start(np.asarray(decision.new, dtype=np.int64), report, incoming)
-        self.tracks.extend(created)
-        confirmed.extend(track for track in created if track.status is TrackStatus.CONFIRMED)
-
-        self.time = t if self.time is None else max(self.time, t)
-        self.last_report[report.sensor] = t
-        self.seq += 1
-        self._manage(self.time, terminated)
-        self._hand_over_to_phantoms(confirmed, terminated)
-        self._absorb_duplicates(terminated)
-        return self._result(report, decision, live, terminated, explain)
+        with self._transaction():
+            return self._apply(report, explain)
 
     def apply_detections(self, report: DetectionReport, *, explain: bool = False) -> StepResult:
         """Apply one sensor's detections: its local tracker, then the fusion step.
@@ -170,7 +152,7 @@ class SessionEngine:
         The sensor's local tracker ([MTT] Fig 6, ``core.tracking``) updates its
         tracks with the detections; its confirmed tracks updated in this scan
         become the sensor's track list for :meth:`apply`
-        (``core.fusion.detections``).
+        (``core.fusion.detections``). Both are one transaction.
 
         Raises
         ------
@@ -188,30 +170,71 @@ class SessionEngine:
                 f"sensor {sensor.id!r} sends track lists: it has no local tracker for detections "
                 "(configure its measurement model)"
             )
-        if not math.isfinite(report.time):
-            raise InvalidInput(f"time must be finite, got {report.time!r}")
+        check_time(report.time)
         last = self.last_report.get(sensor.id)
         if last is not None and report.time <= last:
             raise StaleReport(sensor.id, report.time, last)
-        self._check_horizon(float(report.time), None)
-        late = self.time is not None and report.time < self.time
-        before = tracker.export() if late else None  # only a late scan can be refused after it
-        scan = tracker.step(report.time, report.measurements, report.covariances)
-        tracks = local_track_report(tracker, scan, self.config.motion.layout, self.config.classes)
+        check_detection_magnitudes(report)
+        with self._transaction(tracker):
+            scan = tracker.step(report.time, report.measurements, report.covariances)
+            tracks = local_track_report(
+                tracker, scan, self.config.motion.layout, self.config.classes
+            )
+            return self._apply(TrackReport(sensor.id, report.time, tracks), explain)
+
+    @contextmanager
+    def _transaction(self, tracker: LocalTracker | None = None) -> Iterator[None]:
+        """A step either succeeds whole or changes nothing (DESIGN.md "The session engine").
+
+        The step works on copies of the tracks (:meth:`FusedTrack.copy`); on any
+        exception the previous tracks, counters, table estimates and local
+        tracker come back, so the export is bit-identical to before.
+        """
+        seq, time, next_number = self.seq, self.time, self.next_number
+        last_report, tracks = dict(self.last_report), self.tracks
+        checkpoint = self._table.checkpoint()
+        saved = None if tracker is None else tracker.checkpoint()
+        self.tracks = [track.copy() for track in tracks]
         try:
-            return self.apply(TrackReport(sensor.id, report.time, tracks), explain=explain)
-        except InvalidInput:
-            if before is not None:
-                assert sensor.tracker is not None
-                self.local_trackers[sensor.id] = LocalTracker.restore(sensor.tracker, before)
+            yield
+        except BaseException:
+            self.seq, self.time, self.next_number = seq, time, next_number
+            self.last_report, self.tracks = last_report, tracks
+            self._table.rollback(checkpoint)
+            if tracker is not None and saved is not None:
+                tracker.rollback(saved)
             raise
+
+    def _apply(self, report: TrackReport, explain: bool) -> StepResult:
+        """The step of :meth:`apply`, inside its transaction."""
+        sensor, incoming = self._check(report)
+        t = float(report.time)
+        live = [track for track in self.tracks if track.status in LIVE]
+        states, covariances = self._fused_at(live, t)
+        decision = self._associate(live, states, covariances, report, incoming)
+
+        rows = np.array([pair[0] for pair in decision.pairs], dtype=np.int64)
+        cols = np.array([pair[1] for pair in decision.pairs], dtype=np.int64)
+        increments = self._hit_increments(states[rows], covariances[rows], incoming, cols, sensor)
+        self._record([live[row] for row in rows.tolist()], cols, report, incoming)
+        created = self._start(np.asarray(decision.new, dtype=np.int64), report, incoming)
+        self.tracks.extend(created)
+
+        self.time = t if self.time is None else max(self.time, t)
+        self.last_report[report.sensor] = t
+        self.seq += 1
+        terminated, confirmed = self._life_cycle(
+            sensor, live, states, covariances, rows, increments
+        )
+        self._hand_over_to_phantoms(confirmed, terminated)
+        self._absorb_duplicates(terminated)
+        return self._result(report, decision, live, terminated, explain)
 
     # ------------------------------------------------------------ checks
     def _check(self, report: TrackReport) -> tuple[SensorSpec, Estimates]:
         """Validate a report without changing anything; returns its sensor and its estimates."""
         sensor = self.config.sensor(report.sensor)
-        if not math.isfinite(report.time):
-            raise InvalidInput(f"time must be finite, got {report.time!r}")
+        check_time(report.time)
         last = self.last_report.get(report.sensor)
         if last is not None and report.time <= last:
             raise StaleReport(report.sensor, report.time, last)
@@ -236,27 +259,12 @@ class SessionEngine:
             name="tracks",
             dimension=dim,
         )
+        assert estimates.covariances is not None
+        for index, (state, covariance) in enumerate(
+            zip(estimates.states, estimates.covariances, strict=True)
+        ):
+            check_magnitudes(state, covariance, f"tracks[{index}]")
         return sensor, estimates
-
-    def _check_horizon(self, time: float, incoming: Estimates | None) -> None:
-        """Refuse, before anything changes, a step at ``time`` whose fusion time some estimate
-        cannot be predicted to (``MotionModel.predict`` overflows: :class:`InvalidInput`).
-
-        The step predicts every track that is not terminated, and the report's
-        own tracks, to the fusion time; the live tracks were just predicted to
-        ``time``, and what was predicted is kept, so this costs nothing more
-        when the report is not late.
-        """
-        fusion_time = time if self.time is None else max(self.time, time)
-        self._fused_at(
-            [track for track in self.tracks if track.status is not TrackStatus.TERMINATED],
-            fusion_time,
-        )
-        if incoming is not None and len(incoming) and fusion_time != time:
-            assert incoming.covariances is not None
-            self.config.motion.predict(
-                incoming.states, incoming.covariances, np.full(len(incoming), fusion_time - time)
-            )
 
     def _check_classes(self, track: ReportedTrack, where: str) -> None:
         frame = self.config.classes
@@ -282,6 +290,10 @@ class SessionEngine:
                 or likelihoods.max() > 1.0
             ):
                 raise InvalidInput(f"{where}: class likelihoods must lie in [0, 1]")
+            if likelihoods.max() == 0.0:
+                raise InvalidInput(
+                    f"{where}: class likelihoods are all zero: the evidence rules out every class"
+                )
 
     # ------------------------------------------------------- prediction
     def _fused_at(self, tracks: list[FusedTrack], time: float) -> tuple[FloatArray, FloatArray]:
@@ -438,15 +450,6 @@ class SessionEngine:
         score = self.config.management.score_model(sensor.p_detect)
         return score.hit_increment(distance, log_det, len(self._position))
 
-    def _hit(self, fused: FusedTrack, increment: float) -> None:
-        fused.score = min(fused.score + increment, self.config.management.score_ceiling)
-        fused.hits += 1
-        fused.empty_gate_probability = 1.0
-        if fused.status is TrackStatus.COASTING:
-            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
-        elif fused.status is TrackStatus.TENTATIVE:
-            self._maybe_confirm(fused)
-
     def _record(
         self, tracks: list[FusedTrack], cols: IntArray, report: TrackReport, incoming: Estimates
     ) -> None:
@@ -472,15 +475,6 @@ class SessionEngine:
                 ),
             )
 
-    def _maybe_confirm(self, fused: FusedTrack) -> None:
-        management = self.config.management
-        if len(fused.estimates) >= 2:
-            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.SECOND_SENSOR
-        elif management.min_points is not None and fused.hits >= management.min_points:
-            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.MIN_POINTS
-        elif fused.score >= management.thresholds.confirm_threshold:
-            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.SCORE_CONFIRMED
-
     def _class_evidence(
         self, reported: ReportedTrack, previous: SensorEstimate | None
     ) -> MassFunction | None:
@@ -500,46 +494,100 @@ class SessionEngine:
                 )[0]
         return None if previous is None else previous.class_mass
 
-    def _miss(self, fused: FusedTrack, predicted_covariance: FloatArray, p_detect: float) -> None:
+    def _life_cycle(
+        self,
+        sensor: SensorSpec,
+        live: list[FusedTrack],
+        states: FloatArray,
+        covariances: FloatArray,
+        hit_rows: IntArray,
+        increments: FloatArray,
+    ) -> tuple[list[FusedTrack], list[FusedTrack]]:
+        """:func:`core.lifecycle.advance` over every track that is not terminated.
+
+        Hits and misses are the step's (``live`` at the report time: ``states``,
+        ``covariances`` as predicted before the update); coverage is looked at
+        at the fusion time. Returns the tracks terminated and confirmed by it.
+        """
+        assert self.time is not None
         management = self.config.management
-        score = management.score_model(p_detect)
-        fused.score += score.miss_increment
-        if fused.status is TrackStatus.CONFIRMED:
-            fused.status, fused.reason = TrackStatus.COASTING, StatusReason.MISSED
-        if fused.status is TrackStatus.COASTING:
-            position = self._position
+        candidates = [track for track in self.tracks if track.status is not TrackStatus.TERMINATED]
+        count = len(candidates)
+        if count == 0:
+            return [], []
+        index = {id(track): k for k, track in enumerate(candidates)}
+        live_index = np.fromiter((index[id(track)] for track in live), np.int64, len(live))
+        before = _read_life(candidates)
+        detected = np.zeros(count, dtype=bool)
+        hit_increment = np.zeros(count)
+        detected[live_index[hit_rows]] = True
+        hit_increment[live_index[hit_rows]] = increments
+        seen = np.zeros(count, dtype=bool)
+        hidden = np.zeros(count, dtype=bool)
+        gate_log_det = np.zeros(count)
+        position = self._position
+        if live:
+            live_status = before.status[live_index]
+            established = (live_status == CONFIRMED) | (live_status == COASTING)
+            if len(position) >= 2:
+                plane = states[:, position[:2]]
+                live_seen, live_hidden = sensor_view(
+                    sensor.fov, plane, plane[established], management.occlusion_radius
+                )
+            else:
+                _, live_seen, live_hidden = everywhere(len(live))
+            seen[live_index], hidden[live_index] = live_seen, live_hidden
+            established_miss = np.flatnonzero(live_seen & ~detected[live_index] & established)
+            if len(established_miss):
+                gate_log_det[live_index[established_miss]] = self._gate_log_dets(
+                    [live[row] for row in established_miss.tolist()],
+                    covariances[established_miss],
+                )
+        fused_states, _ = self._fused_at(candidates, self.time)
+        codes = (
+            self._coverage.visibility(fused_states[:, position[:2]])
+            if len(position) >= 2
+            else everywhere(count)[0]
+        )
+        after, confirmed = advance(
+            management,
+            before,
+            Evidence(
+                time=self.time,
+                detected=detected,
+                hit_increment=hit_increment,
+                seen=seen,
+                miss_increment=management.score_model(sensor.p_detect).miss_increment,
+                gate_log_det=gate_log_det,
+                gate_dim=len(position),
+                visibility=codes,
+                occluded=hidden,
+                sensors=np.array([len(t.estimates) for t in candidates], dtype=np.int64),
+            ),
+        )
+        _write_life(candidates, after)
+        ended = (after.status == TERMINATED) & (before.status != TERMINATED)
+        return (
+            [candidates[k] for k in np.flatnonzero(ended).tolist()],
+            [candidates[k] for k in np.flatnonzero(confirmed).tolist()],
+        )
+
+    def _gate_log_dets(self, tracks: list[FusedTrack], predicted: FloatArray) -> FloatArray:
+        """log|S| of each track's gate: its predicted covariance plus its newest estimate's,
+        on the position components ([HZ] §4.2)."""
+        position = self._position
+        gates = []
+        for fused, predicted_covariance in zip(tracks, predicted, strict=True):
             # ties by sensor id: not by dict order, which a restore through a store may change
             newest = max(
                 (fused.estimates[sensor] for sensor in sorted(fused.estimates)),
                 key=lambda estimate: estimate.time,
             )
-            gate_covariance = (
+            gates.append(
                 predicted_covariance[np.ix_(position, position)]
                 + newest.covariance[np.ix_(position, position)]
             )
-            volume = gate_volume(
-                self._gate, np.array([np.linalg.slogdet(gate_covariance)[1]]), len(position)
-            )
-            factor = gate_emptiness_factor(
-                management.false_target_density, management.new_target_density, volume
-            )
-            fused.empty_gate_probability *= float(factor[0])
-
-    def _seen_by(self, sensor: SensorSpec, missed: FloatArray, everyone: FloatArray) -> BoolArray:
-        """Which missed tracks ``sensor`` should have reported: in its field of view, not occluded.
-
-        ``missed`` and ``everyone`` are fused states at the report time; every
-        live track (``everyone``) can hide another from a sector's origin when
-        ``occlusion_radius`` > 0 ([HZ] §2.1).
-        """
-        if sensor.fov is None or len(self._position) < 2:
-            return np.ones(len(missed), dtype=bool)
-        plane = self._position[:2]
-        seen = sensor.fov.contains(missed[:, plane])
-        radius = self.config.management.occlusion_radius
-        if radius > 0.0 and isinstance(sensor.fov, Sector):
-            seen &= ~occluded(sensor.fov.origin, missed[:, plane], everyone[:, plane], radius)
-        return seen
+        return np.asarray(np.linalg.slogdet(np.array(gates))[1], dtype=np.float64)
 
     def _start(self, cols: IntArray, report: TrackReport, incoming: Estimates) -> list[FusedTrack]:
         """A tentative fused track for each of the report tracks ``cols``."""
@@ -557,47 +605,7 @@ class SessionEngine:
             )
             self.next_number += 1
         self._record(created, cols, report, incoming)
-        for fused in created:
-            self._maybe_confirm(fused)
         return created
-
-    def _manage(self, time: float, terminated: list[FusedTrack]) -> None:
-        """Deletion, gate emptiness, blind zones, occlusion, out of range, phantom expiry."""
-        management = self.config.management
-        delete_below = management.thresholds.delete_threshold
-        candidates = [track for track in self.tracks if track.status is not TrackStatus.TERMINATED]
-        if not candidates:
-            return
-        states, _ = self._fused_at(candidates, time)
-        if len(self._position) >= 2:
-            codes = self._coverage.visibility(states[:, self._position[:2]])
-        else:
-            codes = np.full(len(candidates), int(Visibility.VISIBLE))
-        out_of_range, blind = int(Visibility.OUT_OF_RANGE), int(Visibility.BLIND_ZONE)
-        for track, where in zip(candidates, codes.tolist(), strict=True):
-            reason: StatusReason | None = None
-            if where == out_of_range:
-                reason = StatusReason.OUT_OF_RANGE
-            elif track.status is TrackStatus.PHANTOM:
-                assert track.phantom_since is not None
-                if time - track.phantom_since > management.phantom_lifetime:
-                    reason = StatusReason.PHANTOM_EXPIRED
-            elif where == blind:
-                if track.status is TrackStatus.TENTATIVE:
-                    reason = StatusReason.BLIND_ZONE
-                else:
-                    track.status, track.reason = TrackStatus.PHANTOM, StatusReason.BLIND_ZONE
-                    track.phantom_since = time
-            elif track.score <= delete_below:
-                reason = StatusReason.SCORE_DELETED
-            elif (
-                track.status is TrackStatus.COASTING
-                and track.empty_gate_probability < management.termination_probability
-            ):
-                reason = StatusReason.GATE_EMPTINESS
-            if reason is not None:
-                track.status, track.reason = TrackStatus.TERMINATED, reason
-                terminated.append(track)
 
     def _hand_over_to_phantoms(self, fresh: list[FusedTrack], terminated: list[FusedTrack]) -> None:
         """A track confirmed in this step that matches a phantom gives it its estimates ([HZ] §5.1)."""
@@ -644,21 +652,30 @@ class SessionEngine:
             {"gate_probability": self.config.management.gate_probability},
             "sum",
         )
-        for row, col in zip(decision.pair_known, decision.pair_incoming, strict=True):
-            keeper, newcomer = keepers[row], newcomers[col]
-            if set(keeper.estimates) & set(newcomer.estimates):
-                continue  # a sensor that reports both as distinct objects knows better
+        pairs = [
+            (keepers[row], newcomers[col])
+            for row, col in zip(decision.pair_known, decision.pair_incoming, strict=True)
+            # a sensor that reports both as distinct objects knows better
+            if not set(keepers[row].estimates) & set(newcomers[col].estimates)
+        ]
+        if not pairs:
+            return
+        for keeper, newcomer in pairs:
             for sensor_id, estimate in newcomer.estimates.items():
                 keeper.set_estimate(sensor_id, estimate)
                 self._write_estimate(keeper.row, sensor_id, estimate)
-            if keeper.status is not TrackStatus.CONFIRMED:
-                keeper.status, keeper.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
-            keeper.phantom_since = None
-            keeper.empty_gate_probability = 1.0
-            keeper.score = max(keeper.score, newcomer.score)
-            keeper.hits += newcomer.hits
-            newcomer.status, newcomer.reason = TrackStatus.TERMINATED, reason
-            terminated.append(newcomer)
+        merged = [keeper for keeper, _ in pairs] + [newcomer for _, newcomer in pairs]
+        count = len(pairs)
+        _write_life(
+            merged,
+            hand_over(
+                _read_life(merged),
+                np.arange(count, dtype=np.int64),
+                np.arange(count, 2 * count, dtype=np.int64),
+                reason,
+            ),
+        )
+        terminated.extend(newcomer for _, newcomer in pairs)
 
     # ------------------------------------------------------------ output
     def _classify(self, fused: FusedTrack) -> ClassAssessment | None:
@@ -815,6 +832,62 @@ class SessionEngine:
                 )
             engine.local_trackers[sensor] = LocalTracker.restore(tracker_config, plain)
         return engine
+
+
+def check_time(time: float) -> None:
+    """A report time must be finite and of magnitude at most :data:`core.numerics.MAX_TIME`."""
+    if not math.isfinite(time):
+        raise InvalidInput(f"time must be finite, got {time!r}")
+    if abs(time) > MAX_TIME:
+        raise InvalidInput(f"time: magnitude {time!r} is beyond the limit {MAX_TIME:g} s")
+
+
+def check_detection_magnitudes(report: DetectionReport) -> None:
+    """Measurements within :data:`core.numerics.MAX_MAGNITUDE`, their noise within the
+    variance bounds (shapes are the tracker's to check)."""
+    measurements = np.asarray(report.measurements, dtype=np.float64)
+    covariances = (
+        None if report.covariances is None else np.asarray(report.covariances, dtype=np.float64)
+    )
+    for index in range(len(measurements) if measurements.ndim == 2 else 0):
+        covariance = (
+            covariances[index]
+            if covariances is not None and covariances.ndim == 3 and index < len(covariances)
+            else np.ones((1, 1))
+        )
+        check_magnitudes(measurements[index], covariance, f"detections[{index}]", ("z", "r"))
+
+
+def _read_life(tracks: list[FusedTrack]) -> LifeState:
+    """The life of ``tracks`` as arrays (:class:`core.lifecycle.LifeState`)."""
+    return LifeState(
+        status=np.array([STATUSES.index(t.status) for t in tracks], dtype=np.int64),
+        reason=np.array([REASONS.index(t.reason) for t in tracks], dtype=np.int64),
+        score=np.array([t.score for t in tracks], dtype=np.float64),
+        hits=np.array([t.hits for t in tracks], dtype=np.int64),
+        empty_gate=np.array([t.empty_gate_probability for t in tracks], dtype=np.float64),
+        phantom_since=np.array(
+            [math.nan if t.phantom_since is None else t.phantom_since for t in tracks],
+            dtype=np.float64,
+        ),
+    )
+
+
+def _write_life(tracks: list[FusedTrack], life: LifeState) -> None:
+    """Each track's status, reason, score, hits, empty-gate probability and phantom time."""
+    for track, status, reason, score, hits, empty_gate, since in zip(
+        tracks,
+        life.statuses(),
+        life.reasons(),
+        life.score.tolist(),
+        life.hits.tolist(),
+        life.empty_gate.tolist(),
+        life.phantom_since.tolist(),
+        strict=True,
+    ):
+        track.status, track.reason, track.score, track.hits = status, reason, score, int(hits)
+        track.empty_gate_probability = empty_gate
+        track.phantom_since = None if math.isnan(since) else since
 
 
 def _mahalanobis(differences: FloatArray, covariances: FloatArray) -> tuple[FloatArray, FloatArray]:

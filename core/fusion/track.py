@@ -87,6 +87,16 @@ class FusedTrack:
         }
         self.number = int(self.id[1:])
 
+    def copy(self) -> FusedTrack:
+        """A copy a step may change without touching this one (estimates are never changed
+        in place, only replaced, and history entries are never changed: shallow copies)."""
+        twin = object.__new__(FusedTrack)
+        twin.__dict__.update(self.__dict__)
+        twin.estimates = dict(self.estimates)
+        twin.history = list(self.history)
+        twin._sources = dict(self._sources)
+        return twin
+
     def set_estimate(self, sensor: str, estimate: SensorEstimate) -> None:
         """Record ``sensor``'s latest estimate of this track."""
         known = sensor in self.estimates
