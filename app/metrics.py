@@ -49,6 +49,7 @@ class ServiceMetrics:
     sessions: Gauge
     inputs: Counter
     fusion_step: Histogram
+    rebuilds: Counter
 
     @classmethod
     def create(cls) -> ServiceMetrics:
@@ -81,6 +82,14 @@ class ServiceMetrics:
                 "Time to apply one input to a session engine.",
                 ("kind",),
                 buckets=LATENCY_BUCKETS,
+                registry=registry,
+            ),
+            rebuilds=Counter(
+                "credal_session_rebuilds",
+                "Sessions dropped to be rebuilt from their log, the last defence: an engine "
+                "changed by a refused input (a bug: steps are transactions), or a step that "
+                "could not be logged.",
+                ("reason",),
                 registry=registry,
             ),
         )

@@ -156,6 +156,10 @@ def gate_emptiness_factor(
 
 
 # ------------------------------------------------------------------ configuration
+MAX_MIN_POINTS = 100
+"""Largest ``min_points`` (the wire's bound too)."""
+
+
 @dataclass(frozen=True)
 class LifeCycleConfig:
     """The track life cycle of both layers: one type, one set of defaults.
@@ -173,7 +177,8 @@ class LifeCycleConfig:
     termination_probability : gate-emptiness threshold ([HZ] §4.2) in [0, 1); 0 turns it off.
     gate_probability : γ of the gate volume A_G (as a χ² probability) and of the
         hand-over to phantoms, in (0, 1).
-    min_points : confirm a tentative track after this many hits (None: score only).
+    min_points : confirm a tentative track after this many hits, 1 to
+        :data:`MAX_MIN_POINTS` (None: score only).
     score_margin : the score is clamped at ``confirm threshold + score_margin``, so a
         long-lived track is still deleted after a few misses where it should have been
         seen (``core.tracking.config`` Readings); None keeps the raw SPRT.
@@ -217,8 +222,10 @@ class LifeCycleConfig:
             raise InvalidInput(f"score_margin must be >= 0 or None, got {self.score_margin!r}")
         if not (math.isfinite(self.occlusion_radius) and self.occlusion_radius >= 0.0):
             raise InvalidInput(f"occlusion_radius must be >= 0, got {self.occlusion_radius!r}")
-        if self.min_points is not None and self.min_points < 1:
-            raise InvalidInput(f"min_points must be >= 1, got {self.min_points}")
+        if self.min_points is not None and not 1 <= self.min_points <= MAX_MIN_POINTS:
+            raise InvalidInput(
+                f"min_points must be in [1, {MAX_MIN_POINTS}] or None, got {self.min_points}"
+            )
 
     def score_model(self, p_detect: float) -> ScoreModel:
         """The SPRT score of a sensor with detection probability ``p_detect`` (built once)."""
