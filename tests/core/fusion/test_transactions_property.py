@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from functools import partial
 from typing import Any
 from unittest import mock
 
@@ -82,13 +83,13 @@ PHASES = (Phase.explicit, Phase.reuse, Phase.generate)
 """No shrinking: a failing example is reported as found (shrinking a session takes minutes)."""
 
 
-class Injected(RuntimeError):
+class InjectedError(RuntimeError):
     pass
 
 
 @contextmanager
 def failing(owner: Any, name: str, at_call: int) -> Iterator[None]:
-    """``owner.name`` raises :class:`Injected` at its ``at_call``-th call (1-based)."""
+    """``owner.name`` raises :class:`InjectedError` at its ``at_call``-th call (1-based)."""
     real = getattr(owner, name)
     calls = 0
 
@@ -96,7 +97,7 @@ def failing(owner: Any, name: str, at_call: int) -> Iterator[None]:
         nonlocal calls
         calls += 1
         if calls == at_call:
-            raise Injected(f"{name} call {calls}")
+            raise InjectedError(f"{name} call {calls}")
         return real(*args, **kwargs)
 
     with mock.patch.object(owner, name, wrapper):
@@ -125,15 +126,15 @@ def refused(engine: SessionEngine, kind: str) -> tuple[TrackReport, type[Excepti
     return TrackReport(who, time, tracks), StaleReport if kind == "stale" else InvalidInput
 
 
-def check_unchanged(engine: SessionEngine, attempt: Callable[[], object]) -> bool:
-    """Run ``attempt``; if it raised, the export must be as before. True if it raised."""
+def check_unchanged(engine: SessionEngine, attempt: Callable[[], object]) -> type[Exception] | None:
+    """Run ``attempt``; if it raised, the export must be as before. Returns what it raised."""
     before = export_text(engine)
     try:
         attempt()
-    except (Injected, InvalidInput, StaleReport):
+    except (InjectedError, InvalidInput, StaleReport) as error:
         assert export_text(engine) == before
-        return True
-    return False
+        return type(error)
+    return None
 
 
 Action = tuple[str, int, int]
@@ -164,18 +165,15 @@ def test_failures_and_refusals_inside_track_list_steps_change_nothing(
         if action == "inject":
             owner, name = ENGINE_PARTS[choice % len(ENGINE_PARTS)]
             with failing(owner, name, at_call):
-                raised = check_unchanged(engine, lambda: engine.apply(report))
-            if not raised:  # the part was called fewer times: the step went through
+                raised = check_unchanged(engine, partial(engine.apply, report))
+            if raised is None:  # the part was called fewer times: the step went through
                 twin.apply(report)
                 assert export_text(engine) == export_text(twin)
                 continue
         elif action == "refuse" and engine.time is not None:
             bad, error = refused(engine, REFUSALS[choice % len(REFUSALS)])
-            assert check_unchanged(engine, lambda: engine.apply(bad))
-            try:
-                engine.apply(bad)
-            except error:
-                pass
+            raised = check_unchanged(engine, partial(engine.apply, bad))
+            assert raised is not None and issubclass(raised, error)
         assert serialise(engine.apply(report)) == serialise(twin.apply(report))
         assert export_text(engine) == export_text(twin)
     assert engine.tracks
@@ -217,8 +215,8 @@ def test_failures_inside_detection_steps_change_nothing(
         if inject:
             owner, name = parts[choice % len(parts)]
             with failing(owner, name, at_call):
-                raised = check_unchanged(engine, lambda: engine.apply_detections(report))
-            if not raised:
+                raised = check_unchanged(engine, partial(engine.apply_detections, report))
+            if raised is None:
                 twin.apply_detections(report)
                 assert export_text(engine) == export_text(twin)
                 continue
