@@ -469,8 +469,6 @@ class SessionEngine:
                 SensorEstimate(
                     track=reported.id,
                     time=report.time,
-                    state=states[col],  # rows of the report's own arrays (built by _check)
-                    covariance=covariances[col],
                     class_mass=self._class_evidence(reported, previous),
                 ),
             )
@@ -579,13 +577,11 @@ class SessionEngine:
         gates = []
         for fused, predicted_covariance in zip(tracks, predicted, strict=True):
             # ties by sensor id: not by dict order, which a restore through a store may change
-            newest = max(
-                (fused.estimates[sensor] for sensor in sorted(fused.estimates)),
-                key=lambda estimate: estimate.time,
-            )
+            newest = max(sorted(fused.estimates), key=lambda sensor: fused.estimates[sensor].time)
+            _, covariance = self._table.estimate(fused.row, newest)
             gates.append(
                 predicted_covariance[np.ix_(position, position)]
-                + newest.covariance[np.ix_(position, position)]
+                + covariance[np.ix_(position, position)]
             )
         return np.asarray(np.linalg.slogdet(np.array(gates))[1], dtype=np.float64)
 
@@ -663,7 +659,7 @@ class SessionEngine:
         for keeper, newcomer in pairs:
             for sensor_id, estimate in newcomer.estimates.items():
                 keeper.set_estimate(sensor_id, estimate)
-                self._write_estimate(keeper.row, sensor_id, estimate)
+                self._table.move(newcomer.row, keeper.row, sensor_id)
         merged = [keeper for keeper, _ in pairs] + [newcomer for _, newcomer in pairs]
         count = len(pairs)
         _write_life(
@@ -742,12 +738,6 @@ class SessionEngine:
             association=association,
         )
 
-    def _write_estimate(self, row: int, sensor: str, estimate: SensorEstimate) -> None:
-        """One sensor estimate into the table's ``row`` (a merge, a restore; steps write in bulk)."""
-        self._table.write(
-            np.array([row]), sensor, estimate.state[None], estimate.covariance[None], estimate.time
-        )
-
     def _keep(self, tracks: list[FusedTrack]) -> None:
         """``tracks`` become the engine's tracks, rows 0, 1, … of the table in that order."""
         self._table.keep(np.fromiter((track.row for track in tracks), np.int64, len(tracks)))
@@ -794,7 +784,12 @@ class SessionEngine:
             "time": self.time,
             "next_number": self.next_number,
             "last_report": dict(sorted(self.last_report.items())),
-            "tracks": [track.to_plain() for track in self.tracks],
+            "tracks": [
+                track.to_plain(
+                    {sensor: self._table.estimate(track.row, sensor) for sensor in track.estimates}
+                )
+                for track in self.tracks
+            ],
             "local_trackers": {
                 sensor: tracker.export() for sensor, tracker in sorted(self.local_trackers.items())
             },
@@ -810,11 +805,13 @@ class SessionEngine:
         engine.time = None if state["time"] is None else float(state["time"])
         engine.next_number = int(state["next_number"])
         engine.last_report = {str(k): float(v) for k, v in state["last_report"].items()}
-        tracks = [FusedTrack.from_plain(plain, config.classes) for plain in state["tracks"]]
+        restored = [FusedTrack.from_plain(plain, config.classes) for plain in state["tracks"]]
+        tracks = [track for track, _ in restored]
         empty = [track.id for track in tracks if not track.estimates]
         if empty:
             raise InvalidInput(f"exported tracks without any sensor estimate: {empty}")
-        for track, row in zip(tracks, engine._table.add_rows(len(tracks)).tolist(), strict=True):
+        rows = engine._table.add_rows(len(tracks)).tolist()
+        for (track, kinematics), row in zip(restored, rows, strict=True):
             track.row = row
             for sensor, estimate in track.estimates.items():
                 if sensor not in engine._table.slots:
@@ -822,7 +819,10 @@ class SessionEngine:
                         f"exported track {track.id} has an estimate of sensor {sensor!r}, "
                         "which the config does not name"
                     )
-                engine._write_estimate(row, sensor, estimate)
+                state_, covariance = kinematics[sensor]
+                engine._table.write(
+                    np.array([row]), sensor, state_[None], covariance[None], estimate.time
+                )
         engine.tracks = tracks
         for sensor, plain in state["local_trackers"].items():
             tracker_config = config.sensor(sensor).tracker

@@ -170,6 +170,22 @@ class EstimateTable:
         for kept in self._kept:
             kept.forget(rows, slot)
 
+    def estimate(self, row: int, sensor: str) -> tuple[FloatArray, FloatArray]:
+        """``sensor``'s latest state and covariance of ``row`` (copies)."""
+        slot = self.slot(sensor)
+        return self.states[row, slot].copy(), self.covariances[row, slot].copy()
+
+    def move(self, source: int, target: int, sensor: str) -> None:
+        """``sensor``'s estimate of row ``source`` becomes its estimate of row ``target``."""
+        slot = self.slot(sensor)
+        self.write(
+            np.array([target]),
+            sensor,
+            self.states[source, slot][None],
+            self.covariances[source, slot][None],
+            float(self.times[source, slot]),
+        )
+
     # ------------------------------------------------------------ fusion
     def fused_at(self, rows: IntArray, time: float) -> tuple[FloatArray, FloatArray]:
         """The fused state (n, d) and covariance (n, d, d) of ``rows`` (distinct) at ``time``.
