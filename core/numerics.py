@@ -40,34 +40,42 @@ MAX_TIME = 1e12
 
 
 def check_magnitudes(
-    state: FloatArray,
-    covariance: FloatArray,
+    states: FloatArray,
+    covariances: FloatArray,
     where: str,
     names: tuple[str, str] = ("state", "covariance"),
 ) -> None:
-    """Refuse a state or covariance outside the documented bounds (names the field).
+    """Refuse states (n, d) or covariances (n, d, d) outside the documented bounds.
 
     Raises
     ------
     InvalidInput
-        A component of ``{where}.state`` beyond :data:`MAX_MAGNITUDE`, an entry
-        of ``{where}.covariance`` beyond :data:`MAX_VARIANCE`, or a variance
-        below :data:`MIN_VARIANCE`.
+        Naming the first offending field: a component of ``{where}[i].{state}``
+        beyond :data:`MAX_MAGNITUDE`, an entry of ``{where}[i].{covariance}``
+        beyond :data:`MAX_VARIANCE`, or a variance below :data:`MIN_VARIANCE`.
     """
+    if len(states) == 0:
+        return
     state_name, covariance_name = names
-    if state.size and float(np.max(np.abs(state))) > MAX_MAGNITUDE:
-        component = int(np.argmax(np.abs(state)))
+    largest = np.abs(states).max(axis=1)
+    if largest.max() > MAX_MAGNITUDE:
+        row = int(np.argmax(largest > MAX_MAGNITUDE))
+        component = int(np.argmax(np.abs(states[row])))
         raise InvalidInput(
-            f"{where}.{state_name}[{component}]: magnitude {float(state.flat[component]):g} is beyond "
-            f"the limit {MAX_MAGNITUDE:g}"
+            f"{where}[{row}].{state_name}[{component}]: magnitude "
+            f"{float(states[row, component]):g} is beyond the limit {MAX_MAGNITUDE:g}"
         )
-    if covariance.size and float(np.max(np.abs(covariance))) > MAX_VARIANCE:
+    entries = np.abs(covariances).reshape(len(covariances), -1).max(axis=1)
+    if entries.max() > MAX_VARIANCE:
+        row = int(np.argmax(entries > MAX_VARIANCE))
         raise InvalidInput(
-            f"{where}.{covariance_name}: an entry of magnitude {float(np.max(np.abs(covariance))):g} "
+            f"{where}[{row}].{covariance_name}: an entry of magnitude {float(entries[row]):g} "
             f"is beyond the limit {MAX_VARIANCE:g}"
         )
-    if covariance.size and float(np.min(np.diagonal(covariance))) < MIN_VARIANCE:
+    variances = np.diagonal(covariances, axis1=1, axis2=2).min(axis=1)
+    if variances.min() < MIN_VARIANCE:
+        row = int(np.argmax(variances < MIN_VARIANCE))
         raise InvalidInput(
-            f"{where}.{covariance_name}: a variance of {float(np.min(np.diagonal(covariance))):g} is "
+            f"{where}[{row}].{covariance_name}: a variance of {float(variances[row]):g} is "
             f"below the limit {MIN_VARIANCE:g}"
         )

@@ -9,20 +9,29 @@ order → bit-identical outputs. Its whole state exports to plain data
 One track-list step ([T2T] Fig 1-2, generalised to N sensors and to time):
 
 1. check the report (sensor known, newer than that sensor's previous report,
-   numbers finite, shapes right) — nothing changes on a refused report;
+   numbers finite and within the bounds of ``core.numerics``, shapes right,
+   class likelihoods not all zero);
 2. predict the live fused tracks to the report time: each track's state is
    the fusion of every sensor's latest estimate predicted to that time;
 3. associate the report's tracks with them by the session's method, with
    class information when both sides carry it (§3.6);
 4. each associated report track becomes its sensor's latest estimate of the
-   fused track; unassociated ones start tentative tracks; fused tracks the
-   sensor should have seen (inside its field of view, not occluded) and did
-   not count a miss;
-5. life cycle: confirm (score, second sensor, ``min_points``), coast, phantom
-   in blind zones or occlusion, terminate (score, gate emptiness, out of
-   range, phantom expiry); a newly confirmed track that matches a phantom
-   hands its estimates to the phantom, which keeps its id ([HZ] §5.1);
+   fused track; unassociated ones start tentative tracks;
+5. life cycle, shared with the local tracker (:func:`core.lifecycle.advance`):
+   hits and misses (a fused track the sensor should have seen — inside its
+   field of view, not occluded — and did not report), confirmation (score,
+   second sensor, ``min_points``), coasting, phantoms in blind zones or when
+   occluded, termination (score, gate emptiness, out of range, phantom
+   expiry); a newly confirmed track that matches a phantom hands its
+   estimates to the phantom, which keeps its id ([HZ] §5.1,
+   :func:`core.lifecycle.hand_over`);
 6. class fusion per track from the sensors' latest class evidence.
+
+**Transactions.** A step works on copies of the tracks and checkpoints of
+the estimate table and of the sensor's local tracker; when anything in it
+raises — a refused input or an internal error — they come back and the
+export is bit-identical to before. There is no check-before-change: the
+step itself is the check.
 
 **Readings.** The time of a step's result is the fusion time (the latest
 report time seen): a late report (older than the fusion time, newer than
@@ -260,10 +269,7 @@ class SessionEngine:
             dimension=dim,
         )
         assert estimates.covariances is not None
-        for index, (state, covariance) in enumerate(
-            zip(estimates.states, estimates.covariances, strict=True)
-        ):
-            check_magnitudes(state, covariance, f"tracks[{index}]")
+        check_magnitudes(estimates.states, estimates.covariances, "tracks")
         return sensor, estimates
 
     def _check_classes(self, track: ReportedTrack, where: str) -> None:
@@ -563,7 +569,7 @@ class SessionEngine:
                 sensors=np.array([len(t.estimates) for t in candidates], dtype=np.int64),
             ),
         )
-        _write_life(candidates, after)
+        _write_life(candidates, after, before)
         ended = (after.status == TERMINATED) & (before.status != TERMINATED)
         return (
             [candidates[k] for k in np.flatnonzero(ended).tolist()],
@@ -844,25 +850,27 @@ def check_time(time: float) -> None:
 
 def check_detection_magnitudes(report: DetectionReport) -> None:
     """Measurements within :data:`core.numerics.MAX_MAGNITUDE`, their noise within the
-    variance bounds (shapes are the tracker's to check)."""
+    variance bounds (shapes and finiteness are the tracker's to check)."""
     measurements = np.asarray(report.measurements, dtype=np.float64)
+    if measurements.ndim != 2:
+        return
     covariances = (
         None if report.covariances is None else np.asarray(report.covariances, dtype=np.float64)
     )
-    for index in range(len(measurements) if measurements.ndim == 2 else 0):
-        covariance = (
-            covariances[index]
-            if covariances is not None and covariances.ndim == 3 and index < len(covariances)
-            else np.ones((1, 1))
-        )
-        check_magnitudes(measurements[index], covariance, f"detections[{index}]", ("z", "r"))
+    if covariances is None or covariances.shape != (*measurements.shape, measurements.shape[1]):
+        covariances = np.ones((len(measurements), 1, 1))
+    check_magnitudes(measurements, covariances, "detections", ("z", "r"))
+
+
+STATUS_CODES = {status: code for code, status in enumerate(STATUSES)}
+REASON_CODES = {reason: code for code, reason in enumerate(REASONS)}
 
 
 def _read_life(tracks: list[FusedTrack]) -> LifeState:
     """The life of ``tracks`` as arrays (:class:`core.lifecycle.LifeState`)."""
     return LifeState(
-        status=np.array([STATUSES.index(t.status) for t in tracks], dtype=np.int64),
-        reason=np.array([REASONS.index(t.reason) for t in tracks], dtype=np.int64),
+        status=np.array([STATUS_CODES[t.status] for t in tracks], dtype=np.int64),
+        reason=np.array([REASON_CODES[t.reason] for t in tracks], dtype=np.int64),
         score=np.array([t.score for t in tracks], dtype=np.float64),
         hits=np.array([t.hits for t in tracks], dtype=np.int64),
         empty_gate=np.array([t.empty_gate_probability for t in tracks], dtype=np.float64),
@@ -873,21 +881,37 @@ def _read_life(tracks: list[FusedTrack]) -> LifeState:
     )
 
 
-def _write_life(tracks: list[FusedTrack], life: LifeState) -> None:
-    """Each track's status, reason, score, hits, empty-gate probability and phantom time."""
-    for track, status, reason, score, hits, empty_gate, since in zip(
-        tracks,
-        life.statuses(),
-        life.reasons(),
-        life.score.tolist(),
-        life.hits.tolist(),
-        life.empty_gate.tolist(),
-        life.phantom_since.tolist(),
+def _write_life(tracks: list[FusedTrack], life: LifeState, before: LifeState | None = None) -> None:
+    """Each track's status, reason, score, hits, empty-gate probability and phantom time
+    (only of the tracks whose life differs from ``before``, when given)."""
+    rows = np.arange(len(tracks))
+    if before is not None:
+        since, since_before = life.phantom_since, before.phantom_since
+        same_since = (since == since_before) | (np.isnan(since) & np.isnan(since_before))
+        changed = (
+            (life.status != before.status)
+            | (life.reason != before.reason)
+            | (life.score != before.score)
+            | (life.hits != before.hits)
+            | (life.empty_gate != before.empty_gate)
+            | ~same_since
+        )
+        rows = np.flatnonzero(changed)
+    chosen = life.select(rows)
+    for row, status, reason, score, hits, empty_gate, entered in zip(
+        rows.tolist(),
+        chosen.statuses(),
+        chosen.reasons(),
+        chosen.score.tolist(),
+        chosen.hits.tolist(),
+        chosen.empty_gate.tolist(),
+        chosen.phantom_since.tolist(),
         strict=True,
     ):
+        track = tracks[row]
         track.status, track.reason, track.score, track.hits = status, reason, score, int(hits)
         track.empty_gate_probability = empty_gate
-        track.phantom_since = None if math.isnan(since) else since
+        track.phantom_since = None if math.isnan(entered) else entered
 
 
 def _mahalanobis(differences: FloatArray, covariances: FloatArray) -> tuple[FloatArray, FloatArray]:

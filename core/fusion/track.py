@@ -100,10 +100,12 @@ class FusedTrack:
         """A copy a step may change without touching this one (estimates are never changed
         in place, only replaced, and history entries are never changed: shallow copies)."""
         twin = object.__new__(FusedTrack)
-        twin.__dict__.update(self.__dict__)
-        twin.estimates = dict(self.estimates)
-        twin.history = list(self.history)
-        twin._sources = dict(self._sources)
+        twin.__dict__ = {
+            **self.__dict__,
+            "estimates": self.estimates.copy(),
+            "history": self.history.copy(),
+            "_sources": self._sources.copy(),
+        }
         return twin
 
     def set_estimate(self, sensor: str, estimate: SensorEstimate) -> None:
