@@ -38,7 +38,7 @@ report time seen): a late report (older than the fusion time, newer than
 its sensor's previous report, §6.4) is associated at its own time and then
 simply becomes that sensor's latest estimate. The score and the gate volume
 use the position components, so the densities of
-:class:`~core.fusion.config.TrackManagement` are per unit of position space.
+:class:`~core.lifecycle.LifeCycleConfig` are per unit of position space.
 """
 
 from __future__ import annotations

@@ -20,7 +20,7 @@ from core.fusion.config import FusionConfig, SensorSpec
 from core.fusion.engine import SessionEngine
 from core.fusion.motion import MotionModel, StateLayout
 from core.fusion.reports import ReportedTrack, TrackReport
-from core.geometry import PolygonView, Visibility
+from core.geometry import PolygonView, Sector, Visibility
 from core.lifecycle import (
     REASONS,
     STATUSES,
@@ -429,3 +429,42 @@ def test_the_tracker_and_the_engine_reach_the_same_statuses_on_the_same_evidence
         assert end == 26
     else:  # coasting from 6 s; ⌈(confirm − delete) / ln 10⌉ = 6 misses: deleted at 11 s
         assert local[6] == (C, R_.MISSED) and end == 11
+
+
+def test_the_tracker_and_the_engine_both_make_an_occluded_track_a_phantom() -> None:
+    """Two still targets on a sector's axis, at 50 m and 100 m; from 3 s only the near one is
+    detected. With occlusion radius 2 m the near one hides the far one ([HZ] §2.1): both
+    layers make it a phantom (``occluded``) at 3 s and end it at 9 s (phantom lifetime 5 s),
+    scan by scan alike once the tracker has confirmed it (2 s)."""
+    view = Sector((0.0, 0.0), heading_deg=90.0, half_angle_deg=30.0, range_min=0.0, range_max=500.0)
+    life = LifeCycleConfig(occlusion_radius=2.0, phantom_max_distance=50.0, phantom_min_speed=10.0)
+    near, far = (0.0, 50.0), (0.0, 100.0)
+    seen_far = range(3)
+    tracker = LocalTracker(
+        LocalTrackerConfig(bank=BANK, fields_of_view={"radar": view}, life_cycle=life)
+    )
+    engine = SessionEngine(
+        FusionConfig(
+            motion=MotionModel(StateLayout(4, (0, 2), (1, 3)), q=0.01),
+            sensors=(SensorSpec("radar", p_detect=0.9, fov=view),),
+            management=life,
+        )
+    )
+    local, fused = [], []
+    for t in range(12):
+        points = [near, far] if t in seen_far else [near]
+        step = tracker.step(float(t), points)
+        local.append(next(((k.status, k.reason) for k in step.tracks if k.id == "L2"), None))
+        report = TrackReport(
+            "radar",
+            float(t),
+            tuple(
+                ReportedTrack(f"r{k}", np.array([x, 0.0, y, 0.0]), np.eye(4))
+                for k, (x, y) in enumerate(points)
+            ),
+        )
+        result = engine.apply(report)
+        fused.append(next(((k.status, k.reason) for k in result.tracks if k.id == "F2"), None))
+    assert local[2] == fused[2] == (N, R_.SCORE_CONFIRMED)
+    assert local[2:] == fused[2:]
+    assert local[3] == (P, R_.OCCLUDED) and local.index((X, R_.PHANTOM_EXPIRED)) == 9
