@@ -27,8 +27,9 @@ One track-list step ([T2T] Fig 1-2, generalised to N sensors and to time):
    :func:`core.lifecycle.hand_over`);
 6. class fusion per track from the sensors' latest class evidence.
 
-**Transactions.** A step works on copies of the tracks and checkpoints of
-the estimate table and of the sensor's local tracker; when anything in it
+**Transactions.** A step checkpoints the tracks' fields (their containers
+are replaced, never changed in place), the estimate table and the sensor's
+local tracker; when anything in it
 raises — a refused input or an internal error — they come back and the
 export is bit-identical to before. There is no check-before-change: the
 step itself is the check.
@@ -195,20 +196,24 @@ class SessionEngine:
     def _transaction(self, tracker: LocalTracker | None = None) -> Iterator[None]:
         """A step either succeeds whole or changes nothing (DESIGN.md "The session engine").
 
-        The step works on copies of the tracks (:meth:`FusedTrack.copy`); on any
-        exception the previous tracks, counters, table estimates and local
-        tracker come back, so the export is bit-identical to before.
+        Each track's fields are checkpointed (:meth:`FusedTrack.checkpoint`: its
+        containers are only ever replaced), as are the counters, the table's
+        estimates and the local tracker; on any exception they come back, so the
+        export is bit-identical to before.
         """
         seq, time, next_number = self.seq, self.time, self.next_number
         last_report, tracks = dict(self.last_report), self.tracks
         checkpoint = self._table.checkpoint()
         saved = None if tracker is None else tracker.checkpoint()
-        self.tracks = [track.copy() for track in tracks]
+        fields = [track.checkpoint() for track in tracks]
+        self.tracks = list(tracks)
         try:
             yield
         except BaseException:
             self.seq, self.time, self.next_number = seq, time, next_number
             self.last_report, self.tracks = last_report, tracks
+            for track, kept in zip(tracks, fields, strict=True):
+                track.rollback(kept)
             self._table.rollback(checkpoint)
             if tracker is not None and saved is not None:
                 tracker.rollback(saved)

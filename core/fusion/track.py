@@ -96,25 +96,21 @@ class FusedTrack:
         }
         self.number = int(self.id[1:])
 
-    def copy(self) -> FusedTrack:
-        """A copy a step may change without touching this one (estimates are never changed
-        in place, only replaced, and history entries are never changed: shallow copies)."""
-        twin = object.__new__(FusedTrack)
-        twin.__dict__ = {
-            **self.__dict__,
-            "estimates": self.estimates.copy(),
-            "history": self.history.copy(),
-            "_sources": self._sources.copy(),
-        }
-        return twin
+    def checkpoint(self) -> dict[str, Any]:
+        """The track's fields as they are, for :meth:`rollback`. Its containers (estimates,
+        sources, history) are never changed in place, only replaced: a shallow copy is exact."""
+        return self.__dict__.copy()
+
+    def rollback(self, checkpoint: dict[str, Any]) -> None:
+        """The fields of ``checkpoint`` again (a step failed)."""
+        self.__dict__ = checkpoint
 
     def set_estimate(self, sensor: str, estimate: SensorEstimate) -> None:
-        """Record ``sensor``'s latest estimate of this track."""
+        """Record ``sensor``'s latest estimate of this track (new containers, see checkpoint)."""
         known = sensor in self.estimates
-        self.estimates[sensor] = estimate
-        self._sources[sensor] = Source(sensor, estimate.track, estimate.time)
-        if not known:
-            self._sources = dict(sorted(self._sources.items()))
+        self.estimates = {**self.estimates, sensor: estimate}
+        sources = {**self._sources, sensor: Source(sensor, estimate.track, estimate.time)}
+        self._sources = sources if known else dict(sorted(sources.items()))
 
     def sources(self) -> tuple[Source, ...]:
         """The contributing sensor tracks, by sensor id."""
@@ -125,11 +121,10 @@ class FusedTrack:
         return max(estimate.time for estimate in self.estimates.values())
 
     def remember(self, time: float, state: list[float]) -> None:
-        """Append a fused state to the bounded history (replacing one at the same time)."""
-        if self.history and self.history[-1][0] == time:
-            self.history.pop()
-        self.history.append((time, state))
-        del self.history[:-HISTORY_LENGTH]
+        """Append a fused state to the bounded history (replacing one at the same time);
+        a new list, the old one is left as it was (see checkpoint)."""
+        kept = self.history[:-1] if self.history and self.history[-1][0] == time else self.history
+        self.history = [*kept[len(kept) - HISTORY_LENGTH + 1 :], (time, state)]
 
     def to_plain(self, kinematics: Kinematics) -> dict[str, Any]:
         """Plain data, each estimate with its state and covariance from ``kinematics``."""
