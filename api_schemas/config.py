@@ -175,12 +175,29 @@ class StateFusionConfig(WireModel):
 
 
 class TrackThresholds(WireModel):
-    """Track management (ALGORITHMS.md §4): score thresholds and termination."""
+    """Track life cycle of both layers (ALGORITHMS.md §4, §7.3): score thresholds and termination.
 
-    false_confirmation: OpenUnitFloat = 1e-3
-    true_deletion: OpenUnitFloat = 1e-2
-    termination_probability: OpenUnitFloat = 0.5
-    min_points: Annotated[int, Field(ge=1, le=100)] | None = None
+    The wire face of ``core.lifecycle.LifeCycleConfig``: same names, defaults
+    and ranges (a test pins them together).
+    """
+
+    false_confirmation: OpenUnitFloat = Field(
+        default=1e-3, description="α: probability that a false track is confirmed"
+    )
+    true_deletion: OpenUnitFloat = Field(
+        default=1e-3, description="β: probability that a true track is deleted"
+    )
+    termination_probability: Annotated[float, Field(allow_inf_nan=False, ge=0.0, lt=1.0)] = Field(
+        default=0.5,
+        description=(
+            "gate-emptiness termination ([HZ] §4.2): a coasting track ends when the probability "
+            "of its gate being empty falls below this; 0 turns it off"
+        ),
+    )
+    min_points: Annotated[int, Field(ge=1, le=100)] | None = Field(
+        default=None,
+        description="confirm a tentative track after this many hits (null: score only)",
+    )
 
 
 class TrackingConfig(WireModel):

@@ -51,6 +51,7 @@ class ServiceMetrics:
     fusion_step: Histogram
     store_bytes: Gauge
     store_inputs: Gauge
+    rebuilds: Counter
 
     @classmethod
     def create(cls) -> ServiceMetrics:
@@ -93,6 +94,14 @@ class ServiceMetrics:
                 "Time to apply one input to a session engine.",
                 ("kind",),
                 buckets=LATENCY_BUCKETS,
+                registry=registry,
+            ),
+            rebuilds=Counter(
+                "credal_session_rebuilds",
+                "Sessions dropped to be rebuilt from their log, the last defence: an engine "
+                "changed by a refused input (a bug: steps are transactions), or a step that "
+                "could not be logged.",
+                ("reason",),
                 registry=registry,
             ),
         )

@@ -507,8 +507,10 @@ class SessionRegistry:
             )
         except BaseException:
             if session.engine is not None and session.engine.seq != engine_seq:
-                # the engine refused the input after changing (a bug): rebuild it from the log
+                # the last defence: steps are transactions, so a refused input that changed
+                # the engine is a bug; rebuild the session from its log
                 logger.error("session %s: a refused input changed the engine", session.id)
+                self.metrics.rebuilds.labels("refused_after_change").inc()
                 self.discard(session.id, SESSION_RELOADED)
             raise
         self.metrics.fusion_step.labels(kind).observe(time.perf_counter() - started)
@@ -518,6 +520,7 @@ class SessionRegistry:
             await self._io(self.store.append, session.id, seq, log_input(report), received_at)
         except SequenceConflict:
             if not self.shared:
+                self.metrics.rebuilds.labels("unlogged").inc()
                 self.discard(session.id, SESSION_RELOADED)
             raise  # shared: the caller rebuilds the engine in place from the store
         except SessionNotFound:
@@ -527,7 +530,9 @@ class SessionRegistry:
             self.discard(session.id, STORE_UNAVAILABLE)  # not logged: rebuilt when it is back
             raise
         except BaseException:
-            self.discard(session.id, SESSION_RELOADED)  # an unlogged step: rebuild on next use
+            self.metrics.rebuilds.labels("unlogged").inc()
+            # the engine holds an unlogged step: rebuild on next use
+            self.discard(session.id, SESSION_RELOADED)
             raise
         session.engine, session.fusion = step.engine, step.fusion
         session.seq = seq

@@ -24,7 +24,13 @@ import orjson
 from api_schemas.associate import AssociateRequest
 from api_schemas.association import AssociationOptions
 from api_schemas.classification import ClassEvidence
-from api_schemas.config import PolygonFieldOfView, SectorFieldOfView, SensorConfig, SessionConfig
+from api_schemas.config import (
+    PolygonFieldOfView,
+    SectorFieldOfView,
+    SensorConfig,
+    SessionConfig,
+    TrackThresholds,
+)
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import DetectionReport, SensorTrack, TrackReport
 from app.errors import request_validation_error
@@ -32,7 +38,7 @@ from core.association import AssociationResult
 from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, TotalConflict
 from core.fusion.classes import ClassAssessment, accumulate_likelihoods
-from core.fusion.config import FusionConfig, SensorSpec, TrackManagement
+from core.fusion.config import FusionConfig, SensorSpec
 from core.fusion.motion import MotionKind, MotionModel, StateLayout
 from core.fusion.reports import (
     AssociationView,
@@ -46,7 +52,7 @@ from core.fusion.reports import DetectionReport as CoreDetectionReport
 from core.fusion.reports import TrackReport as CoreTrackReport
 from core.fusion.state import StateFusion
 from core.geometry import FieldOfView, PolygonView, Sector
-from core.lifecycle import ScoreModel
+from core.lifecycle import LifeCycleConfig
 from core.tracking.config import ClassificationOptions, LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
 
@@ -120,16 +126,21 @@ def local_tracker_config(
         association_method=tracking.association.method,
         association_options=method_options(options),
         imm_distance=options.imm_distance or "closest_model",
-        score=ScoreModel(
-            p_detect=sensor.p_detect,
-            false_confirmation=thresholds.false_confirmation,
-            true_deletion=thresholds.true_deletion,
-        ),
-        termination_probability=thresholds.termination_probability,
-        min_points=thresholds.min_points,
+        p_detect=sensor.p_detect,
+        life_cycle=life_cycle_config(thresholds),
         fields_of_view={sensor.id: fov},
         classification=ClassificationOptions() if config.classes else None,
         id_prefix=f"{sensor.id}:",
+    )
+
+
+def life_cycle_config(thresholds: TrackThresholds) -> LifeCycleConfig:
+    """The life cycle of both layers from the wire thresholds (the rest: the core's defaults)."""
+    return LifeCycleConfig(
+        false_confirmation=thresholds.false_confirmation,
+        true_deletion=thresholds.true_deletion,
+        termination_probability=thresholds.termination_probability,
+        min_points=thresholds.min_points,
     )
 
 
@@ -172,12 +183,7 @@ def fusion_config(config: SessionConfig, extra_sensors: Iterable[str] = ()) -> F
         association_options=method_options(association.options),
         distance=association.options.distance or "sum",
         state_fusion=StateFusion(config.fusion.state),
-        management=TrackManagement(
-            false_confirmation=thresholds.false_confirmation,
-            true_deletion=thresholds.true_deletion,
-            termination_probability=thresholds.termination_probability,
-            min_points=thresholds.min_points,
-        ),
+        management=life_cycle_config(thresholds),
     )
 
 

@@ -27,11 +27,14 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
-from core.arrays import FloatArray
+from core.arrays import BoolArray, FloatArray, IntArray
+from core.distance.pairwise import chi2_quantile
 from core.errors import InvalidInput
+from core.geometry import Coverage, FieldOfView, Sector, Visibility, occluded
 
 
 class TrackStatus(enum.StrEnum):
@@ -63,17 +66,16 @@ class StatusReason(enum.StrEnum):
     DUPLICATE = "duplicate"
 
 
-def _check_probability(value: float, name: str, *, open_interval: bool = True) -> None:
-    low_ok = value > 0.0 if open_interval else value >= 0.0
-    high_ok = value < 1.0 if open_interval else value <= 1.0
-    if not (math.isfinite(value) and low_ok and high_ok):
-        interval = "(0, 1)" if open_interval else "[0, 1]"
+def _check_probability(value: float, name: str, *, closed_low: bool = False) -> None:
+    low_ok = value >= 0.0 if closed_low else value > 0.0
+    if not (math.isfinite(value) and low_ok and value < 1.0):
+        interval = "[0, 1)" if closed_low else "(0, 1)"
         raise InvalidInput(f"{name} must be in {interval}, got {value!r}")
 
 
 @dataclass(frozen=True)
 class ScoreModel:
-    """Parameters of the SPRT track score.
+    """Parameters of the SPRT track score of one sensor (built by :meth:`LifeCycleConfig.score_model`).
 
     Attributes
     ----------
@@ -84,11 +86,11 @@ class ScoreModel:
     true_deletion : β, P(a true track is deleted).
     """
 
-    p_detect: float = 0.9
-    false_target_density: float = 1e-6
-    new_target_density: float = 1e-6
-    false_confirmation: float = 1e-3
-    true_deletion: float = 1e-2
+    p_detect: float
+    false_target_density: float
+    new_target_density: float
+    false_confirmation: float
+    true_deletion: float
 
     def __post_init__(self) -> None:
         _check_probability(self.p_detect, "p_detect")
@@ -151,3 +153,378 @@ def gate_emptiness_factor(
 ) -> FloatArray:
     """One scan's factor 1 − (ρ_FA + ρ_NT) A_G, clipped at 0 ([HZ] §4.2)."""
     return np.asarray(np.clip(1.0 - (clutter_density + new_target_density) * volume, 0.0, 1.0))
+
+
+# ------------------------------------------------------------------ configuration
+MAX_MIN_POINTS = 100
+"""Largest ``min_points`` (the wire's bound too)."""
+
+
+@dataclass(frozen=True)
+class LifeCycleConfig:
+    """The track life cycle of both layers: one type, one set of defaults.
+
+    The local tracker (``LocalTrackerConfig.life_cycle``), the fusion engine
+    (``FusionConfig.management``) and the wire schema
+    (``api_schemas.config.TrackThresholds``, pinned by a test) share it.
+
+    Attributes
+    ----------
+    false_confirmation : α, P(a false track is confirmed), in (0, 1).
+    true_deletion : β, P(a true track is deleted), in (0, 1).
+    false_target_density : β_FT (= ρ_FA), false alarms per unit of position space per scan.
+    new_target_density : β_NT (= ρ_NT), new targets per unit of position space per scan.
+    termination_probability : gate-emptiness threshold ([HZ] §4.2) in [0, 1); 0 turns it off.
+    gate_probability : γ of the gate volume A_G (as a χ² probability) and of the
+        hand-over to phantoms, in (0, 1).
+    min_points : confirm a tentative track after this many hits, 1 to
+        :data:`MAX_MIN_POINTS` (None: score only).
+    score_margin : the score is clamped at ``confirm threshold + score_margin``, so a
+        long-lived track is still deleted after a few misses where it should have been
+        seen (``core.tracking.config`` Readings); None keeps the raw SPRT.
+    occlusion_radius : radius of a known track as an occluder ([HZ] §2.1); 0: no occlusion.
+    phantom_max_distance, phantom_min_speed : a phantom lives at most
+        ``max_distance / min_speed`` seconds ([HZ] §5.1).
+    phantoms : the blind-zone strategy on (default) or off (a hidden track then
+        coasts and is terminated by score or gate emptiness).
+    """
+
+    false_confirmation: float = 1e-3
+    true_deletion: float = 1e-3
+    false_target_density: float = 1e-6
+    new_target_density: float = 1e-6
+    termination_probability: float = 0.5
+    gate_probability: float = 0.999
+    min_points: int | None = None
+    score_margin: float | None = 0.0
+    occlusion_radius: float = 0.0
+    phantom_max_distance: float = 500.0
+    phantom_min_speed: float = 1.0
+    phantoms: bool = True
+
+    def __post_init__(self) -> None:
+        _check_probability(self.false_confirmation, "false_confirmation")
+        _check_probability(self.true_deletion, "true_deletion")
+        _check_probability(self.termination_probability, "termination_probability", closed_low=True)
+        _check_probability(self.gate_probability, "gate_probability")
+        for name in (
+            "false_target_density",
+            "new_target_density",
+            "phantom_max_distance",
+            "phantom_min_speed",
+        ):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise InvalidInput(f"{name} must be a positive number, got {value!r}")
+        if self.score_margin is not None and not (
+            math.isfinite(self.score_margin) and self.score_margin >= 0.0
+        ):
+            raise InvalidInput(f"score_margin must be >= 0 or None, got {self.score_margin!r}")
+        if not (math.isfinite(self.occlusion_radius) and self.occlusion_radius >= 0.0):
+            raise InvalidInput(f"occlusion_radius must be >= 0, got {self.occlusion_radius!r}")
+        if self.min_points is not None and not 1 <= self.min_points <= MAX_MIN_POINTS:
+            raise InvalidInput(
+                f"min_points must be in [1, {MAX_MIN_POINTS}] or None, got {self.min_points}"
+            )
+
+    def score_model(self, p_detect: float) -> ScoreModel:
+        """The SPRT score of a sensor with detection probability ``p_detect`` (built once)."""
+        return _score_model(self, p_detect)
+
+    @property
+    def confirm_threshold(self) -> float:
+        """ln((1 − β) / α): it depends on α and β only."""
+        return math.log((1.0 - self.true_deletion) / self.false_confirmation)
+
+    @property
+    def delete_threshold(self) -> float:
+        """ln(β / (1 − α))."""
+        return math.log(self.true_deletion / (1.0 - self.false_confirmation))
+
+    @property
+    def score_ceiling(self) -> float:
+        """Largest score a track keeps (+inf without a margin)."""
+        if self.score_margin is None:
+            return math.inf
+        return self.confirm_threshold + self.score_margin
+
+    @property
+    def phantom_lifetime(self) -> float:
+        """Longest time in a blind zone: the maximum distance at the minimum speed ([HZ] §5.1)."""
+        return self.phantom_max_distance / self.phantom_min_speed
+
+
+@lru_cache(maxsize=64)
+def _score_model(config: LifeCycleConfig, p_detect: float) -> ScoreModel:
+    return ScoreModel(
+        p_detect=p_detect,
+        false_target_density=config.false_target_density,
+        new_target_density=config.new_target_density,
+        false_confirmation=config.false_confirmation,
+        true_deletion=config.true_deletion,
+    )
+
+
+# ------------------------------------------------------------------ state
+STATUSES: tuple[TrackStatus, ...] = tuple(TrackStatus)
+REASONS: tuple[StatusReason, ...] = tuple(StatusReason)
+TENTATIVE = STATUSES.index(TrackStatus.TENTATIVE)
+CONFIRMED = STATUSES.index(TrackStatus.CONFIRMED)
+COASTING = STATUSES.index(TrackStatus.COASTING)
+PHANTOM = STATUSES.index(TrackStatus.PHANTOM)
+TERMINATED = STATUSES.index(TrackStatus.TERMINATED)
+
+
+def reason_code(reason: StatusReason) -> int:
+    """The integer code of ``reason`` in :class:`LifeState` arrays."""
+    return REASONS.index(reason)
+
+
+@dataclass(frozen=True)
+class LifeState:
+    """The life of n tracks as arrays (codes index :data:`STATUSES` / :data:`REASONS`).
+
+    Never changed in place: every function here returns a new one.
+    ``phantom_since`` is NaN for a track that is not a phantom.
+    """
+
+    status: IntArray
+    reason: IntArray
+    score: FloatArray
+    hits: IntArray
+    empty_gate: FloatArray
+    phantom_since: FloatArray
+
+    @classmethod
+    def empty(cls) -> LifeState:
+        return cls.new(0, 0.0)
+
+    @classmethod
+    def new(cls, count: int, score: float, hits: int = 1) -> LifeState:
+        """``count`` tentative tracks just initiated with ``score`` and ``hits``."""
+        return cls(
+            status=np.full(count, TENTATIVE, dtype=np.int64),
+            reason=np.full(count, reason_code(StatusReason.INITIATED), dtype=np.int64),
+            score=np.full(count, score, dtype=np.float64),
+            hits=np.full(count, hits, dtype=np.int64),
+            empty_gate=np.ones(count),
+            phantom_since=np.full(count, np.nan),
+        )
+
+    def __len__(self) -> int:
+        return len(self.status)
+
+    def select(self, rows: IntArray) -> LifeState:
+        return LifeState(*(getattr(self, name)[rows] for name in _LIFE_ARRAYS))
+
+    def concatenate(self, other: LifeState) -> LifeState:
+        return LifeState(
+            *(np.concatenate([getattr(self, name), getattr(other, name)]) for name in _LIFE_ARRAYS)
+        )
+
+    def statuses(self) -> list[TrackStatus]:
+        return [STATUSES[code] for code in self.status.tolist()]
+
+    def reasons(self) -> list[StatusReason]:
+        return [REASONS[code] for code in self.reason.tolist()]
+
+
+_LIFE_ARRAYS = ("status", "reason", "score", "hits", "empty_gate", "phantom_since")
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """What one scan or report says about each of n tracks, for :func:`advance`.
+
+    Attributes
+    ----------
+    time : the scan time (phantom expiry and entry).
+    detected : the track got a hit in this step.
+    hit_increment : ΔL of that hit (read only where ``detected``).
+    seen : the step's sensor should have seen the track (in its field of view,
+        not occluded): not detected, it is a miss.
+    miss_increment : ΔL of a miss, ln(1 − P_D).
+    gate_log_det : log|S| of each track's gate on the position components (read
+        only on a coasting miss, for A_G).
+    gate_dim : the number of position components.
+    visibility : :class:`~core.geometry.Visibility` code of each track (the coverage).
+    occluded : inside the sensor's field of view but hidden by a known track.
+    sensors : how many sensors report each track (second-sensor confirmation);
+        None for a single-sensor layer.
+    """
+
+    time: float
+    detected: BoolArray
+    hit_increment: FloatArray
+    seen: BoolArray
+    miss_increment: float
+    gate_log_det: FloatArray
+    gate_dim: int
+    visibility: IntArray
+    occluded: BoolArray
+    sensors: IntArray | None = None
+
+
+# ------------------------------------------------------------------ visibility
+def sensor_view(
+    view: FieldOfView | None, positions: FloatArray, occluders: FloatArray, radius: float
+) -> tuple[BoolArray, BoolArray]:
+    """Seen by the step's sensor, and occluded ([HZ] §2.1), of each planar position (n, 2).
+
+    ``occluders`` are the positions of the known (confirmed or coasting) tracks,
+    a disc of ``radius`` each, effective only for a sector ``view``. A position
+    inside ``view`` but hidden is occluded and not seen.
+    """
+    count = len(positions)
+    seen = np.ones(count, dtype=bool) if view is None else view.contains(positions)
+    hidden = np.zeros(count, dtype=bool)
+    if radius > 0.0 and isinstance(view, Sector) and count:
+        hidden = seen & occluded(view.origin, positions, occluders, radius)
+        seen = seen & ~hidden
+    return np.asarray(seen, dtype=bool), np.asarray(hidden, dtype=bool)
+
+
+def visibility(
+    coverage: Coverage,
+    view: FieldOfView | None,
+    positions: FloatArray,
+    occluders: FloatArray,
+    radius: float,
+) -> tuple[IntArray, BoolArray, BoolArray]:
+    """Coverage code (:class:`~core.geometry.Visibility`), seen, occluded of each position."""
+    if len(positions) == 0:
+        return everywhere(0)
+    return (coverage.visibility(positions), *sensor_view(view, positions, occluders, radius))
+
+
+def everywhere(count: int) -> tuple[IntArray, BoolArray, BoolArray]:
+    """Visibility of ``count`` tracks where there is no plane to look in (1-D states)."""
+    return (
+        np.full(count, int(Visibility.VISIBLE), dtype=np.int64),
+        np.ones(count, dtype=bool),
+        np.zeros(count, dtype=bool),
+    )
+
+
+# ------------------------------------------------------------------ transitions
+def advance(
+    config: LifeCycleConfig, state: LifeState, evidence: Evidence
+) -> tuple[LifeState, BoolArray]:
+    """One step of the life cycle of every track; returns the new state and the newly confirmed.
+
+    1. score: a hit adds its ΔL, a miss (seen, not detected, not a phantom)
+       ln(1 − P_D); clamped at :attr:`LifeCycleConfig.score_ceiling`;
+    2. a coasting track that is hit is confirmed again (``reacquired``); a
+       confirmed one that misses coasts (``missed``); a coasting miss multiplies
+       the empty-gate probability by ``1 − (ρ_FA + ρ_NT) A_G`` ([HZ] §4.2);
+    3. the table of [HZ] §5.1, first reason found wins:
+
+       ======================================  =============  ==================
+       condition                               new status     reason
+       ======================================  =============  ==================
+       out of range of every sensor            terminated     out_of_range
+       phantom older than the lifetime         terminated     phantom_expired
+       (other phantoms stay phantoms)
+       undetected in a blind zone, established phantom        blind_zone
+       undetected in a blind zone, tentative   terminated     blind_zone
+       occluded, established                   phantom        occluded
+       occluded, tentative                     terminated     occluded
+       score ≤ delete threshold                terminated     score_deleted
+       coasting, empty gate < termination p.   terminated     gate_emptiness
+       tentative, reported by ≥ 2 sensors      confirmed      second_sensor
+       tentative, hits ≥ ``min_points``        confirmed      min_points
+       tentative, score ≥ confirm threshold    confirmed      score_confirmed
+       ======================================  =============  ==================
+
+       (established = confirmed or coasting; the two phantom rows only with
+       ``config.phantoms``).
+    """
+    status = state.status
+    is_phantom = status == PHANTOM
+    detected = evidence.detected & ~is_phantom
+    missed = evidence.seen & ~detected & ~is_phantom
+    score = state.score + np.where(detected, evidence.hit_increment, 0.0)
+    score = np.minimum(score + np.where(missed, evidence.miss_increment, 0.0), config.score_ceiling)
+    hits = state.hits + detected.astype(np.int64)
+    reason = state.reason
+
+    def changed(mask: BoolArray, new_status: int, why: StatusReason) -> tuple[IntArray, IntArray]:
+        return np.where(mask, new_status, status), np.where(mask, reason_code(why), reason)
+
+    status, reason = changed(detected & (status == COASTING), CONFIRMED, StatusReason.REACQUIRED)
+    empty_gate = np.where(detected, 1.0, state.empty_gate)
+    status, reason = changed(missed & (status == CONFIRMED), COASTING, StatusReason.MISSED)
+    coasting_miss = missed & (status == COASTING)
+    if coasting_miss.any():
+        gate = chi2_quantile(config.gate_probability, evidence.gate_dim)
+        volume = gate_volume(
+            gate, np.where(coasting_miss, evidence.gate_log_det, 0.0), evidence.gate_dim
+        )
+        factor = gate_emptiness_factor(
+            config.false_target_density, config.new_target_density, volume
+        )
+        empty_gate = np.where(coasting_miss, empty_gate * factor, empty_gate)
+
+    undecided = np.ones(len(status), dtype=bool)
+    phantom_since = state.phantom_since
+
+    def decide(mask: BoolArray, new_status: int, why: StatusReason) -> None:
+        nonlocal status, reason, undecided
+        chosen = mask & undecided
+        status, reason = changed(chosen, new_status, why)
+        undecided = undecided & ~chosen
+
+    decide(evidence.visibility == Visibility.OUT_OF_RANGE, TERMINATED, StatusReason.OUT_OF_RANGE)
+    expired = is_phantom & (evidence.time - phantom_since > config.phantom_lifetime)
+    decide(expired, TERMINATED, StatusReason.PHANTOM_EXPIRED)
+    undecided &= ~is_phantom
+    if config.phantoms:
+        established = (status == CONFIRMED) | (status == COASTING)
+        for hidden, why in (
+            ((evidence.visibility == Visibility.BLIND_ZONE) & ~detected, StatusReason.BLIND_ZONE),
+            (evidence.occluded & ~detected, StatusReason.OCCLUDED),
+        ):
+            entering = hidden & established & undecided
+            phantom_since = np.where(entering, evidence.time, phantom_since)
+            decide(entering, PHANTOM, why)
+            decide(hidden & (status == TENTATIVE), TERMINATED, why)
+    decide(score <= config.delete_threshold, TERMINATED, StatusReason.SCORE_DELETED)
+    if config.termination_probability > 0.0:
+        decide(
+            (status == COASTING) & (empty_gate < config.termination_probability),
+            TERMINATED,
+            StatusReason.GATE_EMPTINESS,
+        )
+    tentative = status == TENTATIVE
+    if evidence.sensors is not None:
+        decide(tentative & (evidence.sensors >= 2), CONFIRMED, StatusReason.SECOND_SENSOR)
+    if config.min_points is not None:
+        decide(tentative & (hits >= config.min_points), CONFIRMED, StatusReason.MIN_POINTS)
+    decide(tentative & (score >= config.confirm_threshold), CONFIRMED, StatusReason.SCORE_CONFIRMED)
+    new = LifeState(status, reason, score, hits, empty_gate, phantom_since)
+    return new, np.asarray(tentative & (status == CONFIRMED), dtype=bool)
+
+
+def hand_over(
+    state: LifeState, keepers: IntArray, newcomers: IntArray, why: StatusReason
+) -> LifeState:
+    """Each newcomer joins its keeper ([HZ] §5.1 hand-over; a duplicate's merge).
+
+    The keeper (a phantom, or an established track) keeps its id, becomes (or
+    stays) confirmed — ``reacquired`` when it was not — with the better score,
+    both hit counts, a fresh empty-gate probability and no phantom time; the
+    newcomer is terminated with ``why``. The callers move the estimates.
+    """
+    if len(keepers) == 0:
+        return state
+    status, reason = state.status.copy(), state.reason.copy()
+    score, hits = state.score.copy(), state.hits.copy()
+    empty_gate, phantom_since = state.empty_gate.copy(), state.phantom_since.copy()
+    rejoined = keepers[status[keepers] != CONFIRMED]
+    status[rejoined], reason[rejoined] = CONFIRMED, reason_code(StatusReason.REACQUIRED)
+    score[keepers] = np.maximum(score[keepers], score[newcomers])
+    hits[keepers] += hits[newcomers]
+    empty_gate[keepers] = 1.0
+    phantom_since[keepers] = np.nan
+    status[newcomers], reason[newcomers] = TERMINATED, reason_code(why)
+    return LifeState(status, reason, score, hits, empty_gate, phantom_since)

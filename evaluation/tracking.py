@@ -13,13 +13,13 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from core.arrays import FloatArray, IntArray
 from core.geometry import PolygonView
-from core.lifecycle import ScoreModel
+from core.lifecycle import LifeCycleConfig
 from core.simulation.scenario import CLUTTER, Region, Scenario
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.models import ModelBank
@@ -54,7 +54,8 @@ def road_bank(
 def road_config(scenario: Scenario, **options: object) -> LocalTrackerConfig:
     """The road scenes' tracker: their sensors' rectangles, clutter density ~1e-3 per m².
 
-    ``options`` override any :class:`LocalTrackerConfig` field; ``noise_intensity``
+    ``options`` override any :class:`LocalTrackerConfig` or
+    :class:`~core.lifecycle.LifeCycleConfig` field; ``noise_intensity``
     (default 1 m²/s³, σ_a = 1 m/s²) sets the road filter's process noise.
     """
     views = {name: rectangle(region) for name, region in scenario.sensor_regions.items()}
@@ -65,11 +66,20 @@ def road_config(scenario: Scenario, **options: object) -> LocalTrackerConfig:
         ),
         "time_interval": scenario.time_interval,
         "fields_of_view": views,
-        "score": ScoreModel(p_detect=0.9, false_target_density=1e-3, new_target_density=1e-4),
         "max_speed": 30.0,
     }
     settings.update(options)
+    settings["life_cycle"] = life_cycle(
+        settings, false_target_density=1e-3, new_target_density=1e-4
+    )
     return LocalTrackerConfig(**settings)  # type: ignore[arg-type]
+
+
+def life_cycle(settings: dict[str, object], **defaults: object) -> LifeCycleConfig:
+    """Take the :class:`LifeCycleConfig` fields out of ``settings`` (over ``defaults``)."""
+    names = {entry.name for entry in fields(LifeCycleConfig)}
+    chosen = {**defaults, **{name: settings.pop(name) for name in list(settings) if name in names}}
+    return LifeCycleConfig(**chosen)  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)

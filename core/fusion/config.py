@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from functools import cached_property, lru_cache
 from types import MappingProxyType
 
 from core.association import DEFAULT_DISTANCE
@@ -20,7 +19,7 @@ from core.fusion.detections import check_layout_for_detections
 from core.fusion.motion import MotionModel
 from core.fusion.state import StateFusion
 from core.geometry import Coverage, FieldOfView, PolygonView
-from core.lifecycle import ScoreModel
+from core.lifecycle import LifeCycleConfig
 from core.tracking.config import LocalTrackerConfig
 
 
@@ -55,81 +54,6 @@ class SensorSpec:
 
 
 @dataclass(frozen=True)
-class TrackManagement:
-    """Track life cycle at the fused level (ALGORITHMS.md §4, §6 step 5).
-
-    Densities are per unit of position space (area in 2-D) per report:
-    the score and the gate volume are computed on the position components.
-    As in the local tracker (``core.tracking.config``, Reading ``score_margin``),
-    the score is clamped at ``confirm threshold + score_margin`` so that a
-    long-lived track is still deleted after a few consecutive misses where it
-    should have been seen; ``None`` keeps the raw SPRT.
-    """
-
-    false_confirmation: float = 1e-3
-    true_deletion: float = 1e-3
-    false_target_density: float = 1e-6
-    new_target_density: float = 1e-5
-    termination_probability: float = 0.5
-    gate_probability: float = 0.999
-    min_points: int | None = None
-    phantom_max_distance: float = 500.0
-    phantom_min_speed: float = 1.0
-    occlusion_radius: float = 0.0
-    score_margin: float | None = 0.0
-
-    def __post_init__(self) -> None:
-        if self.score_margin is not None and not (
-            math.isfinite(self.score_margin) and self.score_margin >= 0.0
-        ):
-            raise InvalidInput(f"score_margin must be >= 0 or None, got {self.score_margin!r}")
-        for name in ("termination_probability", "gate_probability"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and 0.0 < value < 1.0):
-                raise InvalidInput(f"{name} must be in (0, 1), got {value!r}")
-        for name in ("phantom_max_distance", "phantom_min_speed"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise InvalidInput(f"{name} must be a positive number, got {value!r}")
-        if not (math.isfinite(self.occlusion_radius) and self.occlusion_radius >= 0.0):
-            raise InvalidInput(f"occlusion_radius must be >= 0, got {self.occlusion_radius!r}")
-        if self.min_points is not None and self.min_points < 1:
-            raise InvalidInput(f"min_points must be >= 1, got {self.min_points}")
-
-    def score_model(self, p_detect: float) -> ScoreModel:
-        """The SPRT score of a sensor with detection probability ``p_detect`` (built once)."""
-        return _score_model(self, p_detect)
-
-    @cached_property
-    def thresholds(self) -> ScoreModel:
-        """The SPRT thresholds (they depend on α and β only, not on P_D)."""
-        return self.score_model(p_detect=0.5)
-
-    @cached_property
-    def score_ceiling(self) -> float:
-        """Largest score a fused track keeps (+inf without a margin)."""
-        if self.score_margin is None:
-            return math.inf
-        return self.thresholds.confirm_threshold + self.score_margin
-
-    @property
-    def phantom_lifetime(self) -> float:
-        """Longest time in a blind zone: the maximum distance at the minimum speed ([HZ] §5.1)."""
-        return self.phantom_max_distance / self.phantom_min_speed
-
-
-@lru_cache(maxsize=64)
-def _score_model(management: TrackManagement, p_detect: float) -> ScoreModel:
-    return ScoreModel(
-        p_detect=p_detect,
-        false_target_density=management.false_target_density,
-        new_target_density=management.new_target_density,
-        false_confirmation=management.false_confirmation,
-        true_deletion=management.true_deletion,
-    )
-
-
-@dataclass(frozen=True)
 class FusionConfig:
     """Everything the session engine needs, validated.
 
@@ -146,7 +70,9 @@ class FusionConfig:
         gate (``sum`` distance, see ``engine.CONTINUITY_GATE_PROBABILITY``); only the rest
         goes to the association method. Off, every report is associated afresh.
     state_fusion : how the sensors' latest estimates are combined.
-    management : the track life cycle.
+    management : the track life cycle (shared with the local trackers); its densities
+        are per unit of position space (area in 2-D) per report: the score and the
+        gate volume are computed on the position components.
     region : the surveillance region; by default the union of the sensors'
         ranges (``core.geometry``): outside it a track is out of range.
     """
@@ -161,7 +87,7 @@ class FusionConfig:
     distance: str | None = None
     track_continuity: bool = True
     state_fusion: StateFusion = StateFusion.COVARIANCE_INTERSECTION
-    management: TrackManagement = field(default_factory=TrackManagement)
+    management: LifeCycleConfig = field(default_factory=LifeCycleConfig)
     region: PolygonView | None = None
 
     def __post_init__(self) -> None:

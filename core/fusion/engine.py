@@ -9,39 +9,51 @@ order → bit-identical outputs. Its whole state exports to plain data
 One track-list step ([T2T] Fig 1-2, generalised to N sensors and to time):
 
 1. check the report (sensor known, newer than that sensor's previous report,
-   numbers finite, shapes right) — nothing changes on a refused report;
+   numbers finite and within the bounds of ``core.numerics``, shapes right,
+   class likelihoods not all zero);
 2. predict the live fused tracks to the report time: each track's state is
    the fusion of every sensor's latest estimate predicted to that time;
 3. associate the report's tracks with them by the session's method, with
    class information when both sides carry it (§3.6);
 4. each associated report track becomes its sensor's latest estimate of the
-   fused track; unassociated ones start tentative tracks; fused tracks the
-   sensor should have seen (inside its field of view, not occluded) and did
-   not count a miss;
-5. life cycle: confirm (score, second sensor, ``min_points``), coast, phantom
-   in blind zones or occlusion, terminate (score, gate emptiness, out of
-   range, phantom expiry); a newly confirmed track that matches a phantom
-   hands its estimates to the phantom, which keeps its id ([HZ] §5.1);
+   fused track; unassociated ones start tentative tracks;
+5. life cycle, shared with the local tracker (:func:`core.lifecycle.advance`):
+   hits and misses (a fused track the sensor should have seen — inside its
+   field of view, not occluded — and did not report), confirmation (score,
+   second sensor, ``min_points``), coasting, phantoms in blind zones or when
+   occluded, termination (score, gate emptiness, out of range, phantom
+   expiry); a newly confirmed track that matches a phantom hands its
+   estimates to the phantom, which keeps its id ([HZ] §5.1,
+   :func:`core.lifecycle.hand_over`);
 6. class fusion per track from the sensors' latest class evidence.
+
+**Transactions.** A step checkpoints the tracks' fields (their containers
+are replaced, never changed in place), the estimate table and the sensor's
+local tracker; when anything in it
+raises — a refused input or an internal error — they come back and the
+export is bit-identical to before. There is no check-before-change: the
+step itself is the check.
 
 **Readings.** The time of a step's result is the fusion time (the latest
 report time seen): a late report (older than the fusion time, newer than
 its sensor's previous report, §6.4) is associated at its own time and then
 simply becomes that sensor's latest estimate. The score and the gate volume
 use the position components, so the densities of
-:class:`~core.fusion.config.TrackManagement` are per unit of position space.
+:class:`~core.lifecycle.LifeCycleConfig` are per unit of position space.
 """
 
 from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from core.arrays import BoolArray, FloatArray, IntArray
+from core.arrays import FloatArray, IntArray
 from core.association import ScoreMatrix, associate
 from core.belief import MassFunction
 from core.distance import Estimates, chi2_quantile
@@ -60,8 +72,22 @@ from core.fusion.reports import (
 )
 from core.fusion.table import EstimateTable
 from core.fusion.track import FusedTrack, SensorEstimate
-from core.geometry import Sector, Visibility, occluded
-from core.lifecycle import StatusReason, TrackStatus, gate_emptiness_factor, gate_volume
+from core.lifecycle import (
+    COASTING,
+    CONFIRMED,
+    REASONS,
+    STATUSES,
+    TERMINATED,
+    Evidence,
+    LifeState,
+    StatusReason,
+    TrackStatus,
+    advance,
+    everywhere,
+    hand_over,
+    sensor_view,
+)
+from core.numerics import MAX_TIME, check_magnitudes
 from core.tracking.tracker import LocalTracker
 
 EXPORT_VERSION = 1
@@ -110,7 +136,6 @@ class SessionEngine:
         layout = config.motion.layout
         self._position = np.asarray(layout.position, dtype=np.int64)
         self._coverage = config.coverage
-        self._gate = chi2_quantile(config.management.gate_probability, len(layout.position))
         self._reliabilities = {sensor.id: sensor.reliability for sensor in config.sensors}
         self._table = EstimateTable(
             [sensor.id for sensor in config.sensors], config.motion, config.state_fusion
@@ -128,41 +153,8 @@ class SessionEngine:
         StaleReport
             The report is not newer than the sensor's previous report.
         """
-        sensor, incoming = self._check(report)
-        t = float(report.time)
-        live = [track for track in self.tracks if track.status in LIVE]
-        states, covariances = self._fused_at(live, t)
-        self._check_horizon(t, incoming)
-        decision = self._associate(live, states, covariances, report, incoming)
-        terminated: list[FusedTrack] = []
-        confirmed: list[FusedTrack] = []
-
-        rows = np.array([pair[0] for pair in decision.pairs], dtype=np.int64)
-        cols = np.array([pair[1] for pair in decision.pairs], dtype=np.int64)
-        increments = self._hit_increments(states[rows], covariances[rows], incoming, cols, sensor)
-        hit = [live[row] for row in rows.tolist()]
-        self._record(hit, cols, report, incoming)
-        for fused, increment in zip(hit, increments.tolist(), strict=True):
-            was_tentative = fused.status is TrackStatus.TENTATIVE
-            self._hit(fused, increment)
-            if was_tentative and fused.status is TrackStatus.CONFIRMED:
-                confirmed.append(fused)
-        missed = np.asarray(decision.missed, dtype=np.int64)
-        seen = self._seen_by(sensor, states[missed], states) if len(missed) else np.zeros(0, bool)
-        for row, visible in zip(missed, seen, strict=True):
-            if visible:
-                self._miss(live[row], covariances[row], sensor.p_detect)
-        created = self._start(np.asarray(decision.new, dtype=np.int64), report, incoming)
-        self.tracks.extend(created)
-        confirmed.extend(track for track in created if track.status is TrackStatus.CONFIRMED)
-
-        self.time = t if self.time is None else max(self.time, t)
-        self.last_report[report.sensor] = t
-        self.seq += 1
-        self._manage(self.time, terminated)
-        self._hand_over_to_phantoms(confirmed, terminated)
-        self._absorb_duplicates(terminated)
-        return self._result(report, decision, live, terminated, explain)
+        with self._transaction():
+            return self._apply(report, explain)
 
     def apply_detections(self, report: DetectionReport, *, explain: bool = False) -> StepResult:
         """Apply one sensor's detections: its local tracker, then the fusion step.
@@ -170,7 +162,7 @@ class SessionEngine:
         The sensor's local tracker ([MTT] Fig 6, ``core.tracking``) updates its
         tracks with the detections; its confirmed tracks updated in this scan
         become the sensor's track list for :meth:`apply`
-        (``core.fusion.detections``).
+        (``core.fusion.detections``). Both are one transaction.
 
         Raises
         ------
@@ -188,30 +180,75 @@ class SessionEngine:
                 f"sensor {sensor.id!r} sends track lists: it has no local tracker for detections "
                 "(configure its measurement model)"
             )
-        if not math.isfinite(report.time):
-            raise InvalidInput(f"time must be finite, got {report.time!r}")
+        check_time(report.time)
         last = self.last_report.get(sensor.id)
         if last is not None and report.time <= last:
             raise StaleReport(sensor.id, report.time, last)
-        self._check_horizon(float(report.time), None)
-        late = self.time is not None and report.time < self.time
-        before = tracker.export() if late else None  # only a late scan can be refused after it
-        scan = tracker.step(report.time, report.measurements, report.covariances)
-        tracks = local_track_report(tracker, scan, self.config.motion.layout, self.config.classes)
+        check_detection_magnitudes(report)
+        with self._transaction(tracker):
+            scan = tracker.step(report.time, report.measurements, report.covariances)
+            tracks = local_track_report(
+                tracker, scan, self.config.motion.layout, self.config.classes
+            )
+            return self._apply(TrackReport(sensor.id, report.time, tracks), explain)
+
+    @contextmanager
+    def _transaction(self, tracker: LocalTracker | None = None) -> Iterator[None]:
+        """A step either succeeds whole or changes nothing (DESIGN.md "The session engine").
+
+        Each track's fields are checkpointed (:meth:`FusedTrack.checkpoint`: its
+        containers are only ever replaced), as are the counters, the table's
+        estimates and the local tracker; on any exception they come back, so the
+        export is bit-identical to before.
+        """
+        seq, time, next_number = self.seq, self.time, self.next_number
+        last_report, tracks = dict(self.last_report), self.tracks
+        checkpoint = self._table.checkpoint()
+        saved = None if tracker is None else tracker.checkpoint()
+        fields = [track.checkpoint() for track in tracks]
+        self.tracks = list(tracks)
         try:
-            return self.apply(TrackReport(sensor.id, report.time, tracks), explain=explain)
-        except InvalidInput:
-            if before is not None:
-                assert sensor.tracker is not None
-                self.local_trackers[sensor.id] = LocalTracker.restore(sensor.tracker, before)
+            yield
+        except BaseException:
+            self.seq, self.time, self.next_number = seq, time, next_number
+            self.last_report, self.tracks = last_report, tracks
+            for track, kept in zip(tracks, fields, strict=True):
+                track.rollback(kept)
+            self._table.rollback(checkpoint)
+            if tracker is not None and saved is not None:
+                tracker.rollback(saved)
             raise
+
+    def _apply(self, report: TrackReport, explain: bool) -> StepResult:
+        """The step of :meth:`apply`, inside its transaction."""
+        sensor, incoming = self._check(report)
+        t = float(report.time)
+        live = [track for track in self.tracks if track.status in LIVE]
+        states, covariances = self._fused_at(live, t)
+        decision = self._associate(live, states, covariances, report, incoming)
+
+        rows = np.array([pair[0] for pair in decision.pairs], dtype=np.int64)
+        cols = np.array([pair[1] for pair in decision.pairs], dtype=np.int64)
+        increments = self._hit_increments(states[rows], covariances[rows], incoming, cols, sensor)
+        self._record([live[row] for row in rows.tolist()], cols, report, incoming)
+        created = self._start(np.asarray(decision.new, dtype=np.int64), report, incoming)
+        self.tracks.extend(created)
+
+        self.time = t if self.time is None else max(self.time, t)
+        self.last_report[report.sensor] = t
+        self.seq += 1
+        terminated, confirmed = self._life_cycle(
+            sensor, live, states, covariances, rows, increments
+        )
+        self._hand_over_to_phantoms(confirmed, terminated)
+        self._absorb_duplicates(terminated)
+        return self._result(report, decision, live, terminated, explain)
 
     # ------------------------------------------------------------ checks
     def _check(self, report: TrackReport) -> tuple[SensorSpec, Estimates]:
         """Validate a report without changing anything; returns its sensor and its estimates."""
         sensor = self.config.sensor(report.sensor)
-        if not math.isfinite(report.time):
-            raise InvalidInput(f"time must be finite, got {report.time!r}")
+        check_time(report.time)
         last = self.last_report.get(report.sensor)
         if last is not None and report.time <= last:
             raise StaleReport(report.sensor, report.time, last)
@@ -236,27 +273,9 @@ class SessionEngine:
             name="tracks",
             dimension=dim,
         )
+        assert estimates.covariances is not None
+        check_magnitudes(estimates.states, estimates.covariances, "tracks")
         return sensor, estimates
-
-    def _check_horizon(self, time: float, incoming: Estimates | None) -> None:
-        """Refuse, before anything changes, a step at ``time`` whose fusion time some estimate
-        cannot be predicted to (``MotionModel.predict`` overflows: :class:`InvalidInput`).
-
-        The step predicts every track that is not terminated, and the report's
-        own tracks, to the fusion time; the live tracks were just predicted to
-        ``time``, and what was predicted is kept, so this costs nothing more
-        when the report is not late.
-        """
-        fusion_time = time if self.time is None else max(self.time, time)
-        self._fused_at(
-            [track for track in self.tracks if track.status is not TrackStatus.TERMINATED],
-            fusion_time,
-        )
-        if incoming is not None and len(incoming) and fusion_time != time:
-            assert incoming.covariances is not None
-            self.config.motion.predict(
-                incoming.states, incoming.covariances, np.full(len(incoming), fusion_time - time)
-            )
 
     def _check_classes(self, track: ReportedTrack, where: str) -> None:
         frame = self.config.classes
@@ -282,6 +301,10 @@ class SessionEngine:
                 or likelihoods.max() > 1.0
             ):
                 raise InvalidInput(f"{where}: class likelihoods must lie in [0, 1]")
+            if likelihoods.max() == 0.0:
+                raise InvalidInput(
+                    f"{where}: class likelihoods are all zero: the evidence rules out every class"
+                )
 
     # ------------------------------------------------------- prediction
     def _fused_at(self, tracks: list[FusedTrack], time: float) -> tuple[FloatArray, FloatArray]:
@@ -438,15 +461,6 @@ class SessionEngine:
         score = self.config.management.score_model(sensor.p_detect)
         return score.hit_increment(distance, log_det, len(self._position))
 
-    def _hit(self, fused: FusedTrack, increment: float) -> None:
-        fused.score = min(fused.score + increment, self.config.management.score_ceiling)
-        fused.hits += 1
-        fused.empty_gate_probability = 1.0
-        if fused.status is TrackStatus.COASTING:
-            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
-        elif fused.status is TrackStatus.TENTATIVE:
-            self._maybe_confirm(fused)
-
     def _record(
         self, tracks: list[FusedTrack], cols: IntArray, report: TrackReport, incoming: Estimates
     ) -> None:
@@ -466,20 +480,9 @@ class SessionEngine:
                 SensorEstimate(
                     track=reported.id,
                     time=report.time,
-                    state=states[col],  # rows of the report's own arrays (built by _check)
-                    covariance=covariances[col],
                     class_mass=self._class_evidence(reported, previous),
                 ),
             )
-
-    def _maybe_confirm(self, fused: FusedTrack) -> None:
-        management = self.config.management
-        if len(fused.estimates) >= 2:
-            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.SECOND_SENSOR
-        elif management.min_points is not None and fused.hits >= management.min_points:
-            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.MIN_POINTS
-        elif fused.score >= management.thresholds.confirm_threshold:
-            fused.status, fused.reason = TrackStatus.CONFIRMED, StatusReason.SCORE_CONFIRMED
 
     def _class_evidence(
         self, reported: ReportedTrack, previous: SensorEstimate | None
@@ -500,46 +503,98 @@ class SessionEngine:
                 )[0]
         return None if previous is None else previous.class_mass
 
-    def _miss(self, fused: FusedTrack, predicted_covariance: FloatArray, p_detect: float) -> None:
-        management = self.config.management
-        score = management.score_model(p_detect)
-        fused.score += score.miss_increment
-        if fused.status is TrackStatus.CONFIRMED:
-            fused.status, fused.reason = TrackStatus.COASTING, StatusReason.MISSED
-        if fused.status is TrackStatus.COASTING:
-            position = self._position
-            # ties by sensor id: not by dict order, which a restore through a store may change
-            newest = max(
-                (fused.estimates[sensor] for sensor in sorted(fused.estimates)),
-                key=lambda estimate: estimate.time,
-            )
-            gate_covariance = (
-                predicted_covariance[np.ix_(position, position)]
-                + newest.covariance[np.ix_(position, position)]
-            )
-            volume = gate_volume(
-                self._gate, np.array([np.linalg.slogdet(gate_covariance)[1]]), len(position)
-            )
-            factor = gate_emptiness_factor(
-                management.false_target_density, management.new_target_density, volume
-            )
-            fused.empty_gate_probability *= float(factor[0])
+    def _life_cycle(
+        self,
+        sensor: SensorSpec,
+        live: list[FusedTrack],
+        states: FloatArray,
+        covariances: FloatArray,
+        hit_rows: IntArray,
+        increments: FloatArray,
+    ) -> tuple[list[FusedTrack], list[FusedTrack]]:
+        """:func:`core.lifecycle.advance` over every track that is not terminated.
 
-    def _seen_by(self, sensor: SensorSpec, missed: FloatArray, everyone: FloatArray) -> BoolArray:
-        """Which missed tracks ``sensor`` should have reported: in its field of view, not occluded.
-
-        ``missed`` and ``everyone`` are fused states at the report time; every
-        live track (``everyone``) can hide another from a sector's origin when
-        ``occlusion_radius`` > 0 ([HZ] §2.1).
+        Hits and misses are the step's (``live`` at the report time: ``states``,
+        ``covariances`` as predicted before the update); coverage is looked at
+        at the fusion time. Returns the tracks terminated and confirmed by it.
         """
-        if sensor.fov is None or len(self._position) < 2:
-            return np.ones(len(missed), dtype=bool)
-        plane = self._position[:2]
-        seen = sensor.fov.contains(missed[:, plane])
-        radius = self.config.management.occlusion_radius
-        if radius > 0.0 and isinstance(sensor.fov, Sector):
-            seen &= ~occluded(sensor.fov.origin, missed[:, plane], everyone[:, plane], radius)
-        return seen
+        assert self.time is not None
+        management = self.config.management
+        candidates = [track for track in self.tracks if track.status is not TrackStatus.TERMINATED]
+        count = len(candidates)
+        if count == 0:
+            return [], []
+        index = {id(track): k for k, track in enumerate(candidates)}
+        live_index = np.fromiter((index[id(track)] for track in live), np.int64, len(live))
+        before = _read_life(candidates)
+        detected = np.zeros(count, dtype=bool)
+        hit_increment = np.zeros(count)
+        detected[live_index[hit_rows]] = True
+        hit_increment[live_index[hit_rows]] = increments
+        seen = np.zeros(count, dtype=bool)
+        hidden = np.zeros(count, dtype=bool)
+        gate_log_det = np.zeros(count)
+        position = self._position
+        if live:
+            live_status = before.status[live_index]
+            established = (live_status == CONFIRMED) | (live_status == COASTING)
+            if len(position) >= 2:
+                plane = states[:, position[:2]]
+                live_seen, live_hidden = sensor_view(
+                    sensor.fov, plane, plane[established], management.occlusion_radius
+                )
+            else:
+                _, live_seen, live_hidden = everywhere(len(live))
+            seen[live_index], hidden[live_index] = live_seen, live_hidden
+            established_miss = np.flatnonzero(live_seen & ~detected[live_index] & established)
+            if len(established_miss):
+                gate_log_det[live_index[established_miss]] = self._gate_log_dets(
+                    [live[row] for row in established_miss.tolist()],
+                    covariances[established_miss],
+                )
+        fused_states, _ = self._fused_at(candidates, self.time)
+        codes = (
+            self._coverage.visibility(fused_states[:, position[:2]])
+            if len(position) >= 2
+            else everywhere(count)[0]
+        )
+        after, confirmed = advance(
+            management,
+            before,
+            Evidence(
+                time=self.time,
+                detected=detected,
+                hit_increment=hit_increment,
+                seen=seen,
+                miss_increment=management.score_model(sensor.p_detect).miss_increment,
+                gate_log_det=gate_log_det,
+                gate_dim=len(position),
+                visibility=codes,
+                occluded=hidden,
+                sensors=np.array([len(t.estimates) for t in candidates], dtype=np.int64),
+            ),
+        )
+        _write_life(candidates, after, before)
+        ended = (after.status == TERMINATED) & (before.status != TERMINATED)
+        return (
+            [candidates[k] for k in np.flatnonzero(ended).tolist()],
+            [candidates[k] for k in np.flatnonzero(confirmed).tolist()],
+        )
+
+    def _gate_log_dets(self, tracks: list[FusedTrack], predicted: FloatArray) -> FloatArray:
+        """log|S| of each track's gate: its predicted covariance plus its newest estimate's,
+        on the position components ([HZ] §4.2)."""
+        position = self._position
+        gates = []
+        for fused, predicted_covariance in zip(tracks, predicted, strict=True):
+            # ties by sensor id: not by dict order, which a restore through a store may change
+            newest = max(sorted(fused.estimates), key=lambda sensor: fused.estimates[sensor].time)
+            _, covariance = self._table.estimate(fused.row, newest)
+            gates.append(
+                predicted_covariance[np.ix_(position, position)]
+                + covariance[np.ix_(position, position)]
+            )
+        return np.asarray(np.linalg.slogdet(np.array(gates))[1], dtype=np.float64)
 
     def _start(self, cols: IntArray, report: TrackReport, incoming: Estimates) -> list[FusedTrack]:
         """A tentative fused track for each of the report tracks ``cols``."""
@@ -557,47 +612,7 @@ class SessionEngine:
             )
             self.next_number += 1
         self._record(created, cols, report, incoming)
-        for fused in created:
-            self._maybe_confirm(fused)
         return created
-
-    def _manage(self, time: float, terminated: list[FusedTrack]) -> None:
-        """Deletion, gate emptiness, blind zones, occlusion, out of range, phantom expiry."""
-        management = self.config.management
-        delete_below = management.thresholds.delete_threshold
-        candidates = [track for track in self.tracks if track.status is not TrackStatus.TERMINATED]
-        if not candidates:
-            return
-        states, _ = self._fused_at(candidates, time)
-        if len(self._position) >= 2:
-            codes = self._coverage.visibility(states[:, self._position[:2]])
-        else:
-            codes = np.full(len(candidates), int(Visibility.VISIBLE))
-        out_of_range, blind = int(Visibility.OUT_OF_RANGE), int(Visibility.BLIND_ZONE)
-        for track, where in zip(candidates, codes.tolist(), strict=True):
-            reason: StatusReason | None = None
-            if where == out_of_range:
-                reason = StatusReason.OUT_OF_RANGE
-            elif track.status is TrackStatus.PHANTOM:
-                assert track.phantom_since is not None
-                if time - track.phantom_since > management.phantom_lifetime:
-                    reason = StatusReason.PHANTOM_EXPIRED
-            elif where == blind:
-                if track.status is TrackStatus.TENTATIVE:
-                    reason = StatusReason.BLIND_ZONE
-                else:
-                    track.status, track.reason = TrackStatus.PHANTOM, StatusReason.BLIND_ZONE
-                    track.phantom_since = time
-            elif track.score <= delete_below:
-                reason = StatusReason.SCORE_DELETED
-            elif (
-                track.status is TrackStatus.COASTING
-                and track.empty_gate_probability < management.termination_probability
-            ):
-                reason = StatusReason.GATE_EMPTINESS
-            if reason is not None:
-                track.status, track.reason = TrackStatus.TERMINATED, reason
-                terminated.append(track)
 
     def _hand_over_to_phantoms(self, fresh: list[FusedTrack], terminated: list[FusedTrack]) -> None:
         """A track confirmed in this step that matches a phantom gives it its estimates ([HZ] §5.1)."""
@@ -644,21 +659,30 @@ class SessionEngine:
             {"gate_probability": self.config.management.gate_probability},
             "sum",
         )
-        for row, col in zip(decision.pair_known, decision.pair_incoming, strict=True):
-            keeper, newcomer = keepers[row], newcomers[col]
-            if set(keeper.estimates) & set(newcomer.estimates):
-                continue  # a sensor that reports both as distinct objects knows better
+        pairs = [
+            (keepers[row], newcomers[col])
+            for row, col in zip(decision.pair_known, decision.pair_incoming, strict=True)
+            # a sensor that reports both as distinct objects knows better
+            if not set(keepers[row].estimates) & set(newcomers[col].estimates)
+        ]
+        if not pairs:
+            return
+        for keeper, newcomer in pairs:
             for sensor_id, estimate in newcomer.estimates.items():
                 keeper.set_estimate(sensor_id, estimate)
-                self._write_estimate(keeper.row, sensor_id, estimate)
-            if keeper.status is not TrackStatus.CONFIRMED:
-                keeper.status, keeper.reason = TrackStatus.CONFIRMED, StatusReason.REACQUIRED
-            keeper.phantom_since = None
-            keeper.empty_gate_probability = 1.0
-            keeper.score = max(keeper.score, newcomer.score)
-            keeper.hits += newcomer.hits
-            newcomer.status, newcomer.reason = TrackStatus.TERMINATED, reason
-            terminated.append(newcomer)
+                self._table.move(newcomer.row, keeper.row, sensor_id)
+        merged = [keeper for keeper, _ in pairs] + [newcomer for _, newcomer in pairs]
+        count = len(pairs)
+        _write_life(
+            merged,
+            hand_over(
+                _read_life(merged),
+                np.arange(count, dtype=np.int64),
+                np.arange(count, 2 * count, dtype=np.int64),
+                reason,
+            ),
+        )
+        terminated.extend(newcomer for _, newcomer in pairs)
 
     # ------------------------------------------------------------ output
     def _classify(self, fused: FusedTrack) -> ClassAssessment | None:
@@ -725,12 +749,6 @@ class SessionEngine:
             association=association,
         )
 
-    def _write_estimate(self, row: int, sensor: str, estimate: SensorEstimate) -> None:
-        """One sensor estimate into the table's ``row`` (a merge, a restore; steps write in bulk)."""
-        self._table.write(
-            np.array([row]), sensor, estimate.state[None], estimate.covariance[None], estimate.time
-        )
-
     def _keep(self, tracks: list[FusedTrack]) -> None:
         """``tracks`` become the engine's tracks, rows 0, 1, … of the table in that order."""
         self._table.keep(np.fromiter((track.row for track in tracks), np.int64, len(tracks)))
@@ -777,7 +795,12 @@ class SessionEngine:
             "time": self.time,
             "next_number": self.next_number,
             "last_report": dict(sorted(self.last_report.items())),
-            "tracks": [track.to_plain() for track in self.tracks],
+            "tracks": [
+                track.to_plain(
+                    {sensor: self._table.estimate(track.row, sensor) for sensor in track.estimates}
+                )
+                for track in self.tracks
+            ],
             "local_trackers": {
                 sensor: tracker.export() for sensor, tracker in sorted(self.local_trackers.items())
             },
@@ -793,11 +816,13 @@ class SessionEngine:
         engine.time = None if state["time"] is None else float(state["time"])
         engine.next_number = int(state["next_number"])
         engine.last_report = {str(k): float(v) for k, v in state["last_report"].items()}
-        tracks = [FusedTrack.from_plain(plain, config.classes) for plain in state["tracks"]]
+        restored = [FusedTrack.from_plain(plain, config.classes) for plain in state["tracks"]]
+        tracks = [track for track, _ in restored]
         empty = [track.id for track in tracks if not track.estimates]
         if empty:
             raise InvalidInput(f"exported tracks without any sensor estimate: {empty}")
-        for track, row in zip(tracks, engine._table.add_rows(len(tracks)).tolist(), strict=True):
+        rows = engine._table.add_rows(len(tracks)).tolist()
+        for (track, kinematics), row in zip(restored, rows, strict=True):
             track.row = row
             for sensor, estimate in track.estimates.items():
                 if sensor not in engine._table.slots:
@@ -805,7 +830,10 @@ class SessionEngine:
                         f"exported track {track.id} has an estimate of sensor {sensor!r}, "
                         "which the config does not name"
                     )
-                engine._write_estimate(row, sensor, estimate)
+                state_, covariance = kinematics[sensor]
+                engine._table.write(
+                    np.array([row]), sensor, state_[None], covariance[None], estimate.time
+                )
         engine.tracks = tracks
         for sensor, plain in state["local_trackers"].items():
             tracker_config = config.sensor(sensor).tracker
@@ -815,6 +843,80 @@ class SessionEngine:
                 )
             engine.local_trackers[sensor] = LocalTracker.restore(tracker_config, plain)
         return engine
+
+
+def check_time(time: float) -> None:
+    """A report time must be finite and of magnitude at most :data:`core.numerics.MAX_TIME`."""
+    if not math.isfinite(time):
+        raise InvalidInput(f"time must be finite, got {time!r}")
+    if abs(time) > MAX_TIME:
+        raise InvalidInput(f"time: magnitude {time!r} is beyond the limit {MAX_TIME:g} s")
+
+
+def check_detection_magnitudes(report: DetectionReport) -> None:
+    """Measurements within :data:`core.numerics.MAX_MAGNITUDE`, their noise within the
+    variance bounds (shapes and finiteness are the tracker's to check)."""
+    measurements = np.asarray(report.measurements, dtype=np.float64)
+    if measurements.ndim != 2:
+        return
+    covariances = (
+        None if report.covariances is None else np.asarray(report.covariances, dtype=np.float64)
+    )
+    if covariances is None or covariances.shape != (*measurements.shape, measurements.shape[1]):
+        covariances = np.ones((len(measurements), 1, 1))
+    check_magnitudes(measurements, covariances, "detections", ("z", "r"))
+
+
+STATUS_CODES = {status: code for code, status in enumerate(STATUSES)}
+REASON_CODES = {reason: code for code, reason in enumerate(REASONS)}
+
+
+def _read_life(tracks: list[FusedTrack]) -> LifeState:
+    """The life of ``tracks`` as arrays (:class:`core.lifecycle.LifeState`)."""
+    return LifeState(
+        status=np.array([STATUS_CODES[t.status] for t in tracks], dtype=np.int64),
+        reason=np.array([REASON_CODES[t.reason] for t in tracks], dtype=np.int64),
+        score=np.array([t.score for t in tracks], dtype=np.float64),
+        hits=np.array([t.hits for t in tracks], dtype=np.int64),
+        empty_gate=np.array([t.empty_gate_probability for t in tracks], dtype=np.float64),
+        phantom_since=np.array(
+            [math.nan if t.phantom_since is None else t.phantom_since for t in tracks],
+            dtype=np.float64,
+        ),
+    )
+
+
+def _write_life(tracks: list[FusedTrack], life: LifeState, before: LifeState | None = None) -> None:
+    """Each track's status, reason, score, hits, empty-gate probability and phantom time
+    (only of the tracks whose life differs from ``before``, when given)."""
+    rows = np.arange(len(tracks))
+    if before is not None:
+        since, since_before = life.phantom_since, before.phantom_since
+        same_since = (since == since_before) | (np.isnan(since) & np.isnan(since_before))
+        changed = (
+            (life.status != before.status)
+            | (life.reason != before.reason)
+            | (life.score != before.score)
+            | (life.hits != before.hits)
+            | (life.empty_gate != before.empty_gate)
+            | ~same_since
+        )
+        rows = np.flatnonzero(changed)
+    chosen = life.select(rows)
+    for row, status, reason, score, hits, empty_gate, entered in zip(
+        rows.tolist(),
+        chosen.statuses(),
+        chosen.reasons(),
+        chosen.score.tolist(),
+        chosen.hits.tolist(),
+        chosen.empty_gate.tolist(),
+        chosen.phantom_since.tolist(),
+        strict=True,
+    ):
+        track = tracks[row]
+        track.status, track.reason, track.score, track.hits = status, reason, score, int(hits)
+        track.empty_gate_probability = empty_gate
+        track.phantom_since = None if math.isnan(entered) else entered
 
 
 def _mahalanobis(differences: FloatArray, covariances: FloatArray) -> tuple[FloatArray, FloatArray]:

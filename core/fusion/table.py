@@ -132,6 +132,21 @@ class EstimateTable:
             kept.keep(rows)
         self._rows = len(rows)
 
+    def checkpoint(self) -> tuple[int, tuple[FloatArray, ...]]:
+        """The estimates as they are (copies), for :meth:`rollback`."""
+        rows = self._rows
+        return rows, tuple(getattr(self, name)[:rows].copy() for name in _ESTIMATE_ARRAYS)
+
+    def rollback(self, checkpoint: tuple[int, tuple[FloatArray, ...]]) -> None:
+        """The estimates of ``checkpoint`` again; what was computed from others is forgotten
+        (recomputed on demand, with the same bits: module docstring)."""
+        rows, arrays = checkpoint
+        self._allocate(max(rows, 8))
+        for name, values in zip(_ESTIMATE_ARRAYS, arrays, strict=True):
+            getattr(self, name)[:rows] = values
+        self._rows = rows
+        self._kept = []
+
     def slot(self, sensor: str) -> int:
         try:
             return self.slots[sensor]
@@ -154,6 +169,22 @@ class EstimateTable:
         self.present[rows, slot] = True
         for kept in self._kept:
             kept.forget(rows, slot)
+
+    def estimate(self, row: int, sensor: str) -> tuple[FloatArray, FloatArray]:
+        """``sensor``'s latest state and covariance of ``row`` (copies)."""
+        slot = self.slot(sensor)
+        return self.states[row, slot].copy(), self.covariances[row, slot].copy()
+
+    def move(self, source: int, target: int, sensor: str) -> None:
+        """``sensor``'s estimate of row ``source`` becomes its estimate of row ``target``."""
+        slot = self.slot(sensor)
+        self.write(
+            np.array([target]),
+            sensor,
+            self.states[source, slot][None],
+            self.covariances[source, slot][None],
+            float(self.times[source, slot]),
+        )
 
     # ------------------------------------------------------------ fusion
     def fused_at(self, rows: IntArray, time: float) -> tuple[FloatArray, FloatArray]:

@@ -33,16 +33,19 @@ Readings
     surveillance region is ``region`` or, by default, the union of the
     sensors' ranges (:mod:`core.geometry`). No fields of view: one sensor
     that sees everything.
-``score_margin``
-    The SPRT of [MTT] §4.3 as written never deletes a track that has lived a
-    while: with β_FT = 1e-6 each hit adds about +11, so after 100 hits the
-    delete threshold is hundreds of misses away. Blackman & Popoli delete on
-    a fixed drop below the track's best score; we clamp the score at
-    ``confirm threshold + score_margin`` (default margin 0), so a confirmed
-    track is deleted after ``⌈(confirm − delete + margin) / |ln(1 − P_D)|⌉``
+``life_cycle``
+    Score, confirmation, deletion, gate emptiness, occlusion and phantoms are
+    :class:`~core.lifecycle.LifeCycleConfig`, shared with the fusion engine;
+    ``p_detect`` is the tracker's P_D. ``score_margin`` (there): the SPRT of
+    [MTT] §4.3 as written never deletes a track that has lived a while: with
+    β_FT = 1e-6 each hit adds about +11, so after 100 hits the delete
+    threshold is hundreds of misses away. Blackman & Popoli delete on a fixed
+    drop below the track's best score; we clamp the score at ``confirm
+    threshold + score_margin`` (default margin 0), so a confirmed track is
+    deleted after ``⌈(confirm − delete + margin) / |ln(1 − P_D)|⌉``
     consecutive misses (5 with the defaults). ``None`` keeps the raw SPRT.
-``phantom_max_distance``, ``phantom_min_speed``
-    A phantom ([HZ] §5.1) lives at most ``max_distance / min_speed`` seconds.
+    The gate of the gate-emptiness volume and of the hand-over is the life
+    cycle's ``gate_probability``, not the association's.
 """
 
 from __future__ import annotations
@@ -59,7 +62,7 @@ from core.classification.behaviours import LIKELIHOOD_SCALES, LikelihoodScale
 from core.classification.credal import ACCUMULATIONS, DISCOUNTS, Accumulation, Discount
 from core.errors import TrackingError
 from core.geometry import Coverage, FieldOfView, PolygonView
-from core.lifecycle import ScoreModel
+from core.lifecycle import LifeCycleConfig, ScoreModel
 from core.tracking.models import LinearMeasurementModel, ModelBank
 from core.tracking.presets import TrackingPreset, preset
 
@@ -123,18 +126,12 @@ class LocalTrackerConfig:
         ``bias`` (B of [DH] eq 16, default 0) and ``gate_probability``.
     imm_distance, distance : see the module Readings.
     modified_beta, modified_k, modified_alpha : β, k, α of the modified distance.
-    score : the SPRT parameters (P_D, β_FT, β_NT, α, β) of :class:`ScoreModel`.
-    score_margin : the score is clamped at ``confirm threshold + score_margin``
-        (None: no clamp; see the Readings).
-    termination_probability : gate-emptiness threshold ([HZ] §4.2); 0 disables it.
-    min_points : confirm a tentative track after this many detections (None: score only).
+    p_detect : P_D of the system's sensors (the track score).
+    life_cycle : score thresholds and densities, confirmation, deletion, gate
+        emptiness, occlusion and phantoms (:class:`~core.lifecycle.LifeCycleConfig`).
     initiation, max_speed, initial_velocity_std : see the module Readings.
     fields_of_view : the system's sensors and their fields of view.
     region : the surveillance region (default: union of the sensors' ranges).
-    occlusion_radius : radius of a known track as an occluder ([HZ] §2.1); 0: no occlusion.
-    phantom_max_distance, phantom_min_speed : phantom expiry ([HZ] §5.1).
-    phantoms : the blind-zone strategy on (default) or off (a track in a blind
-        zone then coasts and is terminated by score / gate emptiness).
     classification : credal options, or None for no classification; ignored
         when the bank has no classes.
     id_prefix : track ids are ``f"{id_prefix}{n}"``, n = 1, 2, ...
@@ -154,10 +151,8 @@ class LocalTrackerConfig:
     modified_beta: float = 10.0
     modified_k: float = 1.0
     modified_alpha: float = 4.0
-    score: ScoreModel = field(default_factory=ScoreModel)
-    score_margin: float | None = 0.0
-    termination_probability: float = 0.5
-    min_points: int | None = None
+    p_detect: float = 0.9
+    life_cycle: LifeCycleConfig = field(default_factory=LifeCycleConfig)
     initiation: Initiation = "two_point"
     max_speed: float = 1000.0
     initial_velocity_std: float = 300.0
@@ -165,10 +160,6 @@ class LocalTrackerConfig:
         default_factory=lambda: MappingProxyType({"sensor": None})
     )
     region: PolygonView | None = None
-    occlusion_radius: float = 0.0
-    phantom_max_distance: float = 500.0
-    phantom_min_speed: float = 1.0
-    phantoms: bool = True
     classification: ClassificationOptions | None = field(default_factory=ClassificationOptions)
     id_prefix: str = "L"
 
@@ -179,11 +170,8 @@ class LocalTrackerConfig:
             raise TrackingError(f"distance must be one of {DISTANCE_KINDS}")
         if self.initiation not in INITIATIONS:
             raise TrackingError(f"initiation must be one of {INITIATIONS}")
-        if not (
-            math.isfinite(self.termination_probability)
-            and 0.0 <= self.termination_probability < 1.0
-        ):
-            raise TrackingError("termination_probability must be in [0, 1)")
+        if not (math.isfinite(self.p_detect) and 0.0 < self.p_detect < 1.0):
+            raise TrackingError(f"p_detect must be in (0, 1), got {self.p_detect!r}")
         if "time_interval" in self.preset_options:
             raise TrackingError("give time_interval as the config field, not a preset option")
         for name in (
@@ -193,20 +181,10 @@ class LocalTrackerConfig:
             "modified_alpha",
             "max_speed",
             "initial_velocity_std",
-            "phantom_max_distance",
-            "phantom_min_speed",
         ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise TrackingError(f"{name} must be a positive number, got {value!r}")
-        if self.score_margin is not None and not (
-            math.isfinite(self.score_margin) and self.score_margin >= 0.0
-        ):
-            raise TrackingError("score_margin must be >= 0 or None")
-        if not (math.isfinite(self.occlusion_radius) and self.occlusion_radius >= 0.0):
-            raise TrackingError("occlusion_radius must be >= 0")
-        if self.min_points is not None and self.min_points < 1:
-            raise TrackingError("min_points must be >= 1")
         if not self.fields_of_view:
             raise TrackingError("fields_of_view needs at least one sensor")
 
@@ -242,13 +220,6 @@ class LocalTrackerConfig:
         return tuple(self.fields_of_view)
 
     @property
-    def score_ceiling(self) -> float:
-        """Largest track score (``inf`` without a margin)."""
-        if self.score_margin is None:
-            return math.inf
-        return self.score.confirm_threshold + self.score_margin
-
-    @property
-    def phantom_lifetime(self) -> float:
-        """Longest stay in a blind zone: maximum distance at the minimum speed ([HZ] §5.1)."""
-        return self.phantom_max_distance / self.phantom_min_speed
+    def score(self) -> ScoreModel:
+        """The SPRT score of the tracker's sensors (P_D and the life cycle's densities)."""
+        return self.life_cycle.score_model(self.p_detect)

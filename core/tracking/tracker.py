@@ -16,28 +16,25 @@ array batched over tracks (and over the models of the IMM):
 4. **update** (:class:`IMMUpdater`, or the PDA update) and credal
    **classification** of the updated tracks ([MTT] §5.2), all tracks at once
    (:class:`~core.classification.batched.BatchedCredalClassifier`);
-5. **track score** ([MTT] §4.3): a hit adds ``ln[P_D / ((2π)^{q/2} β_FT √|S|)] − D/2``
-   (D, S of the pair's model), a miss ``ln(1 − P_D)``; a confirmed track that
-   misses coasts; the empty-gate probability ([HZ] §4.2) multiplies
-   ``1 − (ρ_FA + ρ_NT) A_G`` per scan while coasting, A_G from the combined S;
-6. **life cycle**, by the table of [HZ] §5.1, first reason found wins:
-   out of range → terminated; phantom older than
-   ``phantom_max_distance / phantom_min_speed`` → terminated; undetected in a
-   blind zone or occluded → phantom (a tentative track is terminated); score
-   ≤ delete threshold → terminated; coasting with empty-gate probability <
-   ``termination_probability`` → terminated; tentative with score ≥ confirm
-   threshold (or ``min_points`` hits) → confirmed;
-7. **hand-over** ([HZ] §5.1): a track confirmed in this scan is compared with
-   the phantoms (GNN, ``sum`` distance on the full state, the association
-   gate probability); a matching phantom takes its estimate and keeps its
-   identity, and the newcomer is terminated (``merged_into_phantom``);
-8. **initiation** from the detections nobody used (two-point or single-point,
+5. **life cycle** (:func:`core.lifecycle.advance`, shared with the fusion
+   engine): track score ([MTT] §4.3; a hit adds ΔL of the pair's model),
+   coasting, empty-gate probability ([HZ] §4.2, A_G from the combined S) and
+   the table of [HZ] §5.1 (out of range, phantom expiry, blind zone or
+   occlusion → phantom, score deletion, gate emptiness, confirmation);
+6. **hand-over** ([HZ] §5.1, :func:`core.lifecycle.hand_over`): a track
+   confirmed in this scan is compared with the phantoms (GNN, ``sum``
+   distance on the full state, the life cycle's gate probability); a
+   matching phantom takes its estimate and keeps its identity, and the
+   newcomer is terminated (``merged_into_phantom``);
+7. **initiation** from the detections nobody used (two-point or single-point,
    :mod:`core.tracking.config`).
 
 Phantoms are never matched with detections. Every status change records its
 reason. The tracker is deterministic and its whole state exports to plain data
 (:meth:`LocalTracker.export`) that :meth:`LocalTracker.restore` continues
-exactly.
+exactly. A step is a transaction: the state's arrays are never changed in
+place, so a step that raises puts the previous references back and leaves
+the tracker as it was.
 """
 
 from __future__ import annotations
@@ -58,8 +55,22 @@ from core.classification.batched import BatchedCredalClassifier, CredalBatch, de
 from core.distance import DistanceModel, Estimates, ModifiedScale, steady_state_covariance
 from core.distance.estimates import check_covariances
 from core.errors import TrackingError
-from core.geometry import Sector, Visibility, occluded
-from core.lifecycle import StatusReason, TrackStatus, gate_emptiness_factor, gate_volume
+from core.lifecycle import (
+    COASTING,
+    CONFIRMED,
+    PHANTOM,
+    REASONS,
+    STATUSES,
+    TERMINATED,
+    Evidence,
+    LifeState,
+    StatusReason,
+    TrackStatus,
+    advance,
+    everywhere,
+    hand_over,
+    visibility,
+)
 from core.tracking.config import CHEAP_JPDA, LocalTrackerConfig
 from core.tracking.gating import TrackGatingProblem, gate_pairs
 from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState, IMMUpdate, IMMUpdater
@@ -69,21 +80,10 @@ from core.tracking.presets import TrackingPreset
 from core.tracking.track import LocalTrack, TrackerStep, float_array, mass_to_plain, plain_floats
 
 EXPORT_VERSION = 1
-STATUSES: tuple[TrackStatus, ...] = tuple(TrackStatus)
-REASONS: tuple[StatusReason, ...] = tuple(StatusReason)
-TENTATIVE = STATUSES.index(TrackStatus.TENTATIVE)
-CONFIRMED = STATUSES.index(TrackStatus.CONFIRMED)
-COASTING = STATUSES.index(TrackStatus.COASTING)
-PHANTOM = STATUSES.index(TrackStatus.PHANTOM)
-TERMINATED = STATUSES.index(TrackStatus.TERMINATED)
 TIME_TOLERANCE = 1e-9
 """Relative tolerance on scan times being multiples of ΔT."""
 SEED_NOISE_GATE = 0.999
 """Gate probability of the measurement-noise part of the seed distance bound."""
-
-
-def _reason(reason: StatusReason) -> int:
-    return REASONS.index(reason)
 
 
 def _as_prediction(bank_h: FloatArray, noise: FloatArray, state: IMMState) -> IMMPrediction:
@@ -164,11 +164,6 @@ class LocalTracker:
                 f"unknown association method {self._method!r}; "
                 f"choose one of {[*METHODS, CHEAP_JPDA]}"
             )
-        gate_probability = options.get("gate_probability", 0.999)
-        self._gate_probability = (
-            float(gate_probability) if isinstance(gate_probability, int | float) else 0.999
-        )
-        self._gate = float(chi2.ppf(self._gate_probability, self._q))
         self._modified: ModifiedScale | None = None
         self._modified_sum: ModifiedScale | None = None
         if config.distance == "modified":
@@ -190,12 +185,7 @@ class LocalTracker:
         self.next_number = 1
         n, r = self.bank.state_dim, self.bank.n_models
         self._numbers: IntArray = np.zeros(0, dtype=np.int64)
-        self._status: IntArray = np.zeros(0, dtype=np.int64)
-        self._reason: IntArray = np.zeros(0, dtype=np.int64)
-        self._score: FloatArray = np.zeros(0)
-        self._hits: IntArray = np.zeros(0, dtype=np.int64)
-        self._empty_gate: FloatArray = np.zeros(0)
-        self._phantom_since: FloatArray = np.zeros(0)
+        self._life = LifeState.empty()
         self._state = IMMState(np.zeros((0, r, n)), np.zeros((0, r, n, n)), np.zeros((0, r)))
         self._classes: CredalBatch | None = (
             None if self.classifier is None else self.classifier.initial(0)
@@ -203,7 +193,6 @@ class LocalTracker:
         self._seeds: FloatArray = np.zeros((0, self._q))
         self._seed_times: FloatArray = np.zeros(0)
         self._seed_sensors: IntArray = np.zeros(0, dtype=np.int64)
-        self._occluded: BoolArray = np.zeros(0, dtype=bool)
 
     # ------------------------------------------------------------------ api
     @property
@@ -235,15 +224,38 @@ class LocalTracker:
             Unknown sensor, a time that goes back or is off the ΔT grid, wrong
             shapes, non-finite numbers; nothing changes then.
         """
+        before = self.checkpoint()
+        try:
+            return self._step(time, measurements, measurement_covariances, sensor)
+        except BaseException:
+            self.rollback(before)
+            raise
+
+    def checkpoint(self) -> dict[str, Any]:
+        """The state as it is, for :meth:`rollback` (references: no array is changed in place)."""
+        return dict(self.__dict__)
+
+    def rollback(self, checkpoint: dict[str, Any]) -> None:
+        """The state of ``checkpoint`` again (a step, or a caller's transaction, failed)."""
+        self.__dict__.clear()
+        self.__dict__.update(checkpoint)
+
+    def _step(
+        self,
+        time: float,
+        measurements: ArrayLike,
+        measurement_covariances: ArrayLike | None,
+        sensor: str | None,
+    ) -> TrackerStep:
         z, own_noise, sensor_name, ahead = self._check(
             time, measurements, measurement_covariances, sensor
         )
         prediction = self._predict(ahead)
         tracks = len(self._numbers)
         combined_z, combined_s = prediction.combined_measurement()
-        visibility, seen = self._visibility(combined_z, sensor_name)
+        codes, seen, hidden = self._visibility(combined_z, sensor_name)
 
-        candidates = np.flatnonzero(self._status != PHANTOM)
+        candidates = np.flatnonzero(self._life.status != PHANTOM)
         sub = _select_prediction(prediction, candidates)
         if self._method == CHEAP_JPDA:
             update, pair_rows, pair_cols, hit_gain, used = self._jpda(sub, z, own_noise)
@@ -268,27 +280,30 @@ class LocalTracker:
             )
             self._classes = classified if every else self._classes.replace(candidates, classified)
 
-        # Score and coasting.
         gain = np.zeros(tracks)
         gain[candidates] = hit_gain
-        missed = seen & ~detected & (self._status != PHANTOM)
-        self._score = self._score + np.where(detected, gain, 0.0)
-        self._score = self._score + np.where(missed, self.config.score.miss_increment, 0.0)
-        self._score = np.minimum(self._score, self.config.score_ceiling)
-        self._hits = self._hits + detected.astype(np.int64)
-        reacquired = detected & (self._status == COASTING)
-        self._set(reacquired, CONFIRMED, StatusReason.REACQUIRED)
-        self._empty_gate = np.where(detected, 1.0, self._empty_gate)
-        self._set(missed & (self._status == CONFIRMED), COASTING, StatusReason.MISSED)
-        coasting = missed & (self._status == COASTING)
-        if np.any(coasting):
-            volume = gate_volume(self._gate, np.linalg.slogdet(combined_s)[1], self._q)
-            factor = gate_emptiness_factor(
-                self.config.score.false_target_density, self.config.score.new_target_density, volume
-            )
-            self._empty_gate = np.where(coasting, self._empty_gate * factor, self._empty_gate)
-
-        newly_confirmed = self._life_cycle(time, visibility, seen, detected)
+        status = self._life.status
+        established_miss = seen & ~detected & ((status == CONFIRMED) | (status == COASTING))
+        self._life, newly_confirmed = advance(
+            self.config.life_cycle,
+            self._life,
+            Evidence(
+                time=time,
+                detected=detected,
+                hit_increment=gain,
+                seen=seen,
+                miss_increment=self.config.score.miss_increment,
+                # log|S|: A_G of the tracks that coast through a miss
+                gate_log_det=(
+                    np.linalg.slogdet(combined_s)[1]
+                    if np.any(established_miss)
+                    else np.zeros(tracks)
+                ),
+                gate_dim=self._q,
+                visibility=codes,
+                occluded=hidden,
+            ),
+        )
 
         # Per-detection assignment (by track number for now).
         numbers = np.full(len(z), -1, dtype=np.int64)
@@ -354,22 +369,22 @@ class LocalTracker:
             prediction = self.predictor.predict(prediction.as_state())
         return prediction
 
-    def _visibility(self, positions: FloatArray, sensor: str) -> tuple[IntArray, BoolArray]:
-        """Visibility codes of every track, and whether the scan's sensor should see it."""
-        tracks = len(positions)
-        self._occluded = np.zeros(tracks, dtype=bool)
-        if self._q != 2 or tracks == 0:
-            return np.full(tracks, int(Visibility.VISIBLE)), np.ones(tracks, dtype=bool)
-        visibility = self._coverage.visibility(positions)
-        view = self._views[sensor]
-        seen = np.ones(tracks, dtype=bool) if view is None else view.contains(positions)
-        radius = self.config.occlusion_radius
-        if radius > 0.0 and isinstance(view, Sector):
-            occluders = positions[(self._status == CONFIRMED) | (self._status == COASTING)]
-            hidden = occluded(view.origin, positions, occluders, radius)
-            self._occluded = seen & hidden
-            seen = seen & ~hidden
-        return visibility, seen
+    def _visibility(
+        self, positions: FloatArray, sensor: str
+    ) -> tuple[IntArray, BoolArray, BoolArray]:
+        """Coverage codes of every track, seen by the scan's sensor, occluded (by the
+        confirmed and coasting tracks; :func:`core.lifecycle.visibility`)."""
+        if self._q != 2:
+            return everywhere(len(positions))
+        status = self._life.status
+        occluders = positions[(status == CONFIRMED) | (status == COASTING)]
+        return visibility(
+            self._coverage,
+            self._views[sensor],
+            positions,
+            occluders,
+            self.config.life_cycle.occlusion_radius,
+        )
 
     # ------------------------------------------------------- association
     def _hit_gain(self, distance: FloatArray, log_det: FloatArray) -> FloatArray:
@@ -452,63 +467,10 @@ class LocalTracker:
         used = np.unique(cols)
         return update, best_rows, best_cols, hit_gain, used
 
-    # -------------------------------------------------------- life cycle
-    def _set(self, mask: BoolArray, status: int, reason: StatusReason) -> None:
-        self._status = np.where(mask, status, self._status)
-        self._reason = np.where(mask, _reason(reason), self._reason)
-
-    def _life_cycle(
-        self, time: float, visibility: IntArray, seen: BoolArray, detected: BoolArray
-    ) -> BoolArray:
-        """[HZ] §5.1 table (module docstring); returns the rows confirmed in this scan."""
-        config = self.config
-        status = self._status
-        open_rows = np.ones(len(status), dtype=bool)  # no decision yet
-
-        def decide(mask: BoolArray, new_status: int, reason: StatusReason) -> None:
-            nonlocal open_rows
-            chosen = mask & open_rows
-            self._set(chosen, new_status, reason)
-            open_rows = open_rows & ~chosen
-
-        decide(visibility == Visibility.OUT_OF_RANGE, TERMINATED, StatusReason.OUT_OF_RANGE)
-        is_phantom = status == PHANTOM
-        expired = is_phantom & (time - self._phantom_since > config.phantom_lifetime)
-        decide(expired, TERMINATED, StatusReason.PHANTOM_EXPIRED)
-        open_rows &= ~is_phantom
-        if config.phantoms:
-            established = (status == CONFIRMED) | (status == COASTING)
-            for hidden, reason in (
-                ((visibility == Visibility.BLIND_ZONE) & ~detected, StatusReason.BLIND_ZONE),
-                (self._occluded & ~detected, StatusReason.OCCLUDED),
-            ):
-                entering = hidden & established & open_rows
-                self._phantom_since = np.where(entering, time, self._phantom_since)
-                decide(entering, PHANTOM, reason)
-                decide(hidden & (status == TENTATIVE), TERMINATED, reason)
-        score = config.score
-        decide(self._score <= score.delete_threshold, TERMINATED, StatusReason.SCORE_DELETED)
-        if config.termination_probability > 0.0:
-            decide(
-                (status == COASTING) & (self._empty_gate < config.termination_probability),
-                TERMINATED,
-                StatusReason.GATE_EMPTINESS,
-            )
-        tentative = status == TENTATIVE
-        decide(
-            tentative & (self._score >= score.confirm_threshold),
-            CONFIRMED,
-            StatusReason.SCORE_CONFIRMED,
-        )
-        if config.min_points is not None:
-            decide(
-                tentative & (self._hits >= config.min_points), CONFIRMED, StatusReason.MIN_POINTS
-            )
-        return np.asarray(tentative & (self._status == CONFIRMED), dtype=np.bool_)
-
+    # -------------------------------------------------------- hand-over
     def _hand_over(self, newly_confirmed: BoolArray, numbers: IntArray) -> None:
         """Newly confirmed tracks that match a phantom give it their estimate ([HZ] §5.1)."""
-        phantoms = np.flatnonzero(self._status == PHANTOM)
+        phantoms = np.flatnonzero(self._life.status == PHANTOM)
         fresh = np.flatnonzero(newly_confirmed)
         if len(phantoms) == 0 or len(fresh) == 0:
             return
@@ -517,7 +479,7 @@ class LocalTracker:
             (means[phantoms], covariances[phantoms]),
             (means[fresh], covariances[fresh]),
             "gnn",
-            {"gate_probability": self._gate_probability},
+            {"gate_probability": self.config.life_cycle.gate_probability},
             "sum",
         )
         if len(decision.pair_known) == 0:
@@ -534,16 +496,7 @@ class LocalTracker:
         covs_all[keepers] = state.covariances[newcomers]
         log_mu[keepers] = state.log_mode_probabilities[newcomers]
         self._state = IMMState(means_all, covs_all, log_mu)
-        self._score[keepers] = np.maximum(self._score[keepers], self._score[newcomers])
-        self._hits[keepers] += self._hits[newcomers]
-        self._empty_gate[keepers] = 1.0
-        self._phantom_since[keepers] = np.nan
-        keep_mask = np.zeros(len(self._status), dtype=bool)
-        keep_mask[keepers] = True
-        self._set(keep_mask, CONFIRMED, StatusReason.REACQUIRED)
-        gone = np.zeros(len(self._status), dtype=bool)
-        gone[newcomers] = True
-        self._set(gone, TERMINATED, StatusReason.MERGED_INTO_PHANTOM)
+        self._life = hand_over(self._life, keepers, newcomers, StatusReason.MERGED_INTO_PHANTOM)
         if self.classifier is not None and self._classes is not None:
             # The newcomer's cumulative mass is one more piece of evidence for the keeper.
             merged = self.classifier.combine(
@@ -606,21 +559,11 @@ class LocalTracker:
         new_numbers = np.arange(self.next_number, self.next_number + count, dtype=np.int64)
         self.next_number += count
         numbers[detections] = new_numbers
-        score = self.config.score
         self._numbers = np.concatenate([self._numbers, new_numbers])
-        self._status = np.concatenate([self._status, np.full(count, TENTATIVE)])
-        self._reason = np.concatenate(
-            [self._reason, np.full(count, _reason(StatusReason.INITIATED))]
-        )
-        self._score = np.concatenate([self._score, np.full(count, score.initial)])
-        self._hits = np.concatenate([self._hits, np.full(count, hits, dtype=np.int64)])
-        self._empty_gate = np.concatenate([self._empty_gate, np.ones(count)])
-        self._phantom_since = np.concatenate([self._phantom_since, np.full(count, np.nan)])
+        self._life = self._life.concatenate(LifeState.new(count, self.config.score.initial, hits))
         self._state = _concatenate(self._state, state)
         if self.classifier is not None and self._classes is not None:
             self._classes = self._classes.concatenate(self.classifier.initial(count))
-        self._status = self._status.astype(np.int64)
-        self._reason = self._reason.astype(np.int64)
 
     # ------------------------------------------------------------ output
     def _track_id(self, number: int) -> str:
@@ -642,22 +585,23 @@ class LocalTracker:
                 )
             ]
         tracks = []
+        life = self._life
         for row in order.tolist():
             tracks.append(
                 LocalTrack(
                     id=self._track_id(int(self._numbers[row])),
-                    status=STATUSES[int(self._status[row])],
-                    reason=REASONS[int(self._reason[row])],
+                    status=STATUSES[int(life.status[row])],
+                    reason=REASONS[int(life.reason[row])],
                     state=means[row],
                     covariance=covariances[row],
                     mode_probabilities=mu[row],
-                    score=float(self._score[row]),
-                    hits=int(self._hits[row]),
+                    score=float(life.score[row]),
+                    hits=int(life.hits[row]),
                     class_mass=class_masses[row],
                     pignistic=pignistic[row],
                 )
             )
-        live = self._status != TERMINATED
+        live = life.status != TERMINATED
         self._keep(np.flatnonzero(live))
         self.time = time
         assignment = tuple(None if n < 0 else self._track_id(int(n)) for n in numbers.tolist())
@@ -665,12 +609,7 @@ class LocalTracker:
 
     def _keep(self, rows: IntArray) -> None:
         self._numbers = self._numbers[rows]
-        self._status = self._status[rows]
-        self._reason = self._reason[rows]
-        self._score = self._score[rows]
-        self._hits = self._hits[rows]
-        self._empty_gate = self._empty_gate[rows]
-        self._phantom_since = self._phantom_since[rows]
+        self._life = self._life.select(rows)
         self._state = self._state.select(rows)
         if self._classes is not None:
             self._classes = self._classes.select(rows)
@@ -679,15 +618,16 @@ class LocalTracker:
     def export(self) -> dict[str, Any]:
         """The whole state as plain data (lists, floats, ints, str, None; see :mod:`core.tracking.track`)."""
         tracks = []
+        life = self._life
         for row in range(len(self._numbers)):
             entry: dict[str, Any] = {
                 "number": int(self._numbers[row]),
-                "status": STATUSES[int(self._status[row])].value,
-                "reason": REASONS[int(self._reason[row])].value,
-                "score": plain_floats(self._score[row]),
-                "hits": int(self._hits[row]),
-                "empty_gate_probability": plain_floats(self._empty_gate[row]),
-                "phantom_since": plain_floats(self._phantom_since[row]),
+                "status": STATUSES[int(life.status[row])].value,
+                "reason": REASONS[int(life.reason[row])].value,
+                "score": plain_floats(life.score[row]),
+                "hits": int(life.hits[row]),
+                "empty_gate_probability": plain_floats(life.empty_gate[row]),
+                "phantom_since": plain_floats(life.phantom_since[row]),
                 "means": plain_floats(self._state.means[row]),
                 "covariances": plain_floats(self._state.covariances[row]),
                 "log_mode_probabilities": plain_floats(self._state.log_mode_probabilities[row]),
@@ -728,18 +668,18 @@ class LocalTracker:
         entries = plain["tracks"]
         n, r = tracker.bank.state_dim, tracker.bank.n_models
         tracker._numbers = np.array([e["number"] for e in entries], dtype=np.int64)
-        tracker._status = np.array(
-            [STATUSES.index(TrackStatus(e["status"])) for e in entries], dtype=np.int64
+        tracker._life = LifeState(
+            status=np.array(
+                [STATUSES.index(TrackStatus(e["status"])) for e in entries], dtype=np.int64
+            ),
+            reason=np.array(
+                [REASONS.index(StatusReason(e["reason"])) for e in entries], dtype=np.int64
+            ),
+            score=float_array([e["score"] for e in entries]).reshape(-1),
+            hits=np.array([e["hits"] for e in entries], dtype=np.int64),
+            empty_gate=float_array([e["empty_gate_probability"] for e in entries]).reshape(-1),
+            phantom_since=float_array([e["phantom_since"] for e in entries]).reshape(-1),
         )
-        tracker._reason = np.array(
-            [REASONS.index(StatusReason(e["reason"])) for e in entries], dtype=np.int64
-        )
-        tracker._score = float_array([e["score"] for e in entries]).reshape(-1)
-        tracker._hits = np.array([e["hits"] for e in entries], dtype=np.int64)
-        tracker._empty_gate = float_array([e["empty_gate_probability"] for e in entries]).reshape(
-            -1
-        )
-        tracker._phantom_since = float_array([e["phantom_since"] for e in entries]).reshape(-1)
         tracker._state = IMMState(
             float_array([e["means"] for e in entries]).reshape(-1, r, n),
             float_array([e["covariances"] for e in entries]).reshape(-1, r, n, n),

@@ -9,19 +9,25 @@ import pytest
 from numpy.testing import assert_allclose
 
 from core.errors import InvalidInput
-from core.lifecycle import ScoreModel, gate_emptiness_factor, gate_volume, unit_ball_volume
+from core.lifecycle import (
+    LifeCycleConfig,
+    ScoreModel,
+    gate_emptiness_factor,
+    gate_volume,
+    unit_ball_volume,
+)
 
 
 def test_thresholds_follow_wald() -> None:
     # α = 0.01, β = 0.1: confirm at ln(0.9 / 0.01) = ln 90, delete at ln(0.1 / 0.99).
-    score = ScoreModel(false_confirmation=0.01, true_deletion=0.1)
+    score = LifeCycleConfig(false_confirmation=0.01, true_deletion=0.1).score_model(0.9)
     assert score.confirm_threshold == pytest.approx(4.499809670330265)
     assert score.delete_threshold == pytest.approx(-2.2925347571405443)
     assert score.confirm_threshold > 0.0 > score.delete_threshold
 
 
 def test_initial_score_and_increments() -> None:
-    score = ScoreModel(p_detect=0.9, false_target_density=1e-4, new_target_density=1e-5)
+    score = LifeCycleConfig(false_target_density=1e-4, new_target_density=1e-5).score_model(0.9)
     assert score.initial == pytest.approx(math.log(0.1))
     assert score.miss_increment == pytest.approx(math.log(0.1))
     # q = 2, |S| = 4 (√|S| = 2), D = 1:
@@ -58,4 +64,13 @@ def test_gate_emptiness_probability() -> None:
 )
 def test_invalid_score_parameters(field: str, value: float, message: str) -> None:
     with pytest.raises(InvalidInput, match=message):
-        ScoreModel(**{field: value})
+        ScoreModel(
+            **{
+                "p_detect": 0.9,
+                "false_target_density": 1e-6,
+                "new_target_density": 1e-6,
+                "false_confirmation": 1e-3,
+                "true_deletion": 1e-2,
+                field: value,
+            }
+        )

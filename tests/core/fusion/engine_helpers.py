@@ -8,11 +8,12 @@ from typing import Any
 
 import numpy as np
 
-from core.fusion.config import FusionConfig, SensorSpec, TrackManagement
+from core.fusion.config import FusionConfig, SensorSpec
 from core.fusion.engine import SessionEngine
 from core.fusion.motion import MotionModel, StateLayout
 from core.fusion.reports import ReportedTrack, StepResult, TrackReport, step_to_plain
 from core.geometry import FieldOfView, PolygonView
+from core.lifecycle import LifeCycleConfig
 from core.simulation.tracklists import SensorTrackList
 
 LAYOUT = StateLayout(dim=4, position=(0, 2), velocity=(1, 3))
@@ -26,7 +27,7 @@ def make_config(
     continuity: bool = True,
     fovs: Mapping[str, FieldOfView] | None = None,
     region: PolygonView | None = None,
-    management: TrackManagement | None = None,
+    management: LifeCycleConfig | None = None,
     q: float = 0.5,
 ) -> FusionConfig:
     specs = tuple(
@@ -47,7 +48,7 @@ def make_config(
         association_options=chosen_options,
         track_continuity=continuity,
         region=region,
-        management=management or TrackManagement(),
+        management=management or LifeCycleConfig(),
     )
 
 

@@ -12,7 +12,7 @@ from core.errors import InvalidInput, StaleReport
 from core.fusion.config import FusionConfig, SensorSpec
 from core.fusion.engine import SessionEngine
 from core.fusion.motion import MotionModel
-from core.fusion.reports import DetectionReport, StepResult, TrackReport
+from core.fusion.reports import DetectionReport, StepResult
 from core.simulation import aircraft_scenario
 from core.tracking.config import LocalTrackerConfig
 
@@ -113,27 +113,32 @@ def test_a_track_list_sensor_cannot_send_detections_and_layouts_are_checked() ->
         )
 
 
-def test_late_detections_refused_after_the_local_tracker_ran_leave_it_as_it_was() -> None:
-    """Detections far older than the fusion time: the local tracker's confirmed tracks cannot be
-    predicted to it, so the fusion step refuses them; the tracker's scan is undone too."""
+def test_a_fusion_step_failing_after_the_local_tracker_ran_leaves_both_as_they_were(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Detections and their fusion are one transaction: a failure in the fusion part (after
+    the local tracker's scan) leaves the tracker, and the whole export, as they were; the
+    next scans then run as if the failed one had never been tried."""
     config = FusionConfig(
         motion=MotionModel(LAYOUT, q=100.0),
-        sensors=(
-            SensorSpec("radar", tracker=LocalTrackerConfig(preset="aircraft")),
-            SensorSpec("ais"),
-        ),
+        sensors=(SensorSpec("radar", tracker=LocalTrackerConfig(preset="aircraft")),),
         classes=CLASSES,
     )
-    engine = SessionEngine(config)
-    engine.apply(TrackReport("ais", 1e200, ()))  # the fusion time jumps far ahead
-    refused = 0
-    for index in range(12):
+    engine, uninterrupted = SessionEngine(config), SessionEngine(config)
+    real = SessionEngine._life_cycle
+    for index in range(8):
         before = json.dumps(engine.export(), sort_keys=True)
-        try:
+        monkeypatch.setattr(SessionEngine, "_life_cycle", _raise)
+        with pytest.raises(RuntimeError, match="injected"):
             engine.apply_detections(detections(index))
-        except InvalidInput as error:
-            assert "overflows" in str(error)
-            assert json.dumps(engine.export(), sort_keys=True) == before
-            refused += 1
-            break
-    assert refused == 1  # once the radar's local tracks are confirmed, its reports are refused
+        monkeypatch.setattr(SessionEngine, "_life_cycle", real)
+        assert json.dumps(engine.export(), sort_keys=True) == before
+        assert serialise(engine.apply_detections(detections(index))) == serialise(
+            uninterrupted.apply_detections(detections(index))
+        )
+    assert engine.export() == uninterrupted.export()
+    assert any(track["status"] == "confirmed" for track in engine.export()["tracks"])
+
+
+def _raise(*_: object, **__: object) -> None:
+    raise RuntimeError("injected")

@@ -12,12 +12,12 @@ from core.association import METHODS
 from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, StaleReport
 from core.fusion.classes import fuse_sensor_classes
-from core.fusion.config import FusionConfig, SensorSpec, TrackManagement
+from core.fusion.config import FusionConfig, SensorSpec
 from core.fusion.engine import SessionEngine
 from core.fusion.motion import MotionModel, StateLayout
 from core.fusion.reports import ReportedTrack, TrackReport
 from core.geometry import PolygonView, Sector
-from core.lifecycle import StatusReason, TrackStatus
+from core.lifecycle import LifeCycleConfig, StatusReason, TrackStatus
 from core.simulation.tracklists import crossing_traffic, estimate_covariance, t2t_four
 
 from .engine_helpers import fused_ids_of_targets, make_config, run, serialise
@@ -207,7 +207,7 @@ def test_a_phantom_expires_after_its_maximum_time_in_the_blind_zone() -> None:
                 if sensor.fov is not None
             },
             region=engine.config.region,
-            management=TrackManagement(phantom_max_distance=20.0, phantom_min_speed=10.0),
+            management=LifeCycleConfig(phantom_max_distance=20.0, phantom_min_speed=10.0),
         )
     )
     seen: list[tuple[float, str, TrackStatus, StatusReason]] = []
@@ -316,7 +316,7 @@ def test_a_track_hidden_behind_another_is_not_penalised(radius: float, penalised
     engine = SessionEngine(
         make_config(
             ["s1", SensorSpec("s2", p_detect=0.9, fov=fov)],
-            management=TrackManagement(occlusion_radius=radius),
+            management=LifeCycleConfig(occlusion_radius=radius),
         )
     )
     a, b = [0.0, 0.0, 50.0, 0.0], [0.0, 0.0, 100.0, 0.0]
@@ -334,7 +334,7 @@ def test_a_time_too_far_to_predict_to_is_refused_and_changes_nothing() -> None:
     before = json.dumps(engine.export())
     with pytest.raises(InvalidInput, match=r"time: predicting the tracks over .* overflows"):
         engine.picture(1e200)
-    with pytest.raises(InvalidInput, match="overflows"):
+    with pytest.raises(InvalidInput, match=r"time: magnitude 1e\+200 is beyond the limit"):
         engine.apply(report("s2", 1e200, ("b", moving(0.0, 1.0))))
     assert json.dumps(engine.export()) == before
 
@@ -359,13 +359,13 @@ def test_a_bad_association_setting_is_refused_when_the_config_is_made(
 
 
 def test_a_report_whose_fusion_time_cannot_be_reached_changes_nothing() -> None:
-    """A late report so far back that its tracks overflow when predicted to the fusion time:
-    refused before anything changes (it used to start its tracks, then fail)."""
+    """A late report so far back that its tracks would overflow when predicted to the fusion
+    time: refused at the edge (its time is beyond the bound), nothing changes."""
     engine = SessionEngine(make_config(["s1", "s2"]))
     engine.apply(TrackReport("s1", 5.0, ()))
     before = json.dumps(engine.export(), sort_keys=True)
     far_back = TrackReport("s2", -1e300, (ReportedTrack("a", np.zeros(4), np.eye(4)),))
-    with pytest.raises(InvalidInput, match="overflows"):
+    with pytest.raises(InvalidInput, match="beyond the limit"):
         engine.apply(far_back)
     assert json.dumps(engine.export(), sort_keys=True) == before
     assert engine.seq == 1 and not engine.tracks and engine.last_report == {"s1": 5.0}

@@ -24,10 +24,10 @@ import math
 import numpy as np
 import pytest
 
-from core.fusion.config import SensorSpec, TrackManagement
+from core.fusion.config import SensorSpec
 from core.fusion.engine import SessionEngine
 from core.fusion.reports import ReportedTrack, StepResult, TrackReport
-from core.lifecycle import StatusReason, TrackStatus
+from core.lifecycle import LifeCycleConfig, StatusReason, TrackStatus
 
 from .engine_helpers import make_config
 
@@ -39,9 +39,12 @@ GATE = -2.0 * math.log(1.0 - 0.999)
 LAST_HIT = 3
 
 
-def management(score_margin: float | None) -> TrackManagement:
-    return TrackManagement(
-        false_target_density=RHO_FA, new_target_density=RHO_NT, score_margin=score_margin
+def management(score_margin: float | None) -> LifeCycleConfig:
+    return LifeCycleConfig(
+        false_target_density=RHO_FA,
+        new_target_density=RHO_NT,
+        true_deletion=1e-3,  # the worked numbers below: delete at ln(1e-3 / 0.999)
+        score_margin=score_margin,
     )
 
 
@@ -89,7 +92,7 @@ def status_of(step: StepResult) -> tuple[TrackStatus, StatusReason, float]:
 def test_reference_numbers_order_the_two_terminations() -> None:
     """Worked values: ΔL ≈ 8.57; gate emptiness after 11 misses; score after 9 (margin 0)."""
     hit, probabilities, _ = reference()
-    thresholds = management(0.0).thresholds
+    thresholds = management(0.0)
     confirm, delete = thresholds.confirm_threshold, thresholds.delete_threshold
     miss = math.log(1.0 - P_DETECT)
     assert hit == pytest.approx(math.log(0.8 / (2 * math.pi * 1e-5 * (2.25 + 1 / 6))))
@@ -109,7 +112,7 @@ def test_a_confirmed_track_the_sensor_keeps_missing_coasts_and_is_terminated(
     score_margin: float | None, misses: int, reason: StatusReason
 ) -> None:
     hit, probabilities, _ = reference()
-    thresholds = management(score_margin).thresholds
+    thresholds = management(score_margin)
     miss = math.log(1.0 - P_DETECT)
     engine, steps = run_until_gone(score_margin)
     assert engine.tracks == []

@@ -11,7 +11,7 @@ from scipy.stats import norm
 
 from core.distance.modified import scale_factor
 from core.errors import TrackingError
-from core.lifecycle import ScoreModel
+from core.lifecycle import LifeCycleConfig
 from core.simulation import (
     aircraft_scenario,
     close_pair_scenario,
@@ -23,6 +23,7 @@ from core.tracking import IMMPredictor, IMMUpdater, ModelBank, two_point_initiat
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.jpda import cheap_jpda_weights, pda_update
 from core.tracking.tracker import LocalTracker
+from evaluation.tracking import life_cycle
 
 from .tracking_runs import TrackerRun, false_assignment_rate, rectangle, run_tracker, sensor_of
 
@@ -43,10 +44,12 @@ def road_config(scenario: Scenario, **options: object) -> LocalTrackerConfig:
         "bank": ROAD_BANK,
         "time_interval": 0.1,
         "fields_of_view": views,
-        "score": ScoreModel(p_detect=0.9, false_target_density=1e-3, new_target_density=1e-4),
         "max_speed": 30.0,
     }
     settings.update(options)
+    settings["life_cycle"] = life_cycle(
+        settings, false_target_density=1e-3, new_target_density=1e-4
+    )
     return LocalTrackerConfig(**settings)  # type: ignore[arg-type]
 
 
@@ -54,7 +57,7 @@ def road_config(scenario: Scenario, **options: object) -> LocalTrackerConfig:
 def test_aircraft_tracks_confirmed_and_deleted_in_the_score_windows() -> None:
     """Targets 3 and 4 appear at 30 and 70, target 2 disappears at 100 ([MTT] §6.1.3).
 
-    Independent numbers (default ScoreModel: P_D 0.9, α 1e-3, β 1e-2):
+    Independent numbers (P_D 0.9, α 1e-3 and β 1e-2, not the default 1e-3):
     two-point initiation on the first two detections (steps k, k+1) starts at
     L₀ = ln(β_NT/β_FT) = 0 < confirm = ln(0.99/0.001) = 6.90; the third hit
     adds ln(0.9 / (2π · 1e-6 · √|S|)) − D/2 with S ≈ 6R = 1.2 I (two-point
@@ -65,7 +68,7 @@ def test_aircraft_tracks_confirmed_and_deleted_in_the_score_windows() -> None:
     ⌈(6.898 + 4.604) / 2.303⌉ = 5 → steps 100..104, deleted at 104.
     """
     scenario = aircraft_scenario(seed=0)
-    run = run_tracker(scenario, LocalTrackerConfig())
+    run = run_tracker(scenario, LocalTrackerConfig(life_cycle=LifeCycleConfig(true_deletion=1e-2)))
     confirm = math.log(0.99 / 0.001)
     delete = math.log(0.01 / 0.999)
     misses_to_delete = math.ceil((confirm - delete) / -math.log(0.1))

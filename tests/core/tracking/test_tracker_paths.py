@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from core.geometry import Sector
-from core.lifecycle import ScoreModel, StatusReason, TrackStatus
+from core.lifecycle import LifeCycleConfig, ScoreModel, StatusReason, TrackStatus
 from core.tracking import ModelBank
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.tracker import LocalTracker
@@ -83,8 +83,9 @@ def test_a_vanished_target_is_terminated_by_gate_emptiness_when_the_product_pred
     emptiness can end the track.
     """
     rho = 1e-3
-    score = ScoreModel(p_detect=0.9, false_target_density=rho, new_target_density=rho)
-    config = LocalTrackerConfig(bank=BANK, score=score, score_margin=None)
+    life = LifeCycleConfig(false_target_density=rho, new_target_density=rho, score_margin=None)
+    config = LocalTrackerConfig(bank=BANK, p_detect=0.9, life_cycle=life)
+    score = config.score
     tracker = LocalTracker(config)
     last_hit = 7
     steps = {
@@ -129,8 +130,9 @@ def test_a_vanished_target_is_terminated_by_gate_emptiness_when_the_product_pred
 def test_gate_emptiness_product_matches_the_reference_scan_by_scan() -> None:
     """The exported empty-gate probability after each miss is the reference product."""
     rho = 1e-3
-    score = ScoreModel(p_detect=0.9, false_target_density=rho, new_target_density=rho)
-    tracker = LocalTracker(LocalTrackerConfig(bank=BANK, score=score, score_margin=None))
+    life = LifeCycleConfig(false_target_density=rho, new_target_density=rho, score_margin=None)
+    config = LocalTrackerConfig(bank=BANK, p_detect=0.9, life_cycle=life)
+    tracker = LocalTracker(config)
     for t in range(4):
         tracker.step(float(t), [[0.0, 0.0]])
     x, p = np.zeros(4), two_point_covariance()
@@ -161,7 +163,11 @@ def test_a_track_hidden_behind_a_known_track_is_not_penalised(radius: float) -> 
     view = Sector(
         origin=(0.0, 0.0), heading_deg=90.0, half_angle_deg=30.0, range_min=0.0, range_max=500.0
     )
-    config = LocalTrackerConfig(bank=BANK, fields_of_view={"radar": view}, occlusion_radius=radius)
+    config = LocalTrackerConfig(
+        bank=BANK,
+        fields_of_view={"radar": view},
+        life_cycle=LifeCycleConfig(occlusion_radius=radius),
+    )
     tracker = LocalTracker(config)
     a, b = [0.0, 50.0], [0.0, 100.0]
     for t in range(3):
@@ -228,7 +234,7 @@ def test_single_point_initiation_starts_at_once_and_the_sprt_confirms() -> None:
 # ------------------------------------------------ per-detection covariance
 def test_a_detection_with_its_own_covariance_gets_the_kalman_update_with_it() -> None:
     """Scan 3 brings z = (1, −0.5) with R₃ = [[4, 1], [1, 2]]; the update must use R₃, not I."""
-    config = LocalTrackerConfig(bank=BANK, score_margin=None)
+    config = LocalTrackerConfig(bank=BANK, life_cycle=LifeCycleConfig(score_margin=None))
     own = np.array([[4.0, 1.0], [1.0, 2.0]])
     z = np.array([1.0, -0.5])
     with_own, default = LocalTracker(config), LocalTracker(config)

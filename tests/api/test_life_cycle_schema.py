@@ -1,0 +1,63 @@
+"""The wire's life-cycle thresholds and the core's life cycle are one fact: names, defaults, ranges.
+
+``api_schemas.config.TrackThresholds`` is what a client posts, ``core.lifecycle.LifeCycleConfig``
+what both layers run; a default or a bound changed on one side only fails here.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import pytest
+from pydantic import ValidationError
+
+from api_schemas.config import SessionConfig, TrackThresholds
+from app.translate import fusion_config, life_cycle_config
+from core.errors import InvalidInput
+from core.lifecycle import LifeCycleConfig
+
+CORE_DEFAULTS = {field.name: field.default for field in dataclasses.fields(LifeCycleConfig)}
+PROBES: dict[str, list[object]] = {
+    "float": [-1.0, -1e-300, 0.0, 1e-300, 1e-3, 0.5, 1.0 - 1e-16, 1.0, 1.5, math.nan, math.inf],
+    "int": [-1, 0, 1, 2, 99, 100, 101, 10**6, None],
+}
+
+
+def test_every_wire_threshold_is_a_life_cycle_field_with_the_same_default() -> None:
+    wire = TrackThresholds()
+    assert set(TrackThresholds.model_fields) <= set(CORE_DEFAULTS)
+    for name in TrackThresholds.model_fields:
+        assert getattr(wire, name) == CORE_DEFAULTS[name], name
+
+
+@pytest.mark.parametrize("name", sorted(TrackThresholds.model_fields))
+def test_the_wire_and_the_core_accept_the_same_values(name: str) -> None:
+    kind = "int" if name == "min_points" else "float"
+    for value in PROBES[kind]:
+        try:
+            TrackThresholds.model_validate({name: value})
+            wire_accepts = True
+        except ValidationError:
+            wire_accepts = False
+        try:
+            LifeCycleConfig(**{name: value})  # type: ignore[arg-type]
+            core_accepts = True
+        except InvalidInput:
+            core_accepts = False
+        assert wire_accepts == core_accepts, (name, value, wire_accepts, core_accepts)
+
+
+def test_a_session_without_thresholds_runs_the_core_defaults_in_both_layers() -> None:
+    """The service passes the wire values on; with none given, both layers get the defaults."""
+    config = SessionConfig.model_validate(
+        {
+            "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+            "sensors": [{"id": "radar", "measurement": {"r": [[1.0, 0.0], [0.0, 1.0]]}}],
+        }
+    )
+    fusion = fusion_config(config)
+    assert fusion.management == LifeCycleConfig()
+    tracker = fusion.sensor("radar").tracker
+    assert tracker is not None and tracker.life_cycle == LifeCycleConfig()
+    assert life_cycle_config(TrackThresholds()) == LifeCycleConfig()
