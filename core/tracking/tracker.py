@@ -3,9 +3,10 @@
 :class:`LocalTracker` runs, for each scan of one of its sensors, with every
 array batched over tracks (and over the models of the IMM):
 
-1. **predict** every live track to the scan time (:class:`IMMPredictor`;
-   several ΔT at once when scans were skipped, none for a second sensor at
-   the same time);
+1. **predict** every live track to the scan time (:class:`IMMPredictor`):
+   one closed-form step over the time since the previous scan, whatever it
+   is (scans need not lie on a grid; a gap costs what one scan costs), none
+   for a second sensor at the same time;
 2. **visibility** of each predicted position ([HZ] §2.1): inside the scan
    sensor's field of view and not occluded by a known track (then a missing
    detection is a miss), in a blind zone, or out of range of every sensor;
@@ -76,8 +77,6 @@ CONFIRMED = STATUSES.index(TrackStatus.CONFIRMED)
 COASTING = STATUSES.index(TrackStatus.COASTING)
 PHANTOM = STATUSES.index(TrackStatus.PHANTOM)
 TERMINATED = STATUSES.index(TrackStatus.TERMINATED)
-TIME_TOLERANCE = 1e-9
-"""Relative tolerance on scan times being multiples of ΔT."""
 SEED_NOISE_GATE = 0.999
 """Gate probability of the measurement-noise part of the seed distance bound."""
 
@@ -133,7 +132,9 @@ class LocalTracker:
         self._h = self.bank.measurement.matrix
         self._noise = self.bank.measurement.noise_covariance
         self._q = self.bank.measurement.dim
-        self._velocity_convention = "velocity" if found is None else found.velocity_convention
+        self._conventions = (
+            ("velocity",) * self.bank.axes if found is None else found.conventions
+        )
         self.classifier: BatchedCredalClassifier | None = None
         if found is not None and config.classification is not None:
             chosen = config.classification
@@ -223,7 +224,8 @@ class LocalTracker:
         Parameters
         ----------
         time : float
-            Scan time; not earlier than the previous scan, a multiple of ΔT after it.
+            Scan time; not earlier than the previous scan (any step: the
+            tracks are predicted over it in closed form).
         measurements : array (m, q)
         measurement_covariances : array (m, q, q), optional
             Each detection's own R (default: the bank's R).
@@ -232,13 +234,13 @@ class LocalTracker:
         Raises
         ------
         TrackingError
-            Unknown sensor, a time that goes back or is off the ΔT grid, wrong
-            shapes, non-finite numbers; nothing changes then.
+            Unknown sensor, a time that goes back, wrong shapes, non-finite
+            numbers; nothing changes then.
         """
-        z, own_noise, sensor_name, ahead = self._check(
+        z, own_noise, sensor_name, elapsed = self._check(
             time, measurements, measurement_covariances, sensor
         )
-        prediction = self._predict(ahead)
+        prediction = self._predict(elapsed)
         tracks = len(self._numbers)
         combined_z, combined_s = prediction.combined_measurement()
         visibility, seen = self._visibility(combined_z, sensor_name)
@@ -306,7 +308,7 @@ class LocalTracker:
         measurements: ArrayLike,
         measurement_covariances: ArrayLike | None,
         sensor: str | None,
-    ) -> tuple[FloatArray, FloatArray | None, str, int]:
+    ) -> tuple[FloatArray, FloatArray | None, str, float]:
         sensor_name = self.config.sensors[0] if sensor is None else sensor
         if sensor_name not in self._views:
             raise TrackingError(f"unknown sensor {sensor_name!r}; known: {list(self._views)}")
@@ -330,36 +332,31 @@ class LocalTracker:
                 )
             if len(own):
                 check_covariances(own, "measurement_covariances")
-        ahead = 0
+        elapsed = 0.0
         if self.time is not None:
             elapsed = time - self.time
-            interval = self.config.time_interval
-            ahead = round(elapsed / interval)
-            if elapsed < 0.0 or abs(elapsed - ahead * interval) > TIME_TOLERANCE * max(
-                1.0, abs(time)
-            ):
+            if elapsed < 0.0:
                 raise TrackingError(
-                    f"scan time {time!r} must be the previous time {self.time!r} "
-                    f"plus a multiple of ΔT = {interval!r}"
+                    f"scan time {time!r} is before the previous scan's time {self.time!r}"
                 )
-        return z, own, sensor_name, int(ahead)
+        return z, own, sensor_name, elapsed
 
     # ---------------------------------------------------------- predict
-    def _predict(self, ahead: int) -> IMMPrediction:
+    def _predict(self, elapsed: float) -> IMMPrediction:
+        """Every track over the time since the previous scan, in one closed-form step
+        (:meth:`IMMPredictor.predict`); none for a second scan at the same time."""
         state = self._state
-        if ahead == 0:
+        if elapsed == 0.0:
             return _as_prediction(self._h, self._noise, state)
-        prediction = self.predictor.predict(state)
-        for _ in range(ahead - 1):
-            prediction = self.predictor.predict(prediction.as_state())
-        return prediction
+        return self.predictor.predict(state, elapsed)
 
     def _visibility(self, positions: FloatArray, sensor: str) -> tuple[IntArray, BoolArray]:
         """Visibility codes of every track, and whether the scan's sensor should see it."""
         tracks = len(positions)
         self._occluded = np.zeros(tracks, dtype=bool)
-        if self._q != 2 or tracks == 0:
+        if self._q < 2 or tracks == 0:
             return np.full(tracks, int(Visibility.VISIBLE)), np.ones(tracks, dtype=bool)
+        positions = positions[:, :2]  # fields of view are planar: x, y of a 3-D track
         visibility = self._coverage.visibility(positions)
         view = self._views[sensor]
         seen = np.ones(tracks, dtype=bool) if view is None else view.contains(positions)
@@ -583,7 +580,7 @@ class LocalTracker:
                     seeds[seed_index],
                     z[starts],
                     interval,
-                    velocity=self._velocity_convention,
+                    velocity=self._conventions,
                 )
                 order = np.argsort(starts, kind="stable")
                 starts = starts[order]
