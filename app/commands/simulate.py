@@ -74,7 +74,7 @@ def summarise(run: ScenarioRun, results: list[Body]) -> str:
 
 def command(args: argparse.Namespace) -> int:
     """Run the scenario and print its summary (progress on stderr)."""
-    run = build(args.scenario, args.seed)
+    run = build(args.scenario, args.seed, args.preset)
     print(f"seed {run.seed}", file=sys.stderr)
     inputs = tqdm(run.inputs, desc=run.name, unit="input", file=sys.stderr, disable=args.quiet)
     if args.server:
