@@ -94,8 +94,8 @@ class MotionModel(WireModel):
             "detections without a preset. null (the default): derived from "
             "tracking.preset when sensors send detections, so the fused tracks follow "
             "every manoeuvre of the preset's bank (the largest velocity change Δv of the "
-            "bank in one time_interval ΔT gives q = Δv²/ΔT: aircraft 3080 at ΔT = 1 s, "
-            "pedestrian 72), else 1"
+            "bank in one time_interval ΔT at 3σ: q = Δv²/(9 ΔT), aircraft 342 at ΔT = 1 s, "
+            "pedestrian 8), else 1"
         ),
     )
 

@@ -58,6 +58,10 @@ GRAVITY = 9.81
 
 VelocityConvention = Literal["velocity", "heading"]
 
+MANOEUVRE_DISTANCE = 9.0
+"""Mahalanobis distance (3σ) of a bank's largest manoeuvre over one scan from the fused
+constant-velocity prediction, under :meth:`TrackingPreset.manoeuvre_density`."""
+
 MIN_MANOEUVRE_DENSITY = 1.0
 """Smallest :meth:`TrackingPreset.manoeuvre_density` (m²/s³): the fused layer's default ``motion.q``."""
 
@@ -103,9 +107,10 @@ class TrackingPreset:
         largest difference ``|s_j − s_k|`` of two speed models (per unit
         heading). A constant acceleration ``a`` held over Δt is at Mahalanobis
         distance ``a² Δt / q`` from the constant-velocity prediction under
-        ``Q = q [[Δt³/3, Δt²/2], [Δt²/2, Δt]]``; ``q = Δv² / ΔT`` puts the
-        bank's largest manoeuvre over one scan at distance 1 (never below
-        :data:`MIN_MANOEUVRE_DENSITY`).
+        ``Q = q [[Δt³/3, Δt²/2], [Δt²/2, Δt]]``; ``q = Δv² / (ΔT d)`` with
+        d = :data:`MANOEUVRE_DISTANCE` puts the bank's largest manoeuvre over
+        one scan at distance d, inside every association gate of the fused
+        layer (never below :data:`MIN_MANOEUVRE_DENSITY`).
         """
         bank = self.bank
         interval = bank.time_interval
@@ -114,7 +119,7 @@ class TrackingPreset:
         change = float(np.max(np.linalg.norm(accelerations, axis=1))) * interval
         spread = np.linalg.norm(speeds[:, None, :] - speeds[None, :, :], axis=-1)
         change = max(change, float(spread.max()))
-        return max(change**2 / interval, MIN_MANOEUVRE_DENSITY)
+        return max(change**2 / (interval * MANOEUVRE_DISTANCE), MIN_MANOEUVRE_DENSITY)
 
 
 AIRCRAFT_ACCELERATIONS: tuple[tuple[float, float], ...] = (
