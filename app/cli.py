@@ -11,7 +11,7 @@ from pathlib import Path
 import uvicorn
 
 from app.commands.replay import export_command, replay_command
-from app.commands.scenarios import PRESETS as scenario_presets
+from app.commands.scenarios import PRESETS as SCENARIO_PRESETS
 from app.commands.scenarios import names as scenario_names
 from app.commands.simulate import command as simulate_command
 from app.main import create_app
@@ -91,7 +91,7 @@ def build_parser() -> argparse.ArgumentParser:
     simulate.add_argument("--seed", type=int, default=0)
     simulate.add_argument(
         "--preset",
-        choices=scenario_presets,
+        choices=SCENARIO_PRESETS,
         help="track a detection scenario with this preset instead of its own ('none': one CV model)",
     )
     simulate.add_argument("--server", help="URL of a running service, e.g. http://127.0.0.1:8000")

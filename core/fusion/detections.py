@@ -50,11 +50,7 @@ DETECTION_AXES = (1, 2, 3)
 def check_layout_for_detections(layout: StateLayout) -> None:
     """A detecting sensor's local tracks need 1 to 3 positions, a velocity for each, nothing else."""
     axes = len(layout.position)
-    if (
-        axes not in DETECTION_AXES
-        or len(layout.velocity) != axes
-        or layout.dim != 2 * axes
-    ):
+    if axes not in DETECTION_AXES or len(layout.velocity) != axes or layout.dim != 2 * axes:
         raise InvalidInput(
             "sensors that send detections need a state of 1 to 3 position components, one "
             "velocity component for each and nothing else (dim = 2 × positions); got dim "
@@ -65,9 +61,7 @@ def check_layout_for_detections(layout: StateLayout) -> None:
 def local_order(layout: StateLayout) -> tuple[int, ...]:
     """Where each local component ``[x, ẋ, y, ẏ, …]`` goes in the session's state."""
     return tuple(
-        index
-        for pair in zip(layout.position, layout.velocity, strict=True)
-        for index in pair
+        index for pair in zip(layout.position, layout.velocity, strict=True) for index in pair
     )
 
 

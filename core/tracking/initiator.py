@@ -76,7 +76,9 @@ def two_point_initiation(
     z0 = np.atleast_2d(np.asarray(first, dtype=np.float64))
     z1 = np.atleast_2d(np.asarray(second, dtype=np.float64))
     if z0.shape != z1.shape:
-        raise TrackingError(f"need two measurement arrays of one shape, got {z0.shape} and {z1.shape}")
+        raise TrackingError(
+            f"need two measurement arrays of one shape, got {z0.shape} and {z1.shape}"
+        )
     pos, vel = _axes_of(bank, z1, "two-point initiation")
     if not (np.isfinite(time_interval) and time_interval > 0.0):
         raise TrackingError(f"time_interval must be positive, got {time_interval!r}")

@@ -494,9 +494,7 @@ class ModelBank:
     _structure: tuple[FloatArray, FloatArray, FloatArray, FloatArray] = field(
         init=False, repr=False, compare=False
     )
-    _power: tuple[FloatArray, FloatArray, FloatArray] = field(
-        init=False, repr=False, compare=False
-    )
+    _power: tuple[FloatArray, FloatArray, FloatArray] = field(init=False, repr=False, compare=False)
     _kept: OrderedDict[float, tuple[MotionMatrices, FloatArray]] = field(
         init=False, repr=False, compare=False
     )

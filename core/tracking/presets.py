@@ -57,6 +57,7 @@ GRAVITY = 9.81
 """g in m/s² ([MTT] §6.1.1)."""
 
 VelocityConvention = Literal["velocity", "heading"]
+VELOCITY: VelocityConvention = "velocity"
 
 MANOEUVRE_DISTANCE = 9.0
 """Mahalanobis distance (3σ) of a bank's largest manoeuvre over one scan from the fused
@@ -97,7 +98,7 @@ class TrackingPreset:
     def conventions(self) -> tuple[VelocityConvention, ...]:
         """What the second component of each axis means: the horizontal axes follow
         :attr:`velocity_convention`, a vertical axis is a velocity."""
-        return (self.velocity_convention,) * 2 + ("velocity",) * (self.bank.axes - 2)
+        return (self.velocity_convention,) * 2 + (VELOCITY,) * (self.bank.axes - 2)
 
     def manoeuvre_density(self) -> float:
         """The density q of the continuous white-noise acceleration that covers the bank.

@@ -66,7 +66,7 @@ from core.tracking.gating import TrackGatingProblem, gate_pairs
 from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState, IMMUpdate, IMMUpdater
 from core.tracking.initiator import pair_seeds, single_point_initiation, two_point_initiation
 from core.tracking.jpda import cheap_jpda_weights, pda_update
-from core.tracking.presets import TrackingPreset
+from core.tracking.presets import VELOCITY, TrackingPreset, VelocityConvention
 from core.tracking.track import LocalTrack, TrackerStep, float_array, mass_to_plain, plain_floats
 
 EXPORT_VERSION = 1
@@ -132,8 +132,8 @@ class LocalTracker:
         self._h = self.bank.measurement.matrix
         self._noise = self.bank.measurement.noise_covariance
         self._q = self.bank.measurement.dim
-        self._conventions = (
-            ("velocity",) * self.bank.axes if found is None else found.conventions
+        self._conventions: tuple[VelocityConvention, ...] = (
+            (VELOCITY,) * self.bank.axes if found is None else found.conventions
         )
         self.classifier: BatchedCredalClassifier | None = None
         if found is not None and config.classification is not None:
