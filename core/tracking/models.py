@@ -32,9 +32,11 @@ axis with the axis's input ``u`` and speed factor ``s``:
 
 The **nominal scan period** ΔT (``time_interval``) is kept by each model only
 where a formula needs one period: the matrices at ΔT (:attr:`MotionModel.transition`,
-``process_noise``, ``input_offset``; the steady state of the modified
-distance, ``core.tracking.tracker``), and the **mode transitions**, which
-are per nominal scan: over Δt the bank uses ``Π(Δt) = Π^{Δt/ΔT}`` (the
+``process_noise``, ``input_offset``), and through them the steady state
+S_ss of the modified distance (``core.tracking.tracker``), the velocity of a
+heading track as its displacement per scan (``core.fusion.detections``) and
+a preset's manoeuvre density (``core.tracking.presets``); and the **mode
+transitions**, which are per nominal scan: over Δt the bank uses ``Π(Δt) = Π^{Δt/ΔT}`` (the
 continuous-time Markov chain whose one-scan transition is Π), exactly Π at
 Δt = ΔT. With the ``stay`` family (``stay`` on the diagonal, the rest spread
 evenly), ``Π = λ I + (1 − λ) 11ᵀ/r`` with ``λ = stay − (1 − stay)/(r − 1)``
@@ -57,6 +59,7 @@ k−1)`` (rows sum to 1; the same convention as filterpy's ``IMMEstimator.M``).
 
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -498,6 +501,7 @@ class ModelBank:
     _kept: OrderedDict[float, tuple[MotionMatrices, FloatArray]] = field(
         init=False, repr=False, compare=False
     )
+    _lock: threading.Lock = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if not self.models:
@@ -530,6 +534,7 @@ class ModelBank:
         object.__setattr__(self, "_structure", structure)
         object.__setattr__(self, "_power", _power_basis(transition))
         object.__setattr__(self, "_kept", OrderedDict())
+        object.__setattr__(self, "_lock", threading.Lock())
         nominal = _evaluate(structure, interval)
         object.__setattr__(self, "transitions", nominal.transition)
         object.__setattr__(self, "input_offsets", nominal.input_offset)
@@ -574,17 +579,18 @@ class ModelBank:
 
     def _at(self, dt: float) -> tuple[MotionMatrices, FloatArray]:
         step = _check_step(dt)
-        kept = self._kept
-        found = kept.get(step)
-        if found is not None:
-            kept.move_to_end(step)
+        with self._lock:  # a bank may be shared by the trackers of one configuration
+            kept = self._kept
+            found = kept.get(step)
+            if found is not None:
+                kept.move_to_end(step)
+                return found
+            matrices = _evaluate(self._structure, step)
+            found = (matrices, self._transition_power(step / self.time_interval))
+            kept[step] = found
+            if len(kept) > KEPT_STEPS:
+                kept.popitem(last=False)
             return found
-        matrices = _evaluate(self._structure, step)
-        found = (matrices, self._transition_power(step / self.time_interval))
-        kept[step] = found
-        if len(kept) > KEPT_STEPS:
-            kept.popitem(last=False)
-        return found
 
     def _transition_power(self, scans: float) -> FloatArray:
         if scans == 1.0:
