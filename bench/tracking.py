@@ -191,7 +191,7 @@ def _confirmed_tracker(
     for scan_time, detections in zip(times, scans, strict=True):
         output = tracker.step(float(scan_time), detections)
     confirmed = sum(track.status.value == "confirmed" for track in output.tracks)
-    if confirmed < len(scans[0]):
+    if confirmed < 0.99 * len(scans[0]):  # a 0.999 gate misses about one pair in a thousand
         raise SystemExit(f"bench setup: {confirmed} of {len(scans[0])} tracks confirmed")
     return tracker
 

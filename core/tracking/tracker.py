@@ -245,7 +245,7 @@ class LocalTracker:
         combined_z, combined_s = prediction.combined_measurement()
         visibility, seen = self._visibility(combined_z, sensor_name)
 
-        candidates = np.flatnonzero(self._status != PHANTOM)
+        candidates = np.flatnonzero((self._status != PHANTOM) & self._can_be_hit(prediction))
         sub = _select_prediction(prediction, candidates)
         if self._method == CHEAP_JPDA:
             update, pair_rows, pair_cols, hit_gain, used = self._jpda(sub, z, own_noise)
@@ -349,6 +349,23 @@ class LocalTracker:
         if elapsed == 0.0:
             return _as_prediction(self._h, self._noise, state)
         return self.predictor.predict(state, elapsed)
+
+    def _can_be_hit(self, prediction: IMMPrediction) -> BoolArray:
+        """Tracks a detection could keep alive: the largest hit increment they could get
+        (distance 0, their most certain model, no measurement noise: ``log |H P_j Hᵀ|``)
+        leaves their score above the delete threshold.
+
+        A prediction so uncertain that no detection can (a scan after a long gap)
+        is not associated: the track misses, its gate empties ([HZ] §4.2) and
+        it is terminated, and the scan costs what any scan costs instead of
+        gating every detection with every track.
+        """
+        if len(self._score) == 0:
+            return np.zeros(0, dtype=bool)
+        sign, log_det = np.linalg.slogdet(prediction.innovation_covariances - self._noise)
+        log_det = np.where(sign > 0.0, log_det, -np.inf).min(axis=1)
+        best = self.config.score.hit_increment(np.zeros_like(log_det), log_det, self._q)
+        return np.asarray(self._score + best > self.config.score.delete_threshold, dtype=np.bool_)
 
     def _visibility(self, positions: FloatArray, sensor: str) -> tuple[IntArray, BoolArray]:
         """Visibility codes of every track, and whether the scan's sensor should see it."""

@@ -200,7 +200,9 @@ def test_jittered_scans_track_as_well_as_the_grid() -> None:
 
 
 def test_a_long_gap_is_one_prediction(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A scan 1e6 s after the last is accepted, predicted in one step, and leaves finite numbers."""
+    """A scan 1e6 s after the last is accepted and predicted in one step; no detection can keep
+    tracks that uncertain (their best hit increment is below the delete threshold), so they are
+    not associated: they miss, their gates empty ([HZ] §4.2), and the targets start anew."""
     start, velocity = _straight_targets(4)
     tracker = LocalTracker(LocalTrackerConfig())
     for k in range(6):
@@ -216,6 +218,23 @@ def test_a_long_gap_is_one_prediction(monkeypatch: pytest.MonkeyPatch) -> None:
     later = 5.0 + 1e6
     step = tracker.step(later, start + later * velocity)
     assert calls == [1e6]
-    for track in step.tracks:
-        assert np.all(np.isfinite(track.state)) and np.all(np.isfinite(track.covariance))
-    tracker.step(later + 1.0, start + (later + 1.0) * velocity)  # and it goes on
+    assert step.assignment == (None,) * 4
+    assert [(t.status.value, t.reason.value) for t in step.tracks] == [
+        ("terminated", "gate_emptiness")
+    ] * 4
+    for k in (1, 2):
+        step = tracker.step(later + k, start + (later + k) * velocity)
+    assert [t.status.value for t in step.tracks] == ["confirmed"] * 4
+    assert all(track_id is not None for track_id in step.assignment)
+
+
+def test_a_moderate_gap_keeps_the_tracks() -> None:
+    """After 20 s without scans the tracks are still associated and keep their ids."""
+    start, velocity = _straight_targets(4)
+    tracker = LocalTracker(LocalTrackerConfig())
+    for k in range(6):
+        step = tracker.step(float(k), start + k * velocity)
+    ids = step.assignment
+    later = 25.0
+    step = tracker.step(later, start + later * velocity)
+    assert step.assignment == ids
