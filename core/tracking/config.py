@@ -191,7 +191,7 @@ class LocalTrackerConfig:
             if name in self.preset_options:
                 raise TrackingError(f"give {name} as the config field, not a preset option")
         if self.axes not in (2, 3):
-            raise TrackingError(f"axes must be 2 or 3, got {self.axes!r}")
+            raise TrackingError(f"the presets track 2 or 3 position axes, got {self.axes!r}")
         for name in (
             "time_interval",
             "modified_beta",

@@ -238,3 +238,42 @@ def test_a_moderate_gap_keeps_the_tracks() -> None:
     later = 25.0
     step = tracker.step(later, start + later * velocity)
     assert step.assignment == ids
+
+
+@pytest.mark.parametrize("factory", [aircraft, pedestrian])
+def test_3d_presets_add_a_vertical_constant_velocity_axis(factory: object) -> None:
+    """Horizontal blocks as in 2-D; z: F = [[1, Δt], [0, 1]], no input, q B Bᵀ; H picks x, y, z."""
+    flat, spatial = factory(), factory(axes=3)  # type: ignore[operator]
+    dt = 1.7
+    planar, full = flat.bank.at(dt), spatial.bank.at(dt)
+    np.testing.assert_array_equal(full.transition[:, :4, :4], planar.transition)
+    np.testing.assert_array_equal(full.process_noise[:, :4, :4], planar.process_noise)
+    np.testing.assert_array_equal(full.input_offset[:, :4], planar.input_offset)
+    q = spatial.bank.models[0].noise_intensity
+    b = np.array([dt**2 / 2, dt])
+    for j in range(spatial.bank.n_models):
+        np.testing.assert_array_equal(full.transition[j, 4:, 4:], [[1, dt], [0, 1]])
+        np.testing.assert_array_equal(full.input_offset[j, 4:], [0.0, 0.0])
+        np.testing.assert_allclose(full.process_noise[j, 4:, 4:], q * np.outer(b, b), rtol=1e-15)
+        assert not np.any(full.process_noise[j, :4, 4:])
+    np.testing.assert_array_equal(
+        spatial.bank.measurement.matrix,
+        [[1, 0, 0, 0, 0, 0], [0, 0, 1, 0, 0, 0], [0, 0, 0, 0, 1, 0]],
+    )
+    assert spatial.conventions[2] == "velocity"
+    assert spatial.behaviours.model_names == flat.behaviours.model_names
+    assert spatial.classes == flat.classes
+
+
+def test_a_3d_tracker_follows_a_climbing_target() -> None:
+    rng = np.random.default_rng(RNG_SEED)
+    config = LocalTrackerConfig(axes=3, measurement_noise=((0.2, 0, 0), (0, 0.2, 0), (0, 0, 0.2)))
+    tracker = LocalTracker(config)
+    start, velocity = np.array([0.0, 0.0, 1000.0]), np.array([150.0, -40.0, 12.0])
+    times = np.cumsum(rng.uniform(0.8, 1.2, 20))
+    for t in times:
+        step = tracker.step(float(t), (start + t * velocity + rng.normal(0, 0.45, 3))[None])
+    (track,) = step.tracks
+    assert track.status.value == "confirmed"
+    np.testing.assert_allclose(track.state[[0, 2, 4]], start + times[-1] * velocity, atol=2.0)
+    np.testing.assert_allclose(track.state[[1, 3, 5]], velocity, atol=2.0)
