@@ -236,19 +236,19 @@ def time_step_table(rng: np.random.Generator) -> None:
         print(
             f"  scan {label:<12} whole scan {_scan_ms(config, jittered, float(at[-1]), scans[-1]):7.2f}"
         )
+    planar_ms = float("nan")
     for axes in (2, 3):
-        config_3d = LocalTrackerConfig(
+        config_axes = LocalTrackerConfig(
             fields_of_view={"radar": None},
             axes=axes,
             measurement_noise=tuple(tuple(row) for row in (0.2 * np.eye(axes)).tolist()),
         )
         scans = _tracker_scans(rng, tracks, warm + 1, axes=axes)
-        spatial = _confirmed_tracker(config_3d, scans[:warm], times)
-        scan_ms = _scan_ms(config_3d, spatial, float(warm), scans[-1])
-        verdict = "meets" if scan_ms <= FLOOR_MS else "MISSES"
-        print(
-            f"  scan in {axes}-D{'':<8} whole scan {scan_ms:7.2f}  (floor {FLOOR_MS:.0f} ms: {verdict})"
-        )
+        spatial = _confirmed_tracker(config_axes, scans[:warm], times)
+        scan_ms = _scan_ms(config_axes, spatial, float(warm), scans[-1])
+        planar_ms = scan_ms if axes == 2 else planar_ms
+        ratio = "" if axes == 2 else f"  ({scan_ms / planar_ms:.2f}x the 2-D scan)"
+        print(f"  scan in {axes}-D{'':<8} whole scan {scan_ms:7.2f}{ratio}")
 
 
 if __name__ == "__main__":
