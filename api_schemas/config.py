@@ -85,7 +85,19 @@ class MotionModel(WireModel):
     """The fused tracks' motion model used to predict them between reports."""
 
     model: Literal["constant_velocity", "constant_position"] = "constant_velocity"
-    q: PositiveFloat = 1.0
+    q: PositiveFloat | None = Field(
+        default=None,
+        description=(
+            "spectral density of the continuous white-noise acceleration (m²/s³): per axis "
+            "Q = q [[Δt³/3, Δt²/2], [Δt²/2, Δt]] (constant_position: Q = q Δt), the same "
+            "meaning for the fused tracks and for the local constant-velocity model of "
+            "detections without a preset. null (the default): derived from "
+            "tracking.preset when sensors send detections, so the fused tracks follow "
+            "every manoeuvre of the preset's bank (the largest velocity change Δv of the "
+            "bank in one time_interval ΔT at 3σ: q = Δv²/(9 ΔT), aircraft 342 at ΔT = 1 s, "
+            "pedestrian 8), else 1"
+        ),
+    )
 
 
 class SectorFieldOfView(WireModel):
@@ -203,14 +215,20 @@ class TrackThresholds(WireModel):
 class TrackingConfig(WireModel):
     """Local tracking of detecting sensors and track management.
 
-    Sensors with a ``measurement`` model send detections; the session tracks
-    them with an IMM over the preset's model bank (or one constant-velocity
-    model of the session's ``motion.q`` without a preset), scans every
-    ``time_interval`` seconds (scan times are multiples of it after the first).
+    Sensors with a ``measurement`` model send detections, at any increasing
+    times; the session tracks them with an IMM over the preset's model bank
+    (or one constant-velocity model of the session's ``motion.q`` without a
+    preset) in 1 to 3 dimensions (the detections' ``z`` lists the state's
+    position components in order; in 3-D the presets add a vertical
+    constant-velocity axis). ``time_interval`` is the nominal scan period: the
+    presets' models are the papers' at that step, and their mode transitions
+    are per ``time_interval``.
     """
 
     preset: TrackingPreset | None = None
-    time_interval: PositiveFloat = 1.0
+    time_interval: PositiveFloat = Field(
+        default=1.0, description="the nominal scan period ΔT (s); scans may come at any times"
+    )
     association: LocalAssociationConfig = Field(default_factory=LocalAssociationConfig)
     thresholds: TrackThresholds = Field(default_factory=TrackThresholds)
 

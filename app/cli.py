@@ -93,6 +93,14 @@ def _positive(text: str) -> float:
 DEBUG_HELP = "on failure, show the Python traceback (default: one line saying what to do)"
 
 
+def _preset_name(text: str) -> str:
+    from app.commands.scenarios import PRESETS
+
+    if text not in PRESETS:
+        raise argparse.ArgumentTypeError(f"unknown preset {text!r}; choose from {list(PRESETS)}")
+    return text
+
+
 def _scenario_name(text: str) -> str:
     from app.commands.scenarios import names
 
@@ -152,6 +160,11 @@ def build_parser() -> argparse.ArgumentParser:
         "scenario", type=_scenario_name, help="e.g. aircraft, crossing (a wrong name lists them)"
     )
     simulate.add_argument("--seed", type=int, default=0)
+    simulate.add_argument(
+        "--preset",
+        type=_preset_name,
+        help="track a detection scenario with this preset instead of its own ('none': one CV model)",
+    )
     simulate.add_argument(
         "--server",
         help="URL of a running service, e.g. http://127.0.0.1:8000: prints the session, "

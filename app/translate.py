@@ -55,6 +55,7 @@ from core.geometry import FieldOfView, PolygonView, Sector
 from core.lifecycle import LifeCycleConfig
 from core.tracking.config import ClassificationOptions, LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
+from core.tracking.presets import MIN_MANOEUVRE_DENSITY, preset
 
 PlainObject = dict[str, Any]
 
@@ -108,12 +109,16 @@ def local_tracker_config(
         return None
     tracking = config.tracking
     interval = tracking.time_interval
+    axes = len(config.state.position)
     r = tuple(tuple(float(x) for x in row) for row in sensor.measurement.r)
     bank = None
     if tracking.preset is None:
+        # one constant-velocity model, Q of motion.q's continuous white-noise form
         bank = ModelBank(
-            models=(constant_velocity(interval, config.motion.q),),
-            measurement=LinearMeasurementModel.position(1.0),
+            models=(
+                constant_velocity(interval, motion_density(config), axes=axes, noise="continuous"),
+            ),
+            measurement=LinearMeasurementModel.position(1.0, 2 * axes),
             mode_transition=np.ones((1, 1)),
         )
     options = tracking.association.options
@@ -121,6 +126,7 @@ def local_tracker_config(
     return LocalTrackerConfig(
         preset=tracking.preset or "aircraft",
         time_interval=interval,
+        axes=axes if tracking.preset is not None else 2,
         bank=bank,
         measurement_noise=r,
         association_method=tracking.association.method,
@@ -144,6 +150,20 @@ def life_cycle_config(thresholds: TrackThresholds) -> LifeCycleConfig:
     )
 
 
+def motion_density(config: SessionConfig) -> float:
+    """The session's ``motion.q``; by default (``null``) the preset's manoeuvre density when
+    the session tracks detections with a preset (:meth:`TrackingPreset.manoeuvre_density`:
+    the fused layer then follows every manoeuvre of the bank), else
+    :data:`~core.tracking.presets.MIN_MANOEUVRE_DENSITY`."""
+    if config.motion.q is not None:
+        return float(config.motion.q)
+    detecting = any(sensor.measurement is not None for sensor in config.sensors)
+    if config.tracking.preset is None or not detecting:
+        return MIN_MANOEUVRE_DENSITY
+    chosen = preset(config.tracking.preset, time_interval=config.tracking.time_interval)
+    return chosen.manoeuvre_density()
+
+
 def method_options(options: AssociationOptions) -> dict[str, object]:
     """The core method options of a resolved wire options object."""
     return {
@@ -164,7 +184,9 @@ def fusion_config(config: SessionConfig, extra_sensors: Iterable[str] = ()) -> F
         position=tuple(config.state.position),
         velocity=tuple(config.state.velocity),
     )
-    motion = MotionModel(layout=layout, kind=MotionKind(config.motion.model), q=config.motion.q)
+    motion = MotionModel(
+        layout=layout, kind=MotionKind(config.motion.model), q=motion_density(config)
+    )
     sensors = [sensor_spec(sensor, index, config) for index, sensor in enumerate(config.sensors)]
     sensors += [SensorSpec(id=sensor_id) for sensor_id in extra_sensors]
     thresholds = config.tracking.thresholds

@@ -11,6 +11,11 @@ numbers of well-separated confirmed aircraft, with and without the credal
 classification (:class:`~core.classification.batched.BatchedCredalClassifier`,
 dense masses vectorised over tracks). The floor holds for both columns.
 
+Then, with 1000 confirmed tracks and credal classes (issue 12): the IMM
+prediction and the whole scan after a gap of 1 s and of 1e6 s (one closed-form
+step either way); scans at jittered times (k + U(−0.12, 0.12) s) against the
+regular grid; and the same scan in 3-D (the preset's vertical axis added).
+
 Run: ``.venv/bin/python bench/tracking.py`` (or ``make bench``).
 """
 
@@ -123,14 +128,25 @@ def main() -> None:
     tracker_table(rng)
 
 
-def _tracker_scans(rng: np.random.Generator, tracks: int, steps: int) -> list[np.ndarray]:
-    """Detections of ``tracks`` aircraft on a 2 km grid flying straight at 200 m/s, R = 0.2 I."""
+def _tracker_scans(
+    rng: np.random.Generator,
+    tracks: int,
+    steps: int,
+    times: np.ndarray | None = None,
+    axes: int = 2,
+) -> list[np.ndarray]:
+    """Detections of ``tracks`` aircraft on a 2 km grid flying straight at 200 m/s, R = 0.2 I
+    (at scan times ``times``, default 0, 1, 2, …; in 3-D at altitudes 1–10 km, climbing at 5 m/s)."""
     side = int(np.ceil(np.sqrt(tracks)))
     grid = np.stack(np.meshgrid(np.arange(side), np.arange(side)), axis=-1).reshape(-1, 2)
     start = 2000.0 * grid[:tracks].astype(np.float64)
     heading = rng.uniform(0, 2 * np.pi, tracks)
     velocity = 200.0 * np.stack([np.cos(heading), np.sin(heading)], axis=1)
-    return [start + k * velocity + rng.normal(0.0, np.sqrt(0.2), (tracks, 2)) for k in range(steps)]
+    if axes == 3:
+        start = np.column_stack([start, rng.uniform(1000.0, 10000.0, tracks)])
+        velocity = np.column_stack([velocity, np.full(tracks, 5.0)])
+    at = np.arange(steps, dtype=np.float64) if times is None else times
+    return [start + t * velocity + rng.normal(0.0, np.sqrt(0.2), (tracks, axes)) for t in at]
 
 
 def tracker_table(rng: np.random.Generator) -> None:
@@ -168,5 +184,73 @@ def tracker_table(rng: np.random.Generator) -> None:
         )
 
 
+def _confirmed_tracker(
+    config: LocalTrackerConfig, scans: list[np.ndarray], times: np.ndarray
+) -> LocalTracker:
+    tracker = LocalTracker(config)
+    for scan_time, detections in zip(times, scans, strict=True):
+        output = tracker.step(float(scan_time), detections)
+    confirmed = sum(track.status.value == "confirmed" for track in output.tracks)
+    if confirmed < 0.99 * len(scans[0]):  # a 0.999 gate misses about one pair in a thousand
+        raise SystemExit(f"bench setup: {confirmed} of {len(scans[0])} tracks confirmed")
+    return tracker
+
+
+def _scan_ms(
+    config: LocalTrackerConfig, tracker: LocalTracker, scan_time: float, detections: np.ndarray
+) -> float:
+    """Median time of one scan at ``scan_time`` from the tracker's state (restored before each run)."""
+    exported = tracker.export()
+    samples = []
+    for _ in range(7):
+        fresh = LocalTracker.restore(config, exported)
+        start = time.perf_counter()
+        fresh.step(scan_time, detections)
+        samples.append((time.perf_counter() - start) * 1e3)
+    return statistics.median(samples)
+
+
+def time_step_table(rng: np.random.Generator) -> None:
+    """Gaps, jitter and 3-D with 1000 confirmed tracks and credal classes (module docstring)."""
+    tracks, warm = 1000, 6
+    config = LocalTrackerConfig(fields_of_view={"radar": None})
+    print()
+    print(f"time steps and dimensions, {tracks} confirmed tracks, credal classes, median ms")
+    times = np.arange(warm, dtype=np.float64)
+    scans = _tracker_scans(rng, tracks, warm + 1)
+    tracker = _confirmed_tracker(config, scans[:warm], times)
+    state = tracker._state  # the live tracks' IMM state
+    predictor = tracker.predictor
+    for label, gap in (("after 1 s", 1.0), ("after 1e6 s", 1e6)):
+        predict_ms = _median_ms(lambda gap=gap: predictor.predict(state, gap), repeats=15)
+        scan_ms = _scan_ms(config, tracker, float(times[-1] + gap), scans[-1])
+        print(f"  scan {label:<12} IMM predict {predict_ms:7.2f}   whole scan {scan_ms:7.2f}")
+    jittered_times = np.arange(16, dtype=np.float64) + rng.uniform(-0.12, 0.12, 16)
+    jittered_times[0] = 0.0
+    for label, at in (
+        ("regular grid", np.arange(16, dtype=np.float64)),
+        ("jittered", jittered_times),
+    ):
+        scans = _tracker_scans(rng, tracks, 16, at)
+        jittered = _confirmed_tracker(config, scans[:-1], at[:-1])
+        print(
+            f"  scan {label:<12} whole scan {_scan_ms(config, jittered, float(at[-1]), scans[-1]):7.2f}"
+        )
+    planar_ms = float("nan")
+    for axes in (2, 3):
+        config_axes = LocalTrackerConfig(
+            fields_of_view={"radar": None},
+            axes=axes,
+            measurement_noise=tuple(tuple(row) for row in (0.2 * np.eye(axes)).tolist()),
+        )
+        scans = _tracker_scans(rng, tracks, warm + 1, axes=axes)
+        spatial = _confirmed_tracker(config_axes, scans[:warm], times)
+        scan_ms = _scan_ms(config_axes, spatial, float(warm), scans[-1])
+        planar_ms = scan_ms if axes == 2 else planar_ms
+        ratio = "" if axes == 2 else f"  ({scan_ms / planar_ms:.2f}x the 2-D scan)"
+        print(f"  scan in {axes}-D{'':<8} whole scan {scan_ms:7.2f}{ratio}")
+
+
 if __name__ == "__main__":
     main()
+    time_step_table(np.random.default_rng(SEED + 1))

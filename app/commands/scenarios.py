@@ -26,6 +26,12 @@ Body = dict[str, Any]
 PRESET_OF = {"aircraft": "aircraft", "crossing": "aircraft", "pedestrian": "pedestrian"}
 """Tracking preset of each detection scenario (the others track with one CV model)."""
 
+PRESETS = ("aircraft", "pedestrian", "none")
+"""Presets a detection scenario can be tracked with (``--preset``; "none": one CV model)."""
+
+CLASSES_OF = {"aircraft": ["liner", "bomber", "fighter"], "pedestrian": ["rambler", "sportsman"]}
+"""The session classes of each preset (its class frame)."""
+
 MOTION_Q = {"aircraft": 100.0, "crossing": 100.0, "close-pair": 100.0}
 """White-acceleration density of the fused tracks: it must cover the targets' manoeuvres."""
 
@@ -65,7 +71,7 @@ def _surveyed(scenario: Scenario) -> Body | None:
     return {"kind": "polygon", "vertices": [[x0, y0], [x1, y0], [x1, y1], [x0, y1]]}
 
 
-def _detection_run(name: str, scenario: Scenario) -> ScenarioRun:
+def _detection_run(name: str, scenario: Scenario, tracking_preset: str | None) -> ScenarioRun:
     sensors = sorted({scan.sensor for scan in scenario.scans})
     r = np.asarray(scenario.measurement_noise).tolist()
     sensor_configs = []
@@ -79,7 +85,8 @@ def _detection_run(name: str, scenario: Scenario) -> ScenarioRun:
                 "vertices": [[x0, y0], [x1, y0], [x1, y1], [x0, y1]],
             }
         sensor_configs.append(config)
-    preset = PRESET_OF.get(name)
+    preset = PRESET_OF.get(name) if tracking_preset is None else tracking_preset
+    preset = None if preset == "none" else preset
     surveyed = _surveyed(scenario)
     session: Body = {
         "name": f"{name} (seed {scenario.seed})",
@@ -91,9 +98,7 @@ def _detection_run(name: str, scenario: Scenario) -> ScenarioRun:
     if surveyed is not None:
         session["region"] = surveyed
     if preset is not None:
-        session["classes"] = (
-            ["liner", "bomber", "fighter"] if preset == "aircraft" else ["rambler", "sportsman"]
-        )
+        session["classes"] = CLASSES_OF[preset]
     inputs = []
     truth = []
     for scan in scenario.scans:
@@ -170,10 +175,17 @@ def _two_class_run(name: str, seed: int) -> ScenarioRun:
     return _track_list_run(name, scenario, scenario.class_masses)
 
 
-def build(name: str, seed: int) -> ScenarioRun:
-    """The scenario ``name`` (an EVALUATION.md id, or ``crossing-traffic``) with ``seed``."""
+def build(name: str, seed: int, preset: str | None = None) -> ScenarioRun:
+    """The scenario ``name`` (an EVALUATION.md id, or ``crossing-traffic``) with ``seed``.
+
+    ``preset`` (one of :data:`PRESETS`) replaces the tracking preset of a
+    detection scenario (default: :data:`PRESET_OF`); track-list scenarios
+    have no local tracking and ignore it.
+    """
+    if preset is not None and preset not in PRESETS:
+        raise ValueError(f"unknown preset {preset!r}; choose one of {list(PRESETS)}")
     if name in SCENARIOS:
-        return _detection_run(name, SCENARIOS[name](seed))
+        return _detection_run(name, SCENARIOS[name](seed), preset)
     track_lists: dict[str, Callable[[int], ScenarioRun]] = {
         "t2t-four": lambda s: _track_list_run(name, t2t_four(s)),
         "crossing-traffic": lambda s: _track_list_run(name, crossing_traffic(s)),

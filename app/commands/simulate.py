@@ -81,7 +81,7 @@ def command(args: argparse.Namespace) -> int:
     first, so the run can be watched; the session is deleted at the end
     unless ``--keep``.
     """
-    run = build(args.scenario, args.seed)
+    run = build(args.scenario, args.seed, args.preset)
     timed = run.inputs if args.speed is None else paced(run.inputs, args.speed)
     inputs = progress(timed, run.name, args.quiet, total=len(run.inputs))
     if not args.server:

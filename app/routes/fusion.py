@@ -60,8 +60,8 @@ async def submit_detections(
     ``measurement`` model and ``tracking``) updates its tracks; its confirmed
     tracks updated by this scan enter the fusion step like a track list.
     409 ``stale-report`` when the batch is not newer than the sensor's
-    previous input; 422 for a sensor without a measurement model or a time
-    off the tracker's ``time_interval`` grid.
+    previous input (scans may come at any increasing times, on no grid);
+    422 for a sensor without a measurement model.
     """
     result = await registry.submit_detections(session, report, explain=explain)
     return JSONTextResponse(result)

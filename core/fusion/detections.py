@@ -8,13 +8,25 @@ session engine"). Tentative tracks are not reported (they may be clutter),
 nor coasting ones (a prediction is not an observation: the fused track counts
 the miss instead).
 
-The local tracker's state is ``[x, ẋ, y, ẏ]``; it is placed on the session's
-state layout (two positions, two velocities). **Reading** for the pedestrian
-models of [MTT] eq 26, whose second and fourth components are *headings*
-scaled by each model's speed: the velocity is ``v = ŝ h`` with ŝ the
-mode-weighted model speed, and the covariance follows the linearisation
-``J P Jᵀ``, ``J = diag(1, ŝ_x, 1, ŝ_y)`` (the spread of the speeds between
-models is not added).
+The local tracker's state is ``[x, ẋ, y, ẏ(, z, ż)]`` (one position/velocity
+pair per axis, :mod:`core.tracking.models`); it is placed on the session's
+state layout, which may order its components any way: local axis i goes to
+``layout.position[i]`` and ``layout.velocity[i]`` (the detections' ``z``
+lists the positions in that order). A detecting sensor's layout has exactly
+one velocity per position and nothing else (``dim = 2 × positions``).
+
+**Reading** for the pedestrian models of [MTT] eq 26, whose second and
+fourth components are *headings* h scaled by each model's speed s: the
+velocity reported for the track is its displacement over one nominal scan
+ΔT per second, model by model: under model j, ``v_j = s_j h + w_j / ΔT``
+with ``w_j`` the position part of model j's process noise over ΔT (variance
+``Q_j,pp(ΔT)``), so ``[x, v]`` has mean ``J_j x̄`` and covariance
+``J_j P Jᵀ_j + diag(0, Q_j,pp / ΔT²)``, ``J_j = diag(1, s_j)`` per axis; the
+models are then moment-matched with the mode probabilities μ_j (the spread
+of their velocities is added). The process-noise term keeps the covariance
+positive definite when the likely models have a zero speed on an axis (a
+pedestrian walking along x under ``(s_x, s_y) = (2, 0)``: under that model its
+y velocity is exactly 0, and ``J P Jᵀ`` alone is singular).
 """
 
 from __future__ import annotations
@@ -27,49 +39,84 @@ from core.errors import InvalidInput
 from core.fusion.motion import StateLayout
 from core.fusion.reports import ReportedTrack
 from core.lifecycle import TrackStatus
+from core.tracking.models import ModelBank
 from core.tracking.track import LocalTrack, TrackerStep
 from core.tracking.tracker import LocalTracker
 
+DETECTION_AXES = (1, 2, 3)
+"""Numbers of position components a detecting sensor's state may have."""
+
 
 def check_layout_for_detections(layout: StateLayout) -> None:
-    """A detecting sensor's local tracks need a 4-D layout with two positions and two velocities."""
-    if layout.dim != 4 or len(layout.position) != 2 or len(layout.velocity) != 2:
+    """A detecting sensor's local tracks need 1 to 3 positions, a velocity for each, nothing else."""
+    axes = len(layout.position)
+    if axes not in DETECTION_AXES or len(layout.velocity) != axes or layout.dim != 2 * axes:
         raise InvalidInput(
-            "sensors that send detections need a state of dim 4 with 2 position and "
-            f"2 velocity components (got dim {layout.dim}, position {list(layout.position)}, "
-            f"velocity {list(layout.velocity)})"
+            "sensors that send detections need a state of 1 to 3 position components, one "
+            "velocity component for each and nothing else (dim = 2 × positions); got dim "
+            f"{layout.dim}, position {list(layout.position)}, velocity {list(layout.velocity)}"
         )
 
 
-def _in_velocity_convention(
-    tracker: LocalTracker, track: LocalTrack
+def local_order(layout: StateLayout) -> tuple[int, ...]:
+    """Where each local component ``[x, ẋ, y, ẏ, …]`` goes in the session's state."""
+    return tuple(
+        index for pair in zip(layout.position, layout.velocity, strict=True) for index in pair
+    )
+
+
+def heading_to_velocity(
+    bank: ModelBank,
+    mode_probabilities: FloatArray,
+    state: FloatArray,
+    covariance: FloatArray,
 ) -> tuple[FloatArray, FloatArray]:
-    """The local estimate ``[x, ẋ, y, ẏ]`` and its covariance (headings turned into velocities)."""
-    preset = tracker.config.tracking_preset()
-    if preset is None or preset.velocity_convention == "velocity":
+    """A heading-convention estimate as ``[x, v, …]`` (module Reading), moment-matched over models."""
+    interval = bank.time_interval
+    speeds = np.array([model.speeds for model in bank.models])  # (r, axes)
+    n = bank.state_dim
+    scales = np.ones((bank.n_models, n))
+    scales[:, 1::2] = speeds
+    floor = np.zeros((bank.n_models, n))
+    position_noise = np.diagonal(bank.process_noises, axis1=1, axis2=2)[:, 0::2]  # Q_j,pp(ΔT)
+    floor[:, 1::2] = position_noise / interval**2
+    means = scales * state  # J_j x̄, (r, n)
+    covariances = scales[:, :, None] * covariance[None] * scales[:, None, :]
+    covariances[:, np.arange(n), np.arange(n)] += floor
+    mu = np.asarray(mode_probabilities, dtype=np.float64)
+    mean = mu @ means
+    spread = means - mean
+    combined = np.einsum("r,rij->ij", mu, covariances) + np.einsum(
+        "r,ri,rj->ij", mu, spread, spread
+    )
+    return mean, 0.5 * (combined + combined.T)
+
+
+def _in_velocity_convention(
+    bank: ModelBank, headings: bool, track: LocalTrack
+) -> tuple[FloatArray, FloatArray]:
+    """The local estimate ``[x, ẋ, …]`` and its covariance (headings turned into velocities)."""
+    if not headings:
         return track.state, track.covariance
-    transitions = tracker.bank.transitions  # (r, 4, 4): x += s_x h_x ΔT
-    interval = tracker.config.time_interval
-    speed_x = float(track.mode_probabilities @ transitions[:, 0, 1]) / interval
-    speed_y = float(track.mode_probabilities @ transitions[:, 2, 3]) / interval
-    jacobian = np.diag([1.0, speed_x, 1.0, speed_y])
-    return jacobian @ track.state, jacobian @ track.covariance @ jacobian.T
+    return heading_to_velocity(bank, track.mode_probabilities, track.state, track.covariance)
 
 
 def local_track_report(
     tracker: LocalTracker, step: TrackerStep, layout: StateLayout, classes: Frame | None
 ) -> tuple[ReportedTrack, ...]:
     """The confirmed local tracks of a scan, on the session's layout, with their class mass."""
-    order = (layout.position[0], layout.velocity[0], layout.position[1], layout.velocity[1])
+    order = list(local_order(layout))
+    preset = tracker.config.tracking_preset()
+    headings = preset is not None and preset.velocity_convention == "heading"
     updated = {track_id for track_id in step.assignment if track_id is not None}
     reported = []
     for track in step.tracks:
         if track.status is not TrackStatus.CONFIRMED or track.id not in updated:
             continue
-        local_state, local_covariance = _in_velocity_convention(tracker, track)
+        local_state, local_covariance = _in_velocity_convention(tracker.bank, headings, track)
         state = np.zeros(layout.dim)
         covariance = np.zeros((layout.dim, layout.dim))
-        state[list(order)] = local_state
+        state[order] = local_state
         covariance[np.ix_(order, order)] = local_covariance
         mass = track.class_mass if classes is not None else None
         reported.append(ReportedTrack(track.id, state, covariance, class_mass=mass))

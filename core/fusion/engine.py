@@ -168,7 +168,8 @@ class SessionEngine:
         ------
         InvalidInput
             Unknown sensor, a sensor without a local tracker (one that sends
-            track lists), bad shapes or numbers, a time off the tracker's ΔT grid.
+            track lists), bad shapes or numbers (any increasing time is accepted:
+            the tracker predicts over any step).
         StaleReport
             The detections are not newer than the sensor's previous input:
             time never goes backwards for detections.

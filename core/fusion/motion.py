@@ -6,6 +6,11 @@ are predicted with, per position axis, the discretised continuous white-noise
 acceleration model of spectral density ``q`` (Bar-Shalom, Li & Kirubarajan
 §6.2.2): ``F = [[1, Δt], [0, 1]]``, ``Q = q [[Δt³/3, Δt²/2], [Δt²/2, Δt]]``.
 ``constant_position`` uses ``F = I`` and ``Q = q Δt`` on the positions.
+This is the one meaning of the session's ``motion.q`` (Stone Soup's
+``ConstantVelocity(noise_diff_coeff=q)``), shared by the local
+constant-velocity model of a session that tracks detections without a preset
+(:mod:`core.tracking.models`, ``noise="continuous"``). Every Δt is one
+closed-form step.
 Components that are neither positions nor velocities are kept constant.
 
 Prediction backwards in time (a late report, ALGORITHMS.md §6.4) uses

@@ -114,7 +114,9 @@ class LocalTrackerConfig:
     ----------
     preset : name of a preset (``"aircraft"``, ``"pedestrian"``) giving the model
         bank, behaviours and classes.
-    time_interval : ΔT of the bank (s); scans come at multiples of it.
+    time_interval : the nominal scan period ΔT of the bank (s); scans come at any
+        increasing times (see :mod:`core.tracking.models` for where ΔT is used).
+    axes : position axes of the preset's models, 2 or 3 (3-D: see :mod:`core.tracking.presets`).
     preset_options : other keyword options of the preset (``stay``, ``noise_intensity``, ...).
     bank : an explicit model bank; replaces the preset's (and then there is no
         classification: behaviours belong to the preset's models).
@@ -139,6 +141,7 @@ class LocalTrackerConfig:
 
     preset: str = "aircraft"
     time_interval: float = 1.0
+    axes: int = 2
     preset_options: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
     bank: ModelBank | None = None
     measurement_noise: tuple[tuple[float, ...], ...] | None = None
@@ -172,8 +175,11 @@ class LocalTrackerConfig:
             raise TrackingError(f"initiation must be one of {INITIATIONS}")
         if not (math.isfinite(self.p_detect) and 0.0 < self.p_detect < 1.0):
             raise TrackingError(f"p_detect must be in (0, 1), got {self.p_detect!r}")
-        if "time_interval" in self.preset_options:
-            raise TrackingError("give time_interval as the config field, not a preset option")
+        for name in ("time_interval", "axes"):
+            if name in self.preset_options:
+                raise TrackingError(f"give {name} as the config field, not a preset option")
+        if self.axes not in (2, 3):
+            raise TrackingError(f"the presets track 2 or 3 position axes, got {self.axes!r}")
         for name in (
             "time_interval",
             "modified_beta",
@@ -193,7 +199,12 @@ class LocalTrackerConfig:
         return (
             None
             if self.bank is not None
-            else preset(self.preset, time_interval=self.time_interval, **dict(self.preset_options))
+            else preset(
+                self.preset,
+                time_interval=self.time_interval,
+                axes=self.axes,
+                **dict(self.preset_options),
+            )
         )
 
     def model_bank(self) -> ModelBank:

@@ -7,6 +7,12 @@ then ``x = F x + B u``, ``P = F P Fᵀ + Q`` per model) followed by
 :meth:`IMMUpdater.update` (Kalman update of every model with the shared H, R,
 mode likelihoods, mode probabilities).
 
+A prediction spans any time step Δt ≥ 0 in constant time: the bank's models
+at Δt in closed form, ``F(Δt)``, ``B(Δt) u``, ``Q(Δt)``, and the mode
+transitions ``Π(Δt) = Π^{Δt/ΔT}`` (:meth:`ModelBank.at`,
+:meth:`ModelBank.mode_transition_at`, :mod:`core.tracking.models`); the
+default step is the bank's nominal ΔT.
+
 Mode probabilities live in the **log domain**: the likelihood of model j is
 kept as ``log Λ_j = −d_j²/2 − ½ log |2π S_j|`` ([MTT] eq 18) and the update
 ``μ_j ∝ c̄_j Λ_j`` is normalised with log-sum-exp. filterpy's
@@ -203,8 +209,6 @@ class IMMPredictor:
 
     def __init__(self, bank: ModelBank) -> None:
         self.bank = bank
-        self._log_transition = safe_log(bank.mode_transition)
-        self._transitions_t = np.ascontiguousarray(np.swapaxes(bank.transitions, -1, -2))
         h = bank.measurement.matrix
         self._h = h
         self._h_t = np.ascontiguousarray(h.T)
@@ -223,8 +227,10 @@ class IMMPredictor:
                 f"{state.means.shape} / {state.covariances.shape} / {state.log_mode_probabilities.shape}"
             )
 
-    def mix(self, state: IMMState) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Mixed initial conditions.
+    def mix(
+        self, state: IMMState, dt: float | None = None
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Mixed initial conditions, with the mode transitions over Δt (default: ΔT).
 
         Returns
         -------
@@ -236,7 +242,9 @@ class IMMPredictor:
             ``log c̄_j = log Σ_i Π_ij μ_i``.
         """
         self._check(state)
-        joint = state.log_mode_probabilities[:, :, None] + self._log_transition[None, :, :]
+        step = self.bank.time_interval if dt is None else dt
+        log_transition = safe_log(self.bank.mode_transition_at(step))
+        joint = state.log_mode_probabilities[:, :, None] + log_transition[None, :, :]
         log_predicted = logsumexp(joint, axis=1)  # (T, r_j)
         reachable = np.isfinite(log_predicted)
         log_mixing = joint - np.where(reachable, log_predicted, 0.0)[:, None, :]
@@ -259,14 +267,17 @@ class IMMPredictor:
         means = mixed_centred + centre[:, None, :]
         return means, covariances, log_predicted
 
-    def predict(self, state: IMMState) -> IMMPrediction:
-        """Mix, then predict every model one step: ``x = F x + B u``, ``P = F P Fᵀ + Q``."""
-        mixed_means, mixed_covariances, log_predicted = self.mix(state)
-        bank = self.bank
-        means = np.einsum("jkl,tjl->tjk", bank.transitions, mixed_means) + bank.input_offsets
+    def predict(self, state: IMMState, dt: float | None = None) -> IMMPrediction:
+        """Mix, then predict every model over Δt (default: the nominal ΔT):
+        ``x = F(Δt) x + B(Δt) u``, ``P = F(Δt) P F(Δt)ᵀ + Q(Δt)``."""
+        step = self.bank.time_interval if dt is None else dt
+        mixed_means, mixed_covariances, log_predicted = self.mix(state, step)
+        models = self.bank.at(step)
+        transitions = models.transition
+        means = np.einsum("jkl,tjl->tjk", transitions, mixed_means) + models.input_offset
         covariances = (
-            np.matmul(np.matmul(bank.transitions, mixed_covariances), self._transitions_t)
-            + bank.process_noises
+            np.matmul(np.matmul(transitions, mixed_covariances), np.swapaxes(transitions, -1, -2))
+            + models.process_noise
         )
         measurement_means = means @ self._h_t
         innovation_covariances = self._h @ covariances @ self._h_t + self._r

@@ -1,4 +1,7 @@
-"""Initiation of IMM tracks for the ``[x, ẋ, y, ẏ]`` state: two-point and single-point.
+"""Initiation of IMM tracks for the ``[x, ẋ, y, ẏ(, z, ż)]`` state: two-point and single-point.
+
+Every axis is a ``(position, velocity)`` pair of the state (2 or 3 axes, or 1),
+with its position measured (:mod:`core.tracking.models`).
 
 From two successive measurements ``z₀, z₁`` of each track (ΔT apart) and the
 measurement noise R, the standard two-point difference gives position ``z₁``
@@ -8,7 +11,8 @@ cross-covariance R/ΔT.
 For the pedestrian speed models ([MTT] eq 26) the second and fourth state
 components are headings: ``velocity="heading"`` sets them to the sign of the
 displacement on each axis (0 when the target did not move), with variance
-``heading_variance``.
+``heading_variance``; the convention may be given per axis (a 3-D
+pedestrian's vertical axis is a velocity).
 
 Single-point initiation ([HZ] §6 starts events from one observation and lets
 the initiation stage confirm them): position ``z`` with covariance R,
@@ -24,6 +28,7 @@ distance a target at ``max_speed`` can travel plus a measurement-noise gate.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Literal
 
 import numpy as np
@@ -32,9 +37,24 @@ from core.arrays import FloatArray, IntArray
 from core.association.assignment import solve_dense
 from core.errors import TrackingError
 from core.tracking.imm import IMMState
-from core.tracking.models import POSITION_INDICES, ModelBank
+from core.tracking.models import ModelBank, position_indices, velocity_indices
 
-VELOCITY_INDICES = (1, 3)
+Convention = Literal["velocity", "heading"]
+
+
+def _axes_of(bank: ModelBank, z: FloatArray, what: str) -> tuple[list[int], list[int]]:
+    """Position and velocity indices of the bank's state, checked against measurements (T, q)."""
+    axes = bank.axes
+    pos = list(position_indices(axes))
+    expected = np.zeros((len(pos), bank.state_dim))
+    expected[np.arange(len(pos)), pos] = 1.0
+    if bank.state_dim != 2 * axes or not np.array_equal(bank.measurement.matrix, expected):
+        raise TrackingError(
+            f"{what} is for the [x, ẋ, y, ẏ(, z, ż)] state with the positions measured"
+        )
+    if z.ndim != 2 or z.shape[1] != axes:
+        raise TrackingError(f"need (T, {axes}) measurement arrays, got {z.shape}")
+    return pos, list(velocity_indices(axes))
 
 
 def two_point_initiation(
@@ -43,39 +63,50 @@ def two_point_initiation(
     second: FloatArray,
     time_interval: float,
     *,
-    velocity: Literal["velocity", "heading"] = "velocity",
+    velocity: Convention | Sequence[Convention] = "velocity",
     heading_variance: float = 0.01,
     mode_probabilities: FloatArray | None = None,
 ) -> IMMState:
-    """IMM states of T new tracks from two measurements each, shapes (T, 2) and (T, 2).
+    """IMM states of T new tracks from two measurements each, shapes (T, q) and (T, q).
 
-    Every model starts from the same Gaussian; mode probabilities default to uniform.
+    ``time_interval`` is the time between the two measurements; ``velocity``
+    the convention of every axis, or one per axis. Every model starts from the
+    same Gaussian; mode probabilities default to uniform.
     """
     z0 = np.atleast_2d(np.asarray(first, dtype=np.float64))
     z1 = np.atleast_2d(np.asarray(second, dtype=np.float64))
-    if z0.shape != z1.shape or z0.ndim != 2 or z0.shape[1] != 2:
-        raise TrackingError(f"need two (T, 2) measurement arrays, got {z0.shape} and {z1.shape}")
-    if bank.state_dim != 4 or bank.measurement.dim != 2:
-        raise TrackingError("two-point initiation is for the [x, ẋ, y, ẏ] state with x, y measured")
+    if z0.shape != z1.shape:
+        raise TrackingError(
+            f"need two measurement arrays of one shape, got {z0.shape} and {z1.shape}"
+        )
+    pos, vel = _axes_of(bank, z1, "two-point initiation")
     if not (np.isfinite(time_interval) and time_interval > 0.0):
         raise TrackingError(f"time_interval must be positive, got {time_interval!r}")
-    tracks = z0.shape[0]
+    conventions = [velocity] * len(pos) if isinstance(velocity, str) else list(velocity)
+    if len(conventions) != len(pos) or not set(conventions) <= {"velocity", "heading"}:
+        raise TrackingError(
+            f"velocity must be 'velocity' or 'heading', or one of them per axis, got {velocity!r}"
+        )
+    tracks, n = z0.shape[0], bank.state_dim
     r = bank.measurement.noise_covariance
-    mean = np.zeros((tracks, 4))
-    covariance = np.zeros((tracks, 4, 4))
-    pos, vel = list(POSITION_INDICES), list(VELOCITY_INDICES)
+    mean = np.zeros((tracks, n))
+    covariance = np.zeros((tracks, n, n))
     mean[:, pos] = z1
     covariance[np.ix_(range(tracks), pos, pos)] = r
-    if velocity == "velocity":
-        mean[:, vel] = (z1 - z0) / time_interval
-        covariance[np.ix_(range(tracks), vel, vel)] = 2.0 * r / time_interval**2
-        covariance[np.ix_(range(tracks), pos, vel)] = r / time_interval
-        covariance[np.ix_(range(tracks), vel, pos)] = r / time_interval
-    elif velocity == "heading":
-        mean[:, vel] = np.sign(z1 - z0)
-        covariance[:, vel, vel] = heading_variance
-    else:
-        raise TrackingError(f"velocity must be 'velocity' or 'heading', got {velocity!r}")
+    moving = np.array([c == "velocity" for c in conventions])
+    axis = np.flatnonzero(moving)
+    heading = np.flatnonzero(~moving)
+    if len(axis):
+        p, v = [pos[a] for a in axis], [vel[a] for a in axis]
+        block = r[np.ix_(axis, axis)]
+        mean[:, v] = (z1[:, axis] - z0[:, axis]) / time_interval
+        covariance[np.ix_(range(tracks), v, v)] = 2.0 * block / time_interval**2
+        covariance[np.ix_(range(tracks), p, v)] = block / time_interval
+        covariance[np.ix_(range(tracks), v, p)] = block / time_interval
+    if len(heading):
+        h = [vel[a] for a in heading]
+        mean[:, h] = np.sign(z1[:, heading] - z0[:, heading])
+        covariance[:, h, h] = heading_variance
     mu = (
         np.full(bank.n_models, 1.0 / bank.n_models)
         if mode_probabilities is None
@@ -91,21 +122,15 @@ def single_point_initiation(
     *,
     mode_probabilities: FloatArray | None = None,
 ) -> IMMState:
-    """IMM states of T new tracks from one measurement each, shape (T, 2) (module docstring)."""
+    """IMM states of T new tracks from one measurement each, shape (T, q) (module docstring)."""
     z = np.atleast_2d(np.asarray(measurements, dtype=np.float64))
-    if z.ndim != 2 or z.shape[1] != 2:
-        raise TrackingError(f"need a (T, 2) measurement array, got {z.shape}")
-    if bank.state_dim != 4 or bank.measurement.dim != 2:
-        raise TrackingError(
-            "single-point initiation is for the [x, ẋ, y, ẏ] state with x, y measured"
-        )
+    pos, vel = _axes_of(bank, z, "single-point initiation")
     if not (np.isfinite(velocity_std) and velocity_std > 0.0):
         raise TrackingError(f"velocity_std must be positive, got {velocity_std!r}")
-    tracks = z.shape[0]
-    pos, vel = list(POSITION_INDICES), list(VELOCITY_INDICES)
-    mean = np.zeros((tracks, 4))
+    tracks, n = z.shape[0], bank.state_dim
+    mean = np.zeros((tracks, n))
     mean[:, pos] = z
-    covariance = np.zeros((tracks, 4, 4))
+    covariance = np.zeros((tracks, n, n))
     covariance[np.ix_(range(tracks), pos, pos)] = bank.measurement.noise_covariance
     covariance[:, vel, vel] = velocity_std**2
     mu = (

@@ -19,7 +19,19 @@
     :mod:`core.tracking.models`).
 
 Both use the mode transition matrix with ``stay`` = 0.95 on the diagonal and
-the rest spread evenly (option ``stay``).
+the rest spread evenly (option ``stay``), per nominal scan ΔT
+(``time_interval``; over other steps see :mod:`core.tracking.models`).
+
+**3-D** (option ``axes=3``, a session whose state has three positions): the
+papers' banks are planar, so each model keeps its horizontal part and adds a
+vertical constant-velocity axis ``[z, ż]`` with no input, speed factor 1 (ż is
+a velocity, in both presets) and the preset's ``Q = q B Bᵀ`` on that axis;
+H picks x, y, z with the same R variance. The behaviours and classes are
+those of the horizontal motion.
+
+:meth:`TrackingPreset.manoeuvre_density` is the white-noise acceleration
+density that covers the bank's largest manoeuvre (the default ``motion.q``
+of the fused layer when the session's tracks come from this preset).
 """
 
 from __future__ import annotations
@@ -27,6 +39,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
+
+import numpy as np
 
 from core.belief import Frame, Relation
 from core.classification.behaviours import BehaviourModels
@@ -43,6 +57,14 @@ GRAVITY = 9.81
 """g in m/s² ([MTT] §6.1.1)."""
 
 VelocityConvention = Literal["velocity", "heading"]
+VELOCITY: VelocityConvention = "velocity"
+
+MANOEUVRE_DISTANCE = 9.0
+"""Mahalanobis distance (3σ) of a bank's largest manoeuvre over one scan from the fused
+constant-velocity prediction, under :meth:`TrackingPreset.manoeuvre_density`."""
+
+MIN_MANOEUVRE_DENSITY = 1.0
+"""Smallest :meth:`TrackingPreset.manoeuvre_density` (m²/s³): the fused layer's default ``motion.q``."""
 
 
 @dataclass(frozen=True)
@@ -57,7 +79,8 @@ class TrackingPreset:
     relation : Relation
         Γ from the behaviours to the classes.
     velocity_convention : "velocity" | "heading"
-        What the second and fourth state components mean (eq 24 vs eq 26).
+        What the second and fourth state components mean (eq 24 vs eq 26);
+        a vertical axis (3-D) is always a velocity (:attr:`conventions`).
     """
 
     name: str
@@ -70,6 +93,34 @@ class TrackingPreset:
     def classes(self) -> Frame:
         """The class frame."""
         return self.relation.target
+
+    @property
+    def conventions(self) -> tuple[VelocityConvention, ...]:
+        """What the second component of each axis means: the horizontal axes follow
+        :attr:`velocity_convention`, a vertical axis is a velocity."""
+        return (self.velocity_convention,) * 2 + (VELOCITY,) * (self.bank.axes - 2)
+
+    def manoeuvre_density(self) -> float:
+        """The density q of the continuous white-noise acceleration that covers the bank.
+
+        Δv is the largest change of velocity over one nominal scan ΔT that the
+        bank contains: ``|u| ΔT`` of its largest acceleration input, or the
+        largest difference ``|s_j − s_k|`` of two speed models (per unit
+        heading). A constant acceleration ``a`` held over Δt is at Mahalanobis
+        distance ``a² Δt / q`` from the constant-velocity prediction under
+        ``Q = q [[Δt³/3, Δt²/2], [Δt²/2, Δt]]``; ``q = Δv² / (ΔT d)`` with
+        d = :data:`MANOEUVRE_DISTANCE` puts the bank's largest manoeuvre over
+        one scan at distance d, inside every association gate of the fused
+        layer (never below :data:`MIN_MANOEUVRE_DENSITY`).
+        """
+        bank = self.bank
+        interval = bank.time_interval
+        accelerations = np.array([model.acceleration for model in bank.models])
+        speeds = np.array([model.speeds for model in bank.models])
+        change = float(np.max(np.linalg.norm(accelerations, axis=1))) * interval
+        spread = np.linalg.norm(speeds[:, None, :] - speeds[None, :, :], axis=-1)
+        change = max(change, float(spread.max()))
+        return max(change**2 / (interval * MANOEUVRE_DISTANCE), MIN_MANOEUVRE_DENSITY)
 
 
 AIRCRAFT_ACCELERATIONS: tuple[tuple[float, float], ...] = (
@@ -101,22 +152,30 @@ PEDESTRIAN_SPEEDS: tuple[tuple[float, float], ...] = (
 """(s_x, s_y) of m1..m7 in m/s."""
 
 
+def _check_axes(axes: int) -> int:
+    if axes not in (2, 3):
+        raise ModelConfigError(f"presets have 2 or 3 position axes, got {axes!r}")
+    return int(axes)
+
+
 def aircraft(
     time_interval: float = 1.0,
     noise_intensity: float = 0.005,
     measurement_variance: float = 0.2,
     stay: float = 0.95,
+    axes: int = 2,
 ) -> TrackingPreset:
     """The 13-model aircraft preset of [MTT] §6.1 (see the module docstring)."""
+    vertical = (0.0,) * (_check_axes(axes) - 2)
     models = tuple(
         acceleration_input(
-            time_interval, (ax * GRAVITY, ay * GRAVITY), noise_intensity, f"m{i + 1}"
+            time_interval, (ax * GRAVITY, ay * GRAVITY, *vertical), noise_intensity, f"m{i + 1}"
         )
         for i, (ax, ay) in enumerate(AIRCRAFT_ACCELERATIONS)
     )
     bank = ModelBank(
         models,
-        LinearMeasurementModel.position(measurement_variance),
+        LinearMeasurementModel.position(measurement_variance, 2 * axes),
         mode_transition_matrix(len(models), stay),
     )
     names = bank.names
@@ -139,15 +198,17 @@ def pedestrian(
     noise_intensity: float = 0.001,
     measurement_variance: float = 0.05,
     stay: float = 0.95,
+    axes: int = 2,
 ) -> TrackingPreset:
     """The 7-model pedestrian preset of [MTT] §6.3 (see the module docstring)."""
+    vertical = (1.0,) * (_check_axes(axes) - 2)
     models = tuple(
-        speed_model(time_interval, speeds, noise_intensity, f"m{i + 1}")
+        speed_model(time_interval, (*speeds, *vertical), noise_intensity, f"m{i + 1}")
         for i, speeds in enumerate(PEDESTRIAN_SPEEDS)
     )
     bank = ModelBank(
         models,
-        LinearMeasurementModel.position(measurement_variance),
+        LinearMeasurementModel.position(measurement_variance, 2 * axes),
         mode_transition_matrix(len(models), stay),
     )
     names = bank.names

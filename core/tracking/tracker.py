@@ -3,9 +3,10 @@
 :class:`LocalTracker` runs, for each scan of one of its sensors, with every
 array batched over tracks (and over the models of the IMM):
 
-1. **predict** every live track to the scan time (:class:`IMMPredictor`;
-   several ΔT at once when scans were skipped, none for a second sensor at
-   the same time);
+1. **predict** every live track to the scan time (:class:`IMMPredictor`):
+   one closed-form step over the time since the previous scan, whatever it
+   is (scans need not lie on a grid; a gap costs what one scan costs), none
+   for a second sensor at the same time;
 2. **visibility** of each predicted position ([HZ] §2.1): inside the scan
    sensor's field of view and not occluded by a known track (then a missing
    detection is a miss), in a blind zone, or out of range of every sensor;
@@ -76,12 +77,10 @@ from core.tracking.gating import TrackGatingProblem, gate_pairs
 from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState, IMMUpdate, IMMUpdater
 from core.tracking.initiator import pair_seeds, single_point_initiation, two_point_initiation
 from core.tracking.jpda import cheap_jpda_weights, pda_update
-from core.tracking.presets import TrackingPreset
+from core.tracking.presets import VELOCITY, TrackingPreset, VelocityConvention
 from core.tracking.track import LocalTrack, TrackerStep, float_array, mass_to_plain, plain_floats
 
 EXPORT_VERSION = 1
-TIME_TOLERANCE = 1e-9
-"""Relative tolerance on scan times being multiples of ΔT."""
 SEED_NOISE_GATE = 0.999
 """Gate probability of the measurement-noise part of the seed distance bound."""
 
@@ -133,7 +132,9 @@ class LocalTracker:
         self._h = self.bank.measurement.matrix
         self._noise = self.bank.measurement.noise_covariance
         self._q = self.bank.measurement.dim
-        self._velocity_convention = "velocity" if found is None else found.velocity_convention
+        self._conventions: tuple[VelocityConvention, ...] = (
+            (VELOCITY,) * self.bank.axes if found is None else found.conventions
+        )
         self.classifier: BatchedCredalClassifier | None = None
         if found is not None and config.classification is not None:
             chosen = config.classification
@@ -212,7 +213,8 @@ class LocalTracker:
         Parameters
         ----------
         time : float
-            Scan time; not earlier than the previous scan, a multiple of ΔT after it.
+            Scan time; not earlier than the previous scan (any step: the
+            tracks are predicted over it in closed form).
         measurements : array (m, q)
         measurement_covariances : array (m, q, q), optional
             Each detection's own R (default: the bank's R).
@@ -221,8 +223,8 @@ class LocalTracker:
         Raises
         ------
         TrackingError
-            Unknown sensor, a time that goes back or is off the ΔT grid, wrong
-            shapes, non-finite numbers; nothing changes then.
+            Unknown sensor, a time that goes back, wrong shapes, non-finite
+            numbers; nothing changes then.
         """
         before = self.checkpoint()
         try:
@@ -247,15 +249,15 @@ class LocalTracker:
         measurement_covariances: ArrayLike | None,
         sensor: str | None,
     ) -> TrackerStep:
-        z, own_noise, sensor_name, ahead = self._check(
+        z, own_noise, sensor_name, elapsed = self._check(
             time, measurements, measurement_covariances, sensor
         )
-        prediction = self._predict(ahead)
+        prediction = self._predict(elapsed)
         tracks = len(self._numbers)
         combined_z, combined_s = prediction.combined_measurement()
         codes, seen, hidden = self._visibility(combined_z, sensor_name)
 
-        candidates = np.flatnonzero(self._life.status != PHANTOM)
+        candidates = np.flatnonzero((self._life.status != PHANTOM) & self._can_be_hit(prediction))
         sub = _select_prediction(prediction, candidates)
         if self._method == CHEAP_JPDA:
             update, pair_rows, pair_cols, hit_gain, used = self._jpda(sub, z, own_noise)
@@ -321,7 +323,7 @@ class LocalTracker:
         measurements: ArrayLike,
         measurement_covariances: ArrayLike | None,
         sensor: str | None,
-    ) -> tuple[FloatArray, FloatArray | None, str, int]:
+    ) -> tuple[FloatArray, FloatArray | None, str, float]:
         sensor_name = self.config.sensors[0] if sensor is None else sensor
         if sensor_name not in self._views:
             raise TrackingError(f"unknown sensor {sensor_name!r}; known: {list(self._views)}")
@@ -345,37 +347,50 @@ class LocalTracker:
                 )
             if len(own):
                 check_covariances(own, "measurement_covariances")
-        ahead = 0
+        elapsed = 0.0
         if self.time is not None:
             elapsed = time - self.time
-            interval = self.config.time_interval
-            ahead = round(elapsed / interval)
-            if elapsed < 0.0 or abs(elapsed - ahead * interval) > TIME_TOLERANCE * max(
-                1.0, abs(time)
-            ):
+            if elapsed < 0.0:
                 raise TrackingError(
-                    f"scan time {time!r} must be the previous time {self.time!r} "
-                    f"plus a multiple of ΔT = {interval!r}"
+                    f"scan time {time!r} is before the previous scan's time {self.time!r}"
                 )
-        return z, own, sensor_name, int(ahead)
+        return z, own, sensor_name, elapsed
 
     # ---------------------------------------------------------- predict
-    def _predict(self, ahead: int) -> IMMPrediction:
+    def _predict(self, elapsed: float) -> IMMPrediction:
+        """Every track over the time since the previous scan, in one closed-form step
+        (:meth:`IMMPredictor.predict`); none for a second scan at the same time."""
         state = self._state
-        if ahead == 0:
+        if elapsed == 0.0:
             return _as_prediction(self._h, self._noise, state)
-        prediction = self.predictor.predict(state)
-        for _ in range(ahead - 1):
-            prediction = self.predictor.predict(prediction.as_state())
-        return prediction
+        return self.predictor.predict(state, elapsed)
+
+    def _can_be_hit(self, prediction: IMMPrediction) -> BoolArray:
+        """Tracks a detection could keep alive: the largest hit increment they could get
+        (distance 0, their most certain model, no measurement noise: ``log |H P_j Hᵀ|``)
+        leaves their score above the delete threshold.
+
+        A prediction so uncertain that no detection can (a scan after a long gap)
+        is not associated: the track misses, its gate empties ([HZ] §4.2) and
+        it is terminated, and the scan costs what any scan costs instead of
+        gating every detection with every track.
+        """
+        score = self._life.score
+        if len(score) == 0:
+            return np.zeros(0, dtype=bool)
+        sign, log_det = np.linalg.slogdet(prediction.innovation_covariances - self._noise)
+        log_det = np.where(sign > 0.0, log_det, -np.inf).min(axis=1)
+        best = self.config.score.hit_increment(np.zeros_like(log_det), log_det, self._q)
+        return np.asarray(score + best > self.config.score.delete_threshold, dtype=np.bool_)
 
     def _visibility(
         self, positions: FloatArray, sensor: str
     ) -> tuple[IntArray, BoolArray, BoolArray]:
         """Coverage codes of every track, seen by the scan's sensor, occluded (by the
         confirmed and coasting tracks; :func:`core.lifecycle.visibility`)."""
-        if self._q != 2:
+        if self._q < 2:
             return everywhere(len(positions))
+        positions = positions[:, :2]  # fields of view are planar: x, y of a 3-D track
         status = self._life.status
         occluders = positions[(status == CONFIRMED) | (status == COASTING)]
         return visibility(
@@ -536,7 +551,7 @@ class LocalTracker:
                     seeds[seed_index],
                     z[starts],
                     interval,
-                    velocity=self._velocity_convention,
+                    velocity=self._conventions,
                 )
                 order = np.argsort(starts, kind="stable")
                 starts = starts[order]

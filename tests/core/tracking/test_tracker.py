@@ -262,14 +262,14 @@ def test_same_inputs_same_outputs() -> None:
 
 def test_refused_scans_change_nothing() -> None:
     tracker = LocalTracker(LocalTrackerConfig())
-    tracker.step(0.0, np.array([[0.0, 0.0]]))
+    tracker.step(1.0, np.array([[0.0, 0.0]]))
     before = json.dumps(tracker.export())
     with pytest.raises(TrackingError):
-        tracker.step(0.5, np.array([[0.0, 0.0]]))  # off the ΔT grid
+        tracker.step(0.5, np.array([[0.0, 0.0]]))  # before the previous scan
     with pytest.raises(TrackingError):
-        tracker.step(1.0, np.array([[0.0, np.nan]]))
+        tracker.step(2.0, np.array([[0.0, np.nan]]))
     with pytest.raises(TrackingError):
-        tracker.step(1.0, np.array([[0.0, 0.0]]), sensor="nobody")
+        tracker.step(2.0, np.array([[0.0, 0.0]]), sensor="nobody")
     assert json.dumps(tracker.export()) == before
 
 
