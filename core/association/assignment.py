@@ -126,10 +126,12 @@ def max_gain_matching(
     )
     _, labels = connected_components(graph, directed=False)
     edge_label = labels[rows]
-    used_labels, edge_component = np.unique(edge_label, return_inverse=True)
+    used_labels = sorted_members(edge_label, len(labels))
     n_components = len(used_labels)
-    node_label = np.concatenate([labels[:n_rows], labels[n_rows:]])
-    node_component = np.searchsorted(used_labels, node_label)
+    renumber = np.zeros(len(labels), dtype=np.int64)  # labels with edges → 0..n_components−1
+    renumber[used_labels] = np.arange(n_components)
+    edge_component = renumber[edge_label]
+    node_component = renumber[labels]
     in_graph = np.zeros(n_rows + n_cols, dtype=bool)
     in_graph[rows] = True
     in_graph[cols + n_rows] = True
@@ -151,9 +153,12 @@ def max_gain_matching(
 
     general = np.flatnonzero(~star_edges)
     if len(general):
-        by_component = general[np.argsort(edge_component[general], kind="stable")]
-        components = edge_component[by_component]
-        bounds = np.flatnonzero(np.diff(components)) + 1
+        components = edge_component[general]
+        if components[0] == components[-1] and np.all(components == components[0]):
+            by_component, bounds = general, np.zeros(0, dtype=np.int64)  # one cluster
+        else:
+            by_component = general[np.argsort(components, kind="stable")]
+            bounds = np.flatnonzero(np.diff(edge_component[by_component])) + 1
         row_slot = np.zeros(n_rows, dtype=np.int64)  # local index of each row, per component
         col_slot = np.zeros(n_cols, dtype=np.int64)
         for edges in np.split(by_component, bounds):
