@@ -86,8 +86,11 @@ class FusedPair(WireModel):
 class ScoreMatrix(WireModel):
     """A method's score matrix: ``values[i][j]`` scores row ``rows[i]`` against column ``cols[j]``.
 
-    ``null`` marks a cell without a finite score: a pair outside the gate, or a
-    forbidden cell (e.g. the ``*`` rows of [T2T] Table 1).
+    ``rows`` are the known items, then one ``*:<column id>`` row per column: the
+    ``*_t`` rows of [T2T] Table 1, whose only allowed cell is their own column
+    (the score of declaring that item new: hachour / mercier BetP(*), gnn the
+    threshold, denoeux 0). ``null`` marks a cell without a finite score: a pair
+    outside the gate, or a forbidden cell of a ``*`` row.
     """
 
     rows: list[str]

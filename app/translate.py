@@ -406,7 +406,7 @@ def associate_plain(request: AssociateRequest, result: AssociationResult) -> Pla
     """The answer of ``POST /v1/associate`` in the contract's shape."""
     known = [track.id for track in request.known]
     incoming = [track.id for track in request.incoming]
-    dense = result.scores.dense()
+    rows, cols, table = result.scores.table(known, incoming)  # [T2T] Table 1, `*:` rows
     diagnostics = result.diagnostics
     return {
         "pairs": [
@@ -416,9 +416,9 @@ def associate_plain(request: AssociateRequest, result: AssociationResult) -> Pla
         "new": [incoming[int(col)] for col in result.new],
         "missed": [known[int(row)] for row in result.missed],
         "matrix": {
-            "rows": known,
-            "cols": incoming,
-            "values": [[finite_or_none(float(value)) for value in row] for row in dense],
+            "rows": list(rows),
+            "cols": list(cols),
+            "values": [[finite_or_none(value) for value in row] for row in table.tolist()],
         },
         "diagnostics": {
             "method": result.method,

@@ -44,6 +44,9 @@ METHODS: list[tuple[str, str, dict[str, object]]] = [
     ("dang_han", "dang_han", {}),
 ]
 FLOORS = {("hachour", "spread", 1000): 50.0, ("hachour", "spread", 10_000): 500.0}
+DENSE_GOAL_MS = 1000.0
+"""Issue 13: every method under 1 s on the dense 1000 × 1000 layout of a quiet machine
+(reported, not a floor: a loaded machine misses it without any change of code)."""
 
 
 def layout(n: int, kind: str, seed: int = 0) -> tuple[Estimates, Estimates]:
@@ -81,6 +84,7 @@ def main() -> int:
     print("median ms per call (defaults of each method; sum covariance; gate on positions)")
     print(header)
     failures = []
+    dense_misses = []
     for kind, n in cases:
         known, incoming = layout(n, kind)
         probe = associate(known, incoming, "gnn", distance=distance)
@@ -92,6 +96,8 @@ def main() -> int:
                 )
             )
             cells.append(f"{elapsed:17.2f}")
+            if kind == "dense" and n == 1000 and elapsed > DENSE_GOAL_MS:
+                dense_misses.append(f"{label} {elapsed:.0f} ms")
             floor = FLOORS.get((label, kind, n))
             if floor is not None and elapsed > floor:
                 failures.append(f"{label} {kind} n={n}: {elapsed:.1f} ms > {floor:.0f} ms")
@@ -100,6 +106,10 @@ def main() -> int:
     for (label, kind, n), floor in FLOORS.items():
         print(f"floor: {label} {kind} n={n} <= {floor:.0f} ms")
     print("FLOORS: " + ("all met" if not failures else "MISSED: " + "; ".join(failures)))
+    print(
+        f"dense n=1000 goal <= {DENSE_GOAL_MS:.0f} ms per method (issue 13): "
+        + ("met" if not dense_misses else "missed in this run: " + "; ".join(dense_misses))
+    )
 
     print("\nlinear assignment: lapx (lapjv) vs scipy.optimize.linear_sum_assignment, median ms")
     rng = np.random.default_rng(1)

@@ -64,7 +64,8 @@ def solve_dense(gain: FloatArray, solver: Solver = "lapjv") -> tuple[IntArray, I
     if solver == "scipy":
         rows, cols = linear_sum_assignment(gain, maximize=True)
     elif solver == "lapjv":
-        rows, cols = lap.lapjvx(-gain, extend_cost=True, return_cost=False)
+        square = gain.shape[0] == gain.shape[1]
+        rows, cols = lap.lapjvx(-gain, extend_cost=not square, return_cost=False)
     else:
         raise InvalidInput(f"solver must be one of {list(SOLVERS)}, got {solver!r}")
     rows = np.asarray(rows, dtype=np.int64)
@@ -73,6 +74,13 @@ def solve_dense(gain: FloatArray, solver: Solver = "lapjv") -> tuple[IntArray, I
     rows, cols = rows[keep], cols[keep]
     order = np.argsort(rows, kind="stable")
     return rows[order], cols[order]
+
+
+def sorted_members(indices: IntArray, size: int) -> IntArray:
+    """The distinct values of ``indices`` (all in range(size)), ascending: a count when dense."""
+    if len(indices) >= size:
+        return np.flatnonzero(np.bincount(indices, minlength=size)).astype(np.int64)
+    return np.unique(indices).astype(np.int64)
 
 
 def max_gain_matching(
@@ -118,10 +126,12 @@ def max_gain_matching(
     )
     _, labels = connected_components(graph, directed=False)
     edge_label = labels[rows]
-    used_labels, edge_component = np.unique(edge_label, return_inverse=True)
+    used_labels = sorted_members(edge_label, len(labels))
     n_components = len(used_labels)
-    node_label = np.concatenate([labels[:n_rows], labels[n_rows:]])
-    node_component = np.searchsorted(used_labels, node_label)
+    renumber = np.zeros(len(labels), dtype=np.int64)  # labels with edges → 0..n_components−1
+    renumber[used_labels] = np.arange(n_components)
+    edge_component = renumber[edge_label]
+    node_component = renumber[labels]
     in_graph = np.zeros(n_rows + n_cols, dtype=bool)
     in_graph[rows] = True
     in_graph[cols + n_rows] = True
@@ -132,8 +142,10 @@ def max_gain_matching(
     star = (row_count == 1) | (col_count == 1)
     star_edges = star[edge_component]
     # Stars: the best pair of each component (ties: lowest row, then column).
-    order = np.lexsort((cols, rows, -gain, edge_component))
-    order = order[star_edges[order]]
+    in_star = np.flatnonzero(star_edges)
+    order = in_star[
+        np.lexsort((cols[in_star], rows[in_star], -gain[in_star], edge_component[in_star]))
+    ]
     first = np.ones(len(order), dtype=bool)
     first[1:] = edge_component[order][1:] != edge_component[order][:-1]
     chosen_rows = [rows[order[first]]]
@@ -141,14 +153,24 @@ def max_gain_matching(
 
     general = np.flatnonzero(~star_edges)
     if len(general):
-        by_component = general[np.argsort(edge_component[general], kind="stable")]
-        components = edge_component[by_component]
-        bounds = np.flatnonzero(np.diff(components)) + 1
+        components = edge_component[general]
+        if components[0] == components[-1] and np.all(components == components[0]):
+            by_component, bounds = general, np.zeros(0, dtype=np.int64)  # one cluster
+        else:
+            by_component = general[np.argsort(components, kind="stable")]
+            bounds = np.flatnonzero(np.diff(edge_component[by_component])) + 1
+        row_slot = np.zeros(n_rows, dtype=np.int64)  # local index of each row, per component
+        col_slot = np.zeros(n_cols, dtype=np.int64)
         for edges in np.split(by_component, bounds):
-            local_rows, row_index = np.unique(rows[edges], return_inverse=True)
-            local_cols, col_index = np.unique(cols[edges], return_inverse=True)
+            edge_rows, edge_cols = rows[edges], cols[edges]
+            local_rows, local_cols = (
+                sorted_members(edge_rows, n_rows),
+                sorted_members(edge_cols, n_cols),
+            )
+            row_slot[local_rows] = np.arange(len(local_rows))
+            col_slot[local_cols] = np.arange(len(local_cols))
             dense = np.zeros((len(local_rows), len(local_cols)))
-            dense[row_index, col_index] = gain[edges]
+            dense[row_slot[edge_rows], col_slot[edge_cols]] = gain[edges]
             matched_rows, matched_cols = solve_dense(dense, solver)
             chosen_rows.append(local_rows[matched_rows])
             chosen_cols.append(local_cols[matched_cols])

@@ -13,9 +13,9 @@ Each column takes exactly one row, so the objective is
 matching on the gains ``BetP_t(ℓ) − BetP_t(*)``.
 
 For the GBT, ``BetP_t(ℓ) > BetP_t(*)`` exactly when ``Pl_t(ℓ) > Pl_t(*)``, so
-an item is matched only if its best plausibility exceeds 1/2: the *implicit
-gate* ``D < 2 ln 2 − q ln 2π − log|C|`` (density) or ``D < 2 ln 2``
-(relative), reported per incoming item.
+an item is matched only if its best plausibility exceeds 1/2 (without
+classes): the *implicit gate* ``D < 2 ln 2 − q ln 2π − log|C|`` (density) or
+``D < 2 ln 2`` (relative), reported per incoming item.
 
 Options
 -------
@@ -32,7 +32,18 @@ plausibility_floor : float in [0, 1)
     bounds the distances that must be solved. Default 1e-12; 0 solves every
     pair (small problems only).
 
-Class information (§3.6) multiplies Pl_t({ℓ}) by 1 − K.
+Class information (§3.6) is a second source on the same frame with
+Pl({ℓ}) = 1 − K (K the class conflict of the pair) and Pl({*}) = 1. Contour
+functions of independent sources multiply (the conjunctive combination of two
+GBT masses is the GBT mass of the products), so::
+
+    Pl_t({ℓ}) = min(G_{ℓ,t}, 1) · (1 − K_{ℓ,t}),   Pl_t({*}) = 1 − max_ℓ min(G_{ℓ,t}, 1)
+
+— the factor applies after the clipping (before it, class evidence vanished
+wherever G > 1/(1 − K)), and Pl(*) stays that of the distances. The implicit
+gate becomes ``G (1 − K) > 1 − G`` for the item's closest pair. An item whose
+every candidate is vetoed (Pl = 0) while Pl(*) = 0 has all its mass on ∅: its
+BetP is undefined, it is declared new and listed in ``diagnostics.undefined``.
 """
 
 from __future__ import annotations
@@ -106,22 +117,21 @@ def associate_hachour(problem: AssociationProblem, options: HachourOptions) -> A
     gate = distance_bound(problem, options)
     pairs = problem.pairs(gate)
     log_g = log_likelihood(pairs, options.likelihood)
-    class_plausibility = problem.class_plausibility(pairs)
-    if class_plausibility is not None:
-        with np.errstate(divide="ignore"):
-            log_g = log_g + np.log(class_plausibility)
     clipped_pair = log_g > 0.0
-    plausibility = np.exp(np.minimum(log_g, 0.0))
-    keep = (plausibility >= options.plausibility_floor) & (plausibility > 0.0)
-    pairs, plausibility = pairs.select(keep), plausibility[keep]
-    clipped = np.bincount(pairs.cols[clipped_pair[keep]], minlength=n_incoming).astype(np.int64)
-
+    distance_plausibility = np.exp(np.minimum(log_g, 0.0))  # Pl = min(G, 1) (§3.3 reading)
     best = np.zeros(n_incoming)
-    np.maximum.at(best, pairs.cols, plausibility)
-    star = 1.0 - best  # eq 5
-
-    # implicit gate: Pl > 1/2 ⇔ D < 2 ln 2 + 2 (ln G + D/2) for the pair's C and K
-    pair_gate = 2.0 * math.log(2.0) + 2.0 * log_g[keep] + pairs.distance
+    np.maximum.at(best, pairs.cols, distance_plausibility)
+    star = 1.0 - best  # [T2T] eq 5, from the distances alone
+    # §3.6: the class source has Pl(ℓ) = 1 − K and Pl(*) = 1; contour functions of
+    # independent sources multiply, so only Pl(ℓ) changes, after the clipping.
+    class_plausibility = problem.class_plausibility(pairs)
+    class_factor = np.ones(len(pairs)) if class_plausibility is None else class_plausibility
+    plausibility = distance_plausibility * class_factor
+    keep = (plausibility >= options.plausibility_floor) & (plausibility > 0.0)
+    # implicit gate: the item's closest pair ℓ is matched iff G(1 − K) > 1 − G, i.e.
+    # D < 2 ln(1 + (1 − K)) − q ln 2π − log|C| (density; relative: without the last two)
+    with np.errstate(divide="ignore"):
+        pair_gate = 2.0 * np.log1p(class_factor) + 2.0 * log_g + pairs.distance
     implicit_gate = np.full(n_incoming, 2.0 * math.log(2.0))
     if options.likelihood == "density":  # items without candidates: the bound over all C
         implicit_gate -= problem.dimension * LOG_TWO_PI + problem.smallest_log_det()
@@ -130,18 +140,24 @@ def associate_hachour(problem: AssociationProblem, options: HachourOptions) -> A
         np.maximum.at(per_item, pairs.cols, pair_gate)
         has = np.bincount(pairs.cols, minlength=n_incoming) > 0
         implicit_gate[has] = per_item[has]
+    clipped = np.bincount(pairs.cols[clipped_pair], minlength=n_incoming).astype(np.int64)
+    pairs, plausibility = pairs.select(keep), plausibility[keep]
+    # an item whose frame keeps nothing plausible (every known item vetoed by classes,
+    # Pl(*) = 0) has all its mass on ∅: BetP undefined, the item is declared new
+    frame_size = np.bincount(pairs.cols, minlength=n_incoming)
+    undefined = np.flatnonzero((frame_size == 0) & (star <= 0.0)).astype(np.int64)
 
     if options.maximise == "plausibility":
-        values, new = plausibility, star
+        values, new = plausibility, star.copy()
     else:
         values = np.zeros(len(pairs))
-        new = np.ones(n_incoming)  # an item without candidates: BetP(*) = 1
+        new = np.where(star > 0.0, 1.0, 0.0)  # an item without candidates: BetP(*) = 1
         ragged = RaggedRows.of(pairs.cols, n_incoming)
         for items, pair_index in ragged.blocks():
             inside = pair_index >= 0
             rows_pl = np.where(inside, plausibility[np.maximum(pair_index, 0)], 0.0)
             rows_pl = np.concatenate([rows_pl, star[items][:, None]], axis=1)
-            betp, _ = gbt_betp_rows(rows_pl)  # always defined: p_max + p_* = 1
+            betp, _ = gbt_betp_rows(rows_pl)  # defined: some Pl of the row is > 0
             values[pair_index[inside]] = betp[:, :-1][inside]
             new[items] = betp[:, -1]
     gain = values - new[pairs.cols]
@@ -176,6 +192,7 @@ def associate_hachour(problem: AssociationProblem, options: HachourOptions) -> A
         gate=gate,
         clipped=clipped,
         implicit_gate=implicit_gate,
+        undefined=undefined,
         notes=notes,
     )
     return build_result(METHOD, matching.rows, matching.cols, scores, diagnostics)

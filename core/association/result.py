@@ -8,11 +8,15 @@ dense matrix; :meth:`ScoreMatrix.dense` builds one on request.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from core.arrays import FloatArray, IntArray
+
+STAR_ROW = "*:"
+"""Prefix of the row ``*_t`` of [T2T] Table 1 in a labelled table: ``*:<incoming id>``."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,6 +67,14 @@ class ScoreMatrix:
         np.fill_diagonal(lower, self.new)
         return np.vstack([self.dense(), lower])
 
+    def table(
+        self, known_ids: Sequence[str], incoming_ids: Sequence[str]
+    ) -> tuple[tuple[str, ...], tuple[str, ...], FloatArray]:
+        """[T2T] Table 1 with labels: rows ``known_ids`` then ``*:<incoming id>``, columns
+        ``incoming_ids``; forbidden cells are NaN (``null`` on the wire)."""
+        rows = (*known_ids, *(f"{STAR_ROW}{incoming}" for incoming in incoming_ids))
+        return rows, tuple(incoming_ids), self.extended(forbidden=np.nan)
+
 
 @dataclass(frozen=True, eq=False)
 class Diagnostics:
@@ -84,7 +96,7 @@ class Diagnostics:
         hachour ``likelihood="density"``: plausibilities clipped at 1 per incoming item.
     implicit_gate : ndarray, shape (n_incoming,) or empty
         hachour: per incoming item, the largest D at which its best pair can
-        still be matched (Pl > 1/2, §3.3).
+        still be matched (G (1 − K) > 1 − G; without classes Pl > 1/2, §3.3).
     undefined : ndarray of int64
         Items whose combined mass was in total conflict (BetP undefined):
         they are declared new / missed.

@@ -730,17 +730,7 @@ class SessionEngine:
             ),
             new=tuple(report.tracks[col].id for col in decision.new),
             missed=tuple(live[row].id for row in decision.missed),
-            matrix=(
-                (
-                    tuple(live[row].id for row in decision.matrix_rows),
-                    tuple(report.tracks[col].id for col in decision.matrix_cols),
-                    np.zeros((len(decision.matrix_rows), len(decision.matrix_cols)))
-                    if decision.scores is None
-                    else decision.scores.dense(),
-                )
-                if explain
-                else None
-            ),
+            matrix=self._explained(report, decision, live) if explain else None,
         )
         return StepResult(
             seq=self.seq,
@@ -749,6 +739,17 @@ class SessionEngine:
             tracks=tuple(views),
             association=association,
         )
+
+    @staticmethod
+    def _explained(
+        report: TrackReport, decision: Decision, live: list[FusedTrack]
+    ) -> tuple[tuple[str, ...], tuple[str, ...], FloatArray]:
+        """The decision matrix: [T2T] Table 1 with a ``*:<track id>`` row per report track."""
+        known = [live[row].id for row in decision.matrix_rows]
+        incoming = [report.tracks[col].id for col in decision.matrix_cols]
+        if decision.scores is None:
+            return tuple(known), tuple(incoming), np.zeros((len(known), len(incoming)))
+        return decision.scores.table(known, incoming)
 
     def _keep(self, tracks: list[FusedTrack]) -> None:
         """``tracks`` become the engine's tracks, rows 0, 1, … of the table in that order."""

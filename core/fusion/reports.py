@@ -77,8 +77,10 @@ class AssociationView:
     ``pairs`` are (fused id, report track id, score, basis): basis
     ``"continuity"`` when the sensor kept reporting the track under the id it
     gave it (score None), ``"association"`` when the method decided (its score).
-    ``matrix`` (rows: fused ids, cols: report track ids, values: the method's
-    scores over what it decided) is filled only when an explanation is asked for.
+    ``matrix`` (rows: fused ids then one ``*:<report track id>`` row per column,
+    the ``*_t`` rows of [T2T] Table 1; cols: report track ids; values: the
+    method's scores over what it decided, NaN on forbidden cells) is filled only
+    when an explanation is asked for.
     """
 
     method: str

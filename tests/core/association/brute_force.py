@@ -103,3 +103,39 @@ def combined_pairwise(partners, evidence) -> dict:
     for partner in partners:
         mass = conjunctive(mass, pairwise_mass(elements, partner, *evidence[partner]))
     return mass
+
+
+def conflict(first: dict[frozenset[str], float], second: dict[frozenset[str], float]) -> float:
+    return sum(x * y for a, x in first.items() for b, y in second.items() if not a & b)
+
+
+def hachour_table(d, log_det, known_masses, incoming_masses, likelihood, dimension=2):
+    """[T2T] Table 1 of hachour with classes (§3.6), from the definitions.
+
+    (n + m) × m: BetP of every known item, then the ``*_t`` rows (NaN off their
+    column). Pl(ℓ) = min(G, 1)(1 − K) with K from intersecting focal sets,
+    Pl(*) = 1 − max_ℓ min(G, 1); GBT and BetP by enumeration.
+
+    An item whose every plausibility is 0 (Pl(*) = 0, every known item vetoed) has
+    all its mass on ∅: its column is 0.
+    """
+    n, m = d.shape
+    if likelihood == "relative":
+        g = np.exp(-d / 2)
+    else:
+        g = np.exp(-d / 2) / np.sqrt((2 * math.pi) ** dimension * np.exp(log_det))
+    table = np.full((n + m, m), np.nan)
+    for t in range(m):
+        plausibility: dict[object, float] = {
+            ell: min(g[ell, t], 1.0) * (1.0 - conflict(known_masses[ell], incoming_masses[t]))
+            for ell in range(n)
+        }
+        plausibility[STAR] = 1.0 - min(g[:, t].max(), 1.0)
+        if max(plausibility.values()) == 0.0:  # m(∅) = 1: BetP undefined, scored 0
+            table[:n, t] = 0.0
+            table[n + t, t] = 0.0
+            continue
+        values = betp(gbt(plausibility), list(plausibility))
+        table[:n, t] = [values[ell] for ell in range(n)]
+        table[n + t, t] = values[STAR]
+    return table

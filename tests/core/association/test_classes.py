@@ -29,7 +29,8 @@ def scene():
     the incoming track (a fighter) at 0.35: D(k0) = 0.49, D(k1) = 0.81.
     Distance alone picks k0; K(fighter, liner) = 0.9·0.9 = 0.81 is evidence against it.
     hachour density: G = e^{−D/2}/sqrt(2π·0.25): G(k0) = 0.6239, G(k1) = 0.5316 (no clipping);
-    with classes Pl(k0) = 0.6239·0.19 = 0.1185 and k1 wins (0.5316 > 1 − 0.5316).
+    with classes Pl(k0) = 0.6239·0.19 = 0.1185, Pl(*) = 1 − 0.6239 (the distances' own, §3.6)
+    and k1 wins (0.5316 > 0.3761).
     """
     known = (np.array([[0.0], [0.8]]), np.full((2, 1, 1), 0.125))
     incoming = (np.array([[0.35]]), np.full((1, 1, 1), 0.125))

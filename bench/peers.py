@@ -1,0 +1,635 @@
+"""Tracking accuracy and speed against Stone Soup 1.9.1, on scenes Stone Soup makes (issue 13).
+
+Scenes: Stone Soup's ``MultiTargetGroundTruthSimulator`` (2-D constant
+velocity, births and deaths) and ``SimpleDetectionSimulator`` (linear-Gaussian
+position measurements, P_D 0.9, Poisson clutter uniform over the surveillance
+square) at about 10, 50 and 200 simultaneous targets, plus ``crossing``:
+pre-existing targets only, four crossing at one point and two pairs 3σ apart
+on parallel courses.
+
+Trackers, every one given the true q, R, P_D and densities where it takes them:
+
+- ``ss-gnn``: Stone Soup's tutorial tracker — Kalman predictor/updater,
+  Mahalanobis ``DistanceHypothesiser`` (missed distance 3) +
+  ``GNNWith2DAssignment``, ``MultiMeasurementInitiator`` (min_points 2),
+  ``UpdateTimeStepsDeleter`` (3 steps);
+- ``ss-kdgnn``: the same with ``DetectionKDTreeGNN2D``;
+- ``ss-jpda``: ``PDAHypothesiser`` (true clutter density and P_D) + ``JPDAwithLBP``,
+  Gaussian-mixture reduction (10- and crossing scenes only: see ``JPDA_MAX_TARGETS``);
+- ``ours``: :class:`core.tracking.tracker.LocalTracker` with the true CV model
+  (Stone Soup's Q), R, P_D, clutter and birth densities, GNN;
+- ``ours-rest``: the service over REST: one session on a live uvicorn server,
+  detections posted scan by scan (the contract has no clutter or birth density:
+  the session's defaults).
+
+Metrics by Stone Soup: GOSPA (``GOSPAMetric``, c = 10σ, p = 1, α = 2) per scan
+with its localisation / missed / false parts, meaned over scans; SIAP
+(``SIAPMetrics`` through ``MultiManager`` + ``TrackToTruth``): completeness,
+spuriousness, position accuracy (10- and crossing scenes: its association is
+quadratic in Python); id switches: changes of the track id GOSPA's own
+assignment gives a true target (:func:`core.metrics.identity_switches`);
+per-scan time of each tracker, in process, in the same run, one BLAS thread;
+``late``: scans from a target's first scan to the first scan a track of the
+tracker covers it (GOSPA's assignment), the cost of initiation and confirmation.
+Ratios: Stone Soup GNN's per-scan time over each tracker's, each tracker's
+GOSPA over Stone Soup GNN's (above ``GNN_FULL_MAX_TARGETS`` targets the tutorial
+GNN runs a few scans, for its time only, and the kd-tree form — the same
+tracks — is the GOSPA reference).
+
+Run: ``.venv/bin/python bench/peers.py [SCENE ...]`` (or ``make bench``); about 3
+minutes on a quiet 2-core machine (scenes: ``~10 ~50 ~200 crossing``).
+"""
+
+from __future__ import annotations
+
+import os
+
+for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_variable] = "1"  # before numpy: one BLAS thread for every tracker
+
+import datetime  # noqa: E402
+import socket  # noqa: E402
+import sys  # noqa: E402
+import threading  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable, Iterator  # noqa: E402
+from contextlib import contextmanager  # noqa: E402
+from dataclasses import dataclass, field  # noqa: E402
+from pathlib import Path  # noqa: E402
+from typing import Any  # noqa: E402
+
+import httpx  # noqa: E402
+import numpy as np  # noqa: E402
+from stonesoup.dataassociator.neighbour import GNNWith2DAssignment  # noqa: E402
+from stonesoup.dataassociator.probability import JPDAwithLBP  # noqa: E402
+from stonesoup.dataassociator.tracktotrack import TrackToTruth  # noqa: E402
+from stonesoup.dataassociator.tree import DetectionKDTreeGNN2D  # noqa: E402
+from stonesoup.deleter.time import UpdateTimeStepsDeleter  # noqa: E402
+from stonesoup.gater.distance import DistanceGater  # noqa: E402
+from stonesoup.hypothesiser.distance import DistanceHypothesiser  # noqa: E402
+from stonesoup.hypothesiser.probability import PDAHypothesiser  # noqa: E402
+from stonesoup.initiator.simple import MultiMeasurementInitiator  # noqa: E402
+from stonesoup.measures import Euclidean, Mahalanobis  # noqa: E402
+from stonesoup.metricgenerator.manager import MultiManager  # noqa: E402
+from stonesoup.metricgenerator.ospametric import GOSPAMetric  # noqa: E402
+from stonesoup.metricgenerator.tracktotruthmetrics import SIAPMetrics  # noqa: E402
+from stonesoup.models.measurement.linear import LinearGaussian  # noqa: E402
+from stonesoup.models.transition.linear import (  # noqa: E402
+    CombinedLinearGaussianTransitionModel,
+    ConstantVelocity,
+)
+from stonesoup.predictor.kalman import KalmanPredictor  # noqa: E402
+from stonesoup.simulator.simple import (  # noqa: E402
+    MultiTargetGroundTruthSimulator,
+    SimpleDetectionSimulator,
+)
+from stonesoup.types.groundtruth import GroundTruthPath  # noqa: E402
+from stonesoup.types.state import GaussianState, State  # noqa: E402
+from stonesoup.types.track import Track  # noqa: E402
+from stonesoup.types.update import GaussianStateUpdate  # noqa: E402
+from stonesoup.updater.kalman import KalmanUpdater  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from machine import describe_machine  # noqa: E402
+
+from core.lifecycle import ScoreModel  # noqa: E402
+from core.metrics import identity_switches  # noqa: E402
+from core.tracking.config import LocalTrackerConfig  # noqa: E402
+from core.tracking.models import LinearMeasurementModel, ModelBank, MotionModel  # noqa: E402
+from core.tracking.tracker import LocalTracker  # noqa: E402
+
+START = datetime.datetime(2026, 1, 1)
+SIGMA = 1.0  # m, measurement noise per axis
+Q = 0.05  # m²/s³, Stone Soup ConstantVelocity noise_diff_coeff
+DT = 1.0  # s
+P_DETECT = 0.9
+CUTOFF = 10.0 * SIGMA
+SIAP_MAX_TARGETS = 15
+JPDA_MAX_TARGETS = 15
+LIVE_STATUSES = ("confirmed", "coasting")
+GNN_FULL_MAX_TARGETS = 80
+"""Above it the tutorial GNN (all track × detection hypotheses, in Python) runs only
+``GNN_TIMING_SCANS`` scans, for its time; its tracks are the kd-tree form's (the
+same on the smaller scenes, see the table), whose accuracy is the reference then."""
+GNN_TIMING_SCANS = 7
+TIMING_FROM = 2
+"""Per-scan time: the median over scans from the third on (every tracker has its tracks)."""
+
+
+@dataclass
+class Scene:
+    """Truth and detections of one scene, in Stone Soup objects and in plain arrays."""
+
+    name: str
+    truths: list[GroundTruthPath]
+    scans: list[tuple[datetime.datetime, set[Any]]]
+    side: float  # m, the surveillance square is [-side/2, side/2]²
+    clutter_rate: float  # false detections per scan
+    birth_rate: float  # new targets per scan
+    transition: CombinedLinearGaussianTransitionModel
+    measurement: LinearGaussian
+    velocity_std: float
+
+    @property
+    def clutter_density(self) -> float:
+        return self.clutter_rate / self.side**2
+
+    @property
+    def birth_density(self) -> float:
+        return max(self.birth_rate, 1e-3) / self.side**2
+
+    def truth_states(self, when: datetime.datetime) -> list[tuple[str, State]]:
+        return [
+            (str(path.id), path[when])
+            for path in self.truths
+            if path[0].timestamp <= when <= path[-1].timestamp
+        ]
+
+    def head(self, scans: int) -> Scene:
+        """The first ``scans`` scans (same truths)."""
+        return Scene(
+            self.name,
+            self.truths,
+            self.scans[:scans],
+            self.side,
+            self.clutter_rate,
+            self.birth_rate,
+            self.transition,
+            self.measurement,
+            self.velocity_std,
+        )
+
+    def mean_targets(self) -> float:
+        return float(np.mean([len(self.truth_states(when)) for when, _ in self.scans]))
+
+
+def models(seed: int) -> tuple[CombinedLinearGaussianTransitionModel, LinearGaussian]:
+    """The truth's models, seeded: their noise draws are the scene's (not the global RNG's)."""
+    transition = CombinedLinearGaussianTransitionModel(
+        [ConstantVelocity(Q), ConstantVelocity(Q)], seed=seed + 100
+    )
+    measurement = LinearGaussian(
+        ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2) * SIGMA**2, seed=seed + 200
+    )
+    return transition, measurement
+
+
+def simulated_scene(
+    name: str, targets: int, steps: int, seed: int, clutter_per_target: float = 0.5
+) -> Scene:
+    """Stone Soup's simulators: ``targets`` at start, births = deaths in the mean."""
+    transition, measurement = models(seed)
+    side = 400.0 * np.sqrt(targets / 10.0)  # the same target density at every size
+    velocity_std = 2.0
+    death = 0.02
+    initial = GaussianState(
+        [[0.0], [0.0], [0.0], [0.0]],
+        np.diag([(side / 4) ** 2, velocity_std**2, (side / 4) ** 2, velocity_std**2]),
+        timestamp=START,
+    )
+    truth = MultiTargetGroundTruthSimulator(
+        transition_model=transition,
+        initial_state=initial,
+        timestep=datetime.timedelta(seconds=DT),
+        number_steps=steps,
+        birth_rate=targets * death,
+        death_probability=death,
+        initial_number_targets=targets,
+        seed=seed,
+    )
+    return _detected(
+        name,
+        truth,
+        transition,
+        measurement,
+        side,
+        targets * clutter_per_target,
+        targets * death,
+        velocity_std,
+        seed,
+    )
+
+
+def crossing_scene(steps: int = 60, seed: int = 7) -> Scene:
+    """Four targets through one point at mid-time; two pairs 3σ apart on parallel courses."""
+    transition, measurement = models(seed)
+    speed, half = 3.0, steps * DT / 2
+    states = []
+    for angle in (0.0, 45.0, 90.0, 135.0):  # through the origin at t = half
+        vx, vy = speed * np.cos(np.radians(angle)), speed * np.sin(np.radians(angle))
+        states.append([-vx * half, vx, -vy * half, vy])
+    for offset in (-60.0, 60.0):  # two pairs, 3σ apart, side by side
+        states.append([-90.0, speed, offset, 0.0])
+        states.append([-90.0, speed, offset + 3.0 * SIGMA, 0.0])
+    truth = MultiTargetGroundTruthSimulator(
+        transition_model=transition,
+        initial_state=GaussianState(np.zeros((4, 1)), np.eye(4), timestamp=START),
+        timestep=datetime.timedelta(seconds=DT),
+        number_steps=steps,
+        birth_rate=0.0,
+        death_probability=0.0,
+        preexisting_states=[np.array(state) for state in states],
+        initial_number_targets=0,
+        seed=seed,
+    )
+    return _detected("crossing", truth, transition, measurement, 300.0, 4.0, 0.0, speed, seed)
+
+
+def _detected(
+    name: str,
+    truth: MultiTargetGroundTruthSimulator,
+    transition: CombinedLinearGaussianTransitionModel,
+    measurement: LinearGaussian,
+    side: float,
+    clutter_rate: float,
+    birth_rate: float,
+    velocity_std: float,
+    seed: int,
+) -> Scene:
+    detector = SimpleDetectionSimulator(
+        groundtruth=truth,
+        measurement_model=measurement,
+        meas_range=np.array([[-side / 2, side / 2], [-side / 2, side / 2]]),
+        detection_probability=P_DETECT,
+        clutter_rate=clutter_rate,
+        seed=seed + 1,
+    )
+    scans, paths = [], set()
+    for when, detections in detector:  # the simulator keeps only the living paths: collect
+        scans.append((when, set(detections)))
+        paths |= set(detector.groundtruth.groundtruth_paths)
+    truths = sorted(paths, key=lambda path: (path[0].timestamp, str(path.id)))
+    return Scene(
+        name, truths, scans, side, clutter_rate, birth_rate, transition, measurement, velocity_std
+    )
+
+
+# ----------------------------------------------------------------- trackers
+Estimates = list[tuple[str, np.ndarray]]  # (track id, state [x, vx, y, vy]) at one scan
+
+
+@dataclass
+class Run:
+    """What one tracker produced on one scene."""
+
+    label: str
+    estimates: list[Estimates] = field(default_factory=list)
+    scan_seconds: list[float] = field(default_factory=list)
+
+
+def stone_soup_run(scene: Scene, kind: str) -> Run:
+    """The tutorial loop of Stone Soup's ``MultiTargetTracker``, timed per scan."""
+    predictor = KalmanPredictor(scene.transition)
+    updater = KalmanUpdater(scene.measurement)
+    if kind == "ss-jpda":
+        hypothesiser = PDAHypothesiser(
+            predictor=predictor,
+            updater=updater,
+            clutter_spatial_density=scene.clutter_density,
+            prob_detect=P_DETECT,
+        )
+        hypothesiser = DistanceGater(hypothesiser, measure=Mahalanobis(), gate_threshold=16)
+        associator: Any = JPDAwithLBP(hypothesiser=hypothesiser)
+    else:
+        hypothesiser = DistanceHypothesiser(predictor, updater, Mahalanobis(), missed_distance=3)
+        associator = (
+            DetectionKDTreeGNN2D(hypothesiser, predictor, updater, max_distance=6 * SIGMA * 4)
+            if kind == "ss-kdgnn"
+            else GNNWith2DAssignment(hypothesiser)
+        )
+    init_hypothesiser = DistanceHypothesiser(predictor, updater, Mahalanobis(), missed_distance=3)
+    initiator = MultiMeasurementInitiator(
+        prior_state=GaussianState(
+            np.zeros((4, 1)), np.diag([0.0, scene.velocity_std**2, 0.0, scene.velocity_std**2])
+        ),
+        measurement_model=scene.measurement,
+        deleter=UpdateTimeStepsDeleter(time_steps_since_update=3),
+        data_associator=GNNWith2DAssignment(init_hypothesiser),
+        updater=updater,
+        min_points=2,
+    )
+    deleter = UpdateTimeStepsDeleter(time_steps_since_update=3)
+    tracks: set[Track] = set()
+    run = Run(kind)
+    for when, detections in scene.scans:
+        started = time.perf_counter()
+        associations = associator.associate(tracks, detections, when)
+        unassociated = set(detections)
+        for track, hypothesis in associations.items():
+            if kind == "ss-jpda":
+                track.append(_jpda_posterior(hypothesis, updater, when))
+                for single in hypothesis:  # the JPDA tutorial: a gated detection is not free
+                    if single:
+                        unassociated.discard(single.measurement)
+            elif hypothesis:
+                track.append(updater.update(hypothesis))
+                unassociated.discard(hypothesis.measurement)
+            else:
+                track.append(hypothesis.prediction)
+        tracks -= deleter.delete_tracks(tracks)
+        tracks |= initiator.initiate(unassociated, when)
+        run.scan_seconds.append(time.perf_counter() - started)
+        run.estimates.append(
+            [
+                (str(track.id), np.asarray(track.state_vector, dtype=float).ravel())
+                for track in tracks
+            ]
+        )
+    return run
+
+
+def _jpda_posterior(hypotheses: Any, updater: KalmanUpdater, when: datetime.datetime) -> Any:
+    """The JPDA tutorial's update: the hypotheses' posteriors reduced to one Gaussian.
+
+    Without any gated detection the track only coasts (its prediction, not an
+    update, so that ``UpdateTimeStepsDeleter`` can end it)."""
+    if not any(hypotheses):
+        return next(iter(hypotheses)).prediction
+    components, weights = [], []
+    for hypothesis in hypotheses:
+        if not hypothesis:
+            components.append(hypothesis.prediction)
+        else:
+            components.append(updater.update(hypothesis))
+        weights.append(float(hypothesis.probability))
+    weights_array = np.array(weights) / np.sum(weights)
+    means = np.hstack([np.asarray(c.state_vector, dtype=float) for c in components])
+    mean = means @ weights_array
+    spread = means - mean[:, None]
+    covariance = sum(
+        w * (np.asarray(c.covar, dtype=float) + np.outer(d, d))
+        for w, c, d in zip(weights_array, components, spread.T, strict=True)
+    )
+    return GaussianStateUpdate(mean[:, None], covariance, hypotheses, timestamp=when)
+
+
+def local_tracker_config(scene: Scene) -> LocalTrackerConfig:
+    """Our tracker with the truths: Stone Soup's CV matrices, R, P_D, both densities."""
+    transition = np.asarray(scene.transition.matrix(time_interval=datetime.timedelta(seconds=DT)))
+    noise = np.asarray(scene.transition.covar(time_interval=datetime.timedelta(seconds=DT)))
+    bank = ModelBank(
+        (MotionModel("cv", transition, np.zeros(4), noise),),
+        LinearMeasurementModel(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]), np.eye(2) * SIGMA**2),
+        np.ones((1, 1)),
+    )
+    return LocalTrackerConfig(
+        bank=bank,
+        time_interval=DT,
+        score=ScoreModel(
+            p_detect=P_DETECT,
+            false_target_density=scene.clutter_density,
+            new_target_density=scene.birth_density,
+        ),
+        max_speed=4.0 * scene.velocity_std * np.sqrt(2.0),
+        classification=None,
+        phantoms=False,
+    )
+
+
+def local_run(scene: Scene) -> Run:
+    tracker = LocalTracker(local_tracker_config(scene))
+    run = Run("ours")
+    for when, detections in scene.scans:
+        z = _positions(detections)
+        started = time.perf_counter()
+        step = tracker.step((when - START).total_seconds(), z)
+        run.scan_seconds.append(time.perf_counter() - started)
+        run.estimates.append(
+            [(t.id, np.asarray(t.state)) for t in step.tracks if t.status.value in LIVE_STATUSES]
+        )
+    return run
+
+
+def _positions(detections: set[Any]) -> np.ndarray:
+    ordered = sorted(detections, key=lambda d: (float(d.state_vector[0]), float(d.state_vector[1])))
+    return np.array([np.asarray(d.state_vector, dtype=float).ravel() for d in ordered]).reshape(
+        -1, 2
+    )
+
+
+@contextmanager
+def live_service() -> Iterator[str]:
+    """The application on uvicorn in a thread, memory store, a free loopback port."""
+    import uvicorn
+
+    from app.main import create_app
+    from app.settings import Settings
+
+    settings = Settings.model_validate(
+        {
+            "store": "memory",
+            "admin_token": "peers-bench-admin-token-0123456789",
+            "max_body_bytes": 8 * 1024 * 1024,
+        }
+    )
+    listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    listener.bind(("127.0.0.1", 0))
+    port = listener.getsockname()[1]
+    server = uvicorn.Server(
+        uvicorn.Config(create_app(settings), log_level="warning", access_log=False)
+    )
+    thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
+    thread.start()
+    while not server.started:
+        time.sleep(0.01)
+    try:
+        yield f"http://127.0.0.1:{port}"
+    finally:
+        server.should_exit = True
+        thread.join(timeout=20)
+        listener.close()
+
+
+def rest_run(scene: Scene, url: str) -> Run:
+    """One session, one detecting sensor with the true R and P_D; scans posted in order."""
+    config = {
+        "name": f"peers {scene.name}",
+        "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+        "motion": {"model": "constant_velocity", "q": Q},
+        "sensors": [
+            {
+                "id": "radar",
+                "p_detect": P_DETECT,
+                "measurement": {"r": (np.eye(2) * SIGMA**2).tolist()},
+            }
+        ],
+        "tracking": {"time_interval": DT},
+    }
+    run = Run("ours-rest")
+    with httpx.Client(base_url=url, timeout=60) as client:
+        created = client.post("/v1/sessions", json=config)
+        created.raise_for_status()
+        sid = created.json()["id"]
+        headers = {"Authorization": f"Bearer {created.json()['token']}"}
+        for when, detections in scene.scans:
+            body = {
+                "sensor": "radar",
+                "time": (when - START).total_seconds(),
+                "detections": [{"z": z.tolist()} for z in _positions(detections)],
+            }
+            started = time.perf_counter()
+            answer = client.post(f"/v1/sessions/{sid}/detections", json=body, headers=headers)
+            run.scan_seconds.append(time.perf_counter() - started)
+            answer.raise_for_status()
+            run.estimates.append(
+                [
+                    (t["id"], np.array(t["state"]))
+                    for t in answer.json()["tracks"]
+                    if t["status"] in LIVE_STATUSES
+                ]
+            )
+    return run
+
+
+# ------------------------------------------------------------------ metrics
+@dataclass(frozen=True)
+class Score:
+    gospa: float
+    localisation: float
+    missed: float
+    false: float
+    switches: int
+    siap: dict[str, float] | None
+    scan_ms: float
+    late: float  # scans from a target's first scan to its first covering track (mean)
+
+
+def confirmation_delay(assigned: list[dict[str, str | None]]) -> float:
+    """Mean scans from each target's first scan to the first scan a track covers it.
+
+    Targets never covered count with the scans they lived (a lower bound)."""
+    first_seen: dict[str, int] = {}
+    first_covered: dict[str, int] = {}
+    last_seen: dict[str, int] = {}
+    for index, step in enumerate(assigned):
+        for truth_id, track_id in step.items():
+            first_seen.setdefault(truth_id, index)
+            last_seen[truth_id] = index
+            if track_id is not None:
+                first_covered.setdefault(truth_id, index)
+    delays = [
+        first_covered.get(truth_id, last_seen[truth_id] + 1) - seen
+        for truth_id, seen in first_seen.items()
+    ]
+    return float(np.mean(delays)) if delays else 0.0
+
+
+def score(scene: Scene, run: Run, with_siap: bool) -> Score:
+    metric = GOSPAMetric(c=CUTOFF, p=1, measure=Euclidean((0, 2)))
+    parts = np.zeros(4)
+    assigned: list[dict[str, str | None]] = []
+    for (when, _), estimates in zip(scene.scans, run.estimates, strict=True):
+        truth = scene.truth_states(when)
+        measured = [State(state.reshape(-1, 1), timestamp=when) for _, state in estimates]
+        truth_states = [State(s.state_vector, timestamp=when) for _, s in truth]
+        if not measured and not truth_states:
+            assigned.append({})
+            continue
+        value, assignment = metric.compute_gospa_metric(measured, truth_states)
+        parts += [value.value[k] for k in ("distance", "localisation", "missed", "false")]
+        step: dict[str, str | None] = {truth_id: None for truth_id, _ in truth}
+        for index, measured_index in enumerate(assignment):
+            if measured_index >= 0:
+                step[truth[index][0]] = estimates[int(measured_index)][0]
+        assigned.append(step)
+    parts /= len(scene.scans)
+    siap = siap_metrics(scene, run) if with_siap else None
+    steady = run.scan_seconds[TIMING_FROM:] or run.scan_seconds  # tracks exist from scan 3
+    return Score(
+        *parts,
+        identity_switches(assigned),
+        siap,
+        1e3 * float(np.median(steady)),
+        confirmation_delay(assigned),
+    )
+
+
+def siap_metrics(scene: Scene, run: Run) -> dict[str, float]:
+    """Stone Soup's SIAP over tracks rebuilt from the run's per-scan estimates."""
+    tracks: dict[str, Track] = {}
+    for (when, _), estimates in zip(scene.scans, run.estimates, strict=True):
+        for track_id, state in estimates:
+            tracks.setdefault(track_id, Track(id=track_id)).append(
+                State(state.reshape(-1, 1), timestamp=when)
+            )
+    manager = MultiManager(
+        [SIAPMetrics(position_measure=Euclidean((0, 2)), velocity_measure=Euclidean((1, 3)))],
+        TrackToTruth(association_threshold=CUTOFF),
+    )
+    manager.add_data({"groundtruth_paths": set(scene.truths), "tracks": set(tracks.values())})
+    metrics = manager.generate_metrics()["siap_generator"]
+    names = {
+        "completeness": "SIAP Completeness",
+        "spuriousness": "SIAP Spuriousness",
+        "position": "SIAP Position Accuracy",
+    }
+    return {short: float(metrics[name].value) for short, name in names.items()}
+
+
+# --------------------------------------------------------------------- main
+SCENES: list[tuple[str, Callable[[], Scene]]] = [
+    ("~10", lambda: simulated_scene("~10", 10, 60, seed=1)),
+    ("~50", lambda: simulated_scene("~50", 50, 40, seed=2)),
+    ("~200", lambda: simulated_scene("~200", 200, 15, seed=3)),
+    ("crossing", crossing_scene),
+]
+
+
+def main() -> int:
+    print(describe_machine())
+    print(
+        f"GOSPA c = {CUTOFF:g} m (10σ), p = 1, α = 2, meaned over scans; σ = {SIGMA:g} m, "
+        f"q = {Q:g} m²/s³, P_D = {P_DETECT:g}; per-scan time: median ms, one BLAS thread"
+    )
+    header = (
+        f"{'scene':>8} {'targets':>7} {'tracker':>10} {'GOSPA':>7} {'loc':>6} {'miss':>6} "
+        f"{'false':>6} {'idsw':>5} {'late':>5} {'C':>5} {'S':>5} {'PA':>5} {'ms/scan':>8} "
+        f"{'vs ss-gnn':>9} {'GOSPA/ss':>8}"
+    )
+    rows = []
+    with live_service() as url:
+        chosen = sys.argv[1:] or [name for name, _ in SCENES]
+        for name, build in SCENES:
+            if name not in chosen:
+                continue
+            scene = build()
+            small = scene.mean_targets() <= SIAP_MAX_TARGETS
+            full_gnn = scene.mean_targets() <= GNN_FULL_MAX_TARGETS
+            gnn_scene = scene if full_gnn else scene.head(GNN_TIMING_SCANS)
+            runs = [stone_soup_run(gnn_scene, "ss-gnn"), stone_soup_run(scene, "ss-kdgnn")]
+            if scene.mean_targets() <= JPDA_MAX_TARGETS:
+                runs.append(stone_soup_run(scene, "ss-jpda"))
+            runs += [local_run(scene), rest_run(scene, url)]
+            scores = [
+                score(gnn_scene if run.label == "ss-gnn" else scene, run, small) for run in runs
+            ]
+            peer_time = scores[0].scan_ms
+            peer = scores[0] if full_gnn else scores[1]  # kd-tree GNN: the same tracks
+            for run, result in zip(runs, scores, strict=True):
+                siap = result.siap or {}
+                cells = [
+                    f"{siap[k]:5.2f}" if k in siap else f"{'-':>5}"
+                    for k in ("completeness", "spuriousness", "position")
+                ]
+                if run.label == "ss-gnn" and not full_gnn:
+                    note = f"(timing only: first {GNN_TIMING_SCANS} scans)"
+                    rows.append(
+                        f"{name:>8} {scene.mean_targets():7.1f} {run.label:>10} {note:>60} "
+                        f"{result.scan_ms:8.2f} {1.0:8.1f}x"
+                    )
+                    continue
+                rows.append(
+                    f"{name:>8} {scene.mean_targets():7.1f} {run.label:>10} {result.gospa:7.1f} "
+                    f"{result.localisation:6.1f} {result.missed:6.1f} {result.false:6.1f} "
+                    f"{result.switches:5d} {result.late:5.1f} {' '.join(cells)} {result.scan_ms:8.2f} "
+                    f"{peer_time / result.scan_ms:8.1f}x {result.gospa / peer.gospa:8.2f}"
+                )
+            print(
+                header if len(rows) == len(runs) else "", *rows[-len(runs) :], sep="\n", flush=True
+            )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
