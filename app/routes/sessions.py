@@ -38,6 +38,8 @@ from app.stores import SessionRecord
 router = APIRouter(prefix="/v1/sessions", tags=["sessions"])
 
 MAX_EVENTS_PAGE = 10_000
+MAX_SEQ = 2**53
+"""Sequence numbers stay below 2⁵³ (exact in every JSON reader; SQLite's INTEGER holds them)."""
 
 
 @router.post(
@@ -144,7 +146,7 @@ async def get_session(session: LiveSessionDep) -> SessionSummary:
 def list_session_events(
     session: AuthorizedSession,
     store: StoreDep,
-    after: Annotated[int, Query(ge=0, description="only events with seq > after")] = 0,
+    after: Annotated[int, Query(ge=0, le=MAX_SEQ, description="only events with seq > after")] = 0,
     limit: Annotated[int, Query(ge=1, le=MAX_EVENTS_PAGE, description="page size")] = 1000,
 ) -> EventLog:
     """The accepted inputs in order (export and replay); page with ``after``."""
