@@ -9,6 +9,23 @@ from api_schemas.base import FiniteFloat, Identifier, Label, Matrix, UnitFloat, 
 from api_schemas.classification import FocalMass
 
 TrackStatus = Literal["tentative", "confirmed", "coasting", "phantom", "terminated"]
+StatusReason = Literal[
+    "initiated",
+    "score_confirmed",
+    "min_points",
+    "second_sensor",
+    "reacquired",
+    "missed",
+    "blind_zone",
+    "occluded",
+    "out_of_range",
+    "score_deleted",
+    "gate_emptiness",
+    "phantom_expired",
+    "merged_into_phantom",
+    "duplicate",
+]
+"""Why a track's status last changed (``core.lifecycle.StatusReason``; a test pins them equal)."""
 
 
 class TrackSource(WireModel):
@@ -38,6 +55,10 @@ class FusedClassification(WireModel):
     plausibility: dict[Label, UnitFloat] | None
     conflict: UnitFloat
     decision: Label | None
+    summarized: bool = False
+    """The fused mass had more focal sets than its bound (256) and was summarized: the
+    largest focal sets kept, the rest of the mass on their union (a weakening: Bel
+    never grows, Pl never shrinks; ``core.belief.summary``)."""
 
 
 class FusedTrack(WireModel):
@@ -55,7 +76,7 @@ class FusedTrack(WireModel):
     sources: list[TrackSource]
     classification: FusedClassification | None
     score: FiniteFloat | None
-    reason: str | None
+    reason: StatusReason | None
 
 
 PairBasis = Literal["continuity", "association"]

@@ -8,10 +8,11 @@ from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
+from fastapi.middleware.cors import CORSMiddleware
 from fastapi.routing import APIRoute
 
 from app.errors import install_error_handlers
-from app.limits import BodySizeLimit
+from app.limits import BodyLimits
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
 from app.rate_limit import RateLimit, parse_rates
@@ -59,7 +60,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     )
     app.state.settings = settings
     app.state.metrics = service_metrics
-    install_error_handlers(app)
+    install_error_handlers(app, service_metrics.internal_errors.inc)
     app.include_router(health.router)
     app.include_router(metrics.router)
     app.include_router(sessions.router)
@@ -67,8 +68,22 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(associate.router)
     app.include_router(streams.router)
     app.include_router(viewer.router)
-    app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
+    # the last added runs first: metrics, CORS, rate limit, body limits (then internal errors)
+    app.add_middleware(
+        BodyLimits,
+        max_bytes=settings.max_body_bytes,
+        read_timeout=settings.body_read_timeout,
+        limits=settings.wire_limits(),
+    )
     app.add_middleware(RateLimit, rates=parse_rates(settings.rate_limit))  # before the body is read
+    origins = settings.cors_origin_list()
+    if origins:
+        app.add_middleware(
+            CORSMiddleware,
+            allow_origins=origins,
+            allow_methods=["GET", "POST", "DELETE"],
+            allow_headers=["Authorization", "Content-Type"],
+        )
     app.add_middleware(HttpMetrics, metrics=service_metrics)
     install_openapi(app)
     return app

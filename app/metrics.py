@@ -49,6 +49,7 @@ class ServiceMetrics:
     sessions: Gauge
     inputs: Counter
     fusion_step: Histogram
+    internal_errors: Counter
 
     @classmethod
     def create(cls) -> ServiceMetrics:
@@ -81,6 +82,11 @@ class ServiceMetrics:
                 "Time to apply one input to a session engine.",
                 ("kind",),
                 buckets=LATENCY_BUCKETS,
+                registry=registry,
+            ),
+            internal_errors=Counter(
+                "credal_internal_errors",
+                "Requests answered 500 internal-error (a bug; the log has each reference).",
                 registry=registry,
             ),
         )

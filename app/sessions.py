@@ -45,6 +45,7 @@ import contextlib
 import functools
 import logging
 import math
+import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -64,7 +65,6 @@ from app.errors import (
     request_validation_error,
 )
 from app.hub import Subscriber
-from app.limits import check_report_limits
 from app.live_session import LiveSession, new_session, restore_snapshot
 from app.metrics import ServiceMetrics
 from app.responses import dumps
@@ -138,6 +138,10 @@ class SessionRegistry:
         self._load_lock = asyncio.Lock()
         self._store_inline = isinstance(store, MemoryStore)
         self._forwarders: dict[str, asyncio.Task[None]] = {}
+        self._tokens: dict[str, str] = {}
+        """Token hash → id of the live sessions in memory (the rate limit's verified identities)."""
+        self.creating = threading.Lock()
+        """Held from counting the sessions to storing a new one: the limit holds under races."""
 
     def __len__(self) -> int:
         return len(self._sessions)
@@ -168,7 +172,12 @@ class SessionRegistry:
         """Register a session just created in the store."""
         session = new_session(record)
         self._sessions[record.id] = session
+        self._tokens[record.token_hash] = record.id
         return session
+
+    def knows_token(self, token_hash: str) -> bool:
+        """Whether ``token_hash`` is the hash of a live session's token held in memory."""
+        return token_hash in self._tokens
 
     async def record(self, session_id: str) -> SessionRecord | None:
         """The stored record of a live session (from memory when the session is loaded)."""
@@ -187,6 +196,7 @@ class SessionRegistry:
             if session is None:
                 session = await self._load(session_id)
                 self._sessions[session_id] = session
+                self._tokens[session.record.token_hash] = session_id
         return session
 
     async def _load(self, session_id: str) -> LiveSession:
@@ -230,6 +240,7 @@ class SessionRegistry:
         """Forget a session (deleted): its subscribers are told, waiting inputs get 404."""
         session = self._sessions.pop(session_id, None)
         if session is not None:
+            self._tokens.pop(session.record.token_hash, None)
             session.closed = True
             session.hub.close()
         forwarder = self._forwarders.pop(session_id, None)
@@ -357,14 +368,12 @@ class SessionRegistry:
     # ------------------------------------------------------------ inputs
     def check_tracks(self, session: LiveSession, report: TrackReport) -> None:
         """Checks that need only the config: item limit, sensor, dimensions, class labels."""
-        check_report_limits(report, self.settings)
         issues = track_report_issues(report, session.config)
         if issues:
             raise request_validation_error(issues)
 
     def check_detections(self, session: LiveSession, report: DetectionReport) -> None:
         """Checks of a detection batch that need only the config."""
-        check_report_limits(report, self.settings)
         issues = detection_report_issues(report, session.config)
         if issues:
             raise request_validation_error(issues)

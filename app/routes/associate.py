@@ -9,11 +9,12 @@ from fastapi import APIRouter
 
 from api_schemas.associate import AssociateRequest, AssociateResponse
 from app.errors import problem_responses
+from app.requests import WireRoute
 from app.responses import PlainJSONResponse
 from app.translate import PlainObject, associate_plain, class_frame, evidence_masses, side_arrays
 from core.association import associate
 
-router = APIRouter(tags=["association"])
+router = APIRouter(tags=["association"], route_class=WireRoute)
 
 TINY_PROBLEM = 256
 """known × incoming pairs up to which the association runs on the event loop."""

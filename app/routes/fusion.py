@@ -14,9 +14,10 @@ from app.errors import (
     TrackNotFound,
     problem_responses,
 )
+from app.requests import WireRoute
 from app.responses import JSONTextResponse, PlainJSONResponse
 
-router = APIRouter(prefix="/v1/sessions", tags=["fusion"])
+router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
 
 TrackId = Annotated[str, Path(min_length=1, max_length=64, description="A fused track id.")]
 

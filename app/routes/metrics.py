@@ -6,8 +6,9 @@ from fastapi import APIRouter, Response
 
 from app.deps import MetricsDep
 from app.errors import problem_responses
+from app.requests import WireRoute
 
-router = APIRouter(tags=["health"])
+router = APIRouter(tags=["health"], route_class=WireRoute)
 
 
 @router.get(

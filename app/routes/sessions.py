@@ -29,13 +29,13 @@ from app.deps import (
     StoreDep,
 )
 from app.errors import LimitExceeded, problem_responses
-from app.limits import check_config_limits
 from app.live_session import LiveSession
+from app.requests import WireRoute
 from app.security import hash_token, issue_token
 from app.session_log import event_from_entry
 from app.stores import SessionRecord
 
-router = APIRouter(prefix="/v1/sessions", tags=["sessions"])
+router = APIRouter(prefix="/v1/sessions", tags=["sessions"], route_class=WireRoute)
 
 MAX_EVENTS_PAGE = 10_000
 MAX_SEQ = 2**53
@@ -55,17 +55,7 @@ def create_session(
     metrics: MetricsDep,
 ) -> SessionCreated:
     """Create a session from a config; returns its id, its token (shown only here) and the resolved config."""
-    check_config_limits(config, settings)
     registry.check_config(config)
-    live = store.count_sessions()
-    if live >= settings.max_sessions:
-        raise LimitExceeded(
-            "max_sessions",
-            settings.max_sessions,
-            live,
-            what="sessions",
-            status=HTTPStatus.TOO_MANY_REQUESTS,
-        )
     token = issue_token()
     record = SessionRecord(
         id=uuid.uuid4().hex,
@@ -73,8 +63,18 @@ def create_session(
         token_hash=hash_token(token),
         created_at=datetime.now(UTC),
     )
-    store.create_session(record)
-    registry.add(record)
+    with registry.creating:  # count and create as one step (this instance's requests)
+        live = store.count_sessions()
+        if live >= settings.max_sessions:
+            raise LimitExceeded(
+                "max_sessions",
+                settings.max_sessions,
+                live,
+                what="sessions",
+                status=HTTPStatus.TOO_MANY_REQUESTS,
+            )
+        store.create_session(record)
+        registry.add(record)
     metrics.sessions.set(store.count_sessions())
     return SessionCreated(id=record.id, token=token, config=config, created_at=record.created_at)
 

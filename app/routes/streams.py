@@ -36,10 +36,11 @@ from api_schemas.ws import DetectionsMessage, client_message_adapter
 from app.deps import open_record
 from app.errors import ServiceError, Unauthorized, problem_for, problem_response
 from app.live_session import LiveSession
+from app.requests import WireRoute
 from app.responses import dumps
 from app.sessions import SessionRegistry, result_message
 
-router = APIRouter(prefix="/v1/sessions")
+router = APIRouter(prefix="/v1/sessions", route_class=WireRoute)
 logger = logging.getLogger("credal_fusion.streams")
 
 OUTBOX_SIZE = 16

@@ -14,7 +14,9 @@ from importlib.resources import files
 from fastapi import APIRouter
 from fastapi.responses import HTMLResponse
 
-router = APIRouter(include_in_schema=False)
+from app.requests import WireRoute
+
+router = APIRouter(include_in_schema=False, route_class=WireRoute)
 
 VIEWER_PAGE = "viewer.html"
 

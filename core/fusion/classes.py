@@ -13,6 +13,14 @@ belief) or class likelihoods (one step of evidence). Per fused track:
   ([MTT] eq 7). It is reported normalised, with the conflict that
   normalisation removed: information about disagreeing sensors, not an error.
 
+**Bound.** Every mass kept or fused has at most
+:data:`~core.belief.summary.MAX_FUSED_FOCAL_SETS` focal sets: a larger one is
+summarized ([LGS86], :mod:`core.belief.summary`: the largest focal sets kept,
+the rest of the mass on their union — a weakening, never a stronger claim).
+A fused assessment says ``summarized`` when its combination was cut; a
+likelihood step over more than 8 fractional classes (2^F > 256 focal sets)
+is always built summarized.
+
 **Reading.** Likelihood values are plausibilities for the GBT and must lie in
 [0, 1]; a sensor that has densities must scale them (the local classifier's
 ``likelihood_scale`` does that for the service's own tracks).
@@ -27,7 +35,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.arrays import FloatArray
-from core.belief import Frame, MassFunction, conjunctive_all, gbt_mass
+from core.belief import Frame, MassFunction, conjunctive
+from core.belief.summary import bounded_gbt_mass, summarize
 from core.errors import TotalConflict
 
 
@@ -58,16 +67,25 @@ class ClassAssessment:
     plausibility: FloatArray
     conflict: float
     decision: str | None
+    summarized: bool = False
+    """Whether the fused mass was summarized to its bound (:mod:`core.belief.summary`)."""
 
 
-def assess(combined: MassFunction) -> ClassAssessment:
+def assess(combined: MassFunction, summarized: bool = False) -> ClassAssessment:
     """Normalise an (unnormalised) combined mass and summarise it."""
     try:
         normalised = combined.normalized()
     except TotalConflict:
         empty = np.zeros(0)
         return ClassAssessment(
-            ClassState.TOTAL_CONFLICT, None, empty, empty, empty, combined.conflict, None
+            ClassState.TOTAL_CONFLICT,
+            None,
+            empty,
+            empty,
+            empty,
+            combined.conflict,
+            None,
+            summarized,
         )
     betp = normalised.pignistic()
     assert betp is not None  # a normalised mass has m(∅) = 0
@@ -79,6 +97,7 @@ def assess(combined: MassFunction) -> ClassAssessment:
         plausibility=normalised.singleton_plausibility(),
         conflict=combined.conflict,
         decision=combined.frame.labels[int(np.argmax(betp))],
+        summarized=summarized,
     )
 
 
@@ -94,8 +113,8 @@ def accumulate_likelihoods(
     TotalConflict
         If the step's evidence contradicts the previous mass totally.
     """
-    step = gbt_mass(frame, np.asarray(likelihoods, dtype=np.float64))
-    combined = step if previous is None else conjunctive_all(previous, step)
+    step, _ = bounded_gbt_mass(frame, np.asarray(likelihoods, dtype=np.float64))
+    combined = step if previous is None else summarize(conjunctive(previous, step))[0]
     return combined.normalized(), combined.conflict
 
 
@@ -111,4 +130,8 @@ def fuse_sensor_classes(
     if not masses:
         return None
     discounted = [masses[sensor].discount(reliabilities[sensor]) for sensor in sorted(masses)]
-    return assess(conjunctive_all(*discounted))
+    fused, summarized = summarize(discounted[0])
+    for mass in discounted[1:]:
+        fused, cut = summarize(conjunctive(fused, mass))
+        summarized = summarized or cut
+    return assess(fused, summarized)

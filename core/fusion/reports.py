@@ -152,6 +152,7 @@ def class_to_plain(assessment: ClassAssessment) -> dict[str, Any]:
             "plausibility": None,
             "conflict": assessment.conflict,
             "decision": None,
+            "summarized": assessment.summarized,
         }
     labels = assessment.mass.frame.labels
     return {
@@ -164,4 +165,5 @@ def class_to_plain(assessment: ClassAssessment) -> dict[str, Any]:
         "plausibility": dict(zip(labels, assessment.plausibility.tolist(), strict=True)),
         "conflict": assessment.conflict,
         "decision": assessment.decision,
+        "summarized": assessment.summarized,
     }
