@@ -450,7 +450,9 @@ async def _on_error(request: Request, error: Exception) -> ProblemResponse:
     return problem_answer(request, error)
 
 
-def install_error_handlers(app: FastAPI, on_internal_error: Callable[[], None] | None = None) -> None:
+def install_error_handlers(
+    app: FastAPI, on_internal_error: Callable[[], None] | None = None
+) -> None:
     """Register the problem+json handler of every error kind on ``app``.
 
     Unexpected errors are answered by :class:`InternalErrors` (a middleware, added

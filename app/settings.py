@@ -80,6 +80,12 @@ class Settings(BaseSettings):
     max_sessions: int = Field(1000, ge=1)
     session_idle_seconds: float = Field(3600.0, ge=0.0, description="0: sessions never expire")
     snapshot_every: int = Field(100, ge=1, description="snapshot the engine every N inputs")
+    ws_messages_per_second: int = Field(
+        1000,
+        ge=1,
+        description="messages one stream connection may send per second; more are answered "
+        "with an error (limit-exceeded, status 429) and not applied",
+    )
     ws_ping_interval: float = Field(20.0, gt=0.0, description="seconds between WebSocket pings")
     ws_ping_timeout: float = Field(20.0, gt=0.0, description="a peer silent this long is dropped")
     lease_ttl_ms: int = Field(
