@@ -57,7 +57,9 @@ def test_verified_tokens_are_counted_apart_forged_ones_count_against_the_address
         assert limited.get(f"/v1/sessions/{sid}", headers=owner).status_code == 200
     assert limited.get(f"/v1/sessions/{sid}", headers=owner).status_code == 429
     forged = {"Authorization": "Bearer another-token"}
-    assert limited.get(f"/v1/sessions/{sid}", headers=forged).status_code == 403  # the address's 2nd
+    assert (
+        limited.get(f"/v1/sessions/{sid}", headers=forged).status_code == 403
+    )  # the address's 2nd
     create(limited)  # the address's third request
     refused = limited.post("/v1/sessions", json=SESSION_CONFIG)
     assert refused.status_code == 429

@@ -17,9 +17,9 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
-from tests.api.examples import DETECTION_REPORT, SESSION_CONFIG, TRACK_REPORT
 from app.main import create_app
 from tests.api.conftest import make_settings
+from tests.api.examples import DETECTION_REPORT, SESSION_CONFIG, TRACK_REPORT
 
 Body = dict[str, Any]
 
