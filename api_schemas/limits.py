@@ -10,7 +10,8 @@ in :data:`ACTIVE_LIMITS` for each request; outside a request the defaults apply.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
 
@@ -45,6 +46,26 @@ ACTIVE_LIMITS: ContextVar[WireLimits] = ContextVar(
     default=DEFAULT_LIMITS,
 )
 """The limits of the request being validated (set by the service per request)."""
+
+
+CEILINGS = WireLimits(
+    max_tracks_per_input=MAX_ITEMS,
+    max_sensors=MAX_SENSORS,
+    max_classes=MAX_CLASSES,
+    max_focal_sets=MAX_FOCAL_SETS,
+)
+"""The hard ceilings: what stored data (logged inputs, session configs) is read back under,
+so that limits lowered after a restart never refuse what was accepted before."""
+
+
+@contextmanager
+def limits_of(limits: WireLimits) -> Iterator[None]:
+    """Validate under ``limits`` within the block."""
+    token = ACTIVE_LIMITS.set(limits)
+    try:
+        yield
+    finally:
+        ACTIVE_LIMITS.reset(token)
 
 
 def bounded(limit: str, what: str) -> BeforeValidator:

@@ -56,7 +56,7 @@ class FusedClassification(WireModel):
     conflict: UnitFloat
     decision: Label | None
     summarized: bool = False
-    """The fused mass had more focal sets than its bound (256) and was summarized: the
+    """The fused mass had more focal sets than its bound (32) and was summarized: the
     largest focal sets kept, the rest of the mass on their union (a weakening: Bel
     never grows, Pl never shrinks; ``core.belief.summary``)."""
 

@@ -13,6 +13,7 @@ import uvicorn
 from app.commands.replay import export_command, replay_command
 from app.commands.scenarios import names as scenario_names
 from app.commands.simulate import command as simulate_command
+from app.keepalive import server_options
 from app.main import create_app
 from app.runtime import tune_garbage_collector
 from app.settings import get_settings
@@ -44,11 +45,9 @@ def _serve(args: argparse.Namespace) -> int:
         application,
         host=args.host,
         port=args.port,
-        ws_max_size=settings.max_body_bytes,
-        ws_ping_interval=settings.ws_ping_interval,
-        ws_ping_timeout=settings.ws_ping_timeout,
         proxy_headers=False,
         access_log=settings.access_log,
+        **server_options(settings),
     )
     return 0
 

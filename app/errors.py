@@ -13,9 +13,7 @@ that is also logged with the traceback.
 from __future__ import annotations
 
 import difflib
-import functools
 import logging
-import typing
 import uuid
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from http import HTTPStatus
@@ -24,7 +22,7 @@ from typing import Any, ClassVar
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
-from pydantic import BaseModel, ValidationError
+from pydantic import ValidationError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
@@ -32,6 +30,7 @@ from api_schemas.issues import FieldIssue
 from api_schemas.keys import allowed_keys
 from api_schemas.limits import LIMIT_EXCEEDED
 from api_schemas.problem import FieldError, Problem
+from app.requests import body_model
 from core.errors import InvalidInput
 
 PROBLEM_MEDIA_TYPE = "application/problem+json"
@@ -418,26 +417,12 @@ def _headers_of(error: Exception) -> dict[str, str]:
     return {}
 
 
-@functools.cache
-def body_type(endpoint: Callable[..., Any]) -> object:
-    """The model a route's body is validated as (the one pydantic-model parameter), if any."""
-    try:
-        hints = typing.get_type_hints(endpoint, include_extras=False)
-    except (NameError, TypeError):
-        return None
-    hints.pop("return", None)
-    models = [
-        hint for hint in hints.values() if isinstance(hint, type) and issubclass(hint, BaseModel)
-    ]
-    return models[0] if len(models) == 1 else None
-
-
 def problem_answer(request: Request, error: Exception) -> ProblemResponse:
     """The problem+json answer of ``error`` to ``request``."""
     settings = getattr(request.app.state, "settings", None)
     listed = getattr(settings, "max_listed_errors", MAX_LISTED_ERRORS)
     endpoint = request.scope.get("endpoint")
-    root = body_type(endpoint) if callable(endpoint) else None
+    root = body_model(endpoint) if callable(endpoint) else None
     problem = problem_for(error, request.url.path, listed=listed, root=root)
     return ProblemResponse(
         problem.model_dump(mode="json", exclude_none=True),

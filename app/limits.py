@@ -2,14 +2,20 @@
 
 Every limit is a setting (``app/settings.py``) checked before the work it bounds:
 
-- ``max_body_bytes`` (4 MiB) and ``body_read_timeout`` (10 s): by
+- ``max_body_bytes`` (1 MiB) and ``body_read_timeout`` (10 s): by
   :class:`BodyLimits`, before anything parses the body (413, 408);
 - ``max_tracks_per_input`` (2 000, also per side of ``/v1/associate``),
   ``max_sensors`` (64), ``max_classes`` (20), ``max_focal_sets`` (64 per class
   mass): by the wire models on each raw list, before its items are validated
   (:mod:`api_schemas.limits`; 422 ``limit-exceeded``); :class:`BodyLimits`
   puts the configured values in place for the request;
+- ``max_associate_pairs`` (250 000) and ``max_associate_class_pairs`` (20 000,
+  when the tracks carry class evidence): known × incoming of ``/v1/associate``;
+- a fused or accumulated class mass keeps at most 32 focal sets (summarized
+  beyond, and said so: :mod:`core.belief.summary`);
 - ``max_listed_errors`` (50): a 422 lists that many errors and counts them all;
+- ``ws_messages_per_second`` (1 000): per stream connection (an ``error`` beyond);
+- a page of ``GET …/events``: ``limit`` events (≤ 10 000) and at most 4 MiB;
 - ``max_sessions`` (1 000): checked and taken atomically at session creation (429);
 - ``rate_limit``: per verified token or client address (:mod:`app.rate_limit`).
 """

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import sys
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
@@ -22,6 +23,13 @@ from app.settings import Settings, get_settings
 from app.stores import open_store
 from core import __version__
 
+GIL_SWITCH_INTERVAL_S = 0.0005
+"""How long a worker thread (a fusion step) may hold the GIL before the event loop gets it.
+
+Python's default is 5 ms; the event loop needs the GIL at every await of an
+answer, so a step in a worker thread delayed ``/healthz`` by hundreds of ms.
+"""
+
 
 def operation_id(route: APIRoute) -> str:
     """Operation ids are the route functions' names (they become SDK method names)."""
@@ -35,6 +43,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        sys.setswitchinterval(GIL_SWITCH_INTERVAL_S)
         store = open_store(settings.store, redis_prefix=settings.redis_prefix)
         app.state.store = store
         registry = SessionRegistry(store, settings, service_metrics)

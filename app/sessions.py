@@ -414,14 +414,18 @@ class SessionRegistry:
         self, session: LiveSession, report: TrackReport, *, explain: bool = False
     ) -> str:
         """Apply one track list, log it durably, then return (and publish) its result (JSON text)."""
-        self.check_tracks(session, report)
+        await self._compute(
+            len(report.tracks), functools.partial(self.check_tracks, session, report)
+        )
         return await self._submit(session, report, len(report.tracks), explain=explain)
 
     async def submit_detections(
         self, session: LiveSession, report: DetectionReport, *, explain: bool = False
     ) -> str:
         """Apply one detection batch (local tracker, then fusion), log it, return its result."""
-        self.check_detections(session, report)
+        await self._compute(
+            len(report.detections), functools.partial(self.check_detections, session, report)
+        )
         return await self._submit(session, report, len(report.detections), explain=explain)
 
     async def _submit(
@@ -554,6 +558,21 @@ class SessionRegistry:
                 len(engine.tracks), functools.partial(engine.picture, at)
             )
             return session.seq, engine.time if at is None else at, tracks_plain(views)
+
+    async def picture_json(self, session: LiveSession, at: float | None) -> str:
+        """:meth:`picture` as the JSON text of a ``FusedPicture``, built off the event loop."""
+        async with session.lock:
+            engine = session.engine
+            seq = session.seq
+            if engine is None or engine.time is None:
+                return dumps({"seq": seq, "time": at, "tracks": []})
+            time_of = engine.time if at is None else at
+
+            def build() -> str:
+                views = engine.picture(at)
+                return dumps({"seq": seq, "time": time_of, "tracks": tracks_plain(views)})
+
+            return await self._compute(len(engine.tracks), build)
 
     async def track_detail(self, session: LiveSession, track_id: str) -> PlainObject | None:
         """One live fused track at the fusion time with its history, or ``None``."""

@@ -57,7 +57,11 @@ class Settings(BaseSettings):
         description="one log line per request (uvicorn's access log); /metrics counts them too",
     )
 
-    max_body_bytes: int = Field(4 * 1024 * 1024, ge=1024)
+    max_body_bytes: int = Field(
+        1024 * 1024,
+        ge=1024,
+        description="a request body or WebSocket message; 1 MiB: parsing one holds the GIL ~10 ms",
+    )
     max_tracks_per_input: int = Field(
         DEFAULTS.max_tracks_per_input,
         ge=1,
@@ -71,6 +75,17 @@ class Settings(BaseSettings):
         ge=1,
         le=MAX_FOCAL_SETS,
         description="focal sets in one class mass of an input",
+    )
+    max_associate_pairs: int = Field(
+        250_000,
+        ge=1,
+        description="known × incoming pairs of one POST /v1/associate (the score matrix's size)",
+    )
+    max_associate_class_pairs: int = Field(
+        20_000,
+        ge=1,
+        description="known × incoming pairs of one POST /v1/associate whose tracks carry class "
+        "evidence (each pair combines two class masses)",
     )
     max_listed_errors: int = Field(
         MAX_LISTED_ERRORS,
@@ -100,6 +115,11 @@ class Settings(BaseSettings):
         "request: no token, an unknown token, unauthenticated routes), in the "
         "'limits' notation: '200/second', '50/second;2000/minute'; 'none' turns it off",
     )
+
+    @field_validator("admin_token", mode="before")
+    @classmethod
+    def _empty_admin_token_is_none(cls, value: object) -> object:
+        return None if value == "" else value  # CREDAL_ADMIN_TOKEN= (empty): no admin token
 
     @field_validator("admin_token")
     @classmethod

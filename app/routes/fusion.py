@@ -78,10 +78,9 @@ async def list_fused_tracks(
         FiniteFloat | None,
         Query(description="predict the tracks to this time (default: the fusion time)"),
     ] = None,
-) -> PlainJSONResponse:
+) -> JSONTextResponse:
     """The live fused tracks (not terminated), optionally predicted to ``time``."""
-    seq, at, tracks = await registry.picture(session, time)
-    return PlainJSONResponse({"seq": seq, "time": at, "tracks": tracks})
+    return JSONTextResponse(await registry.picture_json(session, time))
 
 
 @router.get(

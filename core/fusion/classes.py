@@ -18,7 +18,7 @@ belief) or class likelihoods (one step of evidence). Per fused track:
 summarized ([LGS86], :mod:`core.belief.summary`: the largest focal sets kept,
 the rest of the mass on their union — a weakening, never a stronger claim).
 A fused assessment says ``summarized`` when its combination was cut; a
-likelihood step over more than 8 fractional classes (2^F > 256 focal sets)
+likelihood step over more than 5 fractional classes (2^F > 32 focal sets)
 is always built summarized.
 
 **Reading.** Likelihood values are plausibilities for the GBT and must lie in
