@@ -13,7 +13,10 @@ peer is visibly alive or visibly behind —
 - it sent bytes since the ping (a producer is not dead), or
 - answers to it are waiting: the transport's write buffer is not empty, or the
   application has not taken the peer's last message because its answers are
-  queued (reading is paused: :mod:`app.routes.streams` keeps 16 answers);
+  queued (reading is paused: :mod:`app.routes.streams` keeps 16 answers), or
+  answers were sent to it since its last pong (beyond the connection's first
+  message, the ``ack``): they may sit unread in the peer's buffers, ahead of
+  the ping;
 
 then the next ping is scheduled. Otherwise (silent and owed nothing) it is
 closed with 1011 as before. Backpressure stays bounded: the stream channel
@@ -41,13 +44,28 @@ class PatientWebSocketProtocol(WebSocketsSansIOProtocol):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.received_at = 0.0
+        self.sent_since_pong = 0
+        """Messages sent since the peer's last pong (the first is the connection's ack)."""
+        self.ever_ponged = False
 
     def data_received(self, data: bytes) -> None:
         self.received_at = self.loop.time()
         super().data_received(data)
 
+    async def send(self, message: Any) -> None:
+        if message.get("type") == "websocket.send":
+            self.sent_since_pong += 1
+        await super().send(message)
+
+    def handle_pong(self, event: Any) -> None:
+        if self.pending_ping_payload is not None and bytes(event.data) == self.pending_ping_payload:
+            self.sent_since_pong = 0
+            self.ever_ponged = True
+        super().handle_pong(event)
+
     def keepalive_timeout(self) -> None:
-        behind = self.transport.get_write_buffer_size() > 0 or not self.writable.is_set()
+        owed = self.sent_since_pong > (0 if self.ever_ponged else 1)
+        behind = owed or self.transport.get_write_buffer_size() > 0 or not self.writable.is_set()
         alive = self.received_at > self.ping_sent_at
         if (behind or alive or self.read_paused) and not self.transport.is_closing():
             self.pong_timer = None

@@ -89,6 +89,7 @@ CLASSIFICATION_KEYS = {
     "plausibility",
     "conflict",
     "decision",
+    "summarized",
 }
 
 
