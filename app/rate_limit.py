@@ -79,9 +79,7 @@ def client_key(scope: Scope, verified: Callable[[str], bool]) -> str:
 
 def verifier(scope: Scope) -> Callable[[str], bool]:
     """Whether a token hash is a live session's (held here) or the admin token's."""
-    app = scope.get("app")
-    state = getattr(app, "state", None)
-    registry = getattr(state, "registry", None)
+    state = getattr(scope.get("app"), "state", None)
     settings = getattr(state, "settings", None)
     admin = getattr(settings, "admin_token", None)
     admin_hash = hash_token(admin.get_secret_value()) if admin is not None else None
@@ -89,6 +87,7 @@ def verifier(scope: Scope) -> Callable[[str], bool]:
     def verified(token_hash: str) -> bool:
         if admin_hash is not None and hmac.compare_digest(token_hash, admin_hash):
             return True
+        registry = getattr(state, "registry", None)  # set by the lifespan
         return registry is not None and bool(registry.knows_token(token_hash))
 
     return verified
@@ -101,6 +100,7 @@ class RateLimit:
         self.app = app
         self.rates = rates
         self.limiter = SlidingWindowCounterRateLimiter(MemoryStorage())
+        self._verified: Callable[[str], bool] | None = None
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if (
@@ -110,7 +110,9 @@ class RateLimit:
         ):
             await self.app(scope, receive, send)
             return
-        key = client_key(scope, verifier(scope))
+        if self._verified is None:  # the application's registry and settings, once
+            self._verified = verifier(scope)
+        key = client_key(scope, self._verified)
         for item in self.rates:
             if not await self.limiter.hit(item, key):
                 await self._refuse(scope, receive, send, item, key)
