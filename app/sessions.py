@@ -569,8 +569,9 @@ class SessionRegistry:
             time_of = engine.time if at is None else at
 
             def build() -> str:
-                views = engine.picture(at)
-                return dumps({"seq": seq, "time": time_of, "tracks": tracks_plain(views)})
+                # one track at a time: no single C call holds the GIL for the whole answer
+                tracks = ",".join(dumps(track) for track in tracks_plain(engine.picture(at)))
+                return f'{{"seq":{seq},"time":{dumps(time_of)},"tracks":[{tracks}]}}'
 
             return await self._compute(len(engine.tracks), build)
 
