@@ -9,8 +9,9 @@ from pydantic import Field, model_validator
 from api_schemas.association import AssociationMethod, AssociationOptions, resolve_options
 from api_schemas.base import MAX_CLASSES, FiniteFloat, Identifier, Label, WireModel
 from api_schemas.issues import FieldIssue, raise_issues
+from api_schemas.limits import MAX_ITEMS, bounded
 from api_schemas.linalg import covariance_problems
-from api_schemas.reports import MAX_ITEMS, SensorTrack
+from api_schemas.reports import SensorTrack
 from api_schemas.results import ScoreMatrix
 
 DiagnosticValue = FiniteFloat | int | str | bool | None
@@ -25,8 +26,16 @@ class AssociateRequest(WireModel):
     method: AssociationMethod = "denoeux"
     options: AssociationOptions = Field(default_factory=AssociationOptions)
     classes: Annotated[list[Label], Field(max_length=MAX_CLASSES)] = Field(default_factory=list)
-    known: Annotated[list[SensorTrack], Field(max_length=MAX_ITEMS)]
-    incoming: Annotated[list[SensorTrack], Field(max_length=MAX_ITEMS)]
+    known: Annotated[
+        list[SensorTrack],
+        Field(max_length=MAX_ITEMS),
+        bounded("max_tracks_per_input", "known tracks"),
+    ]
+    incoming: Annotated[
+        list[SensorTrack],
+        Field(max_length=MAX_ITEMS),
+        bounded("max_tracks_per_input", "incoming tracks"),
+    ]
 
     @model_validator(mode="after")
     def _consistent(self) -> Self:

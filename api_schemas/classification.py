@@ -14,6 +14,7 @@ from typing import Annotated, Self
 from pydantic import Field, model_validator
 
 from api_schemas.base import MAX_CLASSES, Label, UnitFloat, WireModel
+from api_schemas.limits import MAX_FOCAL_SETS, bounded
 
 MASS_SUM_TOLERANCE = 1e-9
 """Masses must sum to 1 within this tolerance (ALGORITHMS.md §1)."""
@@ -37,7 +38,14 @@ class FocalMass(WireModel):
 class ClassEvidence(WireModel):
     """Class evidence: exactly one of ``mass`` or ``likelihoods``."""
 
-    mass: Annotated[list[FocalMass], Field(min_length=1, max_length=1024)] | None = None
+    mass: (
+        Annotated[
+            list[FocalMass],
+            Field(min_length=1, max_length=MAX_FOCAL_SETS),
+            bounded("max_focal_sets", "focal sets"),
+        ]
+        | None
+    ) = None
     likelihoods: (
         Annotated[dict[Label, UnitFloat], Field(min_length=1, max_length=MAX_CLASSES)] | None
     ) = None

@@ -30,6 +30,7 @@ from api_schemas.base import (
     WireModel,
 )
 from api_schemas.issues import FieldIssue, raise_issues
+from api_schemas.limits import MAX_SENSORS, bounded
 from api_schemas.linalg import check_covariance
 
 MAX_STATE_DIM = 64
@@ -245,8 +246,12 @@ class SessionConfig(WireModel):
     name: Annotated[str, StringConstraints(min_length=1, max_length=100)] | None = None
     state: StateLayout
     motion: MotionModel = Field(default_factory=MotionModel)
-    classes: Annotated[list[Label], Field(max_length=MAX_CLASSES)] = Field(default_factory=list)
-    sensors: list[SensorConfig] = Field(default_factory=list)
+    classes: Annotated[
+        list[Label], Field(max_length=MAX_CLASSES), bounded("max_classes", "classes")
+    ] = Field(default_factory=list)
+    sensors: Annotated[
+        list[SensorConfig], Field(max_length=MAX_SENSORS), bounded("max_sensors", "sensors")
+    ] = Field(default_factory=list)
     region: PolygonFieldOfView | None = Field(
         default=None,
         description=(

@@ -11,8 +11,11 @@ from itertools import chain
 
 import numpy as np
 
-SYMMETRY_TOLERANCE = 1e-9
-"""Relative tolerance on ``|P - Pᵀ|`` (relative to the largest entry, at least 1)."""
+from core.distance import estimates
+from core.distance.estimates import covariance_problems as covariance_problems_of_stack
+
+SYMMETRY_TOLERANCE = estimates.SYMMETRY_TOLERANCE
+"""Relative tolerance on ``|P - Pᵀ|`` (the core's: one check, one tolerance)."""
 
 
 def check_square(matrix: Sequence[Sequence[float]], size: int | None = None) -> int:
@@ -74,26 +77,5 @@ def covariance_problems(matrices: Sequence[Sequence[Sequence[float]]]) -> dict[i
 
 
 def _stack_problems(stack: np.ndarray) -> dict[int, str]:
-    """:func:`covariance_problems` of a ``(k, n, n)`` stack, by position in the stack."""
-    problems: dict[int, str] = {}
-    difference = np.abs(stack - stack.transpose(0, 2, 1))
-    # every scale is at least 1: below the bare tolerance, every matrix is symmetric
-    if difference.max() > SYMMETRY_TOLERANCE:
-        asymmetry = difference.max(axis=(1, 2))
-        scale = np.maximum(1.0, np.abs(stack).max(axis=(1, 2)))
-        for position in np.flatnonzero(asymmetry > SYMMETRY_TOLERANCE * scale).tolist():
-            problems[position] = (
-                f"covariance is not symmetric (largest |P - Pᵀ| = {asymmetry[position]:.3g})"
-            )
-    candidates = [position for position in range(len(stack)) if position not in problems]
-    if not candidates:
-        return problems
-    try:
-        np.linalg.cholesky(stack[candidates] if problems else stack)
-    except np.linalg.LinAlgError:
-        for position in candidates:
-            try:
-                np.linalg.cholesky(stack[position])
-            except np.linalg.LinAlgError:
-                problems[position] = "covariance is not positive definite (Cholesky failed)"
-    return problems
+    """:func:`covariance_problems` of a ``(k, n, n)`` stack, by position: the core's one check."""
+    return covariance_problems_of_stack(stack)

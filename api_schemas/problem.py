@@ -31,3 +31,5 @@ class Problem(BaseModel):
     detail: str
     instance: str | None = None
     errors: list[FieldError] | None = None
+    error_count: int | None = None
+    """How many errors there were when ``errors`` lists only the first ones (``max_listed_errors``)."""

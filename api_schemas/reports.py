@@ -21,10 +21,8 @@ from pydantic import Field, model_validator
 from api_schemas.base import FiniteFloat, Identifier, Matrix, Vector, WireModel
 from api_schemas.classification import ClassEvidence
 from api_schemas.issues import FieldIssue, raise_issues
+from api_schemas.limits import MAX_ITEMS, bounded
 from api_schemas.linalg import check_square, covariance_problems
-
-MAX_ITEMS = 100_000
-"""Hard ceiling on items per input; the service's configured limit is lower."""
 
 StateVector = Annotated[Vector, Field(min_length=1, max_length=64)]
 
@@ -56,7 +54,11 @@ class TrackReport(WireModel):
 
     sensor: Identifier
     time: FiniteFloat
-    tracks: Annotated[list[SensorTrack], Field(max_length=MAX_ITEMS)]
+    tracks: Annotated[
+        list[SensorTrack],
+        Field(max_length=MAX_ITEMS),
+        bounded("max_tracks_per_input", "tracks"),
+    ]
 
     @model_validator(mode="after")
     def _covariances_and_distinct_ids(self) -> Self:
@@ -111,7 +113,11 @@ class DetectionReport(WireModel):
 
     sensor: Identifier
     time: FiniteFloat
-    detections: Annotated[list[Detection], Field(max_length=MAX_ITEMS)]
+    detections: Annotated[
+        list[Detection],
+        Field(max_length=MAX_ITEMS),
+        bounded("max_tracks_per_input", "detections"),
+    ]
 
     @model_validator(mode="after")
     def _noise_is_covariance(self) -> Self:

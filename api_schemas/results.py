@@ -9,6 +9,23 @@ from api_schemas.base import FiniteFloat, Identifier, Label, Matrix, UnitFloat, 
 from api_schemas.classification import FocalMass
 
 TrackStatus = Literal["tentative", "confirmed", "coasting", "phantom", "terminated"]
+StatusReason = Literal[
+    "initiated",
+    "score_confirmed",
+    "min_points",
+    "second_sensor",
+    "reacquired",
+    "missed",
+    "blind_zone",
+    "occluded",
+    "out_of_range",
+    "score_deleted",
+    "gate_emptiness",
+    "phantom_expired",
+    "merged_into_phantom",
+    "duplicate",
+]
+"""Why a track's status last changed (``core.lifecycle.StatusReason``; a test pins them equal)."""
 
 
 class TrackSource(WireModel):
@@ -46,6 +63,10 @@ class FusedClassification(WireModel):
     conflict: UnitFloat
     decision: Label | None
     decision_state: DecisionState
+    summarized: bool = False
+    """The fused mass had more focal sets than its bound (32) and was summarized: the
+    largest focal sets kept, the rest of the mass on their union (a weakening: Bel
+    never grows, Pl never shrinks; ``core.belief.summary``)."""
 
 
 class FusedTrack(WireModel):
@@ -63,7 +84,7 @@ class FusedTrack(WireModel):
     sources: list[TrackSource]
     classification: FusedClassification | None
     score: FiniteFloat | None
-    reason: str | None
+    reason: StatusReason | None
 
 
 PairBasis = Literal["continuity", "association"]

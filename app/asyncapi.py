@@ -61,7 +61,16 @@ Every message is one JSON object (a text frame) with a required `type` tag.
 plus `type` and an optional `ref`); the server answers each with exactly one
 `result` or `error`, in the order the inputs were sent. A bad message gets an
 `error` that names the problem (field paths in `problem.errors`) and the
-client's `ref`; the connection stays open.
+client's `ref`; the connection stays open. That holds for every kind of bad
+message: not JSON, nested too deep, duplicate keys, invalid UTF-8 in a binary
+frame, a message larger than `CREDAL_MAX_BODY_BYTES` (up to 4 times that; a
+larger frame is closed by the protocol with 1009), more than
+`CREDAL_WS_MESSAGES_PER_SECOND` messages in a second (an `error` with status
+429, the message not applied).
+
+Backpressure: the server keeps at most 16 answers per `stream` connection;
+when the client does not read them, the server stops reading its messages
+and TCP pushes back on the client. Nothing grows without bound.
 
 A `detections` message runs the sensor's local tracker (the sensor needs a
 `measurement` model in the session config) and then the fusion step, like
@@ -86,7 +95,10 @@ REST route's problem+json answer (401, 403, 404 or 429). With the redis
 store, `subscribe` on any instance receives the results applied on any
 other. The server sends
 WebSocket pings every `CREDAL_WS_PING_INTERVAL` seconds; a peer that does not
-answer within `CREDAL_WS_PING_TIMEOUT` is disconnected.
+answer within `CREDAL_WS_PING_TIMEOUT` is disconnected (1011) unless it is
+visibly alive or behind: it sent data since the ping, or answers to it are
+still queued (its pong waits behind them). A client whose results are queued
+is never cut by the keepalive.
 """
 
 

@@ -22,6 +22,7 @@ from evaluation.catalogue import CATALOGUE
 def _serve(args: argparse.Namespace) -> int:
     import uvicorn
 
+    from app.keepalive import server_options
     from app.main import create_app
     from app.runtime import tune_garbage_collector
     from app.settings import get_settings
@@ -46,11 +47,9 @@ def _serve(args: argparse.Namespace) -> int:
         application,
         host=settings.host,
         port=settings.port,
-        ws_max_size=settings.max_body_bytes,
-        ws_ping_interval=settings.ws_ping_interval,
-        ws_ping_timeout=settings.ws_ping_timeout,
         proxy_headers=False,
         access_log=settings.access_log,
+        **server_options(settings),
     )
     return 0
 

@@ -12,19 +12,25 @@ that is also logged with the traceback.
 
 from __future__ import annotations
 
+import difflib
 import logging
 import uuid
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from http import HTTPStatus
 from typing import Any, ClassVar
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from pydantic import ValidationError
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from api_schemas.issues import FieldIssue
+from api_schemas.keys import allowed_keys
+from api_schemas.limits import LIMIT_EXCEEDED
 from api_schemas.problem import FieldError, Problem
+from app.requests import body_model
 from core.errors import InvalidInput
 
 PROBLEM_MEDIA_TYPE = "application/problem+json"
@@ -65,6 +71,10 @@ class ServiceError(Exception):
     def headers(self) -> dict[str, str]:
         """Extra response headers."""
         return {}
+
+    def field_errors(self) -> list[FieldError] | None:
+        """The fields at fault (422s list them; other statuses may)."""
+        return None
 
 
 class SessionNotFound(ServiceError):  # noqa: N818 - HTTP vocabulary
@@ -193,6 +203,7 @@ class LimitExceeded(ServiceError):  # noqa: N818 - HTTP vocabulary
         *,
         what: str | None = None,
         status: int | None = None,
+        loc: Sequence[str | int] = (),
     ) -> None:
         subject = what or limit
         detail = f"{subject}: limit {limit} is {maximum}" + (
@@ -200,6 +211,10 @@ class LimitExceeded(ServiceError):  # noqa: N818 - HTTP vocabulary
         )
         super().__init__(detail, limit=limit, maximum=maximum, actual=actual)
         self._status = int(status) if status is not None else int(type(self).status)
+        self.loc = tuple(loc)
+
+    def field_errors(self) -> list[FieldError] | None:
+        return [_located(self.loc, self.detail, LIMIT_EXCEEDED)]
 
     @property
     def status_code(self) -> int:
@@ -215,13 +230,48 @@ def _pointer(loc: Sequence[str | int], error_type: str) -> str:
     return "#/" + "/".join(escaped) if escaped else "#"
 
 
-def field_errors(errors: Iterable[Mapping[str, Any]]) -> list[FieldError]:
-    """Pydantic/FastAPI error dicts as :class:`FieldError` entries (the input value is never echoed)."""
+LIBRARY_PREFIXES = ("Value error, ", "Assertion failed, ")
+"""What pydantic puts before a validator's own message; never shown to clients."""
+
+
+def unknown_key_detail(root: object, loc: Sequence[str | int]) -> str:
+    """``unknown key 'x'`` with the keys its object allows and the closest one."""
+    path = list(loc[1:]) if loc and loc[0] == "body" else list(loc)
+    key = str(path[-1])
+    allowed = allowed_keys(root, path[:-1]) if root is not None else None
+    if not allowed:
+        return f"unknown key {key!r}"
+    close = difflib.get_close_matches(key, allowed, n=1)
+    hint = f"; did you mean {close[0]!r}?" if close else ""
+    return f"unknown key {key!r} (allowed: {', '.join(allowed)}){hint}"
+
+
+def _detail(error: Mapping[str, Any], root: object) -> str:
+    """The message of one error, without library prefixes; unknown keys list the allowed ones."""
+    kind = str(error.get("type", ""))
+    message = str(error.get("msg", "invalid"))
+    for prefix in LIBRARY_PREFIXES:
+        message = message.removeprefix(prefix)
+    loc = list(error.get("loc", ()))
+    if kind == "json_invalid":
+        reason = (error.get("ctx") or {}).get("error")
+        at = f" at character {loc[-1]}" if loc and isinstance(loc[-1], int) else ""
+        return f"invalid JSON{at}: {reason}" if reason else f"invalid JSON{at}"
+    if kind == "extra_forbidden" and loc:
+        return unknown_key_detail(root, loc)
+    return message
+
+
+def field_errors(errors: Iterable[Mapping[str, Any]], root: object = None) -> list[FieldError]:
+    """Pydantic/FastAPI error dicts as :class:`FieldError` entries (the input value is never echoed).
+
+    ``root`` is the type the body was validated as (it names the keys an object allows).
+    """
     return [
         FieldError(
             loc=list(error.get("loc", ())),
             pointer=_pointer(list(error.get("loc", ())), str(error.get("type", ""))),
-            detail=str(error.get("msg", "invalid")),
+            detail=_detail(error, root),
             type=str(error.get("type", "value_error")),
         )
         for error in errors
@@ -269,93 +319,78 @@ def problem_response(
     )
 
 
-def _validation_detail(errors: list[FieldError]) -> str:
+MAX_LISTED_ERRORS = 50
+"""Default of ``max_listed_errors``: a 422 lists at most this many errors (``error_count`` has all)."""
+
+
+def _validation_detail(errors: list[FieldError], total: int) -> str:
     shown = "; ".join(
         f"{error.pointer if error.pointer != '#' else 'body'}: {error.detail}"
         for error in errors[:MAX_ERRORS_IN_DETAIL]
     )
-    more = len(errors) - MAX_ERRORS_IN_DETAIL
+    more = total - min(len(errors), MAX_ERRORS_IN_DETAIL)
     suffix = f"; and {more} more" if more > 0 else ""
-    noun = "field" if len(errors) == 1 else "fields"
-    return f"{len(errors)} invalid {noun}: {shown}{suffix}"
+    noun = "field" if total == 1 else "fields"
+    return f"{total} invalid {noun}: {shown}{suffix}"
 
 
-async def _on_validation_error(request: Request, error: Exception) -> ProblemResponse:
-    assert isinstance(error, RequestValidationError)
-    errors = field_errors(error.errors())
-    return problem_response(
-        request,
-        status=HTTPStatus.UNPROCESSABLE_ENTITY,
-        slug="validation-error",
-        title="Invalid request",
-        detail=_validation_detail(errors),
-        errors=errors,
-    )
+def _validation_problem(
+    raw: Sequence[Mapping[str, Any]], instance: str | None, listed: int, root: object
+) -> Problem:
+    """One 422 for every validation error: the first ``listed`` of them and their count.
 
-
-async def _on_service_error(request: Request, error: Exception) -> ProblemResponse:
-    assert isinstance(error, ServiceError)
-    return problem_response(
-        request,
-        status=error.status_code,
-        slug=error.slug,
-        title=error.title,
-        detail=error.detail,
-        headers=error.headers(),
-        **error.extensions,
-    )
-
-
-async def _on_invalid_input(request: Request, error: Exception) -> ProblemResponse:
-    return problem_response(
-        request,
-        status=HTTPStatus.UNPROCESSABLE_ENTITY,
-        slug="invalid-input",
-        title="Invalid input",
-        detail=str(error),
-    )
-
-
-async def _on_http_error(request: Request, error: Exception) -> ProblemResponse:
-    assert isinstance(error, StarletteHTTPException)
-    status = HTTPStatus(error.status_code)
-    return problem_response(
-        request,
-        status=error.status_code,
-        slug=status.phrase.lower().replace(" ", "-"),
-        title=status.phrase,
-        detail=str(error.detail),
-        headers=error.headers,
-    )
-
-
-async def _on_unexpected_error(request: Request, error: Exception) -> ProblemResponse:
-    reference = uuid.uuid4().hex
-    logger.error(
-        "unexpected error (reference %s) on %s", reference, request.url.path, exc_info=error
-    )
-    return problem_response(
-        request,
-        status=HTTPStatus.INTERNAL_SERVER_ERROR,
-        slug="internal-error",
-        title="Internal server error",
-        detail=f"unexpected error; the server log has the details under reference {reference}",
-        reference=reference,
-    )
-
-
-def problem_for(error: Exception, instance: str | None = None) -> Problem:
-    """The problem document of any error (the WebSocket channel's ``error`` messages use it)."""
-    if isinstance(error, RequestValidationError):
-        errors = field_errors(error.errors())
+    A breached configurable limit (an error of type ``limit_exceeded``) makes it a
+    ``limit-exceeded`` problem naming the limit, its maximum and the actual size.
+    """
+    errors = field_errors(raw[:listed], root)
+    breach = next((error for error in raw if error.get("type") == LIMIT_EXCEEDED), None)
+    extensions: dict[str, Any] = {}
+    if len(raw) > len(errors):
+        extensions["error_count"] = len(raw)
+    if breach is not None:
+        context = breach.get("ctx") or {}
         return Problem(
-            type=problem_type("validation-error"),
-            title="Invalid request",
+            type=problem_type("limit-exceeded"),
+            title="Limit exceeded",
             status=HTTPStatus.UNPROCESSABLE_ENTITY,
-            detail=_validation_detail(errors),
+            detail=_validation_detail(errors, len(raw)),
             instance=instance,
             errors=errors,
+            limit=context.get("limit"),
+            maximum=context.get("maximum"),
+            actual=context.get("actual"),
+            **extensions,
         )
+    return Problem(
+        type=problem_type("validation-error"),
+        title="Invalid request",
+        status=HTTPStatus.UNPROCESSABLE_ENTITY,
+        detail=_validation_detail(errors, len(raw)),
+        instance=instance,
+        errors=errors,
+        **extensions,
+    )
+
+
+def _located(loc: Sequence[str | int], detail: str, kind: str) -> FieldError:
+    full = ["body", *loc] if loc else []
+    return FieldError(loc=full, pointer=_pointer(full, kind), detail=detail, type=kind)
+
+
+def problem_for(
+    error: Exception,
+    instance: str | None = None,
+    *,
+    listed: int = MAX_LISTED_ERRORS,
+    root: object = None,
+) -> Problem:
+    """The problem document of any error: the one mapping used by HTTP and WebSocket answers.
+
+    ``listed`` caps the listed validation errors; ``root`` is the type the body was
+    validated as (it names the keys an object allows).
+    """
+    if isinstance(error, RequestValidationError | ValidationError):
+        return _validation_problem(list(error.errors()), instance, listed, root)
     if isinstance(error, ServiceError):
         return Problem(
             type=problem_type(error.slug),
@@ -363,14 +398,26 @@ def problem_for(error: Exception, instance: str | None = None) -> Problem:
             status=error.status_code,
             detail=error.detail,
             instance=instance,
+            errors=error.field_errors(),
             **error.extensions,
         )
     if isinstance(error, InvalidInput):
+        # the core's refusal, located where the core knows the field (``error.loc``)
         return Problem(
             type=problem_type("invalid-input"),
             title="Invalid input",
             status=HTTPStatus.UNPROCESSABLE_ENTITY,
             detail=str(error),
+            instance=instance,
+            errors=[_located(error.loc, str(error), "invalid_input")],
+        )
+    if isinstance(error, StarletteHTTPException):
+        status = HTTPStatus(error.status_code)
+        return Problem(
+            type=problem_type(status.phrase.lower().replace(" ", "-")),
+            title=status.phrase,
+            status=error.status_code,
+            detail=str(error.detail),
             instance=instance,
         )
     reference = uuid.uuid4().hex
@@ -385,13 +432,85 @@ def problem_for(error: Exception, instance: str | None = None) -> Problem:
     )
 
 
-def install_error_handlers(app: FastAPI) -> None:
-    """Register every problem+json handler on ``app``."""
-    app.add_exception_handler(RequestValidationError, _on_validation_error)
-    app.add_exception_handler(ServiceError, _on_service_error)
-    app.add_exception_handler(InvalidInput, _on_invalid_input)
-    app.add_exception_handler(StarletteHTTPException, _on_http_error)
-    app.add_exception_handler(Exception, _on_unexpected_error)
+def _headers_of(error: Exception) -> dict[str, str]:
+    if isinstance(error, ServiceError):
+        return error.headers()
+    if isinstance(error, StarletteHTTPException):
+        return dict(error.headers or {})
+    return {}
+
+
+def problem_answer(request: Request, error: Exception) -> ProblemResponse:
+    """The problem+json answer of ``error`` to ``request``."""
+    settings = getattr(request.app.state, "settings", None)
+    listed = getattr(settings, "max_listed_errors", MAX_LISTED_ERRORS)
+    endpoint = request.scope.get("endpoint")
+    root = body_model(endpoint) if callable(endpoint) else None
+    problem = problem_for(error, request.url.path, listed=listed, root=root)
+    return ProblemResponse(
+        problem.model_dump(mode="json", exclude_none=True),
+        status_code=problem.status,
+        headers=_headers_of(error),
+    )
+
+
+async def _on_error(request: Request, error: Exception) -> ProblemResponse:
+    return problem_answer(request, error)
+
+
+def install_error_handlers(
+    app: FastAPI, on_internal_error: Callable[[], None] | None = None
+) -> None:
+    """Register the problem+json handler of every error kind on ``app``.
+
+    Unexpected errors are answered by :class:`InternalErrors` (a middleware, added
+    here: call this before adding other middleware so that it runs innermost), not
+    by a handler of ``Exception``: Starlette re-raises after such a handler
+    answered, and the server then drops the keep-alive connection.
+    ``on_internal_error`` is called once per internal error.
+    """
+    for kind in (RequestValidationError, ServiceError, InvalidInput, StarletteHTTPException):
+        app.add_exception_handler(kind, _on_error)
+    app.add_middleware(InternalErrors, on_error=on_internal_error or _ignore)
+
+
+def _ignore() -> None:
+    return None
+
+
+class InternalErrors:
+    """ASGI middleware: an unexpected error becomes a 500 problem, counted; the connection stays.
+
+    ``on_error`` is called once per internal error (the metrics count them).
+    """
+
+    def __init__(self, app: ASGIApp, on_error: Callable[[], None]) -> None:
+        self.app = app
+        self.on_error = on_error
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        started = False
+
+        async def tracking_send(message: Message) -> None:
+            nonlocal started
+            if message["type"] == "http.response.start":
+                started = True
+            await send(message)
+
+        try:
+            await self.app(scope, receive, tracking_send)
+        except Exception as error:
+            self.on_error()
+            if started:
+                raise  # half an answer is out: only closing the connection can say so
+            problem = problem_for(error, scope.get("path"))
+            response = ProblemResponse(
+                problem.model_dump(mode="json", exclude_none=True), status_code=problem.status
+            )
+            await response(scope, receive, send)
 
 
 PROBLEM_STATUSES: dict[int, str] = {

@@ -1,23 +1,48 @@
-"""Limits: body size (checked before anything parses the body), sessions, sensors, classes, items."""
+"""Limits on one request: the body's size and read time, and the wire limits of its lists.
+
+Every limit is a setting (``app/settings.py``) checked before the work it bounds:
+
+- ``max_body_bytes`` (1 MiB) and ``body_read_timeout`` (10 s): by
+  :class:`BodyLimits`, before anything parses the body (413, 408);
+- ``max_tracks_per_input`` (2 000, also per side of ``/v1/associate``),
+  ``max_sensors`` (64), ``max_classes`` (20), ``max_focal_sets`` (64 per class
+  mass): by the wire models on each raw list, before its items are validated
+  (:mod:`api_schemas.limits`; 422 ``limit-exceeded``); :class:`BodyLimits`
+  puts the configured values in place for the request;
+- ``max_associate_pairs`` (250 000) and ``max_associate_class_pairs`` (20 000,
+  when the tracks carry class evidence): known × incoming of ``/v1/associate``;
+- a fused or accumulated class mass keeps at most 32 focal sets (summarized
+  beyond, and said so: :mod:`core.belief.summary`);
+- ``max_listed_errors`` (50): a 422 lists that many errors and counts them all;
+- ``ws_messages_per_second`` (1 000): per stream connection (an ``error`` beyond);
+- a page of ``GET …/events``: ``limit`` events (≤ 10 000) and at most 4 MiB;
+- ``max_sessions`` (1 000): checked and taken atomically at session creation (429);
+- ``rate_limit``: per verified token or client address (:mod:`app.rate_limit`).
+"""
 
 from __future__ import annotations
 
 from http import HTTPStatus
 
+import anyio
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from api_schemas.config import SessionConfig
-from api_schemas.reports import DetectionReport, TrackReport
-from app.errors import LimitExceeded, problem_response
-from app.settings import Settings
+from api_schemas.limits import ACTIVE_LIMITS, WireLimits
+from app.errors import problem_response
 
 BODY_LIMIT = "max_body_bytes"
+READ_TIMEOUT = "body_read_timeout"
 DRAIN_BYTES = 8 * 1024 * 1024
 """An oversize body is read and discarded up to this size before the 413 is sent."""
 
 
-class BodySizeLimit:
-    """ASGI middleware: a request body larger than ``max_bytes`` gets 413 naming the limit.
+class BodyLimits:
+    """ASGI middleware: the request's wire limits; a body too large (413) or too slow (408).
+
+    ``limits`` are put in :data:`~api_schemas.limits.ACTIVE_LIMITS` for the request
+    (HTTP and WebSocket). A body larger than ``max_bytes`` gets 413 naming the limit;
+    a body not received within ``read_timeout`` seconds gets 408 and the connection
+    is closed.
 
     The body is read (chunked bodies included) only up to the limit and then
     replayed to the application, so no parser ever sees an oversize body.
@@ -27,11 +52,16 @@ class BodySizeLimit:
     and the connection closed.
     """
 
-    def __init__(self, app: ASGIApp, max_bytes: int) -> None:
+    def __init__(
+        self, app: ASGIApp, max_bytes: int, read_timeout: float, limits: WireLimits
+    ) -> None:
         self.app = app
         self.max_bytes = max_bytes
+        self.read_timeout = read_timeout
+        self.limits = limits
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        ACTIVE_LIMITS.set(self.limits)
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
@@ -45,20 +75,24 @@ class BodySizeLimit:
             return
         chunks: list[bytes] = []
         size = 0
-        while True:
-            message = await receive()
-            if message["type"] == "http.disconnect":
-                return
-            chunk: bytes = message.get("body", b"")
-            size += len(chunk)
-            more = bool(message.get("more_body", False))
-            if size > self.max_bytes:
-                ended = not more or await _drain(receive, DRAIN_BYTES)
-                await self._refuse(scope, receive, send, declared, ended)
-                return
-            chunks.append(chunk)
-            if not more:
-                break
+        with anyio.move_on_after(self.read_timeout) as reading:
+            while True:
+                message = await receive()
+                if message["type"] == "http.disconnect":
+                    return
+                chunk: bytes = message.get("body", b"")
+                size += len(chunk)
+                more = bool(message.get("more_body", False))
+                if size > self.max_bytes:
+                    ended = not more or await _drain(receive, DRAIN_BYTES)
+                    await self._refuse(scope, receive, send, declared, ended)
+                    return
+                chunks.append(chunk)
+                if not more:
+                    break
+        if reading.cancelled_caught:
+            await self._too_slow(scope, receive, send, size)
+            return
         body = b"".join(chunks)
         replayed = False
 
@@ -89,6 +123,21 @@ class BodySizeLimit:
             response.headers["Connection"] = "close"
         await response(scope, receive, send)
 
+    async def _too_slow(self, scope: Scope, receive: Receive, send: Send, received: int) -> None:
+        response = problem_response(
+            None,
+            status=HTTPStatus.REQUEST_TIMEOUT,
+            slug="body-too-slow",
+            title="Request body too slow",
+            detail=f"the request body was not received within limit {READ_TIMEOUT} = "
+            f"{self.read_timeout} s ({received} bytes received)",
+            instance=scope.get("path"),
+            limit=READ_TIMEOUT,
+            maximum=self.read_timeout,
+        )
+        response.headers["Connection"] = "close"
+        await response(scope, receive, send)
+
 
 async def _drain(receive: Receive, budget: int) -> bool:
     """Read and discard the rest of a body, at most ``budget`` bytes; whether it ended."""
@@ -101,23 +150,3 @@ async def _drain(receive: Receive, budget: int) -> bool:
         if not message.get("more_body", False):
             return True
     return False
-
-
-def check_config_limits(config: SessionConfig, settings: Settings) -> None:
-    """Sensors and classes of a session config within the configured limits."""
-    if len(config.sensors) > settings.max_sensors:
-        raise LimitExceeded(
-            "max_sensors", settings.max_sensors, len(config.sensors), what="sensors"
-        )
-    if len(config.classes) > settings.max_classes:
-        raise LimitExceeded(
-            "max_classes", settings.max_classes, len(config.classes), what="classes"
-        )
-
-
-def check_report_limits(report: TrackReport | DetectionReport, settings: Settings) -> None:
-    """Items of one input within ``max_tracks_per_input``."""
-    items = len(report.tracks) if isinstance(report, TrackReport) else len(report.detections)
-    if items > settings.max_tracks_per_input:
-        what = "tracks" if isinstance(report, TrackReport) else "detections"
-        raise LimitExceeded("max_tracks_per_input", settings.max_tracks_per_input, items, what=what)

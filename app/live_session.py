@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from datetime import datetime
 
 from api_schemas.config import SessionConfig
+from api_schemas.limits import CEILINGS, limits_of
 from app.hub import Hub
 from app.stores import SessionRecord, Snapshot
 from app.translate import PlainObject, class_frame, fusion_config
@@ -99,7 +100,8 @@ class LiveSession:
 
 
 def new_session(record: SessionRecord) -> LiveSession:
-    config = SessionConfig.model_validate(record.config)
+    with limits_of(CEILINGS):  # a stored config stays readable if the limits were lowered
+        config = SessionConfig.model_validate(record.config)
     fusion = fusion_config(config) if config.sensors else None
     return LiveSession(
         record=record,

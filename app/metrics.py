@@ -52,6 +52,7 @@ class ServiceMetrics:
     store_bytes: Gauge
     store_inputs: Gauge
     rebuilds: Counter
+    internal_errors: Counter
 
     @classmethod
     def create(cls) -> ServiceMetrics:
@@ -102,6 +103,11 @@ class ServiceMetrics:
                 "changed by a refused input (a bug: steps are transactions), or a step that "
                 "could not be logged.",
                 ("reason",),
+                registry=registry,
+            ),
+            internal_errors=Counter(
+                "credal_internal_errors",
+                "Requests answered 500 internal-error (a bug; the log has each reference).",
                 registry=registry,
             ),
         )

@@ -1,4 +1,12 @@
-"""Rate limits: per bearer token, or per client address for requests without one.
+"""Rate limits: per verified session token, or per client address for every other request.
+
+Whom a request counts against is decided before its body is read, and only a
+token the service *verified* earns its own budget: the token of a live
+session held by this instance (the registry keeps their hashes) or the admin
+token. A request with no token, an unknown or forged token (``Bearer
+fake<i>``), or to an unauthenticated route (``POST /v1/sessions``, ``POST
+/v1/associate``) counts against its client address, so inventing tokens
+never buys more requests.
 
 ``CREDAL_RATE_LIMIT`` takes the ``limits`` library's notation: one or more
 rates separated by ``;`` (``"200/second"``, ``"50/second;2000/minute"``);
@@ -19,9 +27,10 @@ Tokens are keyed by a hash, never kept in clear.
 
 from __future__ import annotations
 
-import hashlib
+import hmac
 import math
 import time
+from collections.abc import Callable
 from http import HTTPStatus
 
 from limits import RateLimitItem, parse_many
@@ -32,6 +41,7 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 from starlette.websockets import WebSocket
 
 from app.errors import problem_response
+from app.security import hash_token
 
 RATE_LIMIT = "rate_limit"
 UNLIMITED = frozenset({"", "none", "off", "0"})
@@ -52,17 +62,35 @@ def _rate_text(item: RateLimitItem) -> str:
     return f"{item.amount} per {item.multiples} {item.GRANULARITY.name}"
 
 
-def client_key(scope: Scope) -> str:
-    """Whom a request counts against: its bearer token (hashed), else its client address."""
+def client_key(scope: Scope, verified: Callable[[str], bool]) -> str:
+    """Whom a request counts against: its token's hash if ``verified`` knows it, else its address."""
     for name, value in scope.get("headers", ()):
         if name == b"authorization":
             scheme, _, token = value.partition(b" ")
             token = token.strip()
             if scheme.lower() == b"bearer" and token:
-                return "token:" + hashlib.sha256(token).hexdigest()[:32]
+                token_hash = hash_token(token.decode("latin-1"))
+                if verified(token_hash):
+                    return "token:" + token_hash
             break
     client = scope.get("client")
     return f"address:{client[0] if client else 'unknown'}"
+
+
+def verifier(scope: Scope) -> Callable[[str], bool]:
+    """Whether a token hash is a live session's (held here) or the admin token's."""
+    state = getattr(scope.get("app"), "state", None)
+    settings = getattr(state, "settings", None)
+    admin = getattr(settings, "admin_token", None)
+    admin_hash = hash_token(admin.get_secret_value()) if admin is not None else None
+
+    def verified(token_hash: str) -> bool:
+        if admin_hash is not None and hmac.compare_digest(token_hash, admin_hash):
+            return True
+        registry = getattr(state, "registry", None)  # set by the lifespan
+        return registry is not None and bool(registry.knows_token(token_hash))
+
+    return verified
 
 
 class RateLimit:
@@ -72,6 +100,7 @@ class RateLimit:
         self.app = app
         self.rates = rates
         self.limiter = SlidingWindowCounterRateLimiter(MemoryStorage())
+        self._verified: Callable[[str], bool] | None = None
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if (
@@ -81,7 +110,9 @@ class RateLimit:
         ):
             await self.app(scope, receive, send)
             return
-        key = client_key(scope)
+        if self._verified is None:  # the application's registry and settings, once
+            self._verified = verifier(scope)
+        key = client_key(scope, self._verified)
         for item in self.rates:
             if not await self.limiter.hit(item, key):
                 await self._refuse(scope, receive, send, item, key)

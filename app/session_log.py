@@ -6,11 +6,18 @@ turn it back into the typed events of :mod:`api_schemas.events`.
 
 from __future__ import annotations
 
+from datetime import datetime
 from typing import Any
 
+from pydantic import TypeAdapter
+
 from api_schemas.events import DetectionsEvent, TracksEvent
+from api_schemas.limits import CEILINGS, limits_of
 from api_schemas.reports import DetectionReport, TrackReport
+from app.responses import dumps
 from app.stores import LogEntry
+
+TIMESTAMP: TypeAdapter[datetime] = TypeAdapter(datetime)
 
 
 def log_input(report: TrackReport | DetectionReport) -> dict[str, Any]:
@@ -20,7 +27,22 @@ def log_input(report: TrackReport | DetectionReport) -> dict[str, Any]:
 
 
 def event_from_entry(entry: LogEntry) -> TracksEvent | DetectionsEvent:
-    """A logged input as its typed event."""
+    """A logged input as its typed event (read under the hard ceilings, not today's limits)."""
+    with limits_of(CEILINGS):
+        return _event(entry)
+
+
+def event_json(entry: LogEntry) -> str:
+    """A logged input as the JSON text of its event (the log holds validated JSON already)."""
+    received_at = TIMESTAMP.dump_python(entry.received_at, mode="json")
+    kind = dumps(entry.input["type"])
+    return (
+        f'{{"type":{kind},"seq":{entry.seq},"received_at":"{received_at}",'
+        f'"report":{dumps(entry.input["report"])}}}'
+    )
+
+
+def _event(entry: LogEntry) -> TracksEvent | DetectionsEvent:
     kind = entry.input["type"]
     if kind == "tracks":
         return TracksEvent(

@@ -55,6 +55,7 @@ import contextlib
 import functools
 import logging
 import math
+import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -77,7 +78,6 @@ from app.errors import (
     request_validation_error,
 )
 from app.hub import SESSION_ENDED, SESSION_RELOADED, STORE_UNAVAILABLE, Ending, Subscriber
-from app.limits import check_report_limits
 from app.live_session import LiveSession, new_session, restore_snapshot
 from app.metrics import ServiceMetrics
 from app.responses import dumps
@@ -149,6 +149,10 @@ class SessionRegistry:
         self._load_lock = asyncio.Lock()
         self._store_inline = isinstance(store, MemoryStore)
         self._forwarders: dict[str, asyncio.Task[None]] = {}
+        self._tokens: dict[str, str] = {}
+        """Token hash → id of the live sessions in memory (the rate limit's verified identities)."""
+        self.creating = threading.Lock()
+        """Held from counting the sessions to storing a new one: the limit holds under races."""
 
     def __len__(self) -> int:
         return len(self._sessions)
@@ -179,7 +183,12 @@ class SessionRegistry:
         """Register a session just created in the store."""
         session = new_session(record)
         self._sessions[record.id] = session
+        self._tokens[record.token_hash] = record.id
         return session
+
+    def knows_token(self, token_hash: str) -> bool:
+        """Whether ``token_hash`` is the hash of a live session's token held in memory."""
+        return token_hash in self._tokens
 
     async def record(self, session_id: str) -> SessionRecord | None:
         """The stored record of a live session (from memory when the session is loaded)."""
@@ -198,6 +207,7 @@ class SessionRegistry:
             if session is None:
                 session = await self._load(session_id)
                 self._sessions[session_id] = session
+                self._tokens[session.record.token_hash] = session_id
         return session
 
     async def _load(self, session_id: str) -> LiveSession:
@@ -247,6 +257,7 @@ class SessionRegistry:
         told why; inputs waiting for its lock go to the session as the store has it."""
         session = self._sessions.pop(session_id, None)
         if session is not None:
+            self._tokens.pop(session.record.token_hash, None)
             session.closed = True
             session.hub.close(ending)
         forwarder = self._forwarders.pop(session_id, None)
@@ -379,14 +390,12 @@ class SessionRegistry:
     # ------------------------------------------------------------ inputs
     def check_tracks(self, session: LiveSession, report: TrackReport) -> None:
         """Checks that need only the config: item limit, sensor, dimensions, class labels."""
-        check_report_limits(report, self.settings)
         issues = track_report_issues(report, session.config)
         if issues:
             raise request_validation_error(issues)
 
     def check_detections(self, session: LiveSession, report: DetectionReport) -> None:
         """Checks of a detection batch that need only the config."""
-        check_report_limits(report, self.settings)
         issues = detection_report_issues(report, session.config)
         if issues:
             raise request_validation_error(issues)
@@ -427,14 +436,18 @@ class SessionRegistry:
         self, session: LiveSession, report: TrackReport, *, explain: bool = False
     ) -> str:
         """Apply one track list, log it durably, then return (and publish) its result (JSON text)."""
-        self.check_tracks(session, report)
+        await self._compute(
+            len(report.tracks), functools.partial(self.check_tracks, session, report)
+        )
         return await self._submit(session, report, len(report.tracks), explain=explain)
 
     async def submit_detections(
         self, session: LiveSession, report: DetectionReport, *, explain: bool = False
     ) -> str:
         """Apply one detection batch (local tracker, then fusion), log it, return its result."""
-        self.check_detections(session, report)
+        await self._compute(
+            len(report.detections), functools.partial(self.check_detections, session, report)
+        )
         return await self._submit(session, report, len(report.detections), explain=explain)
 
     async def _submit(
@@ -628,6 +641,22 @@ class SessionRegistry:
                 len(engine.tracks), functools.partial(engine.picture, at)
             )
             return session.seq, engine.time if at is None else at, tracks_plain(views)
+
+    async def picture_json(self, session: LiveSession, at: float | None) -> str:
+        """:meth:`picture` as the JSON text of a ``FusedPicture``, built off the event loop."""
+        async with session.lock:
+            engine = session.engine
+            seq = session.seq
+            if engine is None or engine.time is None:
+                return dumps({"seq": seq, "time": at, "tracks": []})
+            time_of = engine.time if at is None else at
+
+            def build() -> str:
+                # one track at a time: no single C call holds the GIL for the whole answer
+                tracks = ",".join(dumps(track) for track in tracks_plain(engine.picture(at)))
+                return f'{{"seq":{seq},"time":{dumps(time_of)},"tracks":[{tracks}]}}'
+
+            return await self._compute(len(engine.tracks), build)
 
     async def track_detail(self, session: LiveSession, track_id: str) -> PlainObject | None:
         """One live fused track at the fusion time with its history, or ``None``."""

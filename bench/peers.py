@@ -93,10 +93,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from machine import describe_machine  # noqa: E402
 
-from core.lifecycle import ScoreModel  # noqa: E402
+from core.lifecycle import LifeCycleConfig  # noqa: E402
 from core.metrics import identity_switches  # noqa: E402
 from core.tracking.config import LocalTrackerConfig  # noqa: E402
-from core.tracking.models import LinearMeasurementModel, ModelBank, MotionModel  # noqa: E402
+from core.tracking.models import (  # noqa: E402
+    LinearMeasurementModel,
+    ModelBank,
+    constant_velocity,
+)
 from core.tracking.tracker import LocalTracker  # noqa: E402
 
 START = datetime.datetime(2026, 1, 1)
@@ -366,24 +370,22 @@ def _jpda_posterior(hypotheses: Any, updater: KalmanUpdater, when: datetime.date
 
 def local_tracker_config(scene: Scene) -> LocalTrackerConfig:
     """Our tracker with the truths: Stone Soup's CV matrices, R, P_D, both densities."""
-    transition = np.asarray(scene.transition.matrix(time_interval=datetime.timedelta(seconds=DT)))
-    noise = np.asarray(scene.transition.covar(time_interval=datetime.timedelta(seconds=DT)))
     bank = ModelBank(
-        (MotionModel("cv", transition, np.zeros(4), noise),),
+        (constant_velocity(DT, Q, noise="continuous"),),
         LinearMeasurementModel(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]), np.eye(2) * SIGMA**2),
         np.ones((1, 1)),
     )
     return LocalTrackerConfig(
         bank=bank,
         time_interval=DT,
-        score=ScoreModel(
-            p_detect=P_DETECT,
+        p_detect=P_DETECT,
+        life_cycle=LifeCycleConfig(
             false_target_density=scene.clutter_density,
             new_target_density=scene.birth_density,
+            phantoms=False,
         ),
         max_speed=4.0 * scene.velocity_std * np.sqrt(2.0),
         classification=None,
-        phantoms=False,
     )
 
 

@@ -120,7 +120,7 @@ def server(command: list[str], port: int) -> Iterator[str]:
     process = subprocess.Popen(
         command,
         cwd=ROOT,
-        env=os.environ | {"CREDAL_ADMIN_TOKEN": "bench-admin-token"},
+        env=os.environ | {"CREDAL_ADMIN_TOKEN": "bench-admin-token-0123456789abcdef"},
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
     )

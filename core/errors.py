@@ -13,8 +13,21 @@ class CredalError(Exception):
     """Base class of every error raised on purpose by ``core``."""
 
 
+Location = tuple[str | int, ...]
+"""Where in the caller's input a refused value is: ``("tracks", 3, "covariance")``."""
+
+
 class InvalidInput(CredalError, ValueError):  # noqa: N818 - reads better as a category
-    """The caller's input is invalid; the message names the field and the problem."""
+    """The caller's input is invalid; the message names the field and the problem.
+
+    ``loc`` locates the refused value in the caller's input when the core knows
+    it (``("tracks", 3, "covariance")``), ``()`` otherwise; a service maps it to
+    a field pointer.
+    """
+
+    def __init__(self, message: str, *, loc: Location = ()) -> None:
+        super().__init__(message)
+        self.loc = loc
 
 
 class FrameError(InvalidInput):

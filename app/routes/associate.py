@@ -8,12 +8,15 @@ import anyio
 from fastapi import APIRouter
 
 from api_schemas.associate import AssociateRequest, AssociateResponse
-from app.errors import problem_responses
-from app.responses import PlainJSONResponse
+from app.deps import SettingsDep
+from app.errors import LimitExceeded, problem_responses
+from app.requests import WireRoute
+from app.responses import JSONTextResponse, dumps
+from app.settings import Settings
 from app.translate import PlainObject, associate_plain, class_frame, evidence_masses, side_arrays
 from core.association import associate
 
-router = APIRouter(tags=["association"])
+router = APIRouter(tags=["association"], route_class=WireRoute)
 
 TINY_PROBLEM = 256
 """known × incoming pairs up to which the association runs on the event loop."""
@@ -46,9 +49,26 @@ def run_association(request: AssociateRequest) -> PlainObject:
 @router.post(
     "/v1/associate", response_model=AssociateResponse, responses=problem_responses(413, 422)
 )
-async def associate_tracks(request: AssociateRequest) -> PlainJSONResponse:
-    """Two track lists and a method → the assignment with its score matrix (no session, no token)."""
+async def associate_tracks(request: AssociateRequest, settings: SettingsDep) -> JSONTextResponse:
+    """Two track lists and a method → the assignment with its score matrix (no session, no token).
+
+    422 ``limit-exceeded`` when known × incoming exceeds ``max_associate_pairs``
+    (``max_associate_class_pairs`` when the tracks carry class evidence).
+    """
+    check_pairs(request, settings)
     work = functools.partial(run_association, request)
     if len(request.known) * len(request.incoming) <= TINY_PROBLEM:
-        return PlainJSONResponse(work())
-    return PlainJSONResponse(await anyio.to_thread.run_sync(work))
+        return JSONTextResponse(dumps(work()))
+    return JSONTextResponse(await anyio.to_thread.run_sync(lambda: dumps(work())))
+
+
+def check_pairs(request: AssociateRequest, settings: Settings) -> None:
+    """known × incoming within the pair limits, checked before any work."""
+    pairs = len(request.known) * len(request.incoming)
+    carried = bool(request.classes) and any(
+        track.classification is not None for track in (*request.known, *request.incoming)
+    )
+    limit = "max_associate_class_pairs" if carried else "max_associate_pairs"
+    maximum = settings.max_associate_class_pairs if carried else settings.max_associate_pairs
+    if pairs > maximum:
+        raise LimitExceeded(limit, maximum, pairs, what="known × incoming pairs", loc=("incoming",))

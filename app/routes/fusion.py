@@ -14,9 +14,10 @@ from app.errors import (
     TrackNotFound,
     problem_responses,
 )
+from app.requests import WireRoute
 from app.responses import JSONTextResponse, PlainJSONResponse
 
-router = APIRouter(prefix="/v1/sessions", tags=["fusion"])
+router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
 
 TrackId = Annotated[str, Path(min_length=1, max_length=64, description="A fused track id.")]
 
@@ -79,10 +80,9 @@ async def list_fused_tracks(
         FiniteFloat | None,
         Query(description="predict the tracks to this time (default: the fusion time)"),
     ] = None,
-) -> PlainJSONResponse:
+) -> JSONTextResponse:
     """The live fused tracks (not terminated), optionally predicted to ``time``."""
-    seq, at, tracks = await registry.picture(session, time)
-    return PlainJSONResponse({"seq": seq, "time": at, "tracks": tracks})
+    return JSONTextResponse(await registry.picture_json(session, time))
 
 
 @router.get(

@@ -18,11 +18,12 @@ from fastapi import APIRouter, Request
 
 from api_schemas.health import ComponentState, Health, Readiness
 from app.errors import StoreUnavailable
+from app.requests import WireRoute
 from app.responses import PlainJSONResponse
 from app.sessions import SessionRegistry
 from core import __version__
 
-router = APIRouter(tags=["health"])
+router = APIRouter(tags=["health"], route_class=WireRoute)
 
 Component = Literal["store", "fanout"]
 PING_TIMEOUT_S = 3.0

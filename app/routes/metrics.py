@@ -6,8 +6,9 @@ from fastapi import APIRouter, Response
 
 from app.deps import MetricsDep, StoreDep
 from app.errors import StoreUnavailable, problem_responses
+from app.requests import WireRoute
 
-router = APIRouter(tags=["health"])
+router = APIRouter(tags=["health"], route_class=WireRoute)
 
 
 @router.get(

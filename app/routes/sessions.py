@@ -29,17 +29,19 @@ from app.deps import (
     StoreDep,
 )
 from app.errors import LimitExceeded, problem_responses
-from app.limits import check_config_limits
 from app.live_session import LiveSession
-from app.responses import PlainJSONResponse
+from app.requests import WireRoute
+from app.responses import JSONTextResponse, dumps
 from app.security import hash_token, issue_token
-from app.session_log import event_from_entry
+from app.session_log import event_json
 from app.stores import SessionRecord
 from app.stores.base import history
 
-router = APIRouter(prefix="/v1/sessions", tags=["sessions"])
+router = APIRouter(prefix="/v1/sessions", tags=["sessions"], route_class=WireRoute)
 
 MAX_EVENTS_PAGE = 10_000
+MAX_SEQ = 2**53
+"""Sequence numbers stay below 2⁵³ (exact in every JSON reader; SQLite's INTEGER holds them)."""
 
 
 @router.post(
@@ -55,17 +57,7 @@ def create_session(
     metrics: MetricsDep,
 ) -> SessionCreated:
     """Create a session from a config; returns its id, its token (shown only here) and the resolved config."""
-    check_config_limits(config, settings)
     registry.check_config(config)
-    live = store.count_sessions()
-    if live >= settings.max_sessions:
-        raise LimitExceeded(
-            "max_sessions",
-            settings.max_sessions,
-            live,
-            what="sessions",
-            status=HTTPStatus.TOO_MANY_REQUESTS,
-        )
     token = issue_token()
     record = SessionRecord(
         id=uuid.uuid4().hex,
@@ -73,8 +65,18 @@ def create_session(
         token_hash=hash_token(token),
         created_at=datetime.now(UTC),
     )
-    store.create_session(record)
-    registry.add(record)
+    with registry.creating:  # count and create as one step (this instance's requests)
+        live = store.count_sessions()
+        if live >= settings.max_sessions:
+            raise LimitExceeded(
+                "max_sessions",
+                settings.max_sessions,
+                live,
+                what="sessions",
+                status=HTTPStatus.TOO_MANY_REQUESTS,
+            )
+        store.create_session(record)
+        registry.add(record)
     metrics.sessions.set(store.count_sessions())
     return SessionCreated(id=record.id, token=token, config=config, created_at=record.created_at)
 
@@ -142,6 +144,10 @@ async def get_session(session: CurrentSessionDep) -> SessionSummary:
         return summary(session)
 
 
+MAX_EVENTS_PAGE_BYTES = 4 * 1024 * 1024
+"""A page of events stops once its events reach this size (at least one event is given)."""
+
+
 @router.get(
     "/{sid}/events",
     response_model=EventLog,
@@ -150,24 +156,36 @@ async def get_session(session: CurrentSessionDep) -> SessionSummary:
 def list_session_events(
     session: AuthorizedSession,
     store: StoreDep,
-    after: Annotated[int, Query(ge=0, description="only events with seq > after")] = 0,
+    after: Annotated[int, Query(ge=0, le=MAX_SEQ, description="only events with seq > after")] = 0,
     limit: Annotated[int, Query(ge=1, le=MAX_EVENTS_PAGE, description="page size")] = 1000,
-) -> PlainJSONResponse:
+) -> JSONTextResponse:
     """The accepted inputs in order (export and replay); page with ``after``.
 
     The log keeps ``log_retention`` inputs behind the latest snapshot; a page
     whose ``after`` is older starts with that ``snapshot``, then the inputs
     after it, so every page sequence from ``after=0`` replays the session.
+    A page holds at most ``limit`` events and stops after 4 MiB of events (at
+    least one is always given): continue with ``after`` = the last event's
+    ``seq`` until it reaches ``last_seq``. Built in a worker thread, as JSON text.
     """
     page = history(store, session.id, after, limit)
+    events: list[str] = []
+    size = 0
+    for entry in page.entries:
+        text = event_json(entry)
+        if events and size + len(text) > MAX_EVENTS_PAGE_BYTES:
+            break
+        events.append(text)
+        size += len(text) + 1
+    parts = [
+        f'"session":{dumps(session.id)}',
+        f'"events":[{",".join(events)}]',
+        f'"last_seq":{page.last_seq}',
+    ]
     snapshot = page.snapshot
-    log = EventLog(
-        session=session.id,
-        events=[event_from_entry(entry) for entry in page.entries],
-        last_seq=page.last_seq,
-    ).model_dump(mode="json", exclude_none=True)
     if snapshot is not None:  # the state as stored, not validated again
-        log["snapshot"] = SnapshotEvent.model_construct(
+        shown = SnapshotEvent.model_construct(
             type="snapshot", seq=snapshot.seq, taken_at=snapshot.taken_at, state=snapshot.state
         ).model_dump(mode="json")
-    return PlainJSONResponse(log)
+        parts.append(f'"snapshot":{dumps(shown)}')
+    return JSONTextResponse("{" + ",".join(parts) + "}")

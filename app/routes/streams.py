@@ -24,8 +24,10 @@ pub/sub connection) fails: subscribe again once ``/readyz`` is ready.
 
 from __future__ import annotations
 
+import collections
 import json
 import logging
+import time
 
 import anyio
 from fastapi import APIRouter, WebSocket
@@ -35,9 +37,10 @@ from starlette.websockets import WebSocketDisconnect
 
 from api_schemas.problem import Problem
 from api_schemas.reports import DetectionReport, TrackReport
-from api_schemas.ws import DetectionsMessage, client_message_adapter
+from api_schemas.ws import DetectionsMessage, TracksMessage, client_message_adapter
 from app.deps import open_record
 from app.errors import (
+    LimitExceeded,
     ServiceError,
     StoreUnavailable,
     Unauthorized,
@@ -46,10 +49,11 @@ from app.errors import (
 )
 from app.hub import STORE_UNAVAILABLE, Ending
 from app.live_session import LiveSession
+from app.requests import WireRoute, parse_json
 from app.responses import dumps
 from app.sessions import SessionRegistry, result_message
 
-router = APIRouter(prefix="/v1/sessions")
+router = APIRouter(prefix="/v1/sessions", route_class=WireRoute)
 logger = logging.getLogger("credal_fusion.streams")
 
 OUTBOX_SIZE = 16
@@ -121,17 +125,16 @@ def _error(problem: Problem, ref: str | None) -> str:
     )
 
 
-def _ref_of(text: str) -> str | None:
+def _ref_of(document: object) -> str | None:
     """The ``ref`` of a message that failed validation, if it has a usable one."""
-    try:
-        raw = json.loads(text)
-    except ValueError:
-        return None
-    ref = raw.get("ref") if isinstance(raw, dict) else None
+    ref = document.get("ref") if isinstance(document, dict) else None
     return ref if isinstance(ref, str) and 0 < len(ref) <= 128 else None
 
 
-def _message_problem(error: ValidationError, path: str) -> Problem:
+MESSAGE_TYPES = {"tracks": TracksMessage, "detections": DetectionsMessage}
+
+
+def _message_problem(error: ValidationError, path: str, document: object, listed: int) -> Problem:
     """A validation problem located in the message (the union's tag is left out of the path)."""
     errors = []
     allowed = " or ".join(repr(tag) for tag in MESSAGE_TAGS)
@@ -145,17 +148,56 @@ def _message_problem(error: ValidationError, path: str) -> Problem:
         elif entry.get("type") == "union_tag_invalid":
             tag = entry.get("ctx", {}).get("tag")
             loc, message = ["type"], f"{tag!r} is not a message type: 'type' is {allowed}"
-        errors.append({"loc": tuple(loc), "msg": message, "type": entry.get("type", "")})
-    return problem_for(RequestValidationError(errors), path)
+        errors.append({**entry, "loc": tuple(loc), "msg": message})
+    kind = document.get("type") if isinstance(document, dict) else None
+    root = MESSAGE_TYPES.get(kind) if isinstance(kind, str) else None
+    return problem_for(RequestValidationError(errors), path, listed=listed, root=root)
+
+
+def _json_problem(error: json.JSONDecodeError, path: str) -> Problem:
+    entry = {
+        "loc": (),
+        "msg": "JSON decode error",
+        "type": "json_invalid",
+        "ctx": {"error": error.msg},
+    }
+    return problem_for(RequestValidationError([entry]), path)
+
+
+class MessageRate:
+    """At most ``per_second`` messages in any one-second window of a connection."""
+
+    def __init__(self, per_second: int) -> None:
+        self.per_second = per_second
+        self.window: collections.deque[float] = collections.deque()
+
+    def admit(self) -> bool:
+        now = time.monotonic()
+        while self.window and now - self.window[0] >= 1.0:
+            self.window.popleft()
+        if len(self.window) >= self.per_second:
+            return False
+        self.window.append(now)
+        return True
+
+
+def _refusal(error: ServiceError, path: str) -> str:
+    return _error(problem_for(error, path), None)
 
 
 async def _answer(session: LiveSession, registry: SessionRegistry, text: str, path: str) -> str:
     """The one answer (``result`` or ``error``) to one client message."""
+    settings = registry.settings
     ref: str | None = None
     try:
-        message = client_message_adapter.validate_json(text)
+        document = parse_json(text)
+    except json.JSONDecodeError as error:
+        return _error(_json_problem(error, path), None)
+    try:
+        message = client_message_adapter.validate_python(document)
     except ValidationError as error:
-        return _error(_message_problem(error, path), _ref_of(text))
+        problem = _message_problem(error, path, document, settings.max_listed_errors)
+        return _error(problem, _ref_of(document))
     ref = message.ref
     try:
         if session.closed:  # evicted (store down, or a failed step): the registry reloads it
@@ -187,6 +229,9 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
     await websocket.send_text(_ack(session))
     send, receive = anyio.create_memory_object_stream[str](OUTBOX_SIZE)
 
+    settings = registry.settings
+    rate = MessageRate(settings.ws_messages_per_second)
+
     async def reader() -> None:
         async with send:
             while True:
@@ -196,7 +241,26 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
                 text = incoming.get("text")
                 if text is None:
                     text = bytes(incoming.get("bytes") or b"").decode("utf-8", errors="replace")
-                await send.send(await _answer(session, registry, text, path))
+                if len(text) > settings.max_body_bytes:
+                    answer = _refusal(
+                        LimitExceeded(
+                            "max_body_bytes", settings.max_body_bytes, len(text), what="message"
+                        ),
+                        path,
+                    )
+                elif not rate.admit():
+                    answer = _refusal(
+                        LimitExceeded(
+                            "ws_messages_per_second",
+                            settings.ws_messages_per_second,
+                            what="messages per second on this connection",
+                            status=429,
+                        ),
+                        path,
+                    )
+                else:
+                    answer = await _answer(session, registry, text, path)
+                await send.send(answer)
 
     async def writer() -> None:
         async with receive:

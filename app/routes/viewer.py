@@ -21,8 +21,9 @@ from fastapi import APIRouter
 from fastapi.responses import HTMLResponse
 
 from app.page_policy import local_only
+from app.requests import WireRoute
 
-router = APIRouter(include_in_schema=False)
+router = APIRouter(include_in_schema=False, route_class=WireRoute)
 
 VIEWER_PAGE = "viewer.html"
 

@@ -101,33 +101,55 @@ class Estimates:
 def check_covariances(covariances: FloatArray, name: str) -> None:
     """Raise unless every matrix of the stack is finite, symmetric and positive definite.
 
-    Positive definite means every Cholesky pivot exceeds :data:`PIVOT_TOLERANCE`
-    times the matrix's largest diagonal entry (so numerically singular
-    matrices are refused too).
+    The error is located at the first refused matrix (``loc = (name, index,
+    "covariance")``); the checks are those of :func:`covariance_problems`.
     """
     bad = np.flatnonzero(~np.isfinite(covariances).all(axis=(1, 2)))
     if len(bad):
-        raise InvalidInput(f"{name}[{int(bad[0])}].covariance is not finite")
+        index = int(bad[0])
+        raise InvalidInput(
+            f"{name}[{index}].covariance is not finite", loc=(name, index, "covariance")
+        )
+    problems = covariance_problems(covariances)
+    if problems:
+        index, problem = next(iter(problems.items()))
+        raise CovarianceError(f"{name}[{index}].{problem}", loc=(name, index, "covariance"))
+
+
+def covariance_problems(covariances: FloatArray) -> dict[int, str]:
+    """What is wrong with each matrix of a finite ``(k, n, n)`` stack that is not a covariance.
+
+    The one covariance check of the project (the API's schema uses it too):
+    symmetric within :data:`SYMMETRY_TOLERANCE` relative to the matrix's
+    largest entry, and positive definite with every Cholesky pivot above
+    :data:`PIVOT_TOLERANCE` times the largest diagonal entry (numerically
+    singular matrices are refused too). Returns index → message, in index order.
+    """
+    problems: dict[int, str] = {}
+    if not len(covariances):
+        return problems
     scale = np.abs(covariances).max(axis=(1, 2))
     asymmetry = np.abs(covariances - np.swapaxes(covariances, 1, 2)).max(axis=(1, 2))
-    bad = np.flatnonzero(asymmetry > SYMMETRY_TOLERANCE * np.maximum(scale, 1e-300))
-    if len(bad):
-        index = int(bad[0])
-        raise CovarianceError(
-            f"{name}[{index}].covariance is not symmetric (max |P − Pᵀ| = {asymmetry[index]:.3g})"
+    for index in np.flatnonzero(
+        asymmetry > SYMMETRY_TOLERANCE * np.maximum(scale, 1e-300)
+    ).tolist():
+        problems[index] = (
+            f"covariance is not symmetric (max |P − Pᵀ| = {asymmetry[index]:.3g}, "
+            f"tolerance {SYMMETRY_TOLERANCE:g} × largest entry)"
         )
     pivots = _pivots(covariances)
     largest = np.diagonal(covariances, axis1=1, axis2=2).max(axis=1, initial=0.0)
-    failing = pivots <= PIVOT_TOLERANCE * np.maximum(largest, 1e-300)[:, None]
-    bad = np.flatnonzero(failing.any(axis=1))
-    if len(bad):
-        index = int(bad[0])
+    failing = (pivots <= PIVOT_TOLERANCE * np.maximum(largest, 1e-300)[:, None]).any(axis=1)
+    for index in np.flatnonzero(failing).tolist():
+        if index in problems:
+            continue
         eigenvalues = np.linalg.eigvalsh(covariances[index])
-        raise CovarianceError(
-            f"{name}[{index}].covariance is not positive definite "
-            f"(smallest eigenvalue {eigenvalues[0]:.3g}, largest {eigenvalues[-1]:.3g}): "
-            "singular or indefinite covariances cannot be used for a Mahalanobis distance"
+        problems[index] = (
+            f"covariance is not positive definite (smallest eigenvalue {eigenvalues[0]:.3g}, "
+            f"largest {eigenvalues[-1]:.3g}): singular or indefinite covariances cannot be "
+            "used for a Mahalanobis distance"
         )
+    return dict(sorted(problems.items()))
 
 
 def _pivots(covariances: FloatArray) -> FloatArray:

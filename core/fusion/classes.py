@@ -13,6 +13,14 @@ belief) or class likelihoods (one step of evidence). Per fused track:
   ([MTT] eq 7). It is reported normalised, with the conflict that
   normalisation removed: information about disagreeing sensors, not an error.
 
+**Bound.** Every mass kept or fused has at most
+:data:`~core.belief.summary.MAX_FUSED_FOCAL_SETS` focal sets: a larger one is
+summarized ([LGS86], :mod:`core.belief.summary`: the largest focal sets kept,
+the rest of the mass on their union — a weakening, never a stronger claim).
+A fused assessment says ``summarized`` when its combination was cut; a
+likelihood step over more than 5 fractional classes (2^F > 32 focal sets)
+is always built summarized.
+
 **Reading.** Likelihood values are plausibilities for the GBT and must lie in
 [0, 1]; a sensor that has densities must scale them (the local classifier's
 ``likelihood_scale`` does that for the service's own tracks).
@@ -31,10 +39,10 @@ from core.belief import (
     DecisionState,
     Frame,
     MassFunction,
-    conjunctive_all,
-    gbt_mass,
+    conjunctive,
     pignistic_decision,
 )
+from core.belief.summary import bounded_gbt_mass, summarize
 from core.errors import TotalConflict
 
 
@@ -68,9 +76,11 @@ class ClassAssessment:
     conflict: float
     decision: str | None
     decision_state: DecisionState
+    summarized: bool = False
+    """Whether the fused mass was summarized to its bound (:mod:`core.belief.summary`)."""
 
 
-def assess(combined: MassFunction) -> ClassAssessment:
+def assess(combined: MassFunction, summarized: bool = False) -> ClassAssessment:
     """Normalise an (unnormalised) combined mass and summarise it."""
     try:
         normalised = combined.normalized()
@@ -85,6 +95,7 @@ def assess(combined: MassFunction) -> ClassAssessment:
             combined.conflict,
             None,
             DecisionState.UNDEFINED,
+            summarized,
         )
     betp = normalised.pignistic()
     assert betp is not None  # a normalised mass has m(∅) = 0
@@ -98,6 +109,7 @@ def assess(combined: MassFunction) -> ClassAssessment:
         conflict=combined.conflict,
         decision=decision,
         decision_state=decision_state,
+        summarized=summarized,
     )
 
 
@@ -113,8 +125,8 @@ def accumulate_likelihoods(
     TotalConflict
         If the step's evidence contradicts the previous mass totally.
     """
-    step = gbt_mass(frame, np.asarray(likelihoods, dtype=np.float64))
-    combined = step if previous is None else conjunctive_all(previous, step)
+    step, _ = bounded_gbt_mass(frame, np.asarray(likelihoods, dtype=np.float64))
+    combined = step if previous is None else summarize(conjunctive(previous, step))[0]
     return combined.normalized(), combined.conflict
 
 
@@ -130,4 +142,8 @@ def fuse_sensor_classes(
     if not masses:
         return None
     discounted = [masses[sensor].discount(reliabilities[sensor]) for sensor in sorted(masses)]
-    return assess(conjunctive_all(*discounted))
+    fused, summarized = summarize(discounted[0])
+    for mass in discounted[1:]:
+        fused, cut = summarize(conjunctive(fused, mass))
+        summarized = summarized or cut
+    return assess(fused, summarized)

@@ -155,6 +155,7 @@ def class_to_plain(assessment: ClassAssessment) -> dict[str, Any]:
             "conflict": assessment.conflict,
             "decision": None,
             "decision_state": assessment.decision_state.value,
+            "summarized": assessment.summarized,
         }
     labels = assessment.mass.frame.labels
     return {
@@ -168,4 +169,5 @@ def class_to_plain(assessment: ClassAssessment) -> dict[str, Any]:
         "conflict": assessment.conflict,
         "decision": assessment.decision,
         "decision_state": assessment.decision_state.value,
+        "summarized": assessment.summarized,
     }

@@ -59,13 +59,14 @@ def optimal_ci_weight(first: FloatArray, second: FloatArray) -> FloatArray:
     ndarray, shape (T,)
         ω ∈ [0, 1] per track.
     """
-    info_first = np.linalg.inv(first)
-    info_second = np.linalg.inv(second)
-    lower = np.linalg.cholesky(info_second)
-    lower_inv = np.linalg.inv(lower)
-    whitened = lower_inv @ info_first @ np.swapaxes(lower_inv, -1, -2)
+    # B = P₂⁻¹ = L Lᵀ with L = M⁻ᵀ where P₂ = M Mᵀ: then L⁻¹ A L⁻ᵀ = Mᵀ P₁⁻¹ M and
+    # W = M U. No inverse of P₂ is formed (the Cholesky factor of an explicit
+    # inverse of an ill-conditioned P₂ failed: a 500 in issue 14).
+    factor = np.linalg.cholesky((second + np.swapaxes(second, -1, -2)) / 2.0)
+    whitened = np.swapaxes(factor, -1, -2) @ np.linalg.solve(first, factor)
+    whitened = (whitened + np.swapaxes(whitened, -1, -2)) / 2.0
     eigenvalues, eigenvectors = np.linalg.eigh(whitened)
-    basis = np.swapaxes(lower_inv, -1, -2) @ eigenvectors
+    basis = factor @ eigenvectors
     weights_c = np.sum(basis**2, axis=-2)  # c_i, shape (T, d)
     slope = eigenvalues - 1.0
 

@@ -11,8 +11,10 @@ from dataclasses import dataclass
 
 import pytest
 import uvicorn
+from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
+from app.keepalive import server_options
 from app.main import create_app
 from app.settings import Settings
 
@@ -47,13 +49,16 @@ class LiveServer:
 
 
 @contextmanager
-def serving(settings: Settings) -> Iterator[LiveServer]:
-    """The application served by uvicorn on a free loopback port, in a background thread."""
+def serving(settings: Settings, app: FastAPI | None = None) -> Iterator[LiveServer]:
+    """The application (built from ``settings`` unless given) served by uvicorn on a free
+    loopback port, in a background thread."""
     listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
     listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     listener.bind(("127.0.0.1", 0))
     port = listener.getsockname()[1]
-    config = uvicorn.Config(create_app(settings), log_level="warning", lifespan="on")
+    config = uvicorn.Config(
+        app or create_app(settings), log_level="warning", lifespan="on", **server_options(settings)
+    )
     server = uvicorn.Server(config)
     thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
     thread.start()

@@ -90,6 +90,7 @@ CLASSIFICATION_KEYS = {
     "conflict",
     "decision",
     "decision_state",
+    "summarized",
 }
 
 

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
+import numpy as np
 import pytest
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
 from app.errors import LimitExceeded, StaleReport, install_error_handlers
-from core.errors import MassError, TotalConflict
+from core.distance.estimates import check_covariances
+from core.errors import CovarianceError, MassError, TotalConflict
 
 SECRET = "/srv/secret/path/and-a-password"
 
@@ -25,6 +27,12 @@ def build_failing_app() -> FastAPI:
     @app.get("/core-invalid")
     def core_invalid() -> None:
         raise MassError("masses sum to 0.7 for focal set {a}")
+
+    @app.get("/core-located")
+    def core_located() -> None:
+        raise CovarianceError(
+            "tracks[3].covariance is not symmetric", loc=("tracks", 3, "covariance")
+        )
 
     @app.get("/core-internal")
     def core_internal() -> None:
@@ -61,6 +69,30 @@ def test_core_invalid_input_is_422(failing_client: TestClient) -> None:
     assert response.status_code == 422
     assert response.headers["content-type"].startswith("application/problem+json")
     assert "masses sum to 0.7" in response.json()["detail"]
+
+
+def test_core_errors_are_located_and_unlocated_ones_point_at_the_body(
+    failing_client: TestClient,
+) -> None:
+    located = failing_client.get("/core-located").json()
+    assert located["errors"] == [
+        {
+            "loc": ["body", "tracks", 3, "covariance"],
+            "pointer": "#/tracks/3/covariance",
+            "detail": "tracks[3].covariance is not symmetric",
+            "type": "invalid_input",
+        }
+    ]
+    unlocated = failing_client.get("/core-invalid").json()
+    assert [error["pointer"] for error in unlocated["errors"]] == ["#"]
+
+
+def test_core_covariance_check_names_the_field() -> None:
+    """The core's one covariance check locates the matrix it refuses."""
+    stack = np.stack([np.eye(2), np.array([[1.0, 2.0], [2.0, 1.0]])])
+    with pytest.raises(CovarianceError) as refused:
+        check_covariances(stack, "tracks")
+    assert refused.value.loc == ("tracks", 1, "covariance")
 
 
 @pytest.mark.parametrize("route", ["/crash", "/core-internal"])

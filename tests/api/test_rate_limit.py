@@ -48,7 +48,7 @@ def test_a_token_beyond_its_rate_gets_429_naming_the_limit(limited: TestClient) 
     assert "rate_limit" in problem["detail"] and "this token" in problem["detail"]
 
 
-def test_tokens_are_counted_apart_from_each_other_and_from_addresses(
+def test_verified_tokens_are_counted_apart_forged_ones_count_against_the_address(
     limited: TestClient,
 ) -> None:
     owner = create(limited)  # the address's first request
@@ -56,13 +56,24 @@ def test_tokens_are_counted_apart_from_each_other_and_from_addresses(
     for _ in range(3):
         assert limited.get(f"/v1/sessions/{sid}", headers=owner).status_code == 200
     assert limited.get(f"/v1/sessions/{sid}", headers=owner).status_code == 429
-    other = {"Authorization": "Bearer another-token"}
-    assert limited.get(f"/v1/sessions/{sid}", headers=other).status_code == 403  # counted apart
-    create(limited)
+    forged = {"Authorization": "Bearer another-token"}
+    assert (
+        limited.get(f"/v1/sessions/{sid}", headers=forged).status_code == 403
+    )  # the address's 2nd
     create(limited)  # the address's third request
     refused = limited.post("/v1/sessions", json=SESSION_CONFIG)
     assert refused.status_code == 429
     assert "this client address" in refused.json()["detail"]
+
+
+def test_inventing_tokens_buys_no_requests(limited: TestClient) -> None:
+    """Issue 14: ``Bearer fake<i>`` never saw a 429; each forged token had its own budget."""
+    answers = [
+        limited.get("/v1/sessions/x", headers={"Authorization": f"Bearer fake{index}"}).status_code
+        for index in range(5)
+    ]
+    assert answers[:3] == [404, 404, 404]
+    assert answers[3:] == [429, 429]
 
 
 def test_liveness_is_never_limited(limited: TestClient) -> None:

@@ -1,4 +1,10 @@
-"""Bad bodies are rejected with 422 problem+json naming the field, through FastAPI in process."""
+"""Bad bodies are rejected with 422 problem+json naming the field, by the real application.
+
+Each row is sent to the route that takes it (``/sessions`` → ``POST /v1/sessions``,
+``/tracks`` and ``/detections`` → a live session's inputs, ``/associate`` →
+``POST /v1/associate``, ``/message`` → a message on the session's ``stream``
+WebSocket, answered by an ``error`` message), so a check a route drops is seen.
+"""
 
 from __future__ import annotations
 
@@ -11,8 +17,9 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
+from app.main import create_app
+from tests.api.conftest import make_settings
 from tests.api.examples import DETECTION_REPORT, SESSION_CONFIG, TRACK_REPORT
-from tests.api.validation_app import build_validation_app
 
 Body = dict[str, Any]
 
@@ -328,10 +335,52 @@ TEMPLATES: dict[str, Body] = {
 }
 
 
+@dataclass(frozen=True)
+class RealApp:
+    """The application in process, with one session whose state no bad row may change."""
+
+    client: TestClient
+    sid: str
+    headers: dict[str, str]
+
+    def path(self, route: str) -> str:
+        return {
+            "/sessions": "/v1/sessions",
+            "/tracks": f"/v1/sessions/{self.sid}/tracks",
+            "/detections": f"/v1/sessions/{self.sid}/detections",
+            "/associate": "/v1/associate",
+            "/message": f"/v1/sessions/{self.sid}/stream",
+        }[route]
+
+    def send(self, route: str, text: str) -> tuple[int, str, Body]:
+        """(status, content type, problem) of ``text`` sent to ``route``."""
+        if route == "/message":
+            with self.client.websocket_connect(self.path(route), headers=self.headers) as ws:
+                assert ws.receive_json()["type"] == "ack"
+                ws.send_text(text)
+                answer = ws.receive_json()
+            assert answer["type"] == "error", answer
+            problem: Body = answer["problem"]
+            return int(problem["status"]), "application/problem+json", problem
+        response = self.client.post(
+            self.path(route),
+            content=text,
+            headers={"Content-Type": "application/json", **self.headers},
+        )
+        return response.status_code, response.headers["content-type"], response.json()
+
+
+def session_of(client: TestClient) -> tuple[str, dict[str, str]]:
+    created = client.post("/v1/sessions", json=SESSION_CONFIG)
+    assert created.status_code == 201, created.text
+    return created.json()["id"], {"Authorization": f"Bearer {created.json()['token']}"}
+
+
 @pytest.fixture(scope="module")
-def validation_client() -> Iterator[TestClient]:
-    with TestClient(build_validation_app(), raise_server_exceptions=False) as test_client:
-        yield test_client
+def real_app() -> Iterator[RealApp]:
+    with TestClient(create_app(make_settings()), raise_server_exceptions=False) as client:
+        sid, headers = session_of(client)
+        yield RealApp(client, sid, headers)
 
 
 def test_the_table_is_large_enough() -> None:
@@ -339,35 +388,48 @@ def test_the_table_is_large_enough() -> None:
     assert len({row.name for row in ROWS}) == len(ROWS)
 
 
-@pytest.mark.parametrize("route", sorted(TEMPLATES))
-def test_templates_are_valid(validation_client: TestClient, route: str) -> None:
-    response = validation_client.post(route, json=TEMPLATES[route])
-    assert response.status_code == 200, response.text
+@pytest.mark.parametrize("route", sorted(set(TEMPLATES) - {"/message"}))
+def test_templates_are_valid(real_app: RealApp, route: str) -> None:
+    sid, headers = session_of(real_app.client)  # a fresh session: the inputs do not meet
+    fresh = RealApp(real_app.client, sid, headers)
+    response = real_app.client.post(fresh.path(route), json=TEMPLATES[route], headers=headers)
+    assert response.status_code in (200, 201), response.text
+
+
+def test_the_message_template_is_valid(real_app: RealApp) -> None:
+    sid, headers = session_of(real_app.client)
+    with real_app.client.websocket_connect(f"/v1/sessions/{sid}/stream", headers=headers) as ws:
+        assert ws.receive_json()["type"] == "ack"
+        ws.send_text(json.dumps(TEMPLATES["/message"]))
+        assert ws.receive_json()["type"] == "result"
 
 
 @pytest.mark.parametrize("row", ROWS, ids=[row.name for row in ROWS])
-def test_bad_body_is_422_problem_naming_the_field(
-    validation_client: TestClient, row: BadBody
-) -> None:
+def test_bad_body_is_422_problem_naming_the_field(real_app: RealApp, row: BadBody) -> None:
     if row.raw is not None:
         text = row.raw
         assert text != json.dumps(TEMPLATES[row.route]), "the raw edit did not apply"
     else:
         assert row.edit is not None
         text = json.dumps(edited(TEMPLATES[row.route], row.edit))
-    response = validation_client.post(
-        row.route, content=text, headers={"Content-Type": "application/json"}
+    before = real_app.client.get(f"/v1/sessions/{real_app.sid}", headers=real_app.headers).json()
+    status, content_type, problem = real_app.send(row.route, text)
+    assert status == 422, problem
+    assert content_type.startswith("application/problem+json")
+    assert problem["type"] in (
+        "urn:credal-fusion:problem:validation-error",
+        "urn:credal-fusion:problem:limit-exceeded",
     )
-    assert response.status_code == 422, response.text
-    assert response.headers["content-type"].startswith("application/problem+json")
-    problem = response.json()
-    assert problem["type"] == "urn:credal-fusion:problem:validation-error"
     assert problem["status"] == 422
-    assert problem["instance"] == row.route
+    assert problem["instance"] == real_app.path(row.route)
     locations = [tuple(error["loc"]) for error in problem["errors"]]
-    assert any(location[: len(row.loc)] == row.loc for location in locations), (
-        row.loc,
+    expected = row.loc if row.route != "/message" else row.loc[1:]  # a message has no "body"
+    assert any(location[: len(expected)] == expected for location in locations), (
+        expected,
         problem["errors"],
     )
     assert all(error["pointer"].startswith("#") and error["detail"] for error in problem["errors"])
+    assert not any(error["detail"].startswith("Value error") for error in problem["errors"])
     assert "invalid field" in problem["detail"]
+    after = real_app.client.get(f"/v1/sessions/{real_app.sid}", headers=real_app.headers).json()
+    assert after["seq"] == before["seq"] and after["counts"] == before["counts"]

@@ -179,3 +179,24 @@ def test_a_track_fuses_to_the_same_bits_whatever_else_is_in_the_batch(rule: Stat
         np.testing.assert_array_equal(alone[0], state[chosen])
         np.testing.assert_array_equal(alone[1], covariance[chosen])
         np.testing.assert_array_equal(alone[2], weights[chosen])
+
+
+def test_optimal_ci_weight_of_an_ill_conditioned_tiny_pair_matches_a_grid_search() -> None:
+    """Issue 14: a valid but ill-conditioned covariance at scale 1e-96 made a 500 (Cholesky of P₂⁻¹).
+
+    ω is scale-invariant, so the grid search runs on the pair rescaled to unit size,
+    where plain inverses are accurate.
+    """
+    rng = np.random.default_rng(81)  # a pair the explicit-inverse formulation refused
+    pair = []
+    for _ in range(2):
+        basis, _ = np.linalg.qr(rng.normal(size=(4, 4)))
+        pair.append((basis * 10.0 ** rng.uniform(-5.5, 5.5, size=4)) @ basis.T)
+    first, second = ((matrix + matrix.T) / 2.0 for matrix in pair)
+    scale = 1e-96
+    omega = float(optimal_ci_weight((first * scale)[None], (second * scale)[None])[0])
+    grid = np.linspace(0.0, 1.0, 20_001)
+    info_first, info_second = np.linalg.inv(first), np.linalg.inv(second)
+    traces = [np.trace(np.linalg.inv(w * info_first + (1 - w) * info_second)) for w in grid]
+    best = float(grid[int(np.argmin(traces))])
+    assert abs(omega - best) <= 1e-3

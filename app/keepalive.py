@@ -1,0 +1,85 @@
+"""WebSocket keepalive that never cuts a client whose results are queued (the backpressure rule).
+
+The server pings every ``ws_ping_interval`` seconds and, in uvicorn, closes
+with 1011 a peer whose pong is not back within ``ws_ping_timeout``. But a
+peer's pong travels behind everything the server sent before the ping: a
+fast producer that reads its results slowly (its library stops reading when
+its queue is full) cannot answer in time, and was cut off while its results
+were still queued.
+
+The rule here: when the pong deadline passes, the connection stays if the
+peer is visibly alive or visibly behind —
+
+- it sent bytes since the ping (a producer is not dead), or
+- answers to it are waiting: the transport's write buffer is not empty, or the
+  application has not taken the peer's last message because its answers are
+  queued (reading is paused: :mod:`app.routes.streams` keeps 16 answers), or
+  answers were sent to it since its last pong (beyond the connection's first
+  message, the ``ack``): they may sit unread in the peer's buffers, ahead of
+  the ping;
+
+then the next ping is scheduled. Otherwise (silent and owed nothing) it is
+closed with 1011 as before. Backpressure stays bounded: the stream channel
+keeps at most 16 answers per connection, stops reading when they are not
+taken, and TCP pushes back on the client; a peer that is gone for good is
+ended by TCP's own retransmission timeout.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from uvicorn.protocols.websockets.websockets_sansio_impl import WebSocketsSansIOProtocol
+
+from app.settings import Settings
+
+WS_FRAME_FACTOR = 4
+"""uvicorn accepts WebSocket messages up to 4 × ``max_body_bytes``: the application answers
+those above ``max_body_bytes`` with an ``error``; beyond, the protocol closes with 1009."""
+
+
+class PatientWebSocketProtocol(WebSocketsSansIOProtocol):
+    """uvicorn's WebSocket protocol with the keepalive rule of this module."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.received_at = 0.0
+        self.sent_since_pong = 0
+        """Messages sent since the peer's last pong (the first is the connection's ack)."""
+        self.ever_ponged = False
+
+    def data_received(self, data: bytes) -> None:
+        self.received_at = self.loop.time()
+        super().data_received(data)
+
+    async def send(self, message: Any) -> None:
+        if message.get("type") == "websocket.send":
+            self.sent_since_pong += 1
+        await super().send(message)
+
+    def handle_pong(self, event: Any) -> None:
+        if self.pending_ping_payload is not None and bytes(event.data) == self.pending_ping_payload:
+            self.sent_since_pong = 0
+            self.ever_ponged = True
+        super().handle_pong(event)
+
+    def keepalive_timeout(self) -> None:
+        owed = self.sent_since_pong > (0 if self.ever_ponged else 1)
+        behind = owed or self.transport.get_write_buffer_size() > 0 or not self.writable.is_set()
+        alive = self.received_at > self.ping_sent_at
+        if (behind or alive or self.read_paused) and not self.transport.is_closing():
+            self.pong_timer = None
+            self.pending_ping_payload = None
+            self.schedule_ping()
+            return
+        super().keepalive_timeout()
+
+
+def server_options(settings: Settings) -> dict[str, Any]:
+    """uvicorn's options that the service's settings decide (the CLI and the tests use them)."""
+    return {
+        "ws": PatientWebSocketProtocol,
+        "ws_max_size": WS_FRAME_FACTOR * settings.max_body_bytes,
+        "ws_ping_interval": settings.ws_ping_interval,
+        "ws_ping_timeout": settings.ws_ping_timeout,
+    }

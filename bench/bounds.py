@@ -1,0 +1,280 @@
+"""Bounded work: the heaviest legal input of each route, with ``/healthz`` polled meanwhile.
+
+Run with ``python bench/bounds.py`` (``make bench`` runs it too). The service
+runs as a subprocess with its default limits (memory store); for each route
+this process sends the largest input those limits allow while a thread polls
+``/healthz`` every 5 ms on its own connection. Prints, per route: the answer's
+status and size, the request's time, and the slowest ``/healthz`` answer
+during it (the event loop's longest stall, plus a round trip). The targets
+(issue 14): no legal request stalls the loop > 50 ms, ``/healthz`` within
+100 ms. Never asserts a time: the shared machine's load moves every number;
+the tests (``tests/api/test_bounds.py``) assert the answers and sizes.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import httpx
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from service import free_port, server, service_command
+
+from api_schemas.limits import WireLimits
+from app.settings import Settings
+
+LIMITS = WireLimits()
+CLASSES = [f"c{index}" for index in range(LIMITS.max_classes)]
+POLL_S = 0.005
+TARGET_HEALTHZ_MS = 100.0
+
+
+def track(index: int, rng: np.random.Generator, evidence: str) -> dict[str, Any]:
+    x0, y0 = 300.0 * (index % 50), 300.0 * (index // 50)
+    body: dict[str, Any] = {
+        "id": f"t{index}",
+        "state": [round(float(v), 3) for v in np.array([x0, 5.0, y0, -2.0]) + rng.normal(0, 1, 4)],
+        "covariance": [[4, 0, 0, 0], [0, 1, 0, 0], [0, 0, 4, 0], [0, 0, 0, 1]],
+    }
+    if evidence == "likelihoods":
+        body["classification"] = {
+            "likelihoods": {label: round(float(rng.uniform(0.05, 0.95)), 3) for label in CLASSES}
+        }
+    elif evidence == "mass":
+        sets = []
+        for _ in range(LIMITS.max_focal_sets):
+            members = [label for label in CLASSES if rng.random() < 0.5] or [CLASSES[0]]
+            if members not in sets:
+                sets.append(members)
+        mass = 1.0 / len(sets)
+        focal = [{"set": members, "mass": mass} for members in sets]
+        focal[-1]["mass"] = 1.0 - mass * (len(sets) - 1)
+        body["classification"] = {"mass": focal}
+    return body
+
+
+def track_list(sensor: str, time_s: float, count: int, evidence: str) -> dict[str, Any]:
+    rng = np.random.default_rng(int(time_s * 100) + len(sensor))
+    return {
+        "sensor": sensor,
+        "time": time_s,
+        "tracks": [track(index, rng, evidence) for index in range(count)],
+    }
+
+
+def fitting(count: int, build: Callable[[int], dict[str, Any]], max_bytes: int) -> dict[str, Any]:
+    """``build(n)`` for the largest n ≤ count whose JSON fits in ``max_bytes``."""
+    while count > 1:
+        body = build(count)
+        if len(json.dumps(body)) <= max_bytes:
+            return body
+        count = int(count * 0.9)
+    return build(1)
+
+
+class HealthPoller:
+    """Polls ``/healthz`` on its own connection; keeps the slowest answer (ms)."""
+
+    def __init__(self, url: str) -> None:
+        self.url = url
+        self.samples: list[float] = []
+        self.failures = 0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def _run(self) -> None:
+        with httpx.Client(base_url=self.url, timeout=10.0) as client:
+            while not self._stop.is_set():
+                started = time.perf_counter()
+                try:
+                    ok = client.get("/healthz").status_code == 200
+                except httpx.TransportError:
+                    ok = False
+                self.samples.append((time.perf_counter() - started) * 1000)
+                self.failures += 0 if ok else 1
+                time.sleep(POLL_S)
+
+    def __enter__(self) -> HealthPoller:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self._stop.set()
+        self._thread.join()
+
+
+def measure(url: str, name: str, send: Callable[[httpx.Client], httpx.Response]) -> dict[str, Any]:
+    with httpx.Client(base_url=url, timeout=300.0) as client, HealthPoller(url) as poller:
+        time.sleep(0.05)
+        started = time.perf_counter()
+        response = send(client)
+        elapsed = (time.perf_counter() - started) * 1000
+        time.sleep(0.02)
+    return {
+        "route": name,
+        "status": response.status_code,
+        "answer_bytes": len(response.content),
+        "request_ms": round(elapsed, 1),
+        "healthz_max_ms": round(max(poller.samples), 1),
+        "healthz_p50_ms": round(statistics.median(poller.samples), 1),
+        "healthz_failures": poller.failures,
+    }
+
+
+def session(client: httpx.Client, sensors: int, classes: bool) -> tuple[str, dict[str, str]]:
+    config: dict[str, Any] = {
+        "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+        "sensors": [
+            {"id": f"s{index}", "measurement": {"r": [[25, 0], [0, 25]]}}
+            for index in range(sensors)
+        ],
+    }
+    if classes:
+        config["classes"] = CLASSES
+    created = client.post("/v1/sessions", json=config)
+    created.raise_for_status()
+    body = created.json()
+    return body["id"], {"Authorization": f"Bearer {body['token']}"}
+
+
+def main() -> int:
+    max_bytes = Settings().max_body_bytes
+    port = free_port()
+    rows = []
+    with server(service_command(port), port) as url, httpx.Client(base_url=url, timeout=300) as c:
+
+        def config_with(polygons: int) -> dict[str, Any]:
+            """64 sensors, the first ``polygons`` with a 1 000-vertex field of view."""
+            square = [[0, 0], [1000, 0], [1000, 1000], [0, 1000]]
+            angles = np.linspace(0, 6.2, 1000)
+            polygon = [
+                [round(500 + 400 * np.cos(a), 3), round(500 + 400 * np.sin(a), 3)] for a in angles
+            ]
+            sensors = [
+                {
+                    "id": f"s{i}",
+                    "fov": {"kind": "polygon", "vertices": polygon if i < polygons else square},
+                }
+                for i in range(LIMITS.max_sensors)
+            ]
+            return {
+                "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+                "classes": CLASSES,
+                "sensors": sensors,
+            }
+
+        config = fitting(LIMITS.max_sensors, config_with, max_bytes)
+        polygons = sum(len(sensor["fov"]["vertices"]) > 4 for sensor in config["sensors"])
+        rows.append(
+            measure(
+                url,
+                f"POST /v1/sessions (64 sensors, {polygons} polygons)",
+                lambda client: client.post("/v1/sessions", json=config),
+            )
+        )
+
+        for evidence in ("none", "likelihoods", "mass"):
+            sid, headers = session(c, 2, classes=evidence != "none")
+            count = LIMITS.max_tracks_per_input
+            first = fitting(count, lambda n, e=evidence: track_list("s0", 1.0, n, e), max_bytes)
+            second = fitting(count, lambda n, e=evidence: track_list("s1", 1.0, n, e), max_bytes)
+            tracks = len(first["tracks"])
+            rows.append(
+                measure(
+                    url,
+                    f"POST tracks ({tracks}, {evidence}, 1st sensor)",
+                    lambda client, b=first, s=sid, h=headers: client.post(
+                        f"/v1/sessions/{s}/tracks", json=b, headers=h
+                    ),
+                )
+            )
+            rows.append(
+                measure(
+                    url,
+                    f"POST tracks ({tracks}, {evidence}, 2nd sensor)",
+                    lambda client, b=second, s=sid, h=headers: client.post(
+                        f"/v1/sessions/{s}/tracks", json=b, headers=h
+                    ),
+                )
+            )
+            rows.append(
+                measure(
+                    url,
+                    f"GET tracks ({evidence})",
+                    lambda client, s=sid, h=headers: client.get(
+                        f"/v1/sessions/{s}/tracks", headers=h
+                    ),
+                )
+            )
+            rows.append(
+                measure(
+                    url,
+                    f"GET events ({evidence})",
+                    lambda client, s=sid, h=headers: client.get(
+                        f"/v1/sessions/{s}/events", params={"limit": 10_000}, headers=h
+                    ),
+                )
+            )
+
+        sid, headers = session(c, 1, classes=False)
+        rng = np.random.default_rng(3)
+        detections = {
+            "sensor": "s0",
+            "time": 1.0,
+            "detections": [
+                {"z": [float(v) for v in rng.uniform(0, 20000, 2)]}
+                for _ in range(LIMITS.max_tracks_per_input)
+            ],
+        }
+        rows.append(
+            measure(
+                url,
+                "POST detections (2000)",
+                lambda client: client.post(
+                    f"/v1/sessions/{sid}/detections", json=detections, headers=headers
+                ),
+            )
+        )
+        for evidence, side in (("none", 500), ("likelihoods", 141)):  # the pair limits' defaults
+            known = track_list("a", 1.0, side, evidence)["tracks"]
+            incoming = track_list("b", 1.0, side, evidence)["tracks"]
+            body = {"known": known, "incoming": incoming, "method": "gnn"}
+            if evidence != "none":
+                body = {
+                    "known": known,
+                    "incoming": incoming,
+                    "classes": CLASSES,
+                    "method": "mercier",
+                }
+            rows.append(
+                measure(
+                    url,
+                    f"POST /v1/associate ({side}², {evidence})",
+                    lambda client, b=body: client.post("/v1/associate", json=b),
+                )
+            )
+
+    width = max(len(row["route"]) for row in rows)
+    print(f"{'route':{width}}  status  answer KB  request ms  healthz max ms  p50 ms  failures")
+    for row in rows:
+        print(
+            f"{row['route']:{width}}  {row['status']:6}  {row['answer_bytes'] / 1024:9.0f}  "
+            f"{row['request_ms']:10.0f}  {row['healthz_max_ms']:14.1f}  {row['healthz_p50_ms']:6.1f}  "
+            f"{row['healthz_failures']:8}"
+        )
+    worst = max(row["healthz_max_ms"] for row in rows)
+    print(f"slowest /healthz during any route: {worst:.1f} ms (target {TARGET_HEALTHZ_MS:.0f} ms)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
