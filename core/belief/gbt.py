@@ -86,14 +86,6 @@ def gauss_order(log_factor: FloatArray, growth: FloatArray, exact: int) -> int:
     return int(min(exact, max(1, math.ceil(float(needed.max())))))
 
 
-def leave_one_out_products(factors: FloatArray) -> FloatArray:
-    """``out[..., j] = Π_{k≠j} factors[..., k]`` by prefix/suffix products (no division)."""
-    ones = np.ones((*factors.shape[:-1], 1))
-    prefix = np.cumprod(np.concatenate([ones, factors[..., :-1]], axis=-1), axis=-1)
-    suffix = np.cumprod(np.concatenate([ones, factors[..., :0:-1]], axis=-1), axis=-1)[..., ::-1]
-    return np.asarray(prefix * suffix, dtype=np.float64)
-
-
 def leave_one_out_sums(terms: FloatArray) -> FloatArray:
     """``out[..., j] = Σ_{k≠j} terms[..., k]`` by prefix/suffix sums (no subtraction).
 

@@ -1,4 +1,4 @@
-"""Mercier's BetP at any frame size (ALGORITHMS.md §1.1, §3.4).
+"""Mercier's BetP (and Dang–Han's beliefs) at any frame size (ALGORITHMS.md §1.1, §3.4).
 
 The normaliser 1 − m(∅) = Σ_j a_j Π_{k≠j}(1 − a_k) + Π_k (b_k + c_k) has one
 factor per candidate: on a dense 1000 × 1000 problem it is ≈ 0.3^1000 and
@@ -104,15 +104,23 @@ def log_space_betp(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
     return np.exp(log_numerators - log_normaliser)
 
 
-def test_dense_thousand_by_thousand_pairs_every_item_with_its_own() -> None:
-    """1000 items in a box 0.7 wide (unit variances): every pair supports "same" (D < 1),
-    Π(1 − a_k) ≈ 1e-600; incoming = known exactly, shuffled, so item t's partner is known
-    ``order[t]`` and its a = α is the row's largest."""
+@pytest.fixture(scope="module")
+def dense_layout() -> tuple[
+    tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray], np.ndarray
+]:
     n = 1000
     rng = np.random.default_rng(7)
     known = positions(rng, n, 0.7)
     order = rng.permutation(n)
-    incoming = (known[0][order], known[1][order])
+    return known, (known[0][order], known[1][order]), order
+
+
+def test_dense_thousand_by_thousand_pairs_every_item_with_its_own(dense_layout) -> None:
+    """1000 items in a box 0.7 wide (unit variances): every pair supports "same" (D < 1),
+    Π(1 − a_k) ≈ 1e-600; incoming = known exactly, shuffled, so item t's partner is known
+    ``order[t]`` and its a = α is the row's largest."""
+    known, incoming, order = dense_layout
+    n = len(order)
     result = associate(known, incoming, "mercier")
     assert len(result.diagnostics.undefined) == 0
     assert result.diagnostics.candidate_pairs == n * n
@@ -126,3 +134,21 @@ def test_dense_thousand_by_thousand_pairs_every_item_with_its_own() -> None:
         np.testing.assert_allclose(matrix[:, t], reference[:-1], rtol=1e-10)
         assert result.scores.new[t] == pytest.approx(reference[-1], rel=1e-10)
         assert int(np.argmax(matrix[:, t])) == order[t]
+
+
+def test_dense_dang_han_beliefs_in_log_space(dense_layout) -> None:
+    """[DH] eq 19 singleton beliefs m(Y_j) / (1 − m(∅)) had the same underflow."""
+    known, incoming, order = dense_layout
+    result = associate(known, incoming, "dang_han")
+    assert len(result.diagnostics.undefined) == 0
+    assert result.assignment() == {int(order[t]): t for t in range(len(order))}
+    d = sum_distances(known, (incoming[0][:5], incoming[1][:5]))
+    a, b, c = evidence(d, 0.9, "fuzzy")
+    with np.errstate(divide="ignore"):
+        log_keep = np.log(1.0 - a)
+        log_singles = np.log(a) + log_keep.sum(axis=0) - log_keep
+        log_star = np.log(b).sum(axis=0)
+    log_normaliser = logsumexp(np.vstack([log_singles, np.log(b + c).sum(axis=0)]), axis=0)
+    matrix = result.scores.dense()
+    np.testing.assert_allclose(matrix[:, :5], np.exp(log_singles - log_normaliser), rtol=1e-10)
+    np.testing.assert_allclose(result.scores.new[:5], np.exp(log_star - log_normaliser))
