@@ -8,7 +8,9 @@ maximises Σ BetP r over the matrix of [T2T] Table 1, as in §3.3: a
 maximum-gain matching on ``BetP_t(Y_ℓ) − BetP_t(*)``.
 
 An item whose combination is in total conflict has no BetP: it is declared
-new and listed in ``diagnostics.undefined``.
+new and listed in ``diagnostics.undefined``. Total conflict is decided on
+logarithms: on a dense frame 1 − m(∅) holds a product of one factor per
+candidate (≈ 0.1^1000 for 1000 candidates), small but not 0 (§1.1 "Scale").
 
 Options
 -------

@@ -36,7 +36,7 @@ from core.association.options import Options, choice, number
 from core.association.problem import AssociationProblem
 from core.association.rows import RaggedRows
 from core.belief import pairwise_evidence_betp_rows
-from core.belief.gbt import leave_one_out_products
+from core.belief.gbt import leave_one_out_sums
 from core.distance import CandidatePairs, threshold_from_probability
 
 Evidence = tuple[FloatArray, FloatArray, FloatArray]
@@ -90,10 +90,19 @@ def singleton_belief_rows(
     For singletons m = Bel. Columns Y_1..Y_n then ``*``; the second array
     tells which rows are defined (not in total conflict).
     """
-    singles = support * leave_one_out_products(1.0 - support)
-    star = np.prod(refute, axis=-1)
-    normaliser = singles.sum(axis=-1) + np.prod(refute + ignorance, axis=-1)
-    defined = normaliser > 0.0
+    # Products of one factor per candidate underflow on large frames (0.1^1000): they are
+    # formed as sums of logarithms and divided by the row's largest term (as in
+    # ``pairwise_evidence_betp_rows``); the ratios are unchanged.
+    with np.errstate(divide="ignore"):  # log 0 = −inf
+        log_singles = np.log(support) + leave_one_out_sums(np.log(1.0 - support))
+        log_star = np.log(refute).sum(axis=-1)
+        log_full = np.log(refute + ignorance).sum(axis=-1)
+    log_scale = np.maximum(log_singles.max(axis=-1, initial=-np.inf), log_full)  # m(*) ≤ Π(b + c)
+    defined = log_scale > -np.inf
+    shift = np.where(defined, log_scale, 0.0)
+    singles = np.exp(log_singles - shift[:, None])
+    star = np.exp(log_star - shift)
+    normaliser = singles.sum(axis=-1) + np.exp(log_full - shift)
     safe = np.where(defined, normaliser, 1.0)[:, None]
     belief = np.concatenate([singles, star[:, None]], axis=1) / safe
     belief[~defined] = 0.0

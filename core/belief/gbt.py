@@ -86,12 +86,15 @@ def gauss_order(log_factor: FloatArray, growth: FloatArray, exact: int) -> int:
     return int(min(exact, max(1, math.ceil(float(needed.max())))))
 
 
-def leave_one_out_products(factors: FloatArray) -> FloatArray:
-    """``out[..., j] = Π_{k≠j} factors[..., k]`` by prefix/suffix products (no division)."""
-    ones = np.ones((*factors.shape[:-1], 1))
-    prefix = np.cumprod(np.concatenate([ones, factors[..., :-1]], axis=-1), axis=-1)
-    suffix = np.cumprod(np.concatenate([ones, factors[..., :0:-1]], axis=-1), axis=-1)[..., ::-1]
-    return np.asarray(prefix * suffix, dtype=np.float64)
+def leave_one_out_sums(terms: FloatArray) -> FloatArray:
+    """``out[..., j] = Σ_{k≠j} terms[..., k]`` by prefix/suffix sums (no subtraction).
+
+    Made for logarithms (terms ≤ 0, some −inf): −inf minus −inf never occurs.
+    """
+    zeros = np.zeros((*terms.shape[:-1], 1))
+    prefix = np.cumsum(np.concatenate([zeros, terms[..., :-1]], axis=-1), axis=-1)
+    suffix = np.cumsum(np.concatenate([zeros, terms[..., :0:-1]], axis=-1), axis=-1)[..., ::-1]
+    return np.asarray(prefix + suffix, dtype=np.float64)
 
 
 def _leave_one_out_integrals(
@@ -248,35 +251,42 @@ def pairwise_evidence_betp_rows(
     columns = order[:, :width]
     ac, bc, cc = (np.take_along_axis(x, columns, axis=1) for x in (a, b, c))
     # Entries past a row's kept count are refutations (a = c = 0, b = 1): g ≡ 1, score 0.
-    # With w_k = b_k + c_k > 0 and q_k = c_k / w_k, g_k = w_k h_k, h_k = 1 − q_k + q_k t:
+    # With w_k = b_k + c_k = 1 − a_k and q_k = c_k / w_k, g_k = w_k h_k, h_k = 1 − q_k + q_k t:
     # the integrals are those of the GBT path, times the exact Π_{k≠j} w_k.
+    # Scale: Π_k w_k has one factor per candidate (≈ 0.1 each on a dense 1000-candidate
+    # frame, 1e-1000 in all): every product of w is formed as a sum of logarithms and
+    # divided by the row's largest term before exponentiating. BetP is a ratio, so the
+    # common factor cancels; the largest term becomes 1 and nothing underflows that matters.
     # Error bound (gauss_order): on E_ρ, |h_k| ≤ 1 + q_k (ρ' − 1)/2 ≤ exp(q_k (ρ' − 1)/2) and
     # |t| ≤ (1 + ρ')/2 ≤ exp((ρ' − 1)/2); the normaliser is exact and ≥ Π w_k, so every BetP
-    # errs by at most the quadrature bound of exp((Σ q + 1)(ρ' − 1)/2). Rows with some
-    # w_k = 0 (a_k = 1) have no such bound: the exact order and prefix/suffix products.
+    # errs by at most the quadrature bound of exp((Σ q + 1)(ρ' − 1)/2).
     weight = bc + cc
-    at_one = leave_one_out_products(weight)  # Π_{k≠j} w_k
-    singles = ac * at_one
+    with np.errstate(divide="ignore"):  # log 0 = −inf: a certain support (w = 0) or a = 0
+        log_weight = np.log(weight)
+        log_support = np.log(ac)
+    log_at_one = leave_one_out_sums(log_weight)  # log Π_{k≠j} w_k
+    log_full_at_one = log_weight.sum(axis=1)  # log Π_k w_k
+    log_singles = log_support + log_at_one  # log m(Y_j) = log a_j Π_{k≠j}(1 − a_k)
+    log_scale = np.maximum(log_singles.max(axis=1, initial=-np.inf), log_full_at_one)
+    # 1 − m(∅) > 0 exactly when some term is > 0: the test is on logarithms, not on products
+    defined = log_scale > -np.inf
+    shift = np.where(defined, log_scale, 0.0)[:, None]
+    singles = np.exp(log_singles - shift)
+    at_one = np.exp(log_at_one - shift)  # ≤ 1 / max(a_j, w_j) ≤ 2: no overflow
+    full_at_one = np.exp(log_full_at_one - shift[:, 0])
+    normaliser = singles.sum(axis=1) + full_at_one  # (1 − m(∅)) / scale ≥ 1 on defined rows
     shared = np.zeros((rows, width))
     star = np.zeros(rows)
-    full_at_one = np.prod(weight, axis=1)
-    normaliser = singles.sum(axis=1) + full_at_one
-    defined = normaliser > 0.0  # exact products: any positive normaliser is meaningful
-    exact_order = (width + 2) // 2  # degree width
-    positive = np.all(weight > 0.0, axis=1)
-    scaled, fallback = defined & positive, defined & ~positive  # undefined rows score 0
+    # A defined row with some w_k = 0 (a_k = 1) has exactly one: every focal set but {Y_k}
+    # then holds a factor b_k or c_k = 0, so BetP(Y_k) = 1 from ``singles`` alone.
+    scaled = defined & np.all(weight > 0.0, axis=1)
     if scaled.any():
         q = cc[scaled] / weight[scaled]
+        exact_order = (width + 2) // 2  # degree width
         order_needed = gauss_order(np.zeros(len(q)), (q.sum(axis=1) + 1.0) / 2.0, exact_order)
         full_integral, loo_integral = _leave_one_out_integrals(q, order_needed, times_t=True)
         shared[scaled] = cc[scaled] * at_one[scaled] * loo_integral
         star[scaled] = full_at_one[scaled] * full_integral
-    if fallback.any():
-        nodes, weights = _gauss_legendre_01(exact_order)
-        factors = bc[fallback, None, :] + cc[fallback, None, :] * nodes[None, :, None]
-        star[fallback] = np.prod(factors, axis=2) @ weights
-        loo = leave_one_out_products(factors)
-        shared[fallback] = cc[fallback] * np.einsum("l,bln->bn", weights * nodes, loo)
     safe = np.where(defined, normaliser, 1.0)[:, None]
     scores = np.where(defined[:, None], (singles + shared) / safe, 0.0)
     np.put_along_axis(betp[:, :n], columns, scores, axis=1)

@@ -11,8 +11,16 @@ from __future__ import annotations
 import numpy as np
 
 from core.arrays import BoolArray, FloatArray
-from core.belief.gbt import _compress_rows, _gauss_legendre_01, leave_one_out_products
+from core.belief.gbt import _compress_rows, _gauss_legendre_01
 from core.errors import MassError
+
+
+def leave_one_out_products(factors: FloatArray) -> FloatArray:
+    """``out[..., j] = Π_{k≠j} factors[..., k]`` by prefix/suffix products (no division)."""
+    ones = np.ones((*factors.shape[:-1], 1))
+    prefix = np.cumprod(np.concatenate([ones, factors[..., :-1]], axis=-1), axis=-1)
+    suffix = np.cumprod(np.concatenate([ones, factors[..., :0:-1]], axis=-1), axis=-1)[..., ::-1]
+    return np.asarray(prefix * suffix, dtype=np.float64)
 
 
 def slow_gbt_betp_rows(plausibility: FloatArray) -> tuple[FloatArray, BoolArray]:
