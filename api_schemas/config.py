@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal, Self
 
-from pydantic import Discriminator, Field, StringConstraints, Tag, model_validator
+from pydantic import Field, StringConstraints, model_validator
 
 from api_schemas.association import (
     AssociationMethod,
@@ -134,18 +134,70 @@ FieldOfView = Annotated[SectorFieldOfView | PolygonFieldOfView, Field(discrimina
 
 
 class MeasurementModel(WireModel):
-    """A detecting sensor's measurement noise: ``r`` over the position components."""
+    """A detecting sensor's measurement noise.
 
-    kind: Literal["cartesian"] = "cartesian"
-    r: Matrix
+    ``kind: "cartesian"`` (the default): ``r`` over the position components,
+    detections ``{"z": [...]}``. ``kind: "polar"``: a radar's range and
+    azimuth (and elevation, in 3-D) standard deviations; its detections are
+    ``{"range", "azimuth_deg", "elevation_deg"?, "range_rate"?}`` at the
+    sensor's ``site``, azimuth clockwise from north. They are tracked as
+    converted Cartesian measurements with each detection's own covariance
+    (:mod:`app.polar`); ``range_rate`` is accepted and not used yet.
+    """
+
+    kind: Literal["cartesian", "polar"] = "cartesian"
+    r: Matrix | None = Field(default=None, description="cartesian: R over the positions")
+    sigma_range: PositiveFloat | None = Field(
+        default=None, description="polar: range standard deviation (m)"
+    )
+    sigma_azimuth_deg: PositiveFloat | None = Field(
+        default=None, description="polar: azimuth standard deviation (deg)"
+    )
+    sigma_elevation_deg: PositiveFloat | None = Field(
+        default=None, description="polar: elevation standard deviation (deg); required in 3-D"
+    )
+    sigma_range_rate: PositiveFloat | None = Field(
+        default=None, description="polar: range-rate standard deviation (m/s); not used yet"
+    )
 
     @model_validator(mode="after")
     def _r_is_covariance(self) -> Self:
+        polar_fields = (
+            "sigma_range",
+            "sigma_azimuth_deg",
+            "sigma_elevation_deg",
+            "sigma_range_rate",
+        )
+        if self.kind == "polar":
+            issues = [
+                FieldIssue((name,), f"a polar sensor needs {name}", None)
+                for name in polar_fields[:2]
+                if getattr(self, name) is None
+            ]
+            if self.r is not None:
+                issues.append(FieldIssue(("r",), "a polar sensor takes sigmas, not r", self.r))
+            if issues:
+                raise_issues("MeasurementModel", issues)
+            return self
+        extra = [name for name in polar_fields if getattr(self, name) is not None]
+        if extra:
+            raise_issues(
+                "MeasurementModel",
+                [FieldIssue((name,), "only a polar sensor takes sigmas", None) for name in extra],
+            )
+        if self.r is None:
+            raise_issues("MeasurementModel", [FieldIssue(("r",), "r is required", None)])
         try:
             check_covariance(self.r)
         except ValueError as error:
             raise_issues("MeasurementModel", [FieldIssue(("r",), str(error), self.r)])
         return self
+
+    @property
+    def polar_sigmas(self) -> tuple[float, float]:
+        """``(σ_range m, σ_azimuth deg)`` of a polar sensor."""
+        assert self.sigma_range is not None and self.sigma_azimuth_deg is not None
+        return self.sigma_range, self.sigma_azimuth_deg
 
 
 Latitude = Annotated[float, Field(allow_inf_nan=False, ge=-90.0, le=90.0)]
@@ -158,39 +210,6 @@ class GeodeticPoint(WireModel):
     lat: Latitude
     lon: Longitude
     alt: FiniteFloat = 0.0
-
-
-class PolarMeasurement(WireModel):
-    """A radar's noise: range, azimuth (and elevation in 3-D) standard deviations.
-
-    Its detections are ``{"range", "azimuth_deg", "elevation_deg"?, "range_rate"?}``
-    at the sensor's ``site``, azimuth clockwise from north. They are tracked as
-    converted Cartesian measurements with each detection's own covariance
-    (:mod:`app.polar`); ``range_rate`` is accepted and not used yet.
-    """
-
-    kind: Literal["polar"]
-    sigma_range: PositiveFloat = Field(description="range standard deviation (m)")
-    sigma_azimuth_deg: PositiveFloat = Field(description="azimuth standard deviation (deg)")
-    sigma_elevation_deg: PositiveFloat | None = Field(
-        default=None, description="elevation standard deviation (deg); required in 3-D"
-    )
-    sigma_range_rate: PositiveFloat | None = Field(
-        default=None, description="range-rate standard deviation (m/s); not used yet"
-    )
-
-
-def _measurement_kind(value: object) -> str:
-    """``kind`` of a measurement model, ``"cartesian"`` when absent (today's ``{r: …}`` form)."""
-    if isinstance(value, dict):
-        return str(value.get("kind", "cartesian"))
-    return str(getattr(value, "kind", "cartesian"))
-
-
-SensorMeasurement = Annotated[
-    Annotated[MeasurementModel, Tag("cartesian")] | Annotated[PolarMeasurement, Tag("polar")],
-    Discriminator(_measurement_kind),
-]
 
 
 class SensorSite(WireModel):
@@ -237,7 +256,7 @@ class SensorConfig(WireModel):
     reliability: UnitFloat = 1.0
     p_detect: OpenUnitFloat = 0.9
     fov: FieldOfView | None = None
-    measurement: SensorMeasurement | None = None
+    measurement: MeasurementModel | None = None
     site: SensorSite | None = Field(
         default=None,
         description="where the sensor stands (default: the session frame's origin, heading 0)",
@@ -380,8 +399,10 @@ class SessionConfig(WireModel):
                 )
             sensor_ids.add(sensor.id)
             issues.extend(self._placement_issues(index, sensor))
-            if isinstance(sensor.measurement, MeasurementModel) and (
-                len(sensor.measurement.r) != measured
+            if (
+                sensor.measurement is not None
+                and sensor.measurement.r is not None
+                and len(sensor.measurement.r) != measured
             ):
                 size = len(sensor.measurement.r)
                 issues.append(
@@ -425,7 +446,7 @@ class SessionConfig(WireModel):
                 )
             )
         polar = sensor.measurement
-        if isinstance(polar, PolarMeasurement):
+        if polar is not None and polar.kind == "polar":
             if measured == 1:
                 issues.append(
                     FieldIssue(

@@ -7,7 +7,7 @@ body, so the service can answer one 422 that lists them all.
 from __future__ import annotations
 
 from api_schemas.classification import ClassEvidence
-from api_schemas.config import PolarMeasurement, SessionConfig
+from api_schemas.config import SessionConfig
 from api_schemas.issues import FieldIssue, Location
 from api_schemas.reports import Detection, DetectionReport, TrackReport
 
@@ -124,7 +124,9 @@ def detection_report_issues(report: DetectionReport, config: SessionConfig) -> l
     measured = len(config.state.position)
     sensor = config.sensor(report.sensor)
     has_sensor_noise = sensor is not None and sensor.measurement is not None
-    polar_sensor = sensor is not None and isinstance(sensor.measurement, PolarMeasurement)
+    polar_sensor = (
+        sensor is not None and sensor.measurement is not None and sensor.measurement.kind == "polar"
+    )
     for index, detection in enumerate(report.detections):
         if detection.z is None or polar_sensor:
             issues.extend(_polar_issues(detection, polar_sensor, measured, report.sensor, index))

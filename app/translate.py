@@ -27,7 +27,6 @@ from api_schemas.association import AssociationOptions
 from api_schemas.classification import ClassEvidence
 from api_schemas.config import (
     MeasurementModel,
-    PolarMeasurement,
     PolygonFieldOfView,
     SectorFieldOfView,
     SensorConfig,
@@ -117,7 +116,7 @@ def local_tracker_config(
     axes = len(config.state.position)
     r = (
         polar_reference_noise(sensor.measurement, fov, axes)
-        if isinstance(sensor.measurement, PolarMeasurement)
+        if sensor.measurement.r is None
         else tuple(tuple(float(x) for x in row) for row in sensor.measurement.r)
     )
     bank = None
@@ -154,7 +153,7 @@ POLAR_REFERENCE_RANGE = 50_000.0
 
 
 def polar_reference_noise(
-    noise: PolarMeasurement, fov: FieldOfView | None, axes: int
+    noise: MeasurementModel, fov: FieldOfView | None, axes: int
 ) -> tuple[tuple[float, ...], ...]:
     """The R a polar sensor's tracker uses where a detection's own covariance is not passed.
 
@@ -166,7 +165,8 @@ def polar_reference_noise(
     so new tracks start no more confident than their detections.
     """
     far = fov.range_max if isinstance(fov, Sector) else POLAR_REFERENCE_RANGE
-    sigmas = [noise.sigma_range, far * math.radians(noise.sigma_azimuth_deg)]
+    sigma_range, sigma_azimuth_deg = noise.polar_sigmas
+    sigmas = [sigma_range, far * math.radians(sigma_azimuth_deg)]
     if axes == 3 and noise.sigma_elevation_deg is not None:
         sigmas.append(far * math.radians(noise.sigma_elevation_deg))
     variance = max(sigmas) ** 2
@@ -341,7 +341,7 @@ def polar_detection_report(
 ) -> CoreDetectionReport:
     """A polar sensor's detections as converted positions, each with its own covariance."""
     noise = sensor.measurement
-    assert isinstance(noise, PolarMeasurement)
+    assert noise is not None
     dim = len(config.state.position)
     site, _ = sensor_site(config, sensor)
     detections = report.detections
@@ -353,7 +353,7 @@ def polar_detection_report(
     positions, covariances = polar_to_cartesian(
         ranges,
         azimuths,
-        (noise.sigma_range, noise.sigma_azimuth_deg),
+        noise.polar_sigmas,
         site[:dim],
         elevations,
         noise.sigma_elevation_deg,
@@ -371,18 +371,14 @@ def core_detection_report(report: DetectionReport, config: SessionConfig) -> Cor
     """Wire detections as the core's: measurements (m × q) and, when any detection gives its
     own ``r``, one R per detection (the sensor's ``measurement.r`` for the others)."""
     polar = config.sensor(report.sensor)
-    if polar is not None and isinstance(polar.measurement, PolarMeasurement):
+    if polar is not None and polar.measurement is not None and polar.measurement.kind == "polar":
         return polar_detection_report(report, config, polar)
     dim = len(report.detections[0].z or ()) if report.detections else 2
     measurements = np.array([d.z for d in report.detections], dtype=np.float64).reshape(-1, dim)
     if all(detection.r is None for detection in report.detections):
         return CoreDetectionReport(report.sensor, report.time, measurements, None)
     sensor = next((s for s in config.sensors if s.id == report.sensor), None)
-    default = (
-        sensor.measurement.r
-        if sensor is not None and isinstance(sensor.measurement, MeasurementModel)
-        else None
-    )
+    default = None if sensor is None or sensor.measurement is None else sensor.measurement.r
     covariances = np.array(
         [detection.r if detection.r is not None else default for detection in report.detections],
         dtype=np.float64,

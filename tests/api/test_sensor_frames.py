@@ -56,6 +56,13 @@ def _state_of(client: httpx.Client, sid: str, headers: dict[str, str]) -> tuple[
         ),
         ({"state": LAYOUT_2D, "origin": {**ORIGIN, "lat": 91.0}}, "lat"),
         ({"state": LAYOUT_2D, "origin": {**ORIGIN, "lon": -180.5}}, "lon"),
+        (  # a polar sensor without its azimuth σ
+            {
+                "state": LAYOUT_2D,
+                "sensors": [{"id": "r", "measurement": {"kind": "polar", "sigma_range": 20.0}}],
+            },
+            "sigma_azimuth_deg",
+        ),
         (  # a polar sensor of a 3-D session without its elevation σ
             {"state": LAYOUT_3D, "sensors": [{"id": "r", "measurement": POLAR}]},
             "sigma_elevation_deg",
