@@ -25,6 +25,8 @@ from api_schemas.limits import MAX_ITEMS, bounded
 from api_schemas.linalg import check_square, covariance_problems
 
 StateVector = Annotated[Vector, Field(min_length=1, max_length=64)]
+MAX_RANGE = 1e8
+"""A polar detection's range is in (0, 1e8] m (beyond the Moon: a unit error, not a target)."""
 
 
 class SensorTrack(WireModel):
@@ -112,8 +114,8 @@ class Detection(WireModel):
 
     z: Annotated[Vector, Field(min_length=1, max_length=3)] | None = None
     r: Matrix | None = None
-    range: Annotated[float, Field(allow_inf_nan=False, ge=0.0)] | None = None
-    azimuth_deg: FiniteFloat | None = None
+    range: Annotated[float, Field(allow_inf_nan=False, gt=0.0, le=MAX_RANGE)] | None = None
+    azimuth_deg: Annotated[float, Field(allow_inf_nan=False, ge=-360.0, le=360.0)] | None = None
     elevation_deg: Annotated[float, Field(allow_inf_nan=False, ge=-90.0, le=90.0)] | None = None
     range_rate: FiniteFloat | None = None
     classification: ClassEvidence | None = None

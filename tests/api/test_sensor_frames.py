@@ -96,6 +96,13 @@ def test_bad_inputs_are_refused_by_field_and_change_nothing(live_server: LiveSer
                 {"detections": [{"range": 1e3, "azimuth_deg": 5}]},
                 "range",
             ),
+            (  # a range of 0: the converted covariance would be singular
+                {**plain, "sensors": [{"id": "cart", "measurement": POLAR}]},
+                "cart",
+                "detections",
+                {"detections": [{"range": 0.0, "azimuth_deg": 5}]},
+                "range",
+            ),
             (
                 solid,
                 "r3",
