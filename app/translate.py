@@ -36,7 +36,7 @@ from api_schemas.config import (
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import DetectionReport, SensorTrack, TrackReport
 from app.errors import request_validation_error
-from app.geodesy import LocalFrame, geodetic_to_session, sensor_to_session
+from app.geodesy import LocalFrame, geodetic_to_session, rotate_covariances, sensor_to_session
 from app.polar import polar_to_cartesian
 from core.association import AssociationResult
 from core.belief import Frame, MassFunction
@@ -336,10 +336,27 @@ def session_frame_report(report: TrackReport, config: SessionConfig) -> CoreTrac
     return dataclasses.replace(core, tracks=tracks)
 
 
+def site_axes(config: SessionConfig, sensor: SensorConfig, dimension: int) -> np.ndarray | None:
+    """Rotation (d × d) from the ENU axes at a geodetic site to the session's (``None`` at a
+    session-frame ``position``: the sensor measures in the session's axes)."""
+    site = sensor.site
+    frame = session_origin(config)
+    if site is None or site.lat is None or site.lon is None or frame is None:
+        return None
+    rotation: np.ndarray = frame.rotation_from(site.lat, site.lon)[0][:dimension, :dimension]
+    return rotation
+
+
 def polar_detection_report(
     report: DetectionReport, config: SessionConfig, sensor: SensorConfig
 ) -> CoreDetectionReport:
-    """A polar sensor's detections as converted positions, each with its own covariance."""
+    """A polar sensor's detections as converted positions, each with its own covariance.
+
+    Azimuth and elevation are measured in the site's own ENU axes: at a
+    geodetic site the converted offsets and covariances are turned into the
+    session's axes (``R_origin R_siteᵀ``, exact: :mod:`app.geodesy`); the
+    tilt between the two planes is 0.009° per km from the origin.
+    """
     noise = sensor.measurement
     assert noise is not None
     dim = len(config.state.position)
@@ -350,20 +367,20 @@ def polar_detection_report(
     elevations = (
         np.array([d.elevation_deg for d in detections], dtype=np.float64) if dim == 3 else None
     )
-    positions, covariances = polar_to_cartesian(
+    offsets, covariances = polar_to_cartesian(
         ranges,
         azimuths,
         noise.polar_sigmas,
-        site[:dim],
+        np.zeros(dim),
         elevations,
         noise.sigma_elevation_deg,
     )
-    return CoreDetectionReport(
-        report.sensor,
-        report.time,
-        positions.reshape(-1, dim),
-        covariances.reshape(-1, dim, dim),
-    )
+    offsets, covariances = offsets.reshape(-1, dim), covariances.reshape(-1, dim, dim)
+    turn = site_axes(config, sensor, dim)
+    if turn is not None:
+        offsets = offsets @ turn.T
+        covariances = rotate_covariances(np.broadcast_to(turn, covariances.shape), covariances)
+    return CoreDetectionReport(report.sensor, report.time, offsets + site[:dim], covariances)
 
 
 # ------------------------------------------------------------------ outputs

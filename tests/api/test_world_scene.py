@@ -6,8 +6,8 @@ one sensor reporting tracks in its own frame (site and heading). Each
 target must keep one fused id from the first confirmations on, and the fused
 position error must be below that of the best source alone (each source run
 in its own session on the same inputs). The geodetic inputs are made with
-PROJ, the sensor-frame ones and the polar ones by hand: none with the
-service's own conversions.
+PROJ (each radar's range and azimuth in the ENU plane at its own site), the
+sensor-frame ones by hand: none with the service's own conversions.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ def _diag(*variances: float) -> list[list[float]]:
 def _inputs(rng: np.random.Generator) -> list[tuple[str, str, dict[str, Any]]]:
     """Every source's input at every scan: (source, endpoint, body), in time order."""
     oracle = proj_enu(ORIGIN)
-    sites = [np.asarray(oracle.transform(*site))[:2] for site in RADAR_SITES]
+    at_sites = [proj_enu(site) for site in RADAR_SITES]  # each radar measures in its own ENU
     theta = math.radians(OWN_HEADING)
     forward, right = (
         np.array([math.sin(theta), math.cos(theta)]),
@@ -51,11 +51,12 @@ def _inputs(rng: np.random.Generator) -> list[tuple[str, str, dict[str, Any]]]:
     )
     inputs = []
     for scan in range(SCANS):
-        for index, site in enumerate(sites):
+        for index, at_site in enumerate(at_sites):
             time = scan + 0.1 * index
             detections = []
             for truth in _truth(time):
-                offset = truth[[0, 2]] - site
+                point = oracle.transform(truth[0], truth[2], 0.0, direction="INVERSE")
+                offset = np.asarray(at_site.transform(*point))[:2]
                 detections.append(
                     {
                         "range": float(np.hypot(*offset) + rng.normal(0, 20.0)),
