@@ -134,17 +134,119 @@ FieldOfView = Annotated[SectorFieldOfView | PolygonFieldOfView, Field(discrimina
 
 
 class MeasurementModel(WireModel):
-    """A detecting sensor's measurement noise: ``r`` over the position components."""
+    """A detecting sensor's measurement noise.
 
-    r: Matrix
+    ``kind: "cartesian"`` (the default): ``r`` over the position components,
+    detections ``{"z": [...]}``. ``kind: "polar"``: a radar's range and
+    azimuth (and elevation, in 3-D) standard deviations; its detections are
+    ``{"range", "azimuth_deg", "elevation_deg"?, "range_rate"?}`` at the
+    sensor's ``site``, azimuth clockwise from north. They are tracked as
+    converted Cartesian measurements with each detection's own covariance
+    (:mod:`app.polar`); ``range_rate`` is accepted and not used yet.
+    """
+
+    kind: Literal["cartesian", "polar"] = "cartesian"
+    r: Matrix | None = Field(default=None, description="cartesian: R over the positions")
+    sigma_range: PositiveFloat | None = Field(
+        default=None, description="polar: range standard deviation (m)"
+    )
+    sigma_azimuth_deg: PositiveFloat | None = Field(
+        default=None, description="polar: azimuth standard deviation (deg)"
+    )
+    sigma_elevation_deg: PositiveFloat | None = Field(
+        default=None, description="polar: elevation standard deviation (deg); required in 3-D"
+    )
+    sigma_range_rate: PositiveFloat | None = Field(
+        default=None, description="polar: range-rate standard deviation (m/s); not used yet"
+    )
 
     @model_validator(mode="after")
     def _r_is_covariance(self) -> Self:
+        polar_fields = (
+            "sigma_range",
+            "sigma_azimuth_deg",
+            "sigma_elevation_deg",
+            "sigma_range_rate",
+        )
+        if self.kind == "polar":
+            issues = [
+                FieldIssue((name,), f"a polar sensor needs {name}", None)
+                for name in polar_fields[:2]
+                if getattr(self, name) is None
+            ]
+            if self.r is not None:
+                issues.append(FieldIssue(("r",), "a polar sensor takes sigmas, not r", self.r))
+            if issues:
+                raise_issues("MeasurementModel", issues)
+            return self
+        extra = [name for name in polar_fields if getattr(self, name) is not None]
+        if extra:
+            raise_issues(
+                "MeasurementModel",
+                [FieldIssue((name,), "only a polar sensor takes sigmas", None) for name in extra],
+            )
+        if self.r is None:
+            raise_issues("MeasurementModel", [FieldIssue(("r",), "r is required", None)])
         try:
             check_covariance(self.r)
         except ValueError as error:
             raise_issues("MeasurementModel", [FieldIssue(("r",), str(error), self.r)])
         return self
+
+    @property
+    def polar_sigmas(self) -> tuple[float, float]:
+        """``(σ_range m, σ_azimuth deg)`` of a polar sensor."""
+        assert self.sigma_range is not None and self.sigma_azimuth_deg is not None
+        return self.sigma_range, self.sigma_azimuth_deg
+
+
+Latitude = Annotated[float, Field(allow_inf_nan=False, ge=-90.0, le=90.0)]
+Longitude = Annotated[float, Field(allow_inf_nan=False, ge=-180.0, le=180.0)]
+
+
+class GeodeticPoint(WireModel):
+    """A WGS84 point: latitude and longitude (degrees), height above the ellipsoid (m)."""
+
+    lat: Latitude
+    lon: Longitude
+    alt: FiniteFloat = 0.0
+
+
+class SensorSite(WireModel):
+    """Where a sensor stands: ``position`` in the session frame, or ``lat``/``lon``/``alt``.
+
+    ``heading_deg`` is its reference direction, clockwise from north: a
+    track list in ``"frame": "sensor"`` has its y axis along it.
+    """
+
+    position: Annotated[list[FiniteFloat], Field(min_length=2, max_length=3)] | None = None
+    lat: Latitude | None = None
+    lon: Longitude | None = None
+    alt: FiniteFloat | None = None
+    heading_deg: FiniteFloat = 0.0
+
+    @model_validator(mode="after")
+    def _one_form(self) -> Self:
+        geodetic = (self.lat, self.lon, self.alt)
+        if self.position is not None and any(value is not None for value in geodetic):
+            raise_issues(
+                "SensorSite",
+                [FieldIssue(("position",), "give position or lat/lon/alt, not both", None)],
+            )
+        if self.position is None:
+            issues = [
+                FieldIssue((name,), f"{name} is required without position", None)
+                for name, value in (("lat", self.lat), ("lon", self.lon))
+                if value is None
+            ]
+            if issues:
+                raise_issues("SensorSite", issues)
+        return self
+
+    @property
+    def geodetic(self) -> bool:
+        """Whether the site is given as lat/lon/alt (then the session needs an origin)."""
+        return self.position is None
 
 
 class SensorConfig(WireModel):
@@ -155,6 +257,10 @@ class SensorConfig(WireModel):
     p_detect: OpenUnitFloat = 0.9
     fov: FieldOfView | None = None
     measurement: MeasurementModel | None = None
+    site: SensorSite | None = Field(
+        default=None,
+        description="where the sensor stands (default: the session frame's origin, heading 0)",
+    )
 
 
 class AssociationConfig(WireModel):
@@ -264,6 +370,13 @@ class SessionConfig(WireModel):
     fusion: StateFusionConfig = Field(default_factory=StateFusionConfig)
     tracking: TrackingConfig = Field(default_factory=TrackingConfig)
     time: TimeConfig = Field(default_factory=TimeConfig)
+    origin: GeodeticPoint | None = Field(
+        default=None,
+        description=(
+            "WGS84 origin: the session frame is then the East-North-Up plane there (x east, "
+            "y north, z up, metres); without it nothing geodetic is accepted"
+        ),
+    )
 
     @model_validator(mode="after")
     def _consistent(self) -> Self:
@@ -285,7 +398,12 @@ class SessionConfig(WireModel):
                     )
                 )
             sensor_ids.add(sensor.id)
-            if sensor.measurement is not None and len(sensor.measurement.r) != measured:
+            issues.extend(self._placement_issues(index, sensor))
+            if (
+                sensor.measurement is not None
+                and sensor.measurement.r is not None
+                and len(sensor.measurement.r) != measured
+            ):
                 size = len(sensor.measurement.r)
                 issues.append(
                     FieldIssue(
@@ -305,6 +423,47 @@ class SessionConfig(WireModel):
         if issues:
             raise_issues("SessionConfig", issues)
         return self
+
+    def _placement_issues(self, index: int, sensor: SensorConfig) -> list[FieldIssue]:
+        """A geodetic site needs the origin; a polar sensor in 3-D its elevation σ."""
+        issues: list[FieldIssue] = []
+        site = sensor.site
+        if site is not None and site.geodetic and self.origin is None:
+            issues.append(
+                FieldIssue(
+                    ("sensors", index, "site"),
+                    "a geodetic site needs the session's 'origin'",
+                    None,
+                )
+            )
+        measured = len(self.state.position)
+        if site is not None and site.position is not None and len(site.position) < measured:
+            issues.append(
+                FieldIssue(
+                    ("sensors", index, "site", "position"),
+                    f"the site has {len(site.position)} coordinates, the session {measured}",
+                    site.position,
+                )
+            )
+        polar = sensor.measurement
+        if polar is not None and polar.kind == "polar":
+            if measured == 1:
+                issues.append(
+                    FieldIssue(
+                        ("sensors", index, "measurement", "kind"),
+                        "polar measurements need 2 or 3 position components",
+                        "polar",
+                    )
+                )
+            elif measured == 3 and polar.sigma_elevation_deg is None:
+                issues.append(
+                    FieldIssue(
+                        ("sensors", index, "measurement", "sigma_elevation_deg"),
+                        "a polar sensor of a 3-D session needs sigma_elevation_deg",
+                        None,
+                    )
+                )
+        return issues
 
     def sensor(self, sensor_id: str) -> SensorConfig | None:
         """The configured sensor with this id, if any."""

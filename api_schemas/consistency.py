@@ -9,7 +9,7 @@ from __future__ import annotations
 from api_schemas.classification import ClassEvidence
 from api_schemas.config import SessionConfig
 from api_schemas.issues import FieldIssue, Location
-from api_schemas.reports import DetectionReport, TrackReport
+from api_schemas.reports import Detection, DetectionReport, TrackReport
 
 
 def _sensor_issues(sensor: str, config: SessionConfig) -> list[FieldIssue]:
@@ -53,6 +53,7 @@ def _class_issues(
 def track_report_issues(report: TrackReport, config: SessionConfig) -> list[FieldIssue]:
     """Problems of a track list under ``config``: sensor, state dimension, class labels."""
     issues = _sensor_issues(report.sensor, config)
+    issues.extend(_frame_issues(report, config))
     dim = config.state.dim
     for index, track in enumerate(report.tracks):
         if len(track.state) != dim:
@@ -63,9 +64,57 @@ def track_report_issues(report: TrackReport, config: SessionConfig) -> list[Fiel
                     track.state,
                 )
             )
+        elif report.frame == "geodetic":
+            issues.extend(_geodetic_state_issues(track.state, config, index))
         issues.extend(
             _class_issues(track.classification, config, ("tracks", index, "classification"))
         )
+    return issues
+
+
+def _frame_issues(report: TrackReport, config: SessionConfig) -> list[FieldIssue]:
+    """A geodetic report needs the origin; a sensor-frame report a configured sensor."""
+    if report.frame == "geodetic":
+        if config.origin is None:
+            return [
+                FieldIssue(
+                    ("frame",), "the session has no 'origin': geodetic tracks need one", "geodetic"
+                )
+            ]
+        if len(config.state.position) < 2:
+            return [FieldIssue(("frame",), "geodetic tracks need 2 or 3 positions", "geodetic")]
+    if report.frame == "sensor":
+        sensor = config.sensor(report.sensor)
+        if sensor is None:
+            return [
+                FieldIssue(
+                    ("frame",),
+                    f"sensor {report.sensor!r} is not configured: its frame is unknown",
+                    "sensor",
+                )
+            ]
+        if sensor.site is not None and sensor.site.geodetic and config.origin is None:
+            return [FieldIssue(("frame",), "the sensor's geodetic site needs an origin", "sensor")]
+    return []
+
+
+def _geodetic_state_issues(
+    state: list[float], config: SessionConfig, index: int
+) -> list[FieldIssue]:
+    """Latitude in [−90, 90] and longitude in [−180, 180] of a geodetic track's state."""
+    if config.origin is None or len(config.state.position) < 2:
+        return []
+    issues: list[FieldIssue] = []
+    latitude, longitude = config.state.position[0], config.state.position[1]
+    for component, limit, name in ((latitude, 90.0, "latitude"), (longitude, 180.0, "longitude")):
+        if not -limit <= state[component] <= limit:
+            issues.append(
+                FieldIssue(
+                    ("tracks", index, "state", component),
+                    f"{name} {state[component]!r} is outside [-{limit:g}, {limit:g}]",
+                    state[component],
+                )
+            )
     return issues
 
 
@@ -75,8 +124,13 @@ def detection_report_issues(report: DetectionReport, config: SessionConfig) -> l
     measured = len(config.state.position)
     sensor = config.sensor(report.sensor)
     has_sensor_noise = sensor is not None and sensor.measurement is not None
+    polar_sensor = (
+        sensor is not None and sensor.measurement is not None and sensor.measurement.kind == "polar"
+    )
     for index, detection in enumerate(report.detections):
-        if len(detection.z) != measured:
+        if detection.z is None or polar_sensor:
+            issues.extend(_polar_issues(detection, polar_sensor, measured, report.sensor, index))
+        elif len(detection.z) != measured:
             issues.append(
                 FieldIssue(
                     ("detections", index, "z"),
@@ -96,3 +150,42 @@ def detection_report_issues(report: DetectionReport, config: SessionConfig) -> l
             _class_issues(detection.classification, config, ("detections", index, "classification"))
         )
     return issues
+
+
+def _polar_issues(
+    detection: Detection, polar_sensor: bool, measured: int, sensor: str, index: int
+) -> list[FieldIssue]:
+    """A polar detection only from a polar sensor, with an elevation exactly in 3-D."""
+    if detection.z is not None:
+        return [
+            FieldIssue(
+                ("detections", index, "z"),
+                f"sensor {sensor!r} is polar: give range and azimuth_deg, not z",
+                detection.z,
+            )
+        ]
+    if not polar_sensor:
+        return [
+            FieldIssue(
+                ("detections", index, "range"),
+                f"a polar detection from sensor {sensor!r}, whose measurement is not polar",
+                detection.range,
+            )
+        ]
+    if measured == 3 and detection.elevation_deg is None:
+        return [
+            FieldIssue(
+                ("detections", index, "elevation_deg"),
+                "a 3-D session needs elevation_deg on every polar detection",
+                None,
+            )
+        ]
+    if measured == 2 and detection.elevation_deg is not None:
+        return [
+            FieldIssue(
+                ("detections", index, "elevation_deg"),
+                "a 2-D session takes no elevation_deg",
+                detection.elevation_deg,
+            )
+        ]
+    return []

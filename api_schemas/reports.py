@@ -14,7 +14,7 @@ class labels in the frame) are in :mod:`api_schemas.consistency`.
 
 from __future__ import annotations
 
-from typing import Annotated, Self
+from typing import Annotated, Literal, Self
 
 from pydantic import Field, model_validator
 
@@ -25,6 +25,8 @@ from api_schemas.limits import MAX_ITEMS, bounded
 from api_schemas.linalg import check_square, covariance_problems
 
 StateVector = Annotated[Vector, Field(min_length=1, max_length=64)]
+MAX_RANGE = 1e8
+"""A polar detection's range is in (0, 1e8] m (beyond the Moon: a unit error, not a target)."""
 
 
 class SensorTrack(WireModel):
@@ -49,11 +51,23 @@ class SensorTrack(WireModel):
         return self
 
 
+TrackFrame = Literal["session", "sensor", "geodetic"]
+
+
 class TrackReport(WireModel):
-    """A sensor's track list at one time (seconds on the session clock)."""
+    """A sensor's track list at one time (seconds on the session clock).
+
+    ``frame``: ``"session"`` (default) the session frame; ``"sensor"`` the
+    sending sensor's own frame (origin at its site, y along its heading);
+    ``"geodetic"``: positions are lat°, lon° (, alt m), velocities east/north/up
+    m/s and the covariance in metres of the local ENU at the point. The
+    service turns states and covariances into the session frame before
+    association.
+    """
 
     sensor: Identifier
     time: FiniteFloat
+    frame: TrackFrame = "session"
     tracks: Annotated[
         list[SensorTrack],
         Field(max_length=MAX_ITEMS),
@@ -91,15 +105,57 @@ class TrackReport(WireModel):
 
 
 class Detection(WireModel):
-    """One detection: the measured position ``z``, optionally its own noise ``r`` and class evidence."""
+    """One detection: the measured position ``z``, optionally its own noise ``r`` and class evidence.
 
-    z: Annotated[Vector, Field(min_length=1, max_length=3)]
+    A polar sensor's detection gives ``range`` (m) and ``azimuth_deg``
+    (clockwise from north at the site), ``elevation_deg`` in 3-D, optionally
+    ``range_rate`` (m/s, accepted, not used yet) instead of ``z``.
+    """
+
+    z: Annotated[Vector, Field(min_length=1, max_length=3)] | None = None
     r: Matrix | None = None
+    range: Annotated[float, Field(allow_inf_nan=False, gt=0.0, le=MAX_RANGE)] | None = None
+    azimuth_deg: Annotated[float, Field(allow_inf_nan=False, ge=-360.0, le=360.0)] | None = None
+    elevation_deg: Annotated[float, Field(allow_inf_nan=False, ge=-90.0, le=90.0)] | None = None
+    range_rate: FiniteFloat | None = None
     classification: ClassEvidence | None = None
+
+    @property
+    def polar(self) -> bool:
+        """Whether this is a polar detection (``range``/``azimuth_deg``, no ``z``)."""
+        return self.z is None
 
     @model_validator(mode="after")
     def _r_matches_z(self) -> Self:
         """Square and of ``z``'s size; symmetric positive definite is checked by the report."""
+        if self.z is None:
+            polar = {"range": self.range, "azimuth_deg": self.azimuth_deg}
+            missing = [name for name, value in polar.items() if value is None]
+            if missing or self.r is not None:
+                issues = [
+                    FieldIssue((name,), f"{name} is required without z", None) for name in missing
+                ]
+                if self.r is not None:
+                    issues.append(
+                        FieldIssue(
+                            ("r",), "a polar detection takes its noise from its sensor", None
+                        )
+                    )
+                raise_issues("Detection", issues)
+            return self
+        extra = [
+            name
+            for name in ("range", "azimuth_deg", "elevation_deg", "range_rate")
+            if getattr(self, name) is not None
+        ]
+        if extra:
+            raise_issues(
+                "Detection",
+                [
+                    FieldIssue((name,), "give z or the polar fields, not both", None)
+                    for name in extra
+                ],
+            )
         if self.r is not None:
             try:
                 check_square(self.r, len(self.z))

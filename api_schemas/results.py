@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Literal
 
+from pydantic import Field
+
 from api_schemas.association import AssociationMethod
 from api_schemas.base import FiniteFloat, Identifier, Label, Matrix, UnitFloat, Vector, WireModel
 from api_schemas.classification import FocalMass
@@ -69,6 +71,14 @@ class FusedClassification(WireModel):
     never grows, Pl never shrinks; ``core.belief.summary``)."""
 
 
+class GeodeticPosition(WireModel):
+    """A fused track's position on WGS84 (degrees, metres above the ellipsoid)."""
+
+    lat: FiniteFloat
+    lon: FiniteFloat
+    alt: FiniteFloat
+
+
 class FusedTrack(WireModel):
     """One fused track: stable id, status, estimate, sources, class belief, score, reason.
 
@@ -85,6 +95,9 @@ class FusedTrack(WireModel):
     classification: FusedClassification | None
     score: FiniteFloat | None
     reason: StatusReason | None
+    geodetic: GeodeticPosition | None = Field(
+        default=None, description="WGS84 position of the track (only with ?frame=geodetic)"
+    )
 
 
 PairBasis = Literal["continuity", "association"]

@@ -95,8 +95,8 @@ from app.stores import (
 from app.translate import (
     PlainObject,
     core_detection_report,
-    core_track_report,
     fusion_config,
+    session_frame_report,
     step_json,
     tracks_plain,
 )
@@ -422,7 +422,7 @@ class SessionRegistry:
         engine, fusion = self._engine_for(session, report.sensor)
         try:
             if isinstance(report, TrackReport):
-                step = engine.apply(core_track_report(report, session.frame), explain=explain)
+                step = engine.apply(session_frame_report(report, session.config), explain=explain)
             else:
                 step = engine.apply_detections(
                     core_detection_report(report, session.config), explain=explain

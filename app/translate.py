@@ -14,6 +14,7 @@ the per-input hot path. A test holds it equal to ``step_plain``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable, Sequence
 from typing import Any
@@ -25,6 +26,7 @@ from api_schemas.associate import AssociateRequest
 from api_schemas.association import AssociationOptions
 from api_schemas.classification import ClassEvidence
 from api_schemas.config import (
+    MeasurementModel,
     PolygonFieldOfView,
     SectorFieldOfView,
     SensorConfig,
@@ -34,6 +36,8 @@ from api_schemas.config import (
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import DetectionReport, SensorTrack, TrackReport
 from app.errors import request_validation_error
+from app.geodesy import LocalFrame, geodetic_to_session, rotate_covariances, sensor_to_session
+from app.polar import polar_to_cartesian
 from core.association import AssociationResult
 from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, TotalConflict
@@ -110,7 +114,11 @@ def local_tracker_config(
     tracking = config.tracking
     interval = tracking.time_interval
     axes = len(config.state.position)
-    r = tuple(tuple(float(x) for x in row) for row in sensor.measurement.r)
+    r = (
+        polar_reference_noise(sensor.measurement, fov, axes)
+        if sensor.measurement.r is None
+        else tuple(tuple(float(x) for x in row) for row in sensor.measurement.r)
+    )
     bank = None
     if tracking.preset is None:
         # one constant-velocity model, Q of motion.q's continuous white-noise form
@@ -137,6 +145,33 @@ def local_tracker_config(
         fields_of_view={sensor.id: fov},
         classification=ClassificationOptions() if config.classes else None,
         id_prefix=f"{sensor.id}:",
+    )
+
+
+POLAR_REFERENCE_RANGE = 50_000.0
+"""Range (m) of a polar sensor's reference noise when no sector field of view bounds it."""
+
+
+def polar_reference_noise(
+    noise: MeasurementModel, fov: FieldOfView | None, axes: int
+) -> tuple[tuple[float, ...], ...]:
+    """The R a polar sensor's tracker uses where a detection's own covariance is not passed.
+
+    Every polar detection is updated with its own converted covariance
+    (:mod:`app.polar`); the tracker still uses the bank's R to start tracks
+    (two-point velocity variance, seed radius). That R is the largest converted
+    noise over the sensor's coverage, isotropic: ``max(σ_ρ², (ρ_max σ_a)²)``
+    per axis, ``ρ_max`` the sector's far range or :data:`POLAR_REFERENCE_RANGE`,
+    so new tracks start no more confident than their detections.
+    """
+    far = fov.range_max if isinstance(fov, Sector) else POLAR_REFERENCE_RANGE
+    sigma_range, sigma_azimuth_deg = noise.polar_sigmas
+    sigmas = [sigma_range, far * math.radians(sigma_azimuth_deg)]
+    if axes == 3 and noise.sigma_elevation_deg is not None:
+        sigmas.append(far * math.radians(noise.sigma_elevation_deg))
+    variance = max(sigmas) ** 2
+    return tuple(
+        tuple(variance if row == col else 0.0 for col in range(axes)) for row in range(axes)
     )
 
 
@@ -249,11 +284,113 @@ def core_track_report(report: TrackReport, frame: Frame | None) -> CoreTrackRepo
     )
 
 
+def session_origin(config: SessionConfig) -> LocalFrame | None:
+    """The session's ENU frame at its WGS84 ``origin`` (``None`` without one)."""
+    origin = config.origin
+    return None if origin is None else LocalFrame(origin.lat, origin.lon, origin.alt)
+
+
+def sensor_site(config: SessionConfig, sensor: SensorConfig | None) -> tuple[np.ndarray, float]:
+    """A sensor's site in the session frame (3 coordinates; default the origin) and heading."""
+    site = None if sensor is None else sensor.site
+    if site is None:
+        return np.zeros(3), 0.0
+    if site.position is not None:
+        position = np.zeros(3)
+        position[: len(site.position)] = site.position
+        return position, site.heading_deg
+    frame = session_origin(config)
+    assert frame is not None and site.lat is not None and site.lon is not None  # config-checked
+    altitude = frame.alt if site.alt is None else site.alt
+    return frame.from_geodetic(site.lat, site.lon, altitude)[0], site.heading_deg
+
+
+def session_frame_report(report: TrackReport, config: SessionConfig) -> CoreTrackReport:
+    """A track list for the engine in the session frame, whatever its ``frame``.
+
+    ``"sensor"``: turned by the sensor's heading and moved to its site;
+    ``"geodetic"``: lat/lon/alt to session ENU, velocities and covariance
+    turned between the tangent planes (:mod:`app.geodesy`). States and
+    covariances of the whole report are converted in one vectorised pass.
+    """
+    core = core_track_report(report, class_frame(config.classes))
+    if report.frame == "session" or not core.tracks:
+        return core
+    dim = config.state.dim
+    states = np.array([track.state for track in core.tracks]).reshape(-1, dim)
+    covariances = np.array([track.covariance for track in core.tracks]).reshape(-1, dim, dim)
+    position, velocity = tuple(config.state.position), tuple(config.state.velocity)
+    if report.frame == "sensor":
+        site, heading = sensor_site(config, config.sensor(report.sensor))
+        states, covariances = sensor_to_session(
+            states, covariances, position, velocity, site, heading
+        )
+    else:
+        frame = session_origin(config)
+        assert frame is not None  # checked against the config before
+        states, covariances = geodetic_to_session(frame, states, covariances, position, velocity)
+    tracks = tuple(
+        dataclasses.replace(track, state=state, covariance=covariance)
+        for track, state, covariance in zip(core.tracks, states, covariances, strict=True)
+    )
+    return dataclasses.replace(core, tracks=tracks)
+
+
+def site_axes(config: SessionConfig, sensor: SensorConfig, dimension: int) -> np.ndarray | None:
+    """Rotation (d × d) from the ENU axes at a geodetic site to the session's (``None`` at a
+    session-frame ``position``: the sensor measures in the session's axes)."""
+    site = sensor.site
+    frame = session_origin(config)
+    if site is None or site.lat is None or site.lon is None or frame is None:
+        return None
+    rotation: np.ndarray = frame.rotation_from(site.lat, site.lon)[0][:dimension, :dimension]
+    return rotation
+
+
+def polar_detection_report(
+    report: DetectionReport, config: SessionConfig, sensor: SensorConfig
+) -> CoreDetectionReport:
+    """A polar sensor's detections as converted positions, each with its own covariance.
+
+    Azimuth and elevation are measured in the site's own ENU axes: at a
+    geodetic site the converted offsets and covariances are turned into the
+    session's axes (``R_origin R_siteᵀ``, exact: :mod:`app.geodesy`); the
+    tilt between the two planes is 0.009° per km from the origin.
+    """
+    noise = sensor.measurement
+    assert noise is not None
+    dim = len(config.state.position)
+    site, _ = sensor_site(config, sensor)
+    detections = report.detections
+    ranges = np.array([d.range for d in detections], dtype=np.float64)
+    azimuths = np.array([d.azimuth_deg for d in detections], dtype=np.float64)
+    elevations = (
+        np.array([d.elevation_deg for d in detections], dtype=np.float64) if dim == 3 else None
+    )
+    offsets, covariances = polar_to_cartesian(
+        ranges,
+        azimuths,
+        noise.polar_sigmas,
+        np.zeros(dim),
+        elevations,
+        noise.sigma_elevation_deg,
+    )
+    offsets, covariances = offsets.reshape(-1, dim), covariances.reshape(-1, dim, dim)
+    turn = site_axes(config, sensor, dim)
+    if turn is not None:
+        offsets = offsets @ turn.T
+        covariances = rotate_covariances(np.broadcast_to(turn, covariances.shape), covariances)
+    return CoreDetectionReport(report.sensor, report.time, offsets + site[:dim], covariances)
+
+
 # ------------------------------------------------------------------ outputs
 def core_detection_report(report: DetectionReport, config: SessionConfig) -> CoreDetectionReport:
     """Wire detections as the core's: measurements (m × q) and, when any detection gives its
     own ``r``, one R per detection (the sensor's ``measurement.r`` for the others)."""
-    dim = len(report.detections[0].z) if report.detections else 2
+    polar = config.sensor(report.sensor)
+    if polar is not None and polar.measurement is not None and polar.measurement.kind == "polar":
+        return polar_detection_report(report, config, polar)
+    dim = len(report.detections[0].z or ()) if report.detections else 2
     measurements = np.array([d.z for d in report.detections], dtype=np.float64).reshape(-1, dim)
     if all(detection.r is None for detection in report.detections):
         return CoreDetectionReport(report.sensor, report.time, measurements, None)

@@ -99,15 +99,29 @@ def replayed(output: str) -> None:
     assert status == "204"
 
 
+def geodetic(output: str) -> None:
+    """The track is where the WGS84 geodesic from the radar puts it (PROJ's Geod), to 30 m:
+    12.5 km at azimuth 45° (the session's north and the radar's differ by 0.03°: 6 m)."""
+    from pyproj import Geod
+
+    [line] = output.splitlines()
+    match = re.fullmatch(r"F1 confirmed lon, lat = (\S+) (\S+)", line)
+    assert match is not None, line
+    lon, lat, _ = Geod(ellps="WGS84").fwd(1.40, 43.55, 45.0, 12_500.0)
+    _, _, distance = Geod(ellps="WGS84").inv(lon, lat, float(match[1]), float(match[2]))
+    assert distance < 30.0, distance
+
+
 CHECKS: dict[str, Callable[[str], None]] = {
     "SESSION=$(curl": created,
     '"sensor": "radar-1", "time": 12,': tied,
     '"sensor": "radar-2"': decided,
-    "/detections": detections,
+    '"sensor": "radar-3", "time": %d': detections,
     "/tracks?time=20": picture,
     "websockets.sync.client": streamed,
     "simulate t2t-four --server": simulated,
     "credal-fusion export": replayed,
+    "format=geojson": geodetic,
 }
 """Each runnable block, by a piece of its text, and what its output must show."""
 

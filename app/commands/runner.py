@@ -20,10 +20,9 @@ from app.commands.errors import http_failure
 from app.live_session import engine_from_snapshot
 from app.responses import dumps
 from app.translate import (
-    class_frame,
     core_detection_report,
-    core_track_report,
     fusion_config,
+    session_frame_report,
     step_plain,
 )
 from core.fusion.engine import SessionEngine
@@ -42,7 +41,6 @@ def run_locally(config: Body, inputs: Iterable[Input]) -> Iterator[Body]:
     """
     session = SessionConfig.model_validate(config)
     engine = SessionEngine(fusion_config(session))
-    frame = class_frame(session.classes)
     seq = 0
     for kind, body in inputs:
         if kind == "snapshot":
@@ -54,7 +52,7 @@ def run_locally(config: Body, inputs: Iterable[Input]) -> Iterator[Body]:
             continue
         seq += 1
         if kind == "tracks":
-            step = engine.apply(core_track_report(TrackReport.model_validate(body), frame))
+            step = engine.apply(session_frame_report(TrackReport.model_validate(body), session))
         else:
             step = engine.apply_detections(
                 core_detection_report(DetectionReport.model_validate(body), session)

@@ -2,24 +2,55 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Any, Literal
 
+import orjson
 from fastapi import APIRouter, Path, Query
+from fastapi.responses import Response
 
 from api_schemas.base import FiniteFloat
+from api_schemas.config import SessionConfig
+from api_schemas.issues import FieldIssue
 from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
 from app.deps import CurrentSessionDep, LiveSessionDep, RegistryDep
 from app.errors import (
     TrackNotFound,
     problem_responses,
+    request_validation_error,
 )
+from app.geodesy import LocalFrame
+from app.geojson import GEOJSON_MEDIA_TYPE, feature_collection, with_geodetic
 from app.requests import WireRoute
-from app.responses import JSONTextResponse, PlainJSONResponse
+from app.responses import JSONTextResponse, PlainJSONResponse, dumps
+from app.translate import session_origin
 
 router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
 
 TrackId = Annotated[str, Path(min_length=1, max_length=64, description="A fused track id.")]
+OutputFrame = Annotated[
+    Literal["session", "geodetic"],
+    Query(description="geodetic: add geodetic {lat, lon, alt} to each fused track (needs origin)"),
+]
+
+
+def origin_of(config: SessionConfig, parameter: str) -> LocalFrame:
+    """The session's origin frame, or a 422 at the query ``parameter``: it has none."""
+    frame = session_origin(config)
+    if frame is None:
+        raise request_validation_error(
+            [FieldIssue((parameter,), "the session has no origin: geodetic output needs one")],
+            prefix="query",
+        )
+    return frame
+
+
+def geodetic_result(result: str, config: SessionConfig) -> str:
+    """A step result's JSON text with ``geodetic`` added to each fused track."""
+    frame = origin_of(config, "frame")
+    document: dict[str, Any] = orjson.loads(result)
+    document["tracks"] = with_geodetic(document["tracks"], frame, tuple(config.state.position))
+    return dumps(document)
 
 
 @router.post(
@@ -34,13 +65,18 @@ async def submit_tracks(
     explain: Annotated[
         bool, Query(description="add the association method's score matrix")
     ] = False,
+    frame: OutputFrame = "session",
 ) -> JSONTextResponse:
     """One sensor's track list → the fused result of that step (acknowledged once logged).
 
     409 ``stale-report`` (with ``time`` and ``last_time``) for a report not
     newer than the sensor's previous one.
     """
+    if frame == "geodetic":
+        origin_of(session.config, "frame")  # refused before anything is applied
     result = await registry.submit_tracks(session, report, explain=explain)
+    if frame == "geodetic":
+        result = geodetic_result(result, session.config)
     return JSONTextResponse(result)
 
 
@@ -54,6 +90,7 @@ async def submit_detections(
     session: LiveSessionDep,
     registry: RegistryDep,
     explain: Annotated[bool, Query(description="add the association score matrix")] = False,
+    frame: OutputFrame = "session",
 ) -> JSONTextResponse:
     """One sensor's detections → the fused result of that step.
 
@@ -64,7 +101,11 @@ async def submit_detections(
     previous input (scans may come at any increasing times, on no grid);
     422 for a sensor without a measurement model.
     """
+    if frame == "geodetic":
+        origin_of(session.config, "frame")  # refused before anything is applied
     result = await registry.submit_detections(session, report, explain=explain)
+    if frame == "geodetic":
+        result = geodetic_result(result, session.config)
     return JSONTextResponse(result)
 
 
@@ -80,8 +121,32 @@ async def list_fused_tracks(
         FiniteFloat | None,
         Query(description="predict the tracks to this time (default: the fusion time)"),
     ] = None,
-) -> JSONTextResponse:
-    """The live fused tracks (not terminated), optionally predicted to ``time``."""
+    frame: OutputFrame = "session",
+    format: Annotated[
+        Literal["json", "geojson"],
+        Query(description="geojson: an application/geo+json FeatureCollection (needs origin)"),
+    ] = "json",
+) -> Response:
+    """The live fused tracks (not terminated), optionally predicted to ``time``.
+
+    ``frame=geodetic`` adds ``geodetic: {lat, lon, alt}`` to each track;
+    ``format=geojson`` answers a GeoJSON FeatureCollection of Point features
+    (``[lon, lat, alt]``; id, status, decision, BetP and ENU velocity as
+    properties). Both need the session's ``origin`` (else 422).
+    """
+    config = session.config
+    if format == "geojson":
+        origin = origin_of(config, "format")
+        _, _, tracks = await registry.picture(session, time)
+        collection = feature_collection(
+            tracks, origin, tuple(config.state.position), tuple(config.state.velocity)
+        )
+        return Response(dumps(collection), media_type=GEOJSON_MEDIA_TYPE)
+    if frame == "geodetic":
+        origin = origin_of(config, "frame")
+        seq, time_of, tracks = await registry.picture(session, time)
+        geodetic = with_geodetic(tracks, origin, tuple(config.state.position))
+        return JSONTextResponse(dumps({"seq": seq, "time": time_of, "tracks": geodetic}))
     return JSONTextResponse(await registry.picture_json(session, time))
 
 

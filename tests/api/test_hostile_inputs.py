@@ -451,7 +451,7 @@ def test_unknown_keys_name_the_allowed_ones(scene: Scene) -> None:
     (answer,) = tracks(later(lambda b: b.update(trackz=[])))(scene)
     (error,) = json.loads(answer.body)["errors"]
     assert error["pointer"] == "#/trackz"
-    assert "allowed: sensor, time, tracks" in error["detail"]
+    assert "allowed: frame, sensor, time, tracks" in error["detail"]
     assert "did you mean 'tracks'?" in error["detail"]
 
 
