@@ -385,6 +385,7 @@ def local_tracker_config(scene: Scene) -> LocalTrackerConfig:
             phantoms=False,
         ),
         max_speed=4.0 * scene.velocity_std * np.sqrt(2.0),
+        initial_velocity_std=scene.velocity_std,
         classification=None,
     )
 
