@@ -56,6 +56,7 @@ class StatusReason(enum.StrEnum):
     SCORE_CONFIRMED = "score_confirmed"
     MIN_POINTS = "min_points"
     SECOND_SENSOR = "second_sensor"
+    LOCAL_CONFIRMED = "local_confirmed"
     REACQUIRED = "reacquired"
     MISSED = "missed"
     BLIND_ZONE = "blind_zone"

@@ -241,7 +241,8 @@ class SessionEngine:
         terminated, confirmed = self._life_cycle(
             sensor, live, states, covariances, rows, increments
         )
-        self._hand_over_to_phantoms(confirmed, terminated)
+        fresh = confirmed + [track for track in created if track.status is TrackStatus.CONFIRMED]
+        self._hand_over_to_phantoms(fresh, terminated)
         self._absorb_duplicates(terminated)
         return self._result(report, decision, live, terminated, explain)
 
@@ -598,16 +599,24 @@ class SessionEngine:
         return np.asarray(np.linalg.slogdet(np.array(gates))[1], dtype=np.float64)
 
     def _start(self, cols: IntArray, report: TrackReport, incoming: Estimates) -> list[FusedTrack]:
-        """A tentative fused track for each of the report tracks ``cols``."""
-        initial = self.config.management.score_model(self.config.sensor(report.sensor).p_detect)
+        """A fused track for each of the report tracks ``cols``: tentative, or confirmed at
+        once when the sensor is tracked here (its local tracker reports only the tracks it
+        has confirmed: a second test would only delay them), at the score ceiling."""
+        management = self.config.management
+        sensor = self.config.sensor(report.sensor)
+        initial = management.score_model(sensor.p_detect)
+        status, reason, score = TrackStatus.TENTATIVE, StatusReason.INITIATED, initial.initial
+        if sensor.tracker is not None:
+            status, reason = TrackStatus.CONFIRMED, StatusReason.LOCAL_CONFIRMED
+            score = min(management.score_ceiling, management.confirm_threshold)
         created = []
         for row in self._table.add_rows(len(cols)).tolist():
             created.append(
                 FusedTrack(
                     id=f"F{self.next_number}",
-                    status=TrackStatus.TENTATIVE,
-                    reason=StatusReason.INITIATED,
-                    score=initial.initial,
+                    status=status,
+                    reason=reason,
+                    score=score,
                     row=row,
                 )
             )
