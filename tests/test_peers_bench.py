@@ -58,6 +58,8 @@ def test_local_tracker_against_stone_soup_gnn(scores) -> None:
 def test_the_service_with_one_sensor_is_as_accurate_as_its_local_tracker(scores) -> None:
     """The fused layer adds no delay: a local track is confirmed when it enters."""
     _, ours, service, _ = scores
+    # Seen: 18.58 against 19.05, the same late and missed terms; the fused layer's
+    # false term is lower (4.67 against 5.17), so it is never worse, not yet equal.
     assert service.late == pytest.approx(ours.late)
     assert service.missed == pytest.approx(ours.missed)
     assert service.gospa <= ours.gospa * 1.02
