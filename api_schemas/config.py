@@ -8,6 +8,7 @@ identical session.
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Literal, Self
 
 from pydantic import Field, StringConstraints, model_validator
@@ -261,6 +262,14 @@ class SensorConfig(WireModel):
         default=None,
         description="where the sensor stands (default: the session frame's origin, heading 0)",
     )
+    clutter_density: PositiveFloat = Field(
+        default=1e-6,
+        description=(
+            "false detections per unit of position space (m² in 2-D, m³ in 3-D) per scan: "
+            "β_FT of this sensor's track score and gate-emptiness termination (the core's "
+            "default 1e-6)"
+        ),
+    )
 
 
 class AssociationConfig(WireModel):
@@ -317,6 +326,55 @@ class TrackThresholds(WireModel):
         default=None,
         description="confirm a tentative track after this many hits (null: score only)",
     )
+    score_margin: FiniteFloat | None = Field(
+        default=0.0,
+        description=(
+            "an established track's score is clamped at the confirm threshold + this margin, "
+            "so it is deleted after a bounded run of misses; a negative margin down to "
+            "−confirm threshold restarts the test at confirmation; null: the raw SPRT"
+        ),
+    )
+
+    @model_validator(mode="after")
+    def _ceiling_above_delete(self) -> Self:
+        if self.score_margin is None:
+            return self
+        confirm = math.log((1.0 - self.true_deletion) / self.false_confirmation)
+        delete = math.log(self.true_deletion / (1.0 - self.false_confirmation))
+        if confirm + self.score_margin <= delete:
+            message = (
+                "score_margin puts the score ceiling (confirm threshold + margin) at or under "
+                "the delete threshold"
+            )
+            raise_issues(
+                "TrackThresholds", [FieldIssue(("score_margin",), message, self.score_margin)]
+            )
+        return self
+
+
+class TwoPointInitiation(WireModel):
+    """A leftover detection joined by one of the next scan within ``max_speed · Δt`` starts a track."""
+
+    kind: Literal["two_point"] = "two_point"
+    max_speed: PositiveFloat = Field(
+        default=1000.0, description="largest target speed (m/s): the pairing gate"
+    )
+    velocity_std: PositiveFloat = Field(
+        default=300.0,
+        description="standard deviation of a new target's velocity per axis (m/s): the pair's score",
+    )
+
+
+class SinglePointInitiation(WireModel):
+    """Every leftover detection starts a track: velocity 0 with ``velocity_std`` per axis."""
+
+    kind: Literal["single_point"]
+    velocity_std: PositiveFloat = Field(
+        default=300.0, description="standard deviation of a new target's velocity per axis (m/s)"
+    )
+
+
+Initiation = Annotated[TwoPointInitiation | SinglePointInitiation, Field(discriminator="kind")]
 
 
 class TrackingConfig(WireModel):
@@ -338,6 +396,14 @@ class TrackingConfig(WireModel):
     )
     association: LocalAssociationConfig = Field(default_factory=LocalAssociationConfig)
     thresholds: TrackThresholds = Field(default_factory=TrackThresholds)
+    birth_density: PositiveFloat = Field(
+        default=1e-6,
+        description=(
+            "new targets per unit of position space (m² in 2-D, m³ in 3-D) per scan: β_NT of "
+            "the track score and of gate-emptiness termination (the core's default 1e-6)"
+        ),
+    )
+    initiation: Initiation = Field(default_factory=TwoPointInitiation)
 
 
 class TimeConfig(WireModel):

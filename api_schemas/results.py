@@ -16,6 +16,7 @@ StatusReason = Literal[
     "score_confirmed",
     "min_points",
     "second_sensor",
+    "local_confirmed",
     "reacquired",
     "missed",
     "blind_zone",

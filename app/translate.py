@@ -32,6 +32,7 @@ from api_schemas.config import (
     SensorConfig,
     SessionConfig,
     TrackThresholds,
+    TwoPointInitiation,
 )
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import DetectionReport, SensorTrack, TrackReport
@@ -131,6 +132,7 @@ def local_tracker_config(
         )
     options = tracking.association.options
     thresholds = tracking.thresholds
+    initiation = tracking.initiation
     return LocalTrackerConfig(
         preset=tracking.preset or "aircraft",
         time_interval=interval,
@@ -141,7 +143,16 @@ def local_tracker_config(
         association_options=method_options(options),
         imm_distance=options.imm_distance or "closest_model",
         p_detect=sensor.p_detect,
-        life_cycle=life_cycle_config(thresholds),
+        life_cycle=life_cycle_config(
+            thresholds, tracking.birth_density, clutter_density=sensor.clutter_density
+        ),
+        initiation=initiation.kind,
+        max_speed=(
+            initiation.max_speed
+            if isinstance(initiation, TwoPointInitiation)
+            else LocalTrackerConfig.max_speed
+        ),
+        initial_velocity_std=initiation.velocity_std,
         fields_of_view={sensor.id: fov},
         classification=ClassificationOptions() if config.classes else None,
         id_prefix=f"{sensor.id}:",
@@ -175,13 +186,24 @@ def polar_reference_noise(
     )
 
 
-def life_cycle_config(thresholds: TrackThresholds) -> LifeCycleConfig:
-    """The life cycle of both layers from the wire thresholds (the rest: the core's defaults)."""
+def life_cycle_config(
+    thresholds: TrackThresholds,
+    birth_density: float,
+    clutter_density: float = LifeCycleConfig.false_target_density,
+) -> LifeCycleConfig:
+    """The life cycle of both layers from the wire thresholds and densities.
+
+    A local tracker gets its sensor's ``clutter_density``; the fused layer,
+    whose inputs are tracks and not detections, the core's default.
+    """
     return LifeCycleConfig(
         false_confirmation=thresholds.false_confirmation,
         true_deletion=thresholds.true_deletion,
+        false_target_density=clutter_density,
+        new_target_density=birth_density,
         termination_probability=thresholds.termination_probability,
         min_points=thresholds.min_points,
+        score_margin=thresholds.score_margin,
     )
 
 
@@ -240,7 +262,7 @@ def fusion_config(config: SessionConfig, extra_sensors: Iterable[str] = ()) -> F
         association_options=method_options(association.options),
         distance=association.options.distance or "sum",
         state_fusion=StateFusion(config.fusion.state),
-        management=life_cycle_config(thresholds),
+        management=life_cycle_config(thresholds, config.tracking.birth_density),
     )
 
 

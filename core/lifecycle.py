@@ -5,7 +5,9 @@ Shared by the local tracker (ALGORITHMS.md §4) and the fusion engine (§6).
 Track score ([MTT] §4.3, eq 16; Blackman & Popoli pp. 327-334), a sequential
 probability ratio test on "true track" vs "false track":
 
-- a new track starts at ``L₀ = ln(β_NT / β_FT)``;
+- a new track starts at ``L₀ = ln(β_NT / β_FT)`` (its first detection); a
+  two-point track, made of two detections, starts at ``L₀`` plus the second
+  detection's hit ΔL (:meth:`ScoreModel.two_point_initial`);
 - a hit adds ``ΔL = ln[P_D / ((2π)^{q/2} β_FT √|S|)] − D/2``;
 - a miss adds ``ΔL = ln(1 − P_D)``;
 - confirm when ``L ≥ ln((1 − β) / α)``, delete when ``L ≤ ln(β / (1 − α))``,
@@ -54,6 +56,7 @@ class StatusReason(enum.StrEnum):
     SCORE_CONFIRMED = "score_confirmed"
     MIN_POINTS = "min_points"
     SECOND_SENSOR = "second_sensor"
+    LOCAL_CONFIRMED = "local_confirmed"
     REACQUIRED = "reacquired"
     MISSED = "missed"
     BLIND_ZONE = "blind_zone"
@@ -105,6 +108,25 @@ class ScoreModel:
     def initial(self) -> float:
         """L₀ = ln(β_NT / β_FT)."""
         return math.log(self.new_target_density / self.false_target_density)
+
+    def two_point_initial(
+        self, displacement: FloatArray, pair_covariance: FloatArray
+    ) -> FloatArray:
+        """Start scores of two-point tracks: L₀ + the second detection's hit ΔL, vectorised.
+
+        Given the first detection z₀, a true target's second detection z₁ is
+        Gaussian about z₀ with covariance ``pair_covariance`` (2R + Σ_v ΔT²:
+        both measurement noises and the velocity prior over the interval); the
+        hit ΔL of ``z₁ − z₀`` (``displacement``, shape (T, q)) under it is the
+        same SPRT increment as any hit (Blackman & Popoli pp. 328-330). Without
+        it a two-point track would start one detection short of its evidence.
+        """
+        d = np.atleast_2d(np.asarray(displacement, dtype=np.float64))
+        s = np.asarray(pair_covariance, dtype=np.float64)
+        distance = np.einsum("ti,ij,tj->t", d, np.linalg.inv(s), d)
+        log_det = float(np.linalg.slogdet(s)[1])
+        increment = self.hit_increment(distance, np.full(len(d), log_det), d.shape[1])
+        return np.asarray(self.initial + increment, dtype=np.float64)
 
     @property
     def confirm_threshold(self) -> float:
@@ -217,9 +239,13 @@ class LifeCycleConfig:
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInput(f"{name} must be a positive number, got {value!r}")
         if self.score_margin is not None and not (
-            math.isfinite(self.score_margin) and self.score_margin >= 0.0
+            math.isfinite(self.score_margin)
+            and self.confirm_threshold + self.score_margin > self.delete_threshold
         ):
-            raise InvalidInput(f"score_margin must be >= 0 or None, got {self.score_margin!r}")
+            raise InvalidInput(
+                "score_margin must keep the score ceiling (confirm threshold + margin) above "
+                f"the delete threshold, or be None; got {self.score_margin!r}"
+            )
         if not (math.isfinite(self.occlusion_radius) and self.occlusion_radius >= 0.0):
             raise InvalidInput(f"occlusion_radius must be >= 0, got {self.occlusion_radius!r}")
         if self.min_points is not None and not 1 <= self.min_points <= MAX_MIN_POINTS:
@@ -300,8 +326,8 @@ class LifeState:
         return cls.new(0, 0.0)
 
     @classmethod
-    def new(cls, count: int, score: float, hits: int = 1) -> LifeState:
-        """``count`` tentative tracks just initiated with ``score`` and ``hits``."""
+    def new(cls, count: int, score: float | FloatArray, hits: int = 1) -> LifeState:
+        """``count`` tentative tracks just initiated with ``score`` (one, or one each) and ``hits``."""
         return cls(
             status=np.full(count, TENTATIVE, dtype=np.int64),
             reason=np.full(count, reason_code(StatusReason.INITIATED), dtype=np.int64),
@@ -444,7 +470,14 @@ def advance(
     detected = evidence.detected & ~is_phantom
     missed = evidence.seen & ~detected & ~is_phantom
     score = state.score + np.where(detected, evidence.hit_increment, 0.0)
-    score = np.minimum(score + np.where(missed, evidence.miss_increment, 0.0), config.score_ceiling)
+    # A tentative track is never held below its confirm threshold (a ceiling under it,
+    # score_margin < 0, restarts the test of established tracks only).
+    ceiling = np.where(
+        status == TENTATIVE,
+        max(config.score_ceiling, config.confirm_threshold),
+        config.score_ceiling,
+    )
+    score = np.minimum(score + np.where(missed, evidence.miss_increment, 0.0), ceiling)
     hits = state.hits + detected.astype(np.int64)
     reason = state.reason
 

@@ -241,8 +241,9 @@ class SessionEngine:
         terminated, confirmed = self._life_cycle(
             sensor, live, states, covariances, rows, increments
         )
-        self._hand_over_to_phantoms(confirmed, terminated)
-        self._absorb_duplicates(terminated)
+        fresh = confirmed + [track for track in created if track.status is TrackStatus.CONFIRMED]
+        self._hand_over_to_phantoms(fresh, terminated)
+        self._absorb_duplicates(terminated, created)
         return self._result(report, decision, live, terminated, explain)
 
     # ------------------------------------------------------------ checks
@@ -598,16 +599,26 @@ class SessionEngine:
         return np.asarray(np.linalg.slogdet(np.array(gates))[1], dtype=np.float64)
 
     def _start(self, cols: IntArray, report: TrackReport, incoming: Estimates) -> list[FusedTrack]:
-        """A tentative fused track for each of the report tracks ``cols``."""
-        initial = self.config.management.score_model(self.config.sensor(report.sensor).p_detect)
+        """A fused track for each of the report tracks ``cols``: tentative, or confirmed at
+        once when the session's only sensor is tracked here (its local tracker reports only
+        the tracks it has confirmed, and with no other sensor a second test could only
+        delay them), at the score ceiling. With several sensors the fused layer tests
+        again: it absorbs a sensor's duplicates and waits for corroboration."""
+        management = self.config.management
+        sensor = self.config.sensor(report.sensor)
+        initial = management.score_model(sensor.p_detect)
+        status, reason, score = TrackStatus.TENTATIVE, StatusReason.INITIATED, initial.initial
+        if sensor.tracker is not None and len(self.config.sensors) == 1:
+            status, reason = TrackStatus.CONFIRMED, StatusReason.LOCAL_CONFIRMED
+            score = min(management.score_ceiling, management.confirm_threshold)
         created = []
         for row in self._table.add_rows(len(cols)).tolist():
             created.append(
                 FusedTrack(
                     id=f"F{self.next_number}",
-                    status=TrackStatus.TENTATIVE,
-                    reason=StatusReason.INITIATED,
-                    score=initial.initial,
+                    status=status,
+                    reason=reason,
+                    score=score,
                     row=row,
                 )
             )
@@ -620,7 +631,7 @@ class SessionEngine:
         phantoms = [track for track in self.tracks if track.status is TrackStatus.PHANTOM]
         self._merge(phantoms, fresh, StatusReason.MERGED_INTO_PHANTOM, terminated)
 
-    def _absorb_duplicates(self, terminated: list[FusedTrack]) -> None:
+    def _absorb_duplicates(self, terminated: list[FusedTrack], created: list[FusedTrack]) -> None:
         """A tentative track that duplicates an established track of other sensors joins it.
 
         A sensor's first report of an object is associated by the method's gate;
@@ -629,11 +640,19 @@ class SessionEngine:
         tentative track, gated against a confirmed or coasting track that has
         no estimate from its sensors, is merged into it.
         """
-        tentative = [track for track in self.tracks if track.status is TrackStatus.TENTATIVE]
+        # a track created confirmed (a local tracker's) this step is a newcomer as well
+        fresh = {id(track) for track in created if track.status is TrackStatus.CONFIRMED}
+        tentative = [
+            track
+            for track in self.tracks
+            if track.status is TrackStatus.TENTATIVE
+            or (id(track) in fresh and track.status is TrackStatus.CONFIRMED)
+        ]
         established = [
             track
             for track in self.tracks
             if track.status in (TrackStatus.CONFIRMED, TrackStatus.COASTING)
+            and id(track) not in fresh
         ]
         self._merge(established, tentative, StatusReason.DUPLICATE, terminated)
 

@@ -11,7 +11,10 @@ Readings
     seed joined by an unassigned detection of the next scan within
     ``max_speed · Δt`` (plus the gate on R) starts a tentative track by
     :func:`~core.tracking.initiator.two_point_initiation`, scored from
-    ``L₀ = ln(β_NT/β_FT)``. ``"single_point"``: every unassigned detection
+    ``L₀ = ln(β_NT/β_FT)`` plus the second detection's hit ΔL under
+    ``2R + initial_velocity_std² Δt² I`` (the pair's evidence, so a pair of a
+    true target starts well above the delete threshold; a pair at or below it
+    starts nothing). ``"single_point"``: every unassigned detection
     starts a tentative track at once, position from z (covariance R), velocity
     0 with standard deviation ``initial_velocity_std`` per axis (for the
     heading convention of the pedestrian models: heading 0 with variance
@@ -43,7 +46,11 @@ Readings
     drop below the track's best score; we clamp the score at ``confirm
     threshold + score_margin`` (default margin 0), so a confirmed track is
     deleted after ``⌈(confirm − delete + margin) / |ln(1 − P_D)|⌉``
-    consecutive misses (5 with the defaults). ``None`` keeps the raw SPRT.
+    consecutive misses (5 with the defaults). ``None`` keeps the raw SPRT. A
+    negative margin down to ``−confirm`` (ceiling 0) restarts the test once a
+    track is established: deleted after ``⌈(−delete) / |ln(1 − P_D)|⌉`` misses
+    (3 at P_D 0.9), the run of misses a true target shows with probability β;
+    tentative tracks are still scored up to their confirm threshold.
     The gate of the gate-emptiness volume and of the hand-over is the life
     cycle's ``gate_probability``, not the association's.
 """

@@ -546,17 +546,23 @@ class LocalTracker:
             seed_index, detection_index = pair_seeds(seeds, z[detections], radius)
             if len(seed_index):
                 starts = detections[detection_index]
+                first = seeds[seed_index]
+                # [MTT] §4.3: the pair's score has both detections' evidence; a pair
+                # scoring at or below the delete threshold starts no track.
+                spread = self.config.initial_velocity_std**2 * interval**2
+                pair_covariance = 2.0 * self._noise + spread * np.eye(self._q)
+                start_score = self.config.score.two_point_initial(
+                    z[starts] - first, pair_covariance
+                )
+                alive = start_score > self.config.life_cycle.delete_threshold
+                starts, first, start_score = starts[alive], first[alive], start_score[alive]
                 state = two_point_initiation(
-                    self.bank,
-                    seeds[seed_index],
-                    z[starts],
-                    interval,
-                    velocity=self._conventions,
+                    self.bank, first, z[starts], interval, velocity=self._conventions
                 )
                 order = np.argsort(starts, kind="stable")
                 starts = starts[order]
                 state = state.select(order)
-                self._append(state, starts, numbers, hits=2)
+                self._append(state, starts, numbers, hits=2, score=start_score[order])
         remaining = np.setdiff1d(detections, starts)
         kept = ~older
         self._seeds = np.concatenate([self._seeds[kept], z[remaining]])
@@ -566,7 +572,12 @@ class LocalTracker:
         )
 
     def _append(
-        self, state: IMMState, detections: IntArray, numbers: IntArray, hits: int = 1
+        self,
+        state: IMMState,
+        detections: IntArray,
+        numbers: IntArray,
+        hits: int = 1,
+        score: FloatArray | None = None,
     ) -> None:
         count = len(detections)
         if count == 0:
@@ -575,7 +586,8 @@ class LocalTracker:
         self.next_number += count
         numbers[detections] = new_numbers
         self._numbers = np.concatenate([self._numbers, new_numbers])
-        self._life = self._life.concatenate(LifeState.new(count, self.config.score.initial, hits))
+        start = self.config.score.initial if score is None else score
+        self._life = self._life.concatenate(LifeState.new(count, start, hits))
         self._state = _concatenate(self._state, state)
         if self.classifier is not None and self._classes is not None:
             self._classes = self._classes.concatenate(self.classifier.initial(count))

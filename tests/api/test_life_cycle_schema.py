@@ -12,10 +12,11 @@ import math
 import pytest
 from pydantic import ValidationError
 
-from api_schemas.config import SessionConfig, TrackThresholds
+from api_schemas.config import SensorConfig, SessionConfig, TrackingConfig, TrackThresholds
 from app.translate import fusion_config, life_cycle_config
 from core.errors import InvalidInput
 from core.lifecycle import LifeCycleConfig
+from core.tracking.config import LocalTrackerConfig
 
 CORE_DEFAULTS = {field.name: field.default for field in dataclasses.fields(LifeCycleConfig)}
 PROBES: dict[str, list[object]] = {
@@ -60,4 +61,52 @@ def test_a_session_without_thresholds_runs_the_core_defaults_in_both_layers() ->
     assert fusion.management == LifeCycleConfig()
     tracker = fusion.sensor("radar").tracker
     assert tracker is not None and tracker.life_cycle == LifeCycleConfig()
-    assert life_cycle_config(TrackThresholds()) == LifeCycleConfig()
+    assert life_cycle_config(TrackThresholds(), TrackingConfig().birth_density) == LifeCycleConfig()
+
+
+def test_the_wire_densities_and_initiation_default_to_the_core_s() -> None:
+    """``sensors[i].clutter_density``, ``tracking.birth_density`` and ``tracking.initiation``."""
+    core, tracker = LifeCycleConfig(), LocalTrackerConfig()
+    assert SensorConfig(id="s").clutter_density == core.false_target_density
+    tracking = TrackingConfig()
+    assert tracking.birth_density == core.new_target_density
+    assert tracking.initiation.kind == tracker.initiation
+    assert tracking.initiation.max_speed == tracker.max_speed
+    assert tracking.initiation.velocity_std == tracker.initial_velocity_std
+    single = TrackingConfig.model_validate({"initiation": {"kind": "single_point"}})
+    assert single.initiation.velocity_std == tracker.initial_velocity_std
+
+
+def test_the_densities_and_initiation_reach_the_local_tracker() -> None:
+    config = SessionConfig.model_validate(
+        {
+            "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+            "sensors": [
+                {
+                    "id": "radar",
+                    "clutter_density": 3e-5,
+                    "measurement": {"r": [[1.0, 0.0], [0.0, 1.0]]},
+                }
+            ],
+            "tracking": {
+                "birth_density": 2e-7,
+                "initiation": {"kind": "single_point", "velocity_std": 4.0},
+                "thresholds": {"score_margin": -6.0, "min_points": 2},
+            },
+        }
+    )
+    fusion = fusion_config(config)
+    (radar,) = fusion.sensors
+    assert radar.tracker is not None
+    life = radar.tracker.life_cycle
+    assert (life.false_target_density, life.new_target_density) == (3e-5, 2e-7)
+    assert (life.score_margin, life.min_points) == (-6.0, 2)
+    assert (radar.tracker.initiation, radar.tracker.initial_velocity_std) == ("single_point", 4.0)
+    assert fusion.management.new_target_density == 2e-7
+    assert fusion.management.false_target_density == LifeCycleConfig().false_target_density
+
+
+def test_a_ceiling_under_the_delete_threshold_is_refused_naming_the_field() -> None:
+    with pytest.raises(ValidationError) as refused:
+        TrackThresholds.model_validate({"score_margin": -14.0})  # confirm 6.9, delete −6.9
+    assert "score_margin" in str(refused.value)

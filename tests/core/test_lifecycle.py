@@ -10,8 +10,13 @@ from numpy.testing import assert_allclose
 
 from core.errors import InvalidInput
 from core.lifecycle import (
+    CONFIRMED,
+    TENTATIVE,
+    Evidence,
     LifeCycleConfig,
+    LifeState,
     ScoreModel,
+    advance,
     gate_emptiness_factor,
     gate_volume,
     unit_ball_volume,
@@ -74,3 +79,48 @@ def test_invalid_score_parameters(field: str, value: float, message: str) -> Non
                 field: value,
             }
         )
+
+
+def test_a_two_point_start_scores_both_detections() -> None:
+    """L₀ + ln[P_D N(z₁ − z₀; 0, S₂) / β_FT], the density by scipy (Blackman & Popoli p. 330)."""
+    from scipy.stats import multivariate_normal
+
+    model = LifeCycleConfig(false_target_density=3e-5, new_target_density=1e-6).score_model(0.9)
+    pair = np.array([[2.0, 0.0], [1.0, 3.0]]) @ np.array([[2.0, 0.0], [1.0, 3.0]]).T
+    displacement = np.array([[0.5, -1.0], [4.0, 2.0]])
+    expected = [
+        math.log(1e-6 / 3e-5) + math.log(0.9 * multivariate_normal(np.zeros(2), pair).pdf(d) / 3e-5)
+        for d in displacement
+    ]
+    np.testing.assert_allclose(model.two_point_initial(displacement, pair), expected, rtol=1e-12)
+
+
+def test_a_negative_margin_restarts_the_test_of_established_tracks_only() -> None:
+    """Ceiling 0 (margin −confirm): a tentative track still reaches the confirm threshold."""
+    config = LifeCycleConfig(score_margin=-LifeCycleConfig().confirm_threshold)
+    assert config.score_ceiling == pytest.approx(0.0)
+    state = LifeState.new(2, 5.0, hits=2)
+    state = LifeState(
+        np.array([TENTATIVE, CONFIRMED]),
+        state.reason,
+        state.score,
+        state.hits,
+        state.empty_gate,
+        state.phantom_since,
+    )
+    evidence = Evidence(
+        time=1.0,
+        detected=np.array([True, True]),
+        hit_increment=np.array([3.0, 3.0]),
+        seen=np.ones(2, dtype=bool),
+        miss_increment=math.log(0.1),
+        gate_log_det=np.zeros(2),
+        gate_dim=2,
+        visibility=np.zeros(2, dtype=np.int64),
+        occluded=np.zeros(2, dtype=bool),
+    )
+    after, confirmed = advance(config, state, evidence)
+    np.testing.assert_allclose(after.score, [config.confirm_threshold, 0.0])
+    assert confirmed.tolist() == [True, False]
+    with pytest.raises(InvalidInput):
+        LifeCycleConfig(score_margin=-20.0)  # the ceiling would be under the delete threshold

@@ -287,9 +287,11 @@ def test_every_row_of_the_table_at_once() -> None:
     assert before.status.tolist() == [STATUSES.index(c.status) for c in CASES]
     # Every status and every reason the life cycle can give was reached once.
     reached = {(STATUSES[s], REASONS[r]) for s, r in zip(after.status, after.reason, strict=True)}
-    assert {reason for _, reason in reached} | {R_.MERGED_INTO_PHANTOM, R_.DUPLICATE} == set(
-        StatusReason
-    )
+    assert {reason for _, reason in reached} | {
+        R_.MERGED_INTO_PHANTOM,
+        R_.DUPLICATE,
+        R_.LOCAL_CONFIRMED,
+    } == set(StatusReason)
 
 
 def test_with_phantoms_off_a_hidden_track_is_not_a_phantom() -> None:

@@ -96,7 +96,9 @@ def test_a_vanished_target_is_terminated_by_gate_emptiness_when_the_product_pred
 
     # Reference: two-point track at scan 1, updated at scans 2..7 with z = 0.
     x, p = np.zeros(4), two_point_covariance()
-    expected_score = score.initial
+    # The pair's start: L₀ plus the second detection's ΔL, z₁ − z₀ = 0 under
+    # 2R + σ_v² I (Δt = 1, σ_v the default 300 m/s): |S₂| = (2 + 300²)².
+    expected_score = score.initial + hit_increment(score, 0.0, 2.0 * math.log(2.0 + 300.0**2))
     for _ in range(2, last_hit + 1):
         x, p = predict(x, p)
         x, p, distance, log_det = kalman_update(x, p, np.zeros(2), R)
@@ -131,7 +133,8 @@ def test_gate_emptiness_product_matches_the_reference_scan_by_scan() -> None:
     """The exported empty-gate probability after each miss is the reference product."""
     rho = 1e-3
     life = LifeCycleConfig(false_target_density=rho, new_target_density=rho, score_margin=None)
-    config = LocalTrackerConfig(bank=BANK, p_detect=0.9, life_cycle=life)
+    # a velocity prior of 1 m/s: the standing pair's start score confirms it by the 4th scan
+    config = LocalTrackerConfig(bank=BANK, p_detect=0.9, life_cycle=life, initial_velocity_std=1.0)
     tracker = LocalTracker(config)
     for t in range(4):
         tracker.step(float(t), [[0.0, 0.0]])
