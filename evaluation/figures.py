@@ -36,9 +36,9 @@ from evaluation.accelerating import AcceleratingStudy, accelerating_study
 from evaluation.aircraft import AircraftClassification, aircraft_classification
 from evaluation.catalogue import CATALOGUE, FigureEntry
 from evaluation.close_pair import ClosePairStudy, close_pair_study
-from evaluation.crossing import CrossingStudy, crossing_study
+from evaluation.crossing import OSPA_CUTOFF, CrossingRun, CrossingStudy, crossing_study
 from evaluation.four_targets import ThresholdSweep, threshold_sweep
-from evaluation.intervals import rate_interval
+from evaluation.intervals import mean_interval, rate_interval, wilson
 from evaluation.overtaking import CASES as OVERTAKING_CASES
 from evaluation.overtaking import OvertakingStudy, overtaking_study
 from evaluation.pedestrian import PedestrianClassification, pedestrian_classification
@@ -462,35 +462,43 @@ def _plot_close_pair(axes: Axes, study: ClosePairStudy) -> None:
 
 # ------------------------------------------------------------------ crossing
 def draw_crossing(reduced: bool, echo: Echo) -> Figure:
-    """[MTT] Fig 17–18: a fighter crosses an unknown aircraft; assignments and classes."""
+    """[MTT] Fig 17–18, the paper's values first, then our variant; assignments and classes."""
     seeds = _seeds(20, reduced)
-    variances = (1.0, 10.0) if reduced else (0.2, 1.0, 4.0, 10.0, 25.0)
+    variances = (0.2, 10.0) if reduced else (0.2, 1.0, 4.0, 10.0, 25.0)
     echo(f"crossing: seeds {list(seeds)}, measurement variances {list(variances)} m²")
     study = crossing_study(seeds, variances)
-    figure = Figure(figsize=(11, 8), layout="constrained")
-    grid = figure.subplots(2, 2)
-    _plot_crossing_example(grid[0][0], study)
-    _plot_crossing_swaps(grid[0][1], study)
-    chosen = int(np.argmin(np.abs(study.variances - study.example.variance)))
-    for axes, target, title in (
-        (grid[1][0], 1, "Fig 18 left: target 1 (fighter)"),
-        (grid[1][1], 2, "Fig 18 right: target 2 (flies straight)"),
+    figure = Figure(figsize=(11, 14), layout="constrained")
+    grid = figure.subplots(4, 2)
+    for column, (example, case) in enumerate(
+        zip(study.examples, ("paper's values", "our variant"), strict=True)
     ):
-        betp = study.betp["closest_model"][chosen, :, target - 1]
-        steps = np.arange(betp.shape[1])
-        alive = ~np.isnan(betp[:, :, 0])
-        counts = np.maximum(alive.sum(axis=0), 1)
-        for index, label in enumerate(study.classes):
-            mean = np.where(alive, betp[:, :, index], 0.0).sum(axis=0) / counts
-            axes.plot(steps, np.where(alive.any(axis=0), mean, np.nan), label=label)
-        axes.set_ylim(-0.02, 1.02)
-        axes.set_xlabel("step")
-        axes.set_ylabel("BetP (mean of runs)")
-        axes.set_title(
-            f"{title}, σ² = {study.variances[chosen]:g} m², closest_model", fontsize=9, loc="left"
-        )
-        axes.legend(fontsize=7, loc="center left")
-        _shade(axes, study.manoeuvres)
+        _plot_crossing_example(grid[0][column], example, case)
+        chosen = int(np.argmin(np.abs(study.variances - example.variance)))
+        for row, target, title in (
+            (1, 1, "Fig 18 left: target 1 (fighter)"),
+            (2, 2, "Fig 18 right: target 2 (flies straight)"),
+        ):
+            axes = grid[row][column]
+            betp = study.betp[example.imm_distance][chosen, :, target - 1]
+            steps = np.arange(betp.shape[1])
+            alive = ~np.isnan(betp[:, :, 0])
+            counts = np.maximum(alive.sum(axis=0), 1)
+            for index, label in enumerate(study.classes):
+                mean = np.where(alive, betp[:, :, index], 0.0).sum(axis=0) / counts
+                axes.plot(steps, np.where(alive.any(axis=0), mean, np.nan), label=label)
+            axes.plot(steps, alive.mean(axis=0), "k:", lw=0.8, label="share of runs with a track")
+            axes.set_ylim(-0.02, 1.02)
+            axes.set_xlabel("step")
+            axes.set_ylabel("BetP (mean of runs)")
+            axes.set_title(
+                f"{title}, {case}: σ² = {example.variance:g} m², {example.imm_distance}",
+                fontsize=9,
+                loc="left",
+            )
+            axes.legend(fontsize=7, loc="center left")
+            _shade(axes, study.manoeuvres)
+    _plot_crossing_swaps(grid[3][0], study)
+    _plot_crossing_scores(grid[3][1], study)
     return _titled(
         figure,
         "crossing",
@@ -499,9 +507,35 @@ def draw_crossing(reduced: bool, echo: Echo) -> Figure:
     )
 
 
-def _plot_crossing_example(axes: Axes, study: CrossingStudy) -> None:
+def _plot_crossing_scores(axes: Axes, study: CrossingStudy) -> None:
+    """Time-mean OSPA and identity switches per run, 95 % intervals over the runs."""
+    for kind, marker in (("combined", "s"), ("closest_model", "o")):
+        for values, style, name in (
+            (study.ospa[kind], "-", "OSPA (m)"),
+            (study.switches[kind], "--", "identity switches"),
+        ):
+            intervals = [mean_interval(row) for row in values]
+            axes.errorbar(
+                study.variances,
+                [i.estimate for i in intervals],
+                yerr=np.array([[i.estimate - i.low, i.high - i.estimate] for i in intervals]).T,
+                marker=marker,
+                ls=style,
+                capsize=2,
+                label=f"{name}, {kind}",
+            )
+    axes.set_xscale("log")
+    axes.set_xlabel("measurement variance per axis (m²)")
+    axes.set_title(
+        f"tracking metrics (OSPA c = {OSPA_CUTOFF:g} m, order 1); 95 % intervals",
+        fontsize=9,
+        loc="left",
+    )
+    axes.legend(fontsize=6, loc="upper left")
+
+
+def _plot_crossing_example(axes: Axes, example: CrossingRun, case: str) -> None:
     """Fig 17 in the frame of target 2 (y − y₂), so that metres show next to kilometres."""
-    example = study.example
     steps = np.arange(len(example.truth_y))
     reference = example.truth_y[:, 1]
     axes.plot(steps, example.truth_y[:, 0] - reference, "C3-", lw=1, label="truth 1 (fighter)")
@@ -539,7 +573,8 @@ def _plot_crossing_example(axes: Axes, study: CrossingStudy) -> None:
     axes.set_xlabel("step")
     axes.set_ylabel("y − y of target 2 (m)")
     axes.set_title(
-        f"Fig 17: y over time (seed {example.seed}, σ² = {example.variance:g} m²; x is the same)",
+        f"Fig 17, {case}: y (seed {example.seed}, σ² = {example.variance:g} m², "
+        f"{example.imm_distance}; x is the same)",
         fontsize=9,
         loc="left",
     )
@@ -547,12 +582,16 @@ def _plot_crossing_example(axes: Axes, study: CrossingStudy) -> None:
 
 
 def _plot_crossing_swaps(axes: Axes, study: CrossingStudy) -> None:
-    for kind, marker in (("closest_model", "o"), ("combined", "s")):
-        axes.plot(
+    for kind, marker in (("combined", "s"), ("closest_model", "o")):
+        share = study.swapped_share(kind)
+        bounds = np.array([wilson(p * len(study.seeds), len(study.seeds)) for p in share])
+        axes.errorbar(
             study.variances,
-            study.swapped_share(kind),
+            share,
+            yerr=np.abs(bounds - share[:, None]).T,
             marker=marker,
-            label=f"runs with a false assignment ({kind})",
+            capsize=2,
+            label=f"runs with a false assignment ({kind}; Wilson 95 %)",
         )
     fighter = study.classes.index("fighter")
     liner = study.classes.index("liner")

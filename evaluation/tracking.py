@@ -20,6 +20,7 @@ import numpy as np
 from core.arrays import FloatArray, IntArray
 from core.geometry import PolygonView
 from core.lifecycle import LifeCycleConfig
+from core.metrics import coverage, gospa, identity_switches, ospa
 from core.simulation.scenario import CLUTTER, Region, Scenario
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.models import ModelBank
@@ -194,6 +195,65 @@ class TrackedRun:
         }
 
 
+@dataclass(frozen=True)
+class TrackingScores:
+    """EVALUATION's tracking metrics of one run, from the tracker's confirmed tracks.
+
+    Attributes
+    ----------
+    ospa : float
+        Time mean of the per-step OSPA (order 1, cut-off ``cutoff``) between the
+        positions of the confirmed (and coasting) tracks and of the live truths.
+    gospa : float
+        Time mean of the per-step GOSPA (α = 2, order 1, same cut-off).
+    identity_switches : int
+        :func:`core.metrics.identity_switches` of the per-step coverage.
+    cutoff : float
+        The cut-off c (m), also the coverage radius.
+    """
+
+    ospa: float
+    gospa: float
+    identity_switches: int
+    cutoff: float
+
+
+def tracking_scores(
+    scenario: Scenario, run: TrackedRun, cutoff: float, first_step: int = 2
+) -> TrackingScores:
+    """OSPA, GOSPA and identity switches of ``run`` from ``first_step`` on (after initiation)."""
+    last_scan: dict[int, int] = {}
+    for index, step in enumerate(run.steps.tolist()):
+        last_scan[step] = index
+    ospas: list[float] = []
+    gospas: list[float] = []
+    covered: list[dict[int, str | None]] = []
+    for step in sorted(last_scan):
+        if step < first_step:
+            continue
+        index = last_scan[step]
+        ids, statuses, states = run.track_ids[index], run.statuses[index], run.states[index]
+        rows = [r for r, status in enumerate(statuses) if status in ("confirmed", "coasting")]
+        estimates = states[rows][:, [0, 2]].reshape(-1, 2)
+        live = [truth for truth in scenario.truths if truth.alive(step)]
+        truths = np.array([truth.state_at(step)[[0, 2]] for truth in live]).reshape(-1, 2)
+        ospas.append(ospa(estimates, truths, cutoff))
+        gospas.append(gospa(estimates, truths, cutoff).distance)
+        covered.append(
+            coverage(
+                {truth.target_id: position for truth, position in zip(live, truths, strict=True)},
+                {ids[r]: estimates[i] for i, r in enumerate(rows)},
+                cutoff,
+            )
+        )
+    return TrackingScores(
+        ospa=float(np.mean(ospas)) if ospas else float("nan"),
+        gospa=float(np.mean(gospas)) if gospas else float("nan"),
+        identity_switches=identity_switches(covered),
+        cutoff=cutoff,
+    )
+
+
 def track_scenario(scenario: Scenario, config: LocalTrackerConfig) -> TrackedRun:
     """Feed every scan of ``scenario`` to a fresh tracker and record its outputs."""
     tracker = LocalTracker(config)
@@ -247,8 +307,10 @@ __all__ = [
     "CLUTTER",
     "NO_TERMINATION",
     "TrackedRun",
+    "TrackingScores",
     "rectangle",
     "road_bank",
     "road_config",
     "track_scenario",
+    "tracking_scores",
 ]
