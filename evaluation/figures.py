@@ -287,7 +287,9 @@ def draw_aircraft(reduced: bool, echo: Echo) -> Figure:
     return _titled(
         figure,
         "aircraft",
-        f"[MTT] Fig 12, 14, 15: target 2, mean of {len(seeds)} runs",
+        f"[MTT] Fig 12, 14, 15: target 2, mean of {len(seeds)} runs (seeds differ; largest "
+        f"range over the runs: credal {result.run_spread('credal'):.0e}, "
+        f"Bayesian {result.run_spread('bayesian'):.0e})",
         reduced,
     )
 
