@@ -696,6 +696,8 @@ def _plot_road_table(axes: Axes, study: RoadFourStudy) -> None:
         "false\nassign.",
         "losses\n/ run",
         "false tracks\n/ run",
+        "OSPA (m)\n± 95 %",
+        "id switches\n/ run ± 95 %",
     ]
     rows = [
         [
@@ -706,6 +708,9 @@ def _plot_road_table(axes: Axes, study: RoadFourStudy) -> None:
             f"{study.false_assignments[label].mean():.3f}",
             f"{study.losses[label].mean():.2f}",
             f"{study.false_track_counts[label].mean():.2f}",
+            f"{study.ospa[label].mean():.3f} ± {mean_interval(study.ospa[label]).half_width:.3f}",
+            f"{study.switches[label].mean():.2f} ± "
+            f"{mean_interval(study.switches[label]).half_width:.2f}",
         ]
         for label in study.labels
     ]
