@@ -26,6 +26,7 @@ from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
 from core.arrays import FloatArray
+from core.distance.modified import scale_factor
 from core.errors import InvalidInput
 from core.simulation.scenario import TargetTruth
 from core.simulation.tracklists import SensorTrackList, t2t_four
@@ -43,6 +44,7 @@ from evaluation.overtaking import CASES as OVERTAKING_CASES
 from evaluation.overtaking import OvertakingStudy, overtaking_study
 from evaluation.pedestrian import PedestrianClassification, pedestrian_classification
 from evaluation.road_four import RoadFourStudy, road_four_study
+from evaluation.scenes import SCORE_GAPS, pedestrian_truths, tracked_aircraft
 from evaluation.two_class import ClassComparison, class_comparison
 from evaluation.units import NoiseStudy, UnitSweep, noise_study, unit_sweep
 
@@ -636,6 +638,95 @@ def _plot_crossing_swaps(axes: Axes, study: CrossingStudy) -> None:
     axes.legend(fontsize=6, loc="center left")
 
 
+# --------------------------------------------------------------- mtt-scenes
+def draw_mtt_scenes(reduced: bool, echo: Echo) -> Figure:
+    """[MTT] Fig 10–11 (the four aircraft tracked), Fig 4–5 (track scores), Fig 19."""
+    seed = 0
+    n_steps = 80 if reduced else 121
+    echo(f"mtt-scenes: seed {seed}, {n_steps} steps (aircraft), pedestrians seed {seed}")
+    plain = tracked_aircraft(seed, n_steps=n_steps)
+    gapped = tracked_aircraft(seed, gaps=True, n_steps=n_steps)
+    clamped = tracked_aircraft(seed, gaps=True, raw_score=False, n_steps=n_steps)
+    figure = Figure(figsize=(11, 11), layout="constrained")
+    grid = figure.subplots(3, 2)
+    plan, over_time = grid[0]
+    for target, states in plain.truths.items():
+        plan.plot(states[:, 0] / 1e3, states[:, 2] / 1e3, "k-", lw=0.8)
+        over_time.plot(np.arange(len(states)), states[:, 0] / 1e3, "k-", lw=0.8)
+        start = int(np.flatnonzero(~np.isnan(states[:, 0]))[0])
+        plan.annotate(f"{target}", (states[start, 0] / 1e3, states[start, 2] / 1e3), fontsize=8)
+    plan.plot(plain.detections[:, 0] / 1e3, plain.detections[:, 1] / 1e3, ".", ms=1.5, color="0.6")
+    for track, states in plain.tracks.items():
+        plan.plot(states[:, 0] / 1e3, states[:, 2] / 1e3, "--", lw=1.2, label=track)
+        over_time.plot(np.arange(len(states)), states[:, 0] / 1e3, "--", lw=1.2, label=track)
+    plan.set_xlabel("x (km)")
+    plan.set_ylabel("y (km)")
+    plan.set_title("Fig 10: truth (black), detections, tracks (dashed)", fontsize=9, loc="left")
+    plan.legend(fontsize=7)
+    over_time.axvline(100, color="r", lw=0.8)
+    over_time.set_xlabel("step (target 2 disappears at 100)")
+    over_time.set_ylabel("x (km)")
+    over_time.set_title(
+        "Fig 11: x over time, plain SPRT; last steps "
+        + ", ".join(f"{t} {step}" for t, step in plain.last_step.items()),
+        fontsize=9,
+        loc="left",
+    )
+    over_time.legend(fontsize=7)
+    for axes, scene, title, scale in (
+        (grid[1][0], gapped, "Fig 5: scores L, [MTT]'s plain SPRT", "symlog"),
+        (grid[1][1], clamped, "our default life cycle (score clamped near T₂)", "linear"),
+    ):
+        for track, score in scene.scores.items():
+            axes.plot(
+                np.arange(len(score)), score, label=f"{track} (ends {scene.last_step[track]})"
+            )
+        axes.axhline(scene.delete_threshold, color="r", lw=0.8, ls=":", label="T₁ (delete)")
+        axes.axhline(scene.confirm_threshold, color="g", lw=0.8, ls=":", label="T₂ (confirm)")
+        for target, (first, last) in SCORE_GAPS.items():
+            if first < n_steps:
+                axes.axvspan(first, min(last, n_steps - 1), color=f"C{target - 1}", alpha=0.08)
+        if scale == "symlog":
+            axes.set_yscale("symlog", linthresh=10.0)
+        axes.set_xlabel("step (shaded: a target's detections removed, [MTT] §4.3's events)")
+        axes.set_ylabel("score L ([MTT] eq 16)")
+        axes.set_title(title, fontsize=9, loc="left")
+        axes.legend(fontsize=6, loc="lower left")
+    pedestrians = pedestrian_truths(seed)
+    for index, y in enumerate(pedestrians, start=1):
+        grid[2][0].plot(np.arange(len(y)), y, label=f"pedestrian {index}")
+    grid[2][0].set_xlabel("step")
+    grid[2][0].set_ylabel("y (m)")
+    grid[2][0].set_title(
+        "Fig 19: pedestrians' y (x is the same); 1 walks, runs, stops at 120, walks at 240",
+        fontsize=9,
+        loc="left",
+    )
+    grid[2][0].legend(fontsize=7)
+    grid[2][1].axis("off")
+    return _titled(figure, "mtt-scenes", "[MTT] Fig 4–5, 10–11, 19: the scenes", reduced)
+
+
+# ------------------------------------------------------------------ hz-scale
+def draw_hz_scale(reduced: bool, echo: Echo) -> Figure:
+    """[HZ] Fig 3: the scale factor of each distance as a function of |P| / |P_ss|."""
+    echo("hz-scale: no seed (a formula: β = 10, k = 1, α = 4)")
+    u = np.geomspace(0.1, 1e4, 50 if reduced else 400)
+    figure = Figure(figsize=(7, 4.6), layout="constrained")
+    axes = figure.subplots()
+    axes.plot(u, np.ones_like(u), label="Euclidean (constant)")
+    axes.plot(u, u, label="Mahalanobis (∝ |P|)")
+    axes.plot(u, scale_factor(u), label="modified, our reading: u = k (v/β)^α + v")
+    axes.axhline(10.0, color="0.5", lw=0.8, ls=":", label="β = 10 ([HZ]: the asymptote)")
+    axes.set_xscale("log")
+    axes.set_yscale("log")
+    axes.set_xlabel("u = (|S| / |S_ss|)^(1/q)")
+    axes.set_ylabel("scale factor v")
+    axes.legend(fontsize=7)
+    axes.set_title("v ≈ u near the steady state, v ≈ β (u/k)^(1/α) beyond", fontsize=9)
+    return _titled(figure, "hz-scale", "[HZ] Fig 3: the distances' scale factors", reduced)
+
+
 # ---------------------------------------------------------------- road-four
 def draw_road_four(reduced: bool, echo: Echo) -> Figure:
     """[DH] Fig 1–5: RMS position and velocity errors of four vehicles, per method."""
@@ -859,6 +950,8 @@ DRAWINGS: dict[str, Callable[[bool, Echo], Figure]] = {
     "road-four": draw_road_four,
     "accelerating": draw_accelerating,
     "overtaking": draw_overtaking,
+    "mtt-scenes": draw_mtt_scenes,
+    "hz-scale": draw_hz_scale,
 }
 """Figure name → its drawing: one per entry of :data:`~evaluation.catalogue.CATALOGUE`."""
 

@@ -106,6 +106,8 @@ class TrackedRun:
     detection_tracks : tuple of str or None
         The track it was assigned to (None: unassigned or a seed).
     measurements : ndarray, shape (m, 2)
+    scores : tuple of ndarray, shapes (t,)
+        The live tracks' scores L ([MTT] eq 16), aligned with ``track_ids``.
     """
 
     steps: IntArray
@@ -118,6 +120,7 @@ class TrackedRun:
     detection_targets: IntArray
     detection_tracks: tuple[str | None, ...]
     measurements: FloatArray
+    scores: tuple[FloatArray, ...] = ()
 
     def assigned(
         self, target: int, first_step: int = 0, last_step: int | None = None
@@ -172,6 +175,14 @@ class TrackedRun:
         ):
             if track in ids:
                 out[step] = betp[ids.index(track)]
+        return out
+
+    def score_of(self, track: str, n_steps: int) -> FloatArray:
+        """The track's score after the last scan of every step, shape (n_steps,); NaN when absent."""
+        out = np.full(n_steps, np.nan)
+        for step, ids, scores in zip(self.steps.tolist(), self.track_ids, self.scores, strict=True):
+            if track in ids:
+                out[step] = scores[ids.index(track)]
         return out
 
     def status_of(self, track: str) -> dict[int, tuple[str, str]]:
@@ -267,6 +278,7 @@ def track_scenario(scenario: Scenario, config: LocalTrackerConfig) -> TrackedRun
     det_targets: list[IntArray] = []
     det_tracks: list[str | None] = []
     measurements: list[FloatArray] = []
+    scores: list[FloatArray] = []
     for scan in scenario.scans:
         sensor = scan.sensor if scan.sensor in config.fields_of_view else None
         output = tracker.step(scan.time, scan.measurements, sensor=sensor)
@@ -275,6 +287,7 @@ def track_scenario(scenario: Scenario, config: LocalTrackerConfig) -> TrackedRun
         statuses.append(tuple(track.status.value for track in output.tracks))
         reasons.append(tuple(track.reason.value for track in output.tracks))
         states.append(np.array([track.state for track in output.tracks]).reshape(-1, 4))
+        scores.append(np.array([track.score for track in output.tracks], dtype=np.float64))
         rows = [
             np.full(3, np.nan) if track.pignistic is None else track.pignistic
             for track in output.tracks
@@ -300,6 +313,7 @@ def track_scenario(scenario: Scenario, config: LocalTrackerConfig) -> TrackedRun
         detection_targets=np.concatenate(det_targets).astype(np.int64),
         detection_tracks=tuple(det_tracks),
         measurements=np.concatenate(measurements).reshape(-1, 2),
+        scores=tuple(scores),
     )
 
 
