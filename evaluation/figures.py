@@ -558,6 +558,16 @@ def _plot_crossing_example(axes: Axes, example: CrossingRun, case: str) -> None:
                 ls="none",
                 label=f"detection of {target} {label}",
             )
+    elsewhere = (example.detection_owner <= 0) & (example.detection_targets >= 1)
+    axes.plot(
+        example.detection_steps[elsewhere],
+        relative[elsewhere],
+        "x",
+        color="0.4",
+        ms=4,
+        ls="none",
+        label="detection → another track / none",
+    )
     wrong = np.flatnonzero(
         (example.detection_owner >= 1) & (example.detection_owner != example.detection_targets)
     )
