@@ -32,7 +32,13 @@ import numpy as np
 from core.arrays import FloatArray
 from core.simulation import CLUTTER, accelerating_scenario, stealing_scenario
 from core.simulation.scenario import Scenario
-from evaluation.tracking import NO_TERMINATION, TrackedRun, road_config, track_scenario
+from evaluation.tracking import (
+    NO_TERMINATION,
+    TrackedRun,
+    road_config,
+    track_scenario,
+    tracking_scores,
+)
 
 CASES: Mapping[str, Mapping[str, object]] = {
     "(a) plain": {"distance": "plain", **NO_TERMINATION},
@@ -51,6 +57,10 @@ def _scene(name: str, seed: int) -> Scenario:
     return stealing_scenario(seed)
 
 
+OSPA_CUTOFF = 3.0
+"""OSPA cut-off and coverage radius (m), as ``road-four``'s (≈ 4σ of one detection)."""
+
+
 @dataclass(frozen=True)
 class LostTrack:
     """What vehicle 2's track did after losing lock, in one run.
@@ -65,26 +75,40 @@ class LostTrack:
         Whether it was terminated.
     reinitiated : bool
         Whether vehicle 2's detections after the manoeuvre went mostly to another track.
+    ospa : float
+        Time-mean OSPA of the run (order 1, c = :data:`OSPA_CUTOFF`).
+    identity_switches : int
+        Of both vehicles (:func:`~evaluation.tracking.tracking_scores`).
     """
 
     stolen: int
     false_alarms: int
     terminated: bool
     reinitiated: bool
+    ospa: float
+    identity_switches: int
 
 
 def lost_track(scenario: Scenario, run: TrackedRun) -> LostTrack:
     """Score one run (module docstring)."""
+    scores = tracking_scores(scenario, run, OSPA_CUTOFF)
     own_1 = run.track_of(1)
     own_2 = run.track_of(2, 2, MANOEUVRE_STEP - 1)
     if own_2 is None:
-        return LostTrack(0, 0, False, False)
+        return LostTrack(0, 0, False, False, scores.ospa, scores.identity_switches)
     stolen = 0 if own_2 == own_1 else len(run.taken_by(own_2, 1))
     false_alarms = len(run.taken_by(own_2, CLUTTER, MANOEUVRE_STEP))
     statuses = run.status_of(own_2)
     terminated = any(status == "terminated" for status, _ in statuses.values())
     later = run.track_of(2, MANOEUVRE_STEP + 5)
-    return LostTrack(stolen, false_alarms, terminated, later is not None and later != own_2)
+    return LostTrack(
+        stolen,
+        false_alarms,
+        terminated,
+        later is not None and later != own_2,
+        scores.ospa,
+        scores.identity_switches,
+    )
 
 
 @dataclass(frozen=True)
@@ -115,6 +139,10 @@ class AcceleratingStudy:
     def total(self, scene: str, case: str, field: str) -> float:
         """Sum over the runs of one LostTrack field."""
         return float(sum(getattr(outcome, field) for outcome in self.outcomes[(scene, case)]))
+
+    def values(self, scene: str, case: str, field: str) -> FloatArray:
+        """One LostTrack field per run, for intervals."""
+        return np.array([float(getattr(o, field)) for o in self.outcomes[(scene, case)]])
 
     def share(self, scene: str, case: str, field: str) -> float:
         """Share of the runs where a LostTrack field is non-zero."""

@@ -82,6 +82,16 @@ CATALOGUE: dict[str, FigureEntry] = {
             "[HZ] Fig 6",
             "identity through the blind zone with and without phantoms",
         ),
+        FigureEntry(
+            "mtt-scenes",
+            "[MTT] Fig 4–5, 10–11, 19",
+            "the four aircraft tracked, the track scores over time, the pedestrians",
+        ),
+        FigureEntry(
+            "hz-scale",
+            "[HZ] Fig 3",
+            "scale factor of the Euclidean, Mahalanobis and modified distances vs |P|",
+        ),
     )
 }
 """Figure name → entry; :func:`evaluation.figures.reproduce` accepts exactly these names."""

@@ -26,6 +26,7 @@ from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
 from core.arrays import FloatArray
+from core.distance.modified import scale_factor
 from core.errors import InvalidInput
 from core.simulation.scenario import TargetTruth
 from core.simulation.tracklists import SensorTrackList, t2t_four
@@ -36,13 +37,14 @@ from evaluation.accelerating import AcceleratingStudy, accelerating_study
 from evaluation.aircraft import AircraftClassification, aircraft_classification
 from evaluation.catalogue import CATALOGUE, FigureEntry
 from evaluation.close_pair import ClosePairStudy, close_pair_study
-from evaluation.crossing import CrossingStudy, crossing_study
+from evaluation.crossing import OSPA_CUTOFF, CrossingRun, CrossingStudy, crossing_study
 from evaluation.four_targets import ThresholdSweep, threshold_sweep
-from evaluation.intervals import rate_interval
+from evaluation.intervals import mean_interval, rate_interval, wilson
 from evaluation.overtaking import CASES as OVERTAKING_CASES
 from evaluation.overtaking import OvertakingStudy, overtaking_study
 from evaluation.pedestrian import PedestrianClassification, pedestrian_classification
 from evaluation.road_four import RoadFourStudy, road_four_study
+from evaluation.scenes import SCORE_GAPS, pedestrian_truths, tracked_aircraft
 from evaluation.two_class import ClassComparison, class_comparison
 from evaluation.units import NoiseStudy, UnitSweep, noise_study, unit_sweep
 
@@ -287,7 +289,9 @@ def draw_aircraft(reduced: bool, echo: Echo) -> Figure:
     return _titled(
         figure,
         "aircraft",
-        f"[MTT] Fig 12, 14, 15: target 2, mean of {len(seeds)} runs",
+        f"[MTT] Fig 12, 14, 15: target 2, mean of {len(seeds)} runs (seeds differ; largest "
+        f"range over the runs: credal {result.run_spread('credal'):.0e}, "
+        f"Bayesian {result.run_spread('bayesian'):.0e})",
         reduced,
     )
 
@@ -462,35 +466,43 @@ def _plot_close_pair(axes: Axes, study: ClosePairStudy) -> None:
 
 # ------------------------------------------------------------------ crossing
 def draw_crossing(reduced: bool, echo: Echo) -> Figure:
-    """[MTT] Fig 17–18: a fighter crosses an unknown aircraft; assignments and classes."""
+    """[MTT] Fig 17–18, the paper's values first, then our variant; assignments and classes."""
     seeds = _seeds(20, reduced)
-    variances = (1.0, 10.0) if reduced else (0.2, 1.0, 4.0, 10.0, 25.0)
+    variances = (0.2, 10.0) if reduced else (0.2, 1.0, 4.0, 10.0, 25.0)
     echo(f"crossing: seeds {list(seeds)}, measurement variances {list(variances)} m²")
     study = crossing_study(seeds, variances)
-    figure = Figure(figsize=(11, 8), layout="constrained")
-    grid = figure.subplots(2, 2)
-    _plot_crossing_example(grid[0][0], study)
-    _plot_crossing_swaps(grid[0][1], study)
-    chosen = int(np.argmin(np.abs(study.variances - study.example.variance)))
-    for axes, target, title in (
-        (grid[1][0], 1, "Fig 18 left: target 1 (fighter)"),
-        (grid[1][1], 2, "Fig 18 right: target 2 (flies straight)"),
+    figure = Figure(figsize=(11, 14), layout="constrained")
+    grid = figure.subplots(4, 2)
+    for column, (example, case) in enumerate(
+        zip(study.examples, ("paper's values", "our variant"), strict=True)
     ):
-        betp = study.betp["closest_model"][chosen, :, target - 1]
-        steps = np.arange(betp.shape[1])
-        alive = ~np.isnan(betp[:, :, 0])
-        counts = np.maximum(alive.sum(axis=0), 1)
-        for index, label in enumerate(study.classes):
-            mean = np.where(alive, betp[:, :, index], 0.0).sum(axis=0) / counts
-            axes.plot(steps, np.where(alive.any(axis=0), mean, np.nan), label=label)
-        axes.set_ylim(-0.02, 1.02)
-        axes.set_xlabel("step")
-        axes.set_ylabel("BetP (mean of runs)")
-        axes.set_title(
-            f"{title}, σ² = {study.variances[chosen]:g} m², closest_model", fontsize=9, loc="left"
-        )
-        axes.legend(fontsize=7, loc="center left")
-        _shade(axes, study.manoeuvres)
+        _plot_crossing_example(grid[0][column], example, case)
+        chosen = int(np.argmin(np.abs(study.variances - example.variance)))
+        for row, target, title in (
+            (1, 1, "Fig 18 left: target 1 (fighter)"),
+            (2, 2, "Fig 18 right: target 2 (flies straight)"),
+        ):
+            axes = grid[row][column]
+            betp = study.betp[example.imm_distance][chosen, :, target - 1]
+            steps = np.arange(betp.shape[1])
+            alive = ~np.isnan(betp[:, :, 0])
+            counts = np.maximum(alive.sum(axis=0), 1)
+            for index, label in enumerate(study.classes):
+                mean = np.where(alive, betp[:, :, index], 0.0).sum(axis=0) / counts
+                axes.plot(steps, np.where(alive.any(axis=0), mean, np.nan), label=label)
+            axes.plot(steps, alive.mean(axis=0), "k:", lw=0.8, label="share of runs with a track")
+            axes.set_ylim(-0.02, 1.02)
+            axes.set_xlabel("step")
+            axes.set_ylabel("BetP (mean of runs)")
+            axes.set_title(
+                f"{title}, {case}: σ² = {example.variance:g} m², {example.imm_distance}",
+                fontsize=9,
+                loc="left",
+            )
+            axes.legend(fontsize=7, loc="center left")
+            _shade(axes, study.manoeuvres)
+    _plot_crossing_swaps(grid[3][0], study)
+    _plot_crossing_scores(grid[3][1], study)
     return _titled(
         figure,
         "crossing",
@@ -499,9 +511,35 @@ def draw_crossing(reduced: bool, echo: Echo) -> Figure:
     )
 
 
-def _plot_crossing_example(axes: Axes, study: CrossingStudy) -> None:
+def _plot_crossing_scores(axes: Axes, study: CrossingStudy) -> None:
+    """Time-mean OSPA and identity switches per run, 95 % intervals over the runs."""
+    for kind, marker in (("combined", "s"), ("closest_model", "o")):
+        for values, style, name in (
+            (study.ospa[kind], "-", "OSPA (m)"),
+            (study.switches[kind], "--", "identity switches"),
+        ):
+            intervals = [mean_interval(row) for row in values]
+            axes.errorbar(
+                study.variances,
+                [i.estimate for i in intervals],
+                yerr=np.array([[i.estimate - i.low, i.high - i.estimate] for i in intervals]).T,
+                marker=marker,
+                ls=style,
+                capsize=2,
+                label=f"{name}, {kind}",
+            )
+    axes.set_xscale("log")
+    axes.set_xlabel("measurement variance per axis (m²)")
+    axes.set_title(
+        f"tracking metrics (OSPA c = {OSPA_CUTOFF:g} m, order 1); 95 % intervals",
+        fontsize=9,
+        loc="left",
+    )
+    axes.legend(fontsize=6, loc="upper left")
+
+
+def _plot_crossing_example(axes: Axes, example: CrossingRun, case: str) -> None:
     """Fig 17 in the frame of target 2 (y − y₂), so that metres show next to kilometres."""
-    example = study.example
     steps = np.arange(len(example.truth_y))
     reference = example.truth_y[:, 1]
     axes.plot(steps, example.truth_y[:, 0] - reference, "C3-", lw=1, label="truth 1 (fighter)")
@@ -520,6 +558,16 @@ def _plot_crossing_example(axes: Axes, study: CrossingStudy) -> None:
                 ls="none",
                 label=f"detection of {target} {label}",
             )
+    elsewhere = (example.detection_owner <= 0) & (example.detection_targets >= 1)
+    axes.plot(
+        example.detection_steps[elsewhere],
+        relative[elsewhere],
+        "x",
+        color="0.4",
+        ms=4,
+        ls="none",
+        label="detection → another track / none",
+    )
     wrong = np.flatnonzero(
         (example.detection_owner >= 1) & (example.detection_owner != example.detection_targets)
     )
@@ -539,7 +587,8 @@ def _plot_crossing_example(axes: Axes, study: CrossingStudy) -> None:
     axes.set_xlabel("step")
     axes.set_ylabel("y − y of target 2 (m)")
     axes.set_title(
-        f"Fig 17: y over time (seed {example.seed}, σ² = {example.variance:g} m²; x is the same)",
+        f"Fig 17, {case}: y (seed {example.seed}, σ² = {example.variance:g} m², "
+        f"{example.imm_distance}; x is the same)",
         fontsize=9,
         loc="left",
     )
@@ -547,12 +596,16 @@ def _plot_crossing_example(axes: Axes, study: CrossingStudy) -> None:
 
 
 def _plot_crossing_swaps(axes: Axes, study: CrossingStudy) -> None:
-    for kind, marker in (("closest_model", "o"), ("combined", "s")):
-        axes.plot(
+    for kind, marker in (("combined", "s"), ("closest_model", "o")):
+        share = study.swapped_share(kind)
+        bounds = np.array([wilson(p * len(study.seeds), len(study.seeds)) for p in share])
+        axes.errorbar(
             study.variances,
-            study.swapped_share(kind),
+            share,
+            yerr=np.abs(bounds - share[:, None]).T,
             marker=marker,
-            label=f"runs with a false assignment ({kind})",
+            capsize=2,
+            label=f"runs with a false assignment ({kind}; Wilson 95 %)",
         )
     fighter = study.classes.index("fighter")
     liner = study.classes.index("liner")
@@ -593,6 +646,95 @@ def _plot_crossing_swaps(axes: Axes, study: CrossingStudy) -> None:
     axes.set_xlabel("measurement variance per axis (m²); final separation 5 m per axis")
     axes.set_title("across noise levels (perfect doubt: 1/3)", fontsize=9, loc="left")
     axes.legend(fontsize=6, loc="center left")
+
+
+# --------------------------------------------------------------- mtt-scenes
+def draw_mtt_scenes(reduced: bool, echo: Echo) -> Figure:
+    """[MTT] Fig 10–11 (the four aircraft tracked), Fig 4–5 (track scores), Fig 19."""
+    seed = 0
+    n_steps = 80 if reduced else 121
+    echo(f"mtt-scenes: seed {seed}, {n_steps} steps (aircraft), pedestrians seed {seed}")
+    plain = tracked_aircraft(seed, n_steps=n_steps)
+    gapped = tracked_aircraft(seed, gaps=True, n_steps=n_steps)
+    clamped = tracked_aircraft(seed, gaps=True, raw_score=False, n_steps=n_steps)
+    figure = Figure(figsize=(11, 11), layout="constrained")
+    grid = figure.subplots(3, 2)
+    plan, over_time = grid[0]
+    for target, states in plain.truths.items():
+        plan.plot(states[:, 0] / 1e3, states[:, 2] / 1e3, "k-", lw=0.8)
+        over_time.plot(np.arange(len(states)), states[:, 0] / 1e3, "k-", lw=0.8)
+        start = int(np.flatnonzero(~np.isnan(states[:, 0]))[0])
+        plan.annotate(f"{target}", (states[start, 0] / 1e3, states[start, 2] / 1e3), fontsize=8)
+    plan.plot(plain.detections[:, 0] / 1e3, plain.detections[:, 1] / 1e3, ".", ms=1.5, color="0.6")
+    for track, states in plain.tracks.items():
+        plan.plot(states[:, 0] / 1e3, states[:, 2] / 1e3, "--", lw=1.2, label=track)
+        over_time.plot(np.arange(len(states)), states[:, 0] / 1e3, "--", lw=1.2, label=track)
+    plan.set_xlabel("x (km)")
+    plan.set_ylabel("y (km)")
+    plan.set_title("Fig 10: truth (black), detections, tracks (dashed)", fontsize=9, loc="left")
+    plan.legend(fontsize=7)
+    over_time.axvline(100, color="r", lw=0.8)
+    over_time.set_xlabel("step (target 2 disappears at 100)")
+    over_time.set_ylabel("x (km)")
+    over_time.set_title(
+        "Fig 11: x over time, plain SPRT; last steps "
+        + ", ".join(f"{t} {step}" for t, step in plain.last_step.items()),
+        fontsize=9,
+        loc="left",
+    )
+    over_time.legend(fontsize=7)
+    for axes, scene, title, scale in (
+        (grid[1][0], gapped, "Fig 5: scores L, [MTT]'s plain SPRT", "symlog"),
+        (grid[1][1], clamped, "our default life cycle (score clamped near T₂)", "linear"),
+    ):
+        for track, score in scene.scores.items():
+            axes.plot(
+                np.arange(len(score)), score, label=f"{track} (ends {scene.last_step[track]})"
+            )
+        axes.axhline(scene.delete_threshold, color="r", lw=0.8, ls=":", label="T₁ (delete)")
+        axes.axhline(scene.confirm_threshold, color="g", lw=0.8, ls=":", label="T₂ (confirm)")
+        for target, (first, last) in SCORE_GAPS.items():
+            if first < n_steps:
+                axes.axvspan(first, min(last, n_steps - 1), color=f"C{target - 1}", alpha=0.08)
+        if scale == "symlog":
+            axes.set_yscale("symlog", linthresh=10.0)
+        axes.set_xlabel("step (shaded: a target's detections removed, [MTT] §4.3's events)")
+        axes.set_ylabel("score L ([MTT] eq 16)")
+        axes.set_title(title, fontsize=9, loc="left")
+        axes.legend(fontsize=6, loc="lower left")
+    pedestrians = pedestrian_truths(seed)
+    for index, y in enumerate(pedestrians, start=1):
+        grid[2][0].plot(np.arange(len(y)), y, label=f"pedestrian {index}")
+    grid[2][0].set_xlabel("step")
+    grid[2][0].set_ylabel("y (m)")
+    grid[2][0].set_title(
+        "Fig 19: pedestrians' y (x is the same); 1 walks, runs, stops at 120, walks at 240",
+        fontsize=9,
+        loc="left",
+    )
+    grid[2][0].legend(fontsize=7)
+    grid[2][1].axis("off")
+    return _titled(figure, "mtt-scenes", "[MTT] Fig 4–5, 10–11, 19: the scenes", reduced)
+
+
+# ------------------------------------------------------------------ hz-scale
+def draw_hz_scale(reduced: bool, echo: Echo) -> Figure:
+    """[HZ] Fig 3: the scale factor of each distance as a function of |P| / |P_ss|."""
+    echo("hz-scale: no seed (a formula: β = 10, k = 1, α = 4)")
+    u = np.geomspace(0.1, 1e4, 50 if reduced else 400)
+    figure = Figure(figsize=(7, 4.6), layout="constrained")
+    axes = figure.subplots()
+    axes.plot(u, np.ones_like(u), label="Euclidean (constant)")
+    axes.plot(u, u, label="Mahalanobis (∝ |P|)")
+    axes.plot(u, scale_factor(u), label="modified, our reading: u = k (v/β)^α + v")
+    axes.axhline(10.0, color="0.5", lw=0.8, ls=":", label="β = 10 ([HZ]: the asymptote)")
+    axes.set_xscale("log")
+    axes.set_yscale("log")
+    axes.set_xlabel("u = (|S| / |S_ss|)^(1/q)")
+    axes.set_ylabel("scale factor v")
+    axes.legend(fontsize=7)
+    axes.set_title("v ≈ u near the steady state, v ≈ β (u/k)^(1/α) beyond", fontsize=9)
+    return _titled(figure, "hz-scale", "[HZ] Fig 3: the distances' scale factors", reduced)
 
 
 # ---------------------------------------------------------------- road-four
@@ -655,6 +797,8 @@ def _plot_road_table(axes: Axes, study: RoadFourStudy) -> None:
         "false\nassign.",
         "losses\n/ run",
         "false tracks\n/ run",
+        "OSPA (m)\n± 95 %",
+        "id switches\n/ run ± 95 %",
     ]
     rows = [
         [
@@ -665,6 +809,9 @@ def _plot_road_table(axes: Axes, study: RoadFourStudy) -> None:
             f"{study.false_assignments[label].mean():.3f}",
             f"{study.losses[label].mean():.2f}",
             f"{study.false_track_counts[label].mean():.2f}",
+            f"{study.ospa[label].mean():.3f} ± {mean_interval(study.ospa[label]).half_width:.3f}",
+            f"{study.switches[label].mean():.2f} ± "
+            f"{mean_interval(study.switches[label]).half_width:.2f}",
         ]
         for label in study.labels
     ]
@@ -813,6 +960,8 @@ DRAWINGS: dict[str, Callable[[bool, Echo], Figure]] = {
     "road-four": draw_road_four,
     "accelerating": draw_accelerating,
     "overtaking": draw_overtaking,
+    "mtt-scenes": draw_mtt_scenes,
+    "hz-scale": draw_hz_scale,
 }
 """Figure name → its drawing: one per entry of :data:`~evaluation.catalogue.CATALOGUE`."""
 

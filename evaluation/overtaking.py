@@ -38,7 +38,7 @@ import numpy as np
 
 from core.arrays import FloatArray
 from core.simulation import CLUTTER, overtaking_scenario
-from evaluation.tracking import rectangle, road_config, track_scenario
+from evaluation.tracking import rectangle, road_config, track_scenario, tracking_scores
 
 CASES: Mapping[str, Mapping[str, object]] = {
     "(a) plain, no phantoms": {"distance": "plain", "phantoms": False},
@@ -52,6 +52,10 @@ REGION = ((-10.0, 10.0), (-40.0, 60.0))
 """The surveillance region: both sensors and the blind zone between them."""
 BEFORE, AFTER = 60, 95
 """Vehicle 1 is in the rear sensor before step 60 and in the front one from step 95."""
+
+
+OSPA_CUTOFF = 3.0
+"""OSPA cut-off and coverage radius (m), as ``road-four``'s."""
 
 
 @dataclass(frozen=True)
@@ -68,12 +72,19 @@ class OvertakingOutcome:
         False alarms taken by vehicle 1's track.
     phantom_steps : int
         Steps vehicle 1's track spent as a phantom.
+    ospa : float
+        Time-mean OSPA of the run (order 1, c = :data:`OSPA_CUTOFF`; a
+        phantom is not a confirmed track, so a vehicle in the blind zone counts as missed).
+    identity_switches : int
+        Of both vehicles (:func:`~evaluation.tracking.tracking_scores`).
     """
 
     kept: bool
     stolen: int
     false_alarms: int
     phantom_steps: int
+    ospa: float
+    identity_switches: int
 
 
 @dataclass(frozen=True)
@@ -99,6 +110,10 @@ class OvertakingStudy:
         """Share of the runs where vehicle 1 keeps its identity."""
         return float(np.mean([outcome.kept for outcome in self.outcomes[case]]))
 
+    def values(self, case: str, field: str) -> FloatArray:
+        """One outcome field per run, for intervals."""
+        return np.array([float(getattr(o, field)) for o in self.outcomes[case]])
+
     def total(self, case: str, field: str) -> float:
         """Sum over the runs of one outcome field."""
         return float(sum(getattr(outcome, field) for outcome in self.outcomes[case]))
@@ -117,10 +132,13 @@ def overtaking_study(
             scenario = overtaking_scenario(seed=seed)
             settings = {"region": rectangle(REGION), **options}
             run = track_scenario(scenario, road_config(scenario, **settings))
+            scores = tracking_scores(scenario, run, OSPA_CUTOFF)
             rear = run.track_of(1, 1, BEFORE - 1)
             front = run.track_of(1, AFTER)
             if rear is None:
-                found.append(OvertakingOutcome(False, 0, 0, 0))
+                found.append(
+                    OvertakingOutcome(False, 0, 0, 0, scores.ospa, scores.identity_switches)
+                )
                 continue
             phantom = sum(status == "phantom" for status, _ in run.status_of(rear).values())
             found.append(
@@ -129,6 +147,8 @@ def overtaking_study(
                     stolen=len(run.taken_by(rear, 2)),
                     false_alarms=len(run.taken_by(rear, CLUTTER)),
                     phantom_steps=phantom,
+                    ospa=scores.ospa,
+                    identity_switches=scores.identity_switches,
                 )
             )
             if seed == seeds[0]:

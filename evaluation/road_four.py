@@ -30,7 +30,7 @@ from core.arrays import FloatArray
 from core.metrics import coverage, false_tracks, track_losses
 from core.simulation import road_four_scenario
 from core.simulation.scenario import Scenario
-from evaluation.tracking import TrackedRun, road_config, track_scenario
+from evaluation.tracking import TrackedRun, road_config, track_scenario, tracking_scores
 
 METHODS: Mapping[str, tuple[str, Mapping[str, object]]] = {
     "dang_han [DH]": ("dang_han", {}),
@@ -63,6 +63,10 @@ class RoadFourStudy:
     losses, false_track_counts : dict
         ``label → (runs,)``: :func:`core.metrics.track_losses` and
         :func:`core.metrics.false_tracks` of each run.
+    ospa, gospa, switches : dict
+        ``label → (runs,)``: time-mean OSPA and GOSPA (order 1, c =
+        :data:`COVER_RADIUS`) and identity switches of each run
+        (:func:`~evaluation.tracking.tracking_scores`).
     """
 
     seeds: tuple[int, ...]
@@ -73,6 +77,9 @@ class RoadFourStudy:
     false_assignments: Mapping[str, FloatArray]
     losses: Mapping[str, FloatArray]
     false_track_counts: Mapping[str, FloatArray]
+    ospa: Mapping[str, FloatArray]
+    gospa: Mapping[str, FloatArray]
+    switches: Mapping[str, FloatArray]
 
     @property
     def labels(self) -> tuple[str, ...]:
@@ -92,6 +99,17 @@ class RoadFourStudy:
             warnings.simplefilter("ignore", RuntimeWarning)
             rms = self.rms(label, kind)[:, SETTLE:]
             return np.asarray(np.nanmean(rms, axis=1), dtype=np.float64)
+
+    def run_mean_error(self, label: str, kind: str = "position") -> FloatArray:
+        """Per run, the mean error over the vehicles and steps ≥ SETTLE with a track, (runs,).
+
+        A per-run quantity, so that the runs give a t interval and methods a
+        paired difference (the RMS of [DH] eq 28 pools the runs).
+        """
+        errors = (self.position_error if kind == "position" else self.velocity_error)[label]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return np.asarray(np.nanmean(errors[:, :, SETTLE:], axis=(1, 2)), dtype=np.float64)
 
     def missing(self, label: str) -> float:
         """Share of (run, vehicle, step ≥ SETTLE) without the vehicle's track."""
@@ -145,17 +163,20 @@ def road_four_study(
     false: dict[str, FloatArray] = {}
     losses: dict[str, FloatArray] = {}
     false_counts: dict[str, FloatArray] = {}
+    scores: dict[str, dict[str, FloatArray]] = {"ospa": {}, "gospa": {}, "switches": {}}
     scenarios = [
         road_four_scenario(seed, n_steps=n_steps, clutter_rate=clutter_rate) for seed in seeds
     ]
     for label, (method, options) in methods.items():
         rows = []
+        measured = []
         for scenario in scenarios:
             config = road_config(
                 scenario, association_method=method, association_options=dict(options)
             )
             run = track_scenario(scenario, config)
             covered = _cover(scenario, run)
+            measured.append(tracking_scores(scenario, run, COVER_RADIUS, first_step=SETTLE))
             rows.append(
                 (
                     *_errors(scenario, run),
@@ -168,6 +189,9 @@ def road_four_study(
         false[label] = np.stack([row[2] for row in rows])
         losses[label] = np.array([row[3] for row in rows], dtype=np.float64)
         false_counts[label] = np.array([row[4] for row in rows], dtype=np.float64)
+        scores["ospa"][label] = np.array([m.ospa for m in measured])
+        scores["gospa"][label] = np.array([m.gospa for m in measured])
+        scores["switches"][label] = np.array([m.identity_switches for m in measured], dtype=float)
     return RoadFourStudy(
         seeds=tuple(seeds),
         n_steps=n_steps,
@@ -177,4 +201,7 @@ def road_four_study(
         false_assignments=false,
         losses=losses,
         false_track_counts=false_counts,
+        ospa=scores["ospa"],
+        gospa=scores["gospa"],
+        switches=scores["switches"],
     )

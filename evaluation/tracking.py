@@ -20,6 +20,7 @@ import numpy as np
 from core.arrays import FloatArray, IntArray
 from core.geometry import PolygonView
 from core.lifecycle import LifeCycleConfig
+from core.metrics import coverage, gospa, identity_switches, ospa
 from core.simulation.scenario import CLUTTER, Region, Scenario
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.models import ModelBank
@@ -105,6 +106,8 @@ class TrackedRun:
     detection_tracks : tuple of str or None
         The track it was assigned to (None: unassigned or a seed).
     measurements : ndarray, shape (m, 2)
+    scores : tuple of ndarray, shapes (t,)
+        The live tracks' scores L ([MTT] eq 16), aligned with ``track_ids``.
     """
 
     steps: IntArray
@@ -117,6 +120,7 @@ class TrackedRun:
     detection_targets: IntArray
     detection_tracks: tuple[str | None, ...]
     measurements: FloatArray
+    scores: tuple[FloatArray, ...] = ()
 
     def assigned(
         self, target: int, first_step: int = 0, last_step: int | None = None
@@ -173,6 +177,14 @@ class TrackedRun:
                 out[step] = betp[ids.index(track)]
         return out
 
+    def score_of(self, track: str, n_steps: int) -> FloatArray:
+        """The track's score after the last scan of every step, shape (n_steps,); NaN when absent."""
+        out = np.full(n_steps, np.nan)
+        for step, ids, scores in zip(self.steps.tolist(), self.track_ids, self.scores, strict=True):
+            if track in ids:
+                out[step] = scores[ids.index(track)]
+        return out
+
     def status_of(self, track: str) -> dict[int, tuple[str, str]]:
         """``{step: (status, reason)}`` of a track after the last scan of each step."""
         found: dict[int, tuple[str, str]] = {}
@@ -194,6 +206,65 @@ class TrackedRun:
         }
 
 
+@dataclass(frozen=True)
+class TrackingScores:
+    """EVALUATION's tracking metrics of one run, from the tracker's confirmed tracks.
+
+    Attributes
+    ----------
+    ospa : float
+        Time mean of the per-step OSPA (order 1, cut-off ``cutoff``) between the
+        positions of the confirmed (and coasting) tracks and of the live truths.
+    gospa : float
+        Time mean of the per-step GOSPA (α = 2, order 1, same cut-off).
+    identity_switches : int
+        :func:`core.metrics.identity_switches` of the per-step coverage.
+    cutoff : float
+        The cut-off c (m), also the coverage radius.
+    """
+
+    ospa: float
+    gospa: float
+    identity_switches: int
+    cutoff: float
+
+
+def tracking_scores(
+    scenario: Scenario, run: TrackedRun, cutoff: float, first_step: int = 2
+) -> TrackingScores:
+    """OSPA, GOSPA and identity switches of ``run`` from ``first_step`` on (after initiation)."""
+    last_scan: dict[int, int] = {}
+    for index, step in enumerate(run.steps.tolist()):
+        last_scan[step] = index
+    ospas: list[float] = []
+    gospas: list[float] = []
+    covered: list[dict[int, str | None]] = []
+    for step in sorted(last_scan):
+        if step < first_step:
+            continue
+        index = last_scan[step]
+        ids, statuses, states = run.track_ids[index], run.statuses[index], run.states[index]
+        rows = [r for r, status in enumerate(statuses) if status in ("confirmed", "coasting")]
+        estimates = states[rows][:, [0, 2]].reshape(-1, 2)
+        live = [truth for truth in scenario.truths if truth.alive(step)]
+        truths = np.array([truth.state_at(step)[[0, 2]] for truth in live]).reshape(-1, 2)
+        ospas.append(ospa(estimates, truths, cutoff))
+        gospas.append(gospa(estimates, truths, cutoff).distance)
+        covered.append(
+            coverage(
+                {truth.target_id: position for truth, position in zip(live, truths, strict=True)},
+                {ids[r]: estimates[i] for i, r in enumerate(rows)},
+                cutoff,
+            )
+        )
+    return TrackingScores(
+        ospa=float(np.mean(ospas)) if ospas else float("nan"),
+        gospa=float(np.mean(gospas)) if gospas else float("nan"),
+        identity_switches=identity_switches(covered),
+        cutoff=cutoff,
+    )
+
+
 def track_scenario(scenario: Scenario, config: LocalTrackerConfig) -> TrackedRun:
     """Feed every scan of ``scenario`` to a fresh tracker and record its outputs."""
     tracker = LocalTracker(config)
@@ -207,6 +278,7 @@ def track_scenario(scenario: Scenario, config: LocalTrackerConfig) -> TrackedRun
     det_targets: list[IntArray] = []
     det_tracks: list[str | None] = []
     measurements: list[FloatArray] = []
+    scores: list[FloatArray] = []
     for scan in scenario.scans:
         sensor = scan.sensor if scan.sensor in config.fields_of_view else None
         output = tracker.step(scan.time, scan.measurements, sensor=sensor)
@@ -215,6 +287,7 @@ def track_scenario(scenario: Scenario, config: LocalTrackerConfig) -> TrackedRun
         statuses.append(tuple(track.status.value for track in output.tracks))
         reasons.append(tuple(track.reason.value for track in output.tracks))
         states.append(np.array([track.state for track in output.tracks]).reshape(-1, 4))
+        scores.append(np.array([track.score for track in output.tracks], dtype=np.float64))
         rows = [
             np.full(3, np.nan) if track.pignistic is None else track.pignistic
             for track in output.tracks
@@ -240,6 +313,7 @@ def track_scenario(scenario: Scenario, config: LocalTrackerConfig) -> TrackedRun
         detection_targets=np.concatenate(det_targets).astype(np.int64),
         detection_tracks=tuple(det_tracks),
         measurements=np.concatenate(measurements).reshape(-1, 2),
+        scores=tuple(scores),
     )
 
 
@@ -247,8 +321,10 @@ __all__ = [
     "CLUTTER",
     "NO_TERMINATION",
     "TrackedRun",
+    "TrackingScores",
     "rectangle",
     "road_bank",
     "road_config",
     "track_scenario",
+    "tracking_scores",
 ]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from core.simulation import aircraft_scenario
 from evaluation.aircraft import aircraft_classification
 from evaluation.four_targets import threshold_sweep
 from evaluation.pedestrian import pedestrian_classification
@@ -73,17 +74,36 @@ def test_aircraft_credal_doubts_where_bayes_picks_a_side() -> None:
     before = result.steps < 50
     np.testing.assert_allclose(result.credal[:, before], 1 / 3, atol=0.1)
     assert result.manoeuvres == ((50, 54, "2g"), (70, 75, "4g"))
+    # The 20-run mean has no spread although each run has its own noise: the
+    # behaviour plausibilities are 0 or 1 (decisive likelihood ratios at 0.2 m²).
+    first, second = (aircraft_scenario(seed=seed).detections(2)[1] for seed in (0, 1))
+    assert np.abs(first - second).max() > 0.1
+    behaviours = result.behaviours[~np.isnan(result.behaviours)]
+    assert np.mean((behaviours < 1e-9) | (behaviours > 1 - 1e-9)) > 0.99
+    assert result.run_spread("credal") < 1e-6
+    np.testing.assert_array_equal(result.decision_steps("credal"), [70.0, 70.0])
 
 
 def test_pedestrian_discounting_follows_the_class_changes() -> None:
+    # [MTT]'s timing: the class change (the stop) at step 120.
     result = pedestrian_classification(seed=0)
     standard = result.traces["standard"]
-    assert np.isnan(standard.first_step_above(RAMBLER, after=60))  # Fig 20: never follows the stop
+    assert np.isnan(standard.first_step_above(RAMBLER, after=120))  # Fig 20: never follows the stop
+    undefined = standard.steps[np.isnan(standard.probabilities).any(axis=1)]
+    assert 120 <= undefined[0] <= 130  # "cannot even compute the pignistic probabilities after 120"
+    assert np.all(np.isnan(standard.probabilities[standard.steps >= undefined[0]]))
     instantaneous = result.traces["instantaneous 0.3"]
     assert instantaneous.first_step_above(SPORTSMAN, after=40) < 50  # Fig 21: the run
-    assert 60 < instantaneous.first_step_above(RAMBLER, after=60) < 100  # … and the stop
+    assert 120 < instantaneous.first_step_above(RAMBLER, after=120) < 239  # … and the stop
     cumulative = result.traces["cumulative 0.9, walks again"]
+    assert cumulative.first_step_above(RAMBLER, after=120) <= 125  # forgets the run at once
     assert cumulative.probabilities[-1, RAMBLER] == pytest.approx(0.5, abs=0.05)  # Fig 22
     again = result.traces["instantaneous 0.9, walks again"]
     assert again.probabilities[-1, RAMBLER] > 0.99  # Fig 23
+    assert [phase[:2] for phase in result.phases[:4]] == [
+        (1, 39),
+        (40, 119),
+        (120, 239),
+        (240, 299),
+    ]
     assert [phase[2] for phase in result.phases] == ["walk", "run", "stop", "walk"]

@@ -37,6 +37,8 @@ def test_the_registry_names_the_papers_figures() -> None:
         "road-four",
         "accelerating",
         "overtaking",
+        "mtt-scenes",
+        "hz-scale",
     }
     assert all(spec.name == name and spec.paper for name, spec in FIGURES.items())
     assert set(DRAWINGS) == set(CATALOGUE) == set(FIGURES)  # a drawing for every name

@@ -39,22 +39,37 @@ def test_close_pair_combined_is_low_and_closest_model_confuses_the_pair() -> Non
 def test_crossing_false_assignment_after_the_crossing_misleads_target_2_only() -> None:
     # [MTT] Fig 17–18 at σ² = 10 m²: false assignments from about step 36 (paper: 38);
     # target 1 stays fighter; target 2's doubt is spoilt towards bomber/fighter.
-    study = crossing_study(seeds=(0, 1), variances=(10.0,), example=(0, 10.0))
+    study = crossing_study(seeds=(0, 1), variances=(10.0,), examples=((0, 10.0, "closest_model"),))
     first = study.first_false["closest_model"][0]
     assert np.all((first >= 34) & (first <= 45))
     assert study.final_betp("closest_model", 1)[0, FIGHTER] > 0.99
     target_2 = study.final_betp("closest_model", 2)[0]
     assert target_2[LINER] < 0.1 and target_2[BOMBER] > 0.2 and target_2[FIGHTER] > 0.4
-    assert study.example.seed == 0 and len(study.example.detection_y) == 120
+    assert study.examples[0].seed == 0 and len(study.examples[0].detection_y) == 120
     # Surprise: the model-combined distance loses the fighter at its 4g manoeuvre.
     assert study.alive_at_end("combined", 1)[0] == 0.0
     assert np.all(study.first_false["combined"][0] <= 24)
 
 
 def test_crossing_low_noise_keeps_identities_and_perfect_doubt() -> None:
-    study = crossing_study(seeds=(0,), variances=(0.2,), imm_distances=("closest_model",))
+    study = crossing_study(
+        seeds=(0,), variances=(0.2,), imm_distances=("closest_model",), examples=()
+    )
     assert np.isnan(study.first_false["closest_model"][0, 0])
     np.testing.assert_allclose(study.final_betp("closest_model", 2)[0], 1 / 3, atol=1e-6)
+    # Two well separated tracks, no switch; fighter decided at its first 4g step.
+    assert study.switches["closest_model"][0, 0] == 0
+    assert study.fighter_delay["closest_model"][0, 0] == 0
+    assert 0.0 < study.ospa["closest_model"][0, 0] < 1.0  # about the 0.45 m noise
+
+
+def test_crossing_paper_values_lose_the_fighter_at_its_manoeuvre() -> None:
+    # [MTT]'s own values (0.2 m², model-combined distance): the fighter's track is
+    # lost at the 4g step, so its class is never decided; target 2 keeps perfect doubt.
+    study = crossing_study(seeds=(0,), variances=(0.2,), imm_distances=("combined",), examples=())
+    assert study.alive_at_end("combined", 1)[0] == 0.0
+    assert np.isnan(study.fighter_delay["combined"][0, 0])
+    np.testing.assert_allclose(study.final_betp("combined", 2)[0], 1 / 3, atol=1e-6)
 
 
 def test_road_four_scenario_matches_its_description() -> None:
