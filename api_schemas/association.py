@@ -1,4 +1,4 @@
-"""Association methods and their options (ALGORITHMS.md §3).
+"""Association methods and their options (docs/algorithms.md §3).
 
 One options model holds every option name the API knows; which ones apply
 depends on the method (:data:`METHOD_OPTIONS`). Giving an option that does
@@ -63,7 +63,7 @@ METHOD_DEFAULTS: dict[str, dict[str, object]] = {
     "dang_han": {"alpha": 0.9, "distance": "mean"},
     "cheap_jpda": {"gate_probability": 0.999},
 }
-"""Defaults filled into a resolved configuration (ALGORITHMS.md §3, §3.7).
+"""Defaults filled into a resolved configuration (docs/algorithms.md §3, §3.7).
 
 A default that is one of an exclusive pair is filled only when its partner
 is unset (``gnn`` with a ``threshold`` gets no ``gate_probability``).

@@ -36,7 +36,7 @@ Timestamp = Annotated[datetime, Field(strict=False)]
 """A UTC timestamp (ISO 8601 on the wire; parsed from text even in strict models)."""
 
 MAX_CLASSES = 20
-"""Class frames have at most 20 labels (ALGORITHMS.md §1)."""
+"""Class frames have at most 20 labels (docs/algorithms.md §1)."""
 
 
 class WireModel(BaseModel):

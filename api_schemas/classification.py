@@ -17,7 +17,7 @@ from api_schemas.base import MAX_CLASSES, Label, UnitFloat, WireModel
 from api_schemas.limits import MAX_FOCAL_SETS, bounded
 
 MASS_SUM_TOLERANCE = 1e-9
-"""Masses must sum to 1 within this tolerance (ALGORITHMS.md §1)."""
+"""Masses must sum to 1 within this tolerance (docs/algorithms.md §1)."""
 
 FocalSetLabels = Annotated[list[Label], Field(min_length=1, max_length=MAX_CLASSES)]
 

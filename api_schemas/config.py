@@ -303,7 +303,7 @@ class StateFusionConfig(WireModel):
 
 
 class TrackThresholds(WireModel):
-    """Track life cycle of both layers (ALGORITHMS.md §4, §7.3): score thresholds and termination.
+    """Track life cycle of both layers (docs/algorithms.md §4, §7.3): score thresholds and termination.
 
     The wire face of ``core.lifecycle.LifeCycleConfig``: same names, defaults
     and ranges (a test pins them together).

@@ -1,4 +1,4 @@
-"""The fused result of one input (ALGORITHMS.md §6 "Fused output")."""
+"""The fused result of one input (docs/algorithms.md §6 "Fused output")."""
 
 from __future__ import annotations
 

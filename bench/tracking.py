@@ -3,7 +3,7 @@
 For 10, 100 and 1000 tracks, times one step of :mod:`core.tracking.imm` on all
 tracks at once and, in the same run, filterpy's ``IMMEstimator`` looped over
 the same tracks with the same measurements. Prints the machine. Floor
-(ALGORITHMS.md / issue 4): 1000 tracks ≤ 50 ms per step.
+(docs/algorithms.md / issue 4): 1000 tracks ≤ 50 ms per step.
 
 Then one full :class:`~core.tracking.tracker.LocalTracker` scan (predict,
 closest-model gating, GNN, update, score, life cycle, initiation) on the same

@@ -61,7 +61,7 @@ class TotalConflict(CredalError):  # noqa: N818 - the name of the state in the p
 
 
 class StaleReport(CredalError):  # noqa: N818 - a state of the input, named as the API says
-    """A report is not newer than the sensor's previous one (ALGORITHMS.md §6.4).
+    """A report is not newer than the sensor's previous one (docs/algorithms.md §6.4).
 
     Attributes
     ----------

@@ -1,4 +1,4 @@
-"""Fields of view, blind zones and occlusion ([HZ] §2.1, §5; ALGORITHMS.md §4).
+"""Fields of view, blind zones and occlusion ([HZ] §2.1, §5; docs/algorithms.md §4).
 
 A sensor sees a region of the plane: a *sector* (origin, heading, half-angle,
 minimum and maximum range) or a *polygon*. For a track position the

@@ -1,6 +1,6 @@
 """Track life cycle: status, reasons, SPRT score and gate-emptiness termination.
 
-Shared by the local tracker (ALGORITHMS.md §4) and the fusion engine (§6).
+Shared by the local tracker (docs/algorithms.md §4) and the fusion engine (§6).
 
 Track score ([MTT] §4.3, eq 16; Blackman & Popoli pp. 327-334), a sequential
 probability ratio test on "true track" vs "false track":

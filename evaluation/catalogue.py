@@ -54,7 +54,7 @@ CATALOGUE: dict[str, FigureEntry] = {
         ),
         FigureEntry(
             "unit-study",
-            "ALGORITHMS.md §3.3",
+            "docs/algorithms.md §3.3",
             "hachour density vs relative vs gnn/denoeux in metres and kilometres",
         ),
         FigureEntry(

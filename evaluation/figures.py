@@ -363,7 +363,7 @@ def _pedestrian_panels(result: PedestrianClassification) -> Figure:
 
 # ---------------------------------------------------------------- unit study
 def draw_unit_study(reduced: bool, echo: Echo) -> Figure:
-    """The unit study: hachour across length units and noise levels (ALGORITHMS.md §3.3)."""
+    """The unit study: hachour across length units and noise levels (docs/algorithms.md §3.3)."""
     seeds = _seeds(10, reduced)
     n_steps = 4 if reduced else 20
     echo(f"unit-study: seeds {list(seeds)}, {n_steps} steps")

@@ -6,7 +6,7 @@ sensor 1's estimates are matched to sensor 2's at every step
 ``mean`` covariance). ``gnn`` is swept over its maximum distance λ,
 ``denoeux`` over γ = ln 2 / λ ([T2T] eq 11, α = 1), and the parameterless
 ``hachour`` is run once per realisation with each ``likelihood`` reading
-(ALGORITHMS.md §3.3). Rates are per noise realisation (one seed each) so the
+(docs/algorithms.md §3.3). Rates are per noise realisation (one seed each) so the
 caller can average them as the paper does ("averaged over 10 noise
 realisations").
 

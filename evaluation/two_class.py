@@ -4,14 +4,14 @@ Two nearby targets of different classes (:func:`core.simulation.two_class.t2t_tw
 sensor 1's estimates are matched to sensor 2's at every step
 (:mod:`evaluation.pairing`, ``mean`` covariance of [T2T] eq 2).
 "Mono-information" uses the distance only, "multi-information" adds the
-class conflict of the two tracks' mass functions (ALGORITHMS.md §3.6:
+class conflict of the two tracks' mass functions (docs/algorithms.md §3.6:
 ``denoeux`` adds ln(1 − K) to its weight, ``hachour`` and ``mercier`` multiply
 the pair's plausibility by 1 − K). ``gnn`` cannot use classes ([T2T] §4).
 
 "In this simulation, optimal parameters λ and γ are used": λ of ``gnn`` and
 of ``denoeux`` (γ = ln 2 / λ) is the one with the lowest mean mono-information
 rate on a grid, and is kept for the multi-information run; the session
-default (``denoeux``, gate 0.999, α 1, ``sum``, ALGORITHMS.md §3.7) is run
+default (``denoeux``, gate 0.999, α 1, ``sum``, docs/algorithms.md §3.7) is run
 untuned beside it. ``hachour`` with
 ``likelihood="density"`` is run on the scene in metres and in kilometres
 (its decisions depend on the unit, §3.3).

@@ -1,4 +1,4 @@
-"""Unit study: is the "parameterless" ``hachour`` unit-free? (ALGORITHMS.md §3.3, EVALUATION.md).
+"""Unit study: is the "parameterless" ``hachour`` unit-free? (docs/algorithms.md §3.3, EVALUATION.md).
 
 [T2T] eq 4 turns a Mahalanobis distance D into the Gaussian density
 ``G = exp(−D/2) / sqrt((2π)^q |C|)`` and uses it as a plausibility. D does not

@@ -1,7 +1,7 @@
 """docs/algorithms.md and docs/design.md have every section the code cites.
 
-The code cites ``ALGORITHMS.md §<n>`` (or algorithms.md) and
-``DESIGN.md "<title>"`` (or design.md); each must name a heading of the
+The code cites ``docs/algorithms.md §<n>`` (or algorithms.md) and
+``docs/design.md "<title>"`` (or design.md); each must name a heading of the
 repository's own document, so that no citation points at nothing.
 """
 

@@ -1,4 +1,4 @@
-"""Track-to-track and measurement-to-track association (ALGORITHMS.md §3).
+"""Track-to-track and measurement-to-track association (docs/algorithms.md §3).
 
 One module per method — :mod:`~core.association.gnn`,
 :mod:`~core.association.denoeux`, :mod:`~core.association.hachour`,

@@ -1,6 +1,6 @@
 """Maximum-weight partial matching on a sparse bipartite graph, cluster by cluster.
 
-Every method of ALGORITHMS.md §3 that solves an assignment reduces to: given
+Every method of docs/algorithms.md §3 that solves an assignment reduces to: given
 candidate pairs (ℓ, t) with a *gain* g > 0 (what matching ℓ with t adds to
 the objective compared with leaving both unmatched), pick a partial matching
 maximising Σ g. Pairs with g ≤ 0 never help and are dropped first.

@@ -1,6 +1,6 @@
 """The entry point: :func:`associate` dispatches to one method module.
 
-Defaults (ALGORITHMS.md §3.7): track-to-track association uses ``denoeux``
+Defaults (docs/algorithms.md §3.7): track-to-track association uses ``denoeux``
 with ``gate_probability`` 0.999, α = 1 and the ``sum`` covariance;
 local tracking (measurement-to-track) uses ``gnn`` with ``gate_probability``
 0.999 (:func:`associate_measurements`).
@@ -49,7 +49,7 @@ DEFAULT_DISTANCE: dict[str, str] = {
 }
 """Track-to-track distance of each method when the caller names none: the
 ``mean`` covariance of [T2T] eq 1-2 for the methods compared there, ``sum``
-for the session default ``denoeux`` (ALGORITHMS.md §3.7)."""
+for the session default ``denoeux`` (docs/algorithms.md §3.7)."""
 LOCAL_TRACKING_DEFAULT = ("gnn", {"gate_probability": 0.999}, "innovation")
 
 

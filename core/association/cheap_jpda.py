@@ -1,4 +1,4 @@
-"""Cheap JPDA weights of Fitzgerald ([DH] §2, eq 16; ALGORITHMS.md §3.5).
+"""Cheap JPDA weights of Fitzgerald ([DH] §2, eq 16; docs/algorithms.md §3.5).
 
 A measurement-to-track comparison baseline, not a fusion method. For the
 gated pairs (track t, measurement j) with Gaussian likelihood

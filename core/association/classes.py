@@ -1,4 +1,4 @@
-"""Class information as association evidence ([T2T] §2 Fig 2, §4 Fig 6; ALGORITHMS.md §3.6).
+"""Class information as association evidence ([T2T] §2 Fig 2, §4 Fig 6; docs/algorithms.md §3.6).
 
 When both sides carry class mass functions on one class frame, their conflict
 ``K = (m₁ ∩ m₂)(∅)`` is evidence against the association of the pair:

@@ -1,4 +1,4 @@
-"""Credal association with parameter γ ([T2T] §4 and its ref [7]; ALGORITHMS.md §3.2).
+"""Credal association with parameter γ ([T2T] §4 and its ref [7]; docs/algorithms.md §3.2).
 
 Per pair, evidence on {associated (1), not (0)}:
 ``m({1}) = α e^{−γD}``, ``m({0}) = α (1 − e^{−γD})``, ``m(Θ) = 1 − α``. Its

@@ -1,4 +1,4 @@
-"""Global Nearest Neighbour ([MTT] §4.2 Table 1; [T2T] §4; ALGORITHMS.md §3.1).
+"""Global Nearest Neighbour ([MTT] §4.2 Table 1; [T2T] §4; docs/algorithms.md §3.1).
 
 Cost matrix ``[D | diag(T)]``: a known item ℓ is matched with an incoming item
 t at cost D, or left unmatched at cost T. Minimising the total cost is

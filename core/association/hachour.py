@@ -1,4 +1,4 @@
-"""Parameterless credal assignment ([T2T] §3, the seeds' own method; ALGORITHMS.md §3.3).
+"""Parameterless credal assignment ([T2T] §3, the seeds' own method; docs/algorithms.md §3.3).
 
 For each incoming item t and known item ℓ (eq 3–4)::
 

@@ -1,6 +1,6 @@
 """Mercier's credal assignment: pairwise evidence, exact BetP, Hungarian step.
 
-([T2T] ref [8]; ALGORITHMS.md §3.4.) For each incoming item t, the pairwise
+([T2T] ref [8]; docs/algorithms.md §3.4.) For each incoming item t, the pairwise
 sources (a_ℓ, b_ℓ, c_ℓ) of its candidates ℓ (:mod:`core.association.pairwise_evidence`)
 are combined conjunctively on Θ_t = {Y_1..Y_n, *}; BetP_t is computed exactly
 in O(n²) (``pairwise_evidence_betp_rows``, §1.1). The assignment then

@@ -1,4 +1,4 @@
-"""Pairwise evidence of the Royère / Mercier / Dang–Han family ([DH] §3, ALGORITHMS.md §3.4).
+"""Pairwise evidence of the Royère / Mercier / Dang–Han family ([DH] §3, docs/algorithms.md §3.4).
 
 For an item i and a candidate partner j, a mass function on {Y_j, ¬Y_j}
 ("i comes from j" or not): ``a`` on Y_j, ``b`` on ¬Y_j, ``c = 1 − a − b`` on Θ.
@@ -44,7 +44,7 @@ EvidenceModel = Callable[[FloatArray, float], Evidence]
 
 
 def fuzzy_evidence(distance: FloatArray, alpha: float) -> Evidence:
-    """[DH] eq 23–27 as read in ALGORITHMS.md §3.4: s = e^{−D/2}, a = α(2s−1)⁺, b = α(1−2s)⁺."""
+    """[DH] eq 23–27 as read in docs/algorithms.md §3.4: s = e^{−D/2}, a = α(2s−1)⁺, b = α(1−2s)⁺."""
     similarity = np.exp(-0.5 * distance)
     support = alpha * np.maximum(0.0, 2.0 * similarity - 1.0)
     refute = alpha * np.maximum(0.0, 1.0 - 2.0 * similarity)

@@ -1,4 +1,4 @@
-"""The one result type of every association method (ALGORITHMS.md §3).
+"""The one result type of every association method (docs/algorithms.md §3).
 
 Rows are the known items ℓ (tracks with predicted estimates), columns the
 incoming items t (tracks of a report, or measurements). The score matrix is

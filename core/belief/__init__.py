@@ -1,4 +1,4 @@
-"""Belief functions on finite frames (ALGORITHMS.md §1).
+"""Belief functions on finite frames (docs/algorithms.md §1).
 
 Frames, sparse mass functions, Pl / Bel / BetP, the conjunctive and Dempster
 rules, discounting, the GBT with its exact O(N²) pignistic probabilities,

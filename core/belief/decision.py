@@ -1,4 +1,4 @@
-"""The pignistic decision, and when it admits doubt (DESIGN.md "Decisions that admit doubt").
+"""The pignistic decision, and when it admits doubt (docs/design.md "Decisions that admit doubt").
 
 The decision is the class of largest BetP ([MTT] §2.3: decide on the
 pignistic probability). It is not always a class:

@@ -2,7 +2,7 @@
 
 A frame is an ordered tuple of distinct labels; a subset is an integer bit mask
 over that order (bit ``i`` set means label ``i`` is in the subset), as
-ALGORITHMS.md §1 fixes.
+docs/algorithms.md §1 fixes.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ GBT ([MTT] eq 10, [T2T] eq 6): from singleton plausibilities ``p_k``,
 ``m(A) = Π_{k∈A} p_k Π_{k∉A} (1 − p_k)``.
 
 That mass is the law of a random set containing each element independently
-with probability ``p_k``, so (ALGORITHMS.md §1.1)
+with probability ``p_k``, so (docs/algorithms.md §1.1)
 
     BetP(k) ∝ p_k ∫₀¹ Π_{j≠k} (1 − p_j + p_j t) dt,
 
@@ -219,7 +219,7 @@ def pairwise_evidence_betp_rows(
     ``a_k`` (``support``) is the mass on Y_k ("comes from k"), ``b_k``
     (``refute``) the mass on ¬Y_k and ``c_k`` (``ignorance``) the mass on Θ.
     Their conjunctive combination over k lives on Θ = {Y_1 .. Y_n, *}.
-    With ``g_k(t) = b_k + c_k t`` (ALGORITHMS.md §1.1)::
+    With ``g_k(t) = b_k + c_k t`` (docs/algorithms.md §1.1)::
 
         BetP(*)   ∝ ∫ Π_k g_k(t) dt
         BetP(Y_j) ∝ a_j Π_{k≠j} (b_k + c_k) + c_j ∫ t Π_{k≠j} g_k(t) dt

@@ -1,4 +1,4 @@
-"""Sparse mass functions on a frame ([MTT] §2.1, ALGORITHMS.md §1).
+"""Sparse mass functions on a frame ([MTT] §2.1, docs/algorithms.md §1).
 
 Only focal sets are stored: an array of subset masks (sorted, unique) and an
 array of their masses. The empty set (mask 0) may carry mass: that is the

@@ -7,8 +7,8 @@ handful of numpy operations instead of a Python loop over
 :class:`~core.belief.MassFunction` objects.
 
 Behaviour and class frames are tiny (3 behaviours, 2–3 classes in the presets
-of ALGORITHMS.md §4), so each track's mass lives in a **dense** row over the
-2^n subsets of the frame, in bit-mask order (ALGORITHMS.md §1 forbids 2^n
+of docs/algorithms.md §4), so each track's mass lives in a **dense** row over the
+2^n subsets of the frame, in bit-mask order (docs/algorithms.md §1 forbids 2^n
 arrays only where an operation does not need them: these frames are capped
 by :data:`MAX_DENSE_FRAME`). Per step, vectorised over tracks:
 

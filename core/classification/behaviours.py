@@ -9,7 +9,7 @@ plausibility ([MTT] eq 22, credal) are the same number::
 
 Everything is computed in the log domain, vectorised over tracks.
 
-- μ_j are the IMM's **updated** mode probabilities of the step (ALGORITHMS.md
+- μ_j are the IMM's **updated** mode probabilities of the step (docs/algorithms.md
   §5: with the predicted ones, models that do not fit dilute Λ₁ at every step).
 - **Reading:** when every model of a behaviour has μ_j = 0 exactly (log μ = −inf),
   eq 20 is 0/0; we then take μ' uniform over the behaviour.

@@ -1,4 +1,4 @@
-"""Credal classification from kinematics ([MTT] §5.2, ALGORITHMS.md §5).
+"""Credal classification from kinematics ([MTT] §5.2, docs/algorithms.md §5).
 
 At each step where a track is updated with a measurement:
 

@@ -1,4 +1,4 @@
-"""Distances between estimates, over gated pairs only (ALGORITHMS.md §2).
+"""Distances between estimates, over gated pairs only (docs/algorithms.md §2).
 
 - :class:`Estimates` — a validated list of states with covariances (or of
   measurements);

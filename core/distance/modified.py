@@ -6,7 +6,7 @@ well-localised tracks ([HZ] §3.1, Fig 1). The modified distance stays close to
 the Mahalanobis distance while the covariance is near its steady state and
 tends to a scaled Euclidean distance as it grows.
 
-**Reading** (ALGORITHMS.md §2; [HZ] writes the relation with raw
+**Reading** (docs/algorithms.md §2; [HZ] writes the relation with raw
 determinants, ``x = k (y / (β|P_ss|))^α + y / |P_ss|``, whose units do not
 match): the size of a covariance S relative to its steady state S_ss is
 

@@ -1,4 +1,4 @@
-"""Mahalanobis distances between two lists, over gated pairs only (ALGORITHMS.md §2).
+"""Mahalanobis distances between two lists, over gated pairs only (docs/algorithms.md §2).
 
 For estimates (x₁, P₁) of the known side and (x₂, P₂) of the incoming side,
 Δ = x₁ − x₂ and ``D = Δᵀ C⁻¹ Δ`` with
@@ -107,7 +107,7 @@ def chi2_quantile(probability: float, dimension: int) -> float:
 
 
 def threshold_from_probability(probability: float, dimension: int, model: DistanceModel) -> float:
-    """T with P(D ≤ T) = probability for a true pair (ALGORITHMS.md §3.1).
+    """T with P(D ≤ T) = probability for a true pair (docs/algorithms.md §3.1).
 
     ``chi2.ppf(p, q)``, doubled for the ``mean`` covariance whose C is halved.
     The modified distance is ≥ D, so the same T is a (tighter) gate there.

@@ -1,1 +1,1 @@
-"""Track-to-track fusion ([T2T] Fig 1-2, ALGORITHMS.md §6)."""
+"""Track-to-track fusion ([T2T] Fig 1-2, docs/algorithms.md §6)."""

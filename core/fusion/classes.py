@@ -1,4 +1,4 @@
-"""Class fusion from sensor reports (ALGORITHMS.md §5 "From sensor reports", §6 step 6).
+"""Class fusion from sensor reports (docs/algorithms.md §5 "From sensor reports", §6 step 6).
 
 A sensor track may carry a class mass function (the sensor's own cumulative
 belief) or class likelihoods (one step of evidence). Per fused track:

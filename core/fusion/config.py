@@ -1,4 +1,4 @@
-"""The validated configuration of a fusion session (DESIGN.md "Session config").
+"""The validated configuration of a fusion session (docs/design.md "Session config").
 
 Plain frozen dataclasses: ``app`` translates the wire model into these; the
 core never sees pydantic.
@@ -34,7 +34,7 @@ class SensorSpec:
     p_detect : P_D, used by the track score.
     fov : its field of view, or None if it sees everywhere.
     tracker : for a sensor that sends raw detections, its local tracker's
-        configuration (the session tracks them, ALGORITHMS.md §4); None for a
+        configuration (the session tracks them, docs/algorithms.md §4); None for a
         sensor that sends track lists.
     """
 
@@ -63,7 +63,7 @@ class FusionConfig:
     sensors : the session's sensors, in a fixed order.
     classes : the class frame, or None for a session without classification.
     association_method, association_options, distance : track-to-track association
-        (defaults of ALGORITHMS.md §3.7: ``denoeux``, gate probability 0.999, α = 1, ``sum``);
+        (defaults of docs/algorithms.md §3.7: ``denoeux``, gate probability 0.999, α = 1, ``sum``);
         ``distance=None`` takes the method's own (``core.association.DEFAULT_DISTANCE``).
     track_continuity : a report track that keeps the id under which its sensor
         last reported a live fused track stays with it while it passes a loose χ²

@@ -1,9 +1,9 @@
 """From a detecting sensor's local tracks to a track list for the fusion step.
 
 A sensor that sends raw detections is tracked by the session itself
-(:class:`~core.tracking.tracker.LocalTracker`, ALGORITHMS.md §4); its
+(:class:`~core.tracking.tracker.LocalTracker`, docs/algorithms.md §4); its
 *confirmed* local tracks — the ones updated by a detection in this scan —
-then enter the same fusion step as a sensor's own track list (DESIGN.md "The
+then enter the same fusion step as a sensor's own track list (docs/design.md "The
 session engine"). Tentative tracks are not reported (they may be clutter),
 nor coasting ones (a prediction is not an observation: the fused track counts
 the miss instead).

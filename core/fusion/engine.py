@@ -1,8 +1,8 @@
 """The session engine: one deterministic state machine per fusion scene.
 
 Built from a :class:`~core.fusion.config.FusionConfig`, it takes one input
-at a time and returns the fused result of that step (DESIGN.md "The session
-engine"; ALGORITHMS.md §6). Same configuration + same inputs in the same
+at a time and returns the fused result of that step (docs/design.md "The session
+engine"; docs/algorithms.md §6). Same configuration + same inputs in the same
 order → bit-identical outputs. Its whole state exports to plain data
 (:meth:`SessionEngine.export`) and restores exactly (:meth:`SessionEngine.restore`).
 
@@ -195,7 +195,7 @@ class SessionEngine:
 
     @contextmanager
     def _transaction(self, tracker: LocalTracker | None = None) -> Iterator[None]:
-        """A step either succeeds whole or changes nothing (DESIGN.md "The session engine").
+        """A step either succeeds whole or changes nothing (docs/design.md "The session engine").
 
         Each track's fields are checkpointed (:meth:`FusedTrack.checkpoint`: its
         containers are only ever replaced), as are the counters, the table's

@@ -1,7 +1,7 @@
 """The fused tracks' motion model on the session's state layout.
 
 A session names which state components are positions and which are their
-velocities (DESIGN.md "Session config"). Between reports the fused tracks
+velocities (docs/design.md "Session config"). Between reports the fused tracks
 are predicted with, per position axis, the discretised continuous white-noise
 acceleration model of spectral density ``q`` (Bar-Shalom, Li & Kirubarajan
 §6.2.2): ``F = [[1, Δt], [0, 1]]``, ``Q = q [[Δt³/3, Δt²/2], [Δt²/2, Δt]]``.
@@ -13,7 +13,7 @@ constant-velocity model of a session that tracks detections without a preset
 closed-form step.
 Components that are neither positions nor velocities are kept constant.
 
-Prediction backwards in time (a late report, ALGORITHMS.md §6.4) uses
+Prediction backwards in time (a late report, docs/algorithms.md §6.4) uses
 ``F(Δt)`` with Δt < 0 and adds ``Q(|Δt|)``: the uncertainty grows in both
 directions.
 """

@@ -58,7 +58,7 @@ class Source:
 
 @dataclass(frozen=True)
 class FusedTrackView:
-    """One fused track as a step reports it (ALGORITHMS.md §6 "Fused output")."""
+    """One fused track as a step reports it (docs/algorithms.md §6 "Fused output")."""
 
     id: str
     status: TrackStatus

@@ -1,4 +1,4 @@
-"""Fusion of several sensors' estimates of one object (ALGORITHMS.md §6 step 4).
+"""Fusion of several sensors' estimates of one object (docs/algorithms.md §6 step 4).
 
 Each fused track keeps the latest estimate of every sensor that reports it;
 its state is the fusion of those estimates (already predicted to a common

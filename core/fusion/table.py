@@ -3,7 +3,7 @@
 One row per fused track, one slot per sensor (in the configuration's order):
 states (R, S, d), covariances (R, S, d, d), report times (R, S) and a
 ``present`` mask. :meth:`EstimateTable.fused_at` predicts the present slots
-of the rows asked for to a time and fuses them (ALGORITHMS.md §6 step 4,
+of the rows asked for to a time and fuses them (docs/algorithms.md §6 step 4,
 ``core.fusion.state``).
 
 What it computed at the last :data:`KEPT_TIMES` times asked for — every

@@ -1,4 +1,4 @@
-"""Local tracking from detections (ALGORITHMS.md §4): models, presets, the batched IMM, the tracker."""
+"""Local tracking from detections (docs/algorithms.md §4): models, presets, the batched IMM, the tracker."""
 
 from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState, IMMUpdate, IMMUpdater
 from core.tracking.initiator import pair_seeds, single_point_initiation, two_point_initiation

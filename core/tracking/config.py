@@ -1,8 +1,8 @@
 """The validated configuration of one sensor system's :class:`~core.tracking.tracker.LocalTracker`.
 
-Plain frozen dataclasses, no web types (ALGORITHMS.md §4). Every option the
+Plain frozen dataclasses, no web types (docs/algorithms.md §4). Every option the
 papers leave open is a named field here; the defaults are the ones of
-ALGORITHMS.md §3.7 and §4.
+docs/algorithms.md §3.7 and §4.
 
 Readings
 --------
@@ -87,7 +87,7 @@ CHEAP_JPDA = "cheap_jpda"
 
 @dataclass(frozen=True)
 class ClassificationOptions:
-    """Credal kinematic classification of the tracks ([MTT] §5.2, ALGORITHMS.md §5).
+    """Credal kinematic classification of the tracks ([MTT] §5.2, docs/algorithms.md §5).
 
     Attributes
     ----------

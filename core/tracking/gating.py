@@ -1,4 +1,4 @@
-"""Measurement-to-track gating of IMM tracks, for any association method (ALGORITHMS.md §4).
+"""Measurement-to-track gating of IMM tracks, for any association method (docs/algorithms.md §4).
 
 An IMM track predicts one ẑ_j, S_j per model j. The pair (track t,
 detection i) is gated and scored ([MTT] eq 15) with

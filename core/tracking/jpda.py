@@ -1,4 +1,4 @@
-"""The cheap JPDA baseline of [DH] §2 (Fitzgerald), as an IMM update (ALGORITHMS.md §3.5).
+"""The cheap JPDA baseline of [DH] §2 (Fitzgerald), as an IMM update (docs/algorithms.md §3.5).
 
 Soft association weights ([DH] eq 16)::
 

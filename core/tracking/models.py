@@ -433,7 +433,7 @@ class LinearMeasurementModel:
 
 
 def mode_transition_matrix(n_models: int, stay: float = 0.95) -> FloatArray:
-    """``stay`` on the diagonal, the rest spread evenly over the other modes (ALGORITHMS.md §4)."""
+    """``stay`` on the diagonal, the rest spread evenly over the other modes (docs/algorithms.md §4)."""
     if n_models < 1:
         raise ModelConfigError("a model bank needs at least one model")
     if not (np.isfinite(stay) and 0.0 <= stay <= 1.0):

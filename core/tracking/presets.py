@@ -1,4 +1,4 @@
-"""Presets that reproduce the papers' model banks, behaviours and classes (ALGORITHMS.md §4).
+"""Presets that reproduce the papers' model banks, behaviours and classes (docs/algorithms.md §4).
 
 ``aircraft`` ([MTT] §6.1)
     ΔT = 1 s, Q = 0.005 B Bᵀ, R = 0.2 I, H picks x, y; 13 acceleration inputs

@@ -1,4 +1,4 @@
-"""The contract-by-example bodies of DESIGN.md, shared by the API tests."""
+"""The contract-by-example bodies of docs/design.md, shared by the API tests."""
 
 from __future__ import annotations
 

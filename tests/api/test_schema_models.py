@@ -1,4 +1,4 @@
-"""The wire models accept DESIGN.md's examples and resolve defaults."""
+"""The wire models accept docs/design.md's examples and resolve defaults."""
 
 from __future__ import annotations
 

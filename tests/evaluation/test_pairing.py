@@ -68,7 +68,7 @@ def _true_pair_distances(pair_states: tuple[np.ndarray, np.ndarray, np.ndarray])
 
 def test_hachour_density_in_metres_matches_exactly_the_pairs_inside_its_implicit_gate() -> None:
     # Targets 40 m apart: no competition, so a pair is matched iff its Pl > 1/2, i.e. iff
-    # D < 2 ln 2 − q ln 2π − ln|C| (ALGORITHMS.md §3.3) — at σ = 0.5 m that is D < 2.35.
+    # D < 2 ln 2 − q ln 2π − ln|C| (docs/algorithms.md §3.3) — at σ = 0.5 m that is D < 2.35.
     sigma = 0.5
     pairs = list_pairs(t2t_four(seed=2, position_sigma=sigma, separation=40.0, n_steps=40).reports)
     gate = implicit_gate(sigma)

@@ -1,4 +1,4 @@
-"""Mercier's BetP (and Dang–Han's beliefs) at any frame size (ALGORITHMS.md §1.1, §3.4).
+"""Mercier's BetP (and Dang–Han's beliefs) at any frame size (docs/algorithms.md §1.1, §3.4).
 
 The normaliser 1 − m(∅) = Σ_j a_j Π_{k≠j}(1 − a_k) + Π_k (b_k + c_k) has one
 factor per candidate: on a dense 1000 × 1000 problem it is ≈ 0.3^1000 and

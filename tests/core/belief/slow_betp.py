@@ -66,7 +66,7 @@ def slow_pairwise_evidence_betp_rows(
     ``a_k`` (``support``) is the mass on Y_k ("comes from k"), ``b_k``
     (``refute``) the mass on ¬Y_k and ``c_k`` (``ignorance``) the mass on Θ.
     Their conjunctive combination over k lives on Θ = {Y_1 .. Y_n, *}.
-    With ``g_k(t) = b_k + c_k t`` (ALGORITHMS.md §1.1)::
+    With ``g_k(t) = b_k + c_k t`` (docs/algorithms.md §1.1)::
 
         BetP(*)   ∝ ∫ Π_k g_k(t) dt
         BetP(Y_j) ∝ a_j Π_{k≠j} (b_k + c_k) + c_j ∫ t Π_{k≠j} g_k(t) dt

@@ -1,4 +1,4 @@
-"""The engine's fused state on [T2T] scenario 1 (``t2t-four``), against numpy (ALGORITHMS.md §6.4).
+"""The engine's fused state on [T2T] scenario 1 (``t2t-four``), against numpy (docs/algorithms.md §6.4).
 
 Each two-source fused track is recomputed from the sensors' latest reported
 estimates alone: both predicted to the step time with the CV model of §7.1

@@ -191,7 +191,7 @@ def test_modified_distance_prevents_observation_stealing() -> None:
 
 
 def test_modified_distance_delays_stealing_under_the_reading() -> None:
-    """What the Reading of ALGORITHMS.md §2 cannot do: v grows as β (u/k)^(1/α) ∝ u^(1/4)
+    """What the Reading of docs/algorithms.md §2 cannot do: v grows as β (u/k)^(1/α) ∝ u^(1/4)
     without bound, so a track that coasts long enough steals with either distance.
 
     Seed 3 run for 20 s: plain first steals at step 115, modified at step 166
