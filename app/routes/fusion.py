@@ -153,13 +153,25 @@ async def list_fused_tracks(
 @router.get(
     "/{sid}/tracks/{tid}",
     response_model=FusedTrackDetail,
-    responses=problem_responses(401, 403, 404, 503),
+    responses=problem_responses(401, 403, 404, 422, 503),
 )
 async def get_fused_track(
-    tid: TrackId, session: CurrentSessionDep, registry: RegistryDep
+    tid: TrackId,
+    session: CurrentSessionDep,
+    registry: RegistryDep,
+    frame: OutputFrame = "session",
 ) -> PlainJSONResponse:
-    """One live fused track with its recent history (fused states, oldest first)."""
+    """One live fused track with its recent history (fused states, oldest first).
+
+    ``frame=geodetic`` adds ``geodetic: {lat, lon, alt}`` to the track (needs
+    the session's ``origin``, else 422); the history stays in the session frame.
+    """
+    config = session.config
+    origin = origin_of(config, "frame") if frame == "geodetic" else None
     detail = await registry.track_detail(session, tid)
     if detail is None:
         raise TrackNotFound(session.id, tid)
+    if origin is not None:
+        (track,) = with_geodetic([detail["track"]], origin, tuple(config.state.position))
+        detail = {**detail, "track": track}
     return PlainJSONResponse(detail)

@@ -238,6 +238,40 @@ def test_geodetic_reads_need_an_origin(live_server: LiveServer) -> None:
             locations = _locations(answer)
             assert any(field in location for location in locations)
             assert "origin" in answer.text
+        answer = client.get(f"/v1/sessions/{sid}/tracks/F1?frame=geodetic", headers=headers)
+        assert any("frame" in location for location in _locations(answer))
+        assert "origin" in answer.text
+
+
+def test_one_track_read_in_geodetic(live_server: LiveServer) -> None:
+    """``GET …/tracks/{tid}?frame=geodetic``: the track's WGS84 position is PROJ's."""
+    config = {"state": LAYOUT_2D, "origin": ORIGIN, "sensors": [{"id": "s"}]}
+    state = [12_000.0, 5.0, -7_000.0, 0.0]
+    with httpx.Client(base_url=live_server.url) as client:
+        sid, headers = _session(client, config)
+        report = {
+            "sensor": "s",
+            "time": 1.0,
+            "tracks": [{"id": "t", "state": state, "covariance": COVARIANCE_4}],
+        }
+        answer = client.post(f"/v1/sessions/{sid}/tracks", json=report, headers=headers)
+        assert answer.status_code == 200, answer.text
+        (fused,) = answer.json()["tracks"]
+        detail = client.get(
+            f"/v1/sessions/{sid}/tracks/{fused['id']}?frame=geodetic", headers=headers
+        )
+        assert detail.status_code == 200, detail.text
+        track = detail.json()["track"]
+        assert track["state"] == fused["state"]  # the session frame kept
+        np.testing.assert_allclose(track["state"], state, atol=1.0)  # near the report's
+        east, north = track["state"][0], track["state"][2]
+        oracle = proj_enu((ORIGIN["lat"], ORIGIN["lon"], ORIGIN["alt"]))
+        lat, lon, alt = oracle.transform(east, north, 0.0, direction="INVERSE")
+        geodetic = track["geodetic"]
+        np.testing.assert_allclose([geodetic["lat"], geodetic["lon"]], [lat, lon], atol=1e-8)
+        assert math.isclose(geodetic["alt"], alt, abs_tol=1e-3)  # ≈ 100 m + 15 m of the curve
+        plain = client.get(f"/v1/sessions/{sid}/tracks/{fused['id']}", headers=headers).json()
+        assert plain["track"].get("geodetic") is None
 
 
 def test_polar_detections_are_converted_at_the_geodetic_site(live_server: LiveServer) -> None:

@@ -22,6 +22,7 @@ from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
 from tests.api.conftest import LiveServer
+from tests.api.proj_oracle import proj_enu
 from tests.api.scenario import reports, session_config, truth
 from tests.e2e.browser import BrowserPage
 
@@ -98,6 +99,7 @@ def test_the_viewer_draws_a_live_session(
         opened = viewer_state(page)
         assert opened["connection"] == "live"
         assert len(opened["trails"]) == len(opened["drawn"]) > 0
+        assert opened["axes"]["x"]["title"].startswith("x (")  # no origin: metres
         page.screenshot(path=tmp_path / "viewer-overview.png")
 
         # zoom in on one track with the wheel: new results must not re-zoom the view
@@ -206,6 +208,79 @@ def test_the_viewer_draws_a_live_session(
         assert client.delete(f"/v1/sessions/{sid}", headers=headers).status_code == 204
         wait_for_connection(page, "ended")
         assert "session ended" in viewer_state(page)["status"]
+
+
+def test_the_viewer_labels_a_geodetic_session_in_degrees(
+    live_server: LiveServer, browser_page: BrowserPage, tmp_path: Path
+) -> None:
+    """With an origin the ticks are degrees (PROJ's at their screen positions, to the label's
+    last digit) and a selected track's details show its lat/lon/alt (PROJ's)."""
+    page, log = browser_page.page, browser_page.log
+    origin = {"lat": 48.85, "lon": 2.35, "alt": 100.0}
+    config = {
+        "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+        "origin": origin,
+        "sensors": [{"id": "s"}],
+    }
+    covariance = np.diag([400.0, 1.0, 400.0, 1.0]).tolist()
+    states = [[12_000.0, 5.0, -7_000.0, 0.0], [-3_000.0, 0.0, 4_000.0, 5.0]]
+    report = {
+        "sensor": "s",
+        "time": 1.0,
+        "tracks": [
+            {"id": f"t{n}", "state": state, "covariance": covariance}
+            for n, state in enumerate(states)
+        ],
+    }
+    oracle = proj_enu((origin["lat"], origin["lon"], origin["alt"]))
+    with httpx.Client(base_url=live_server.url, timeout=30) as client:
+        created = client.post("/v1/sessions", json=config).json()
+        sid, token = created["id"], created["token"]
+        headers = {"Authorization": f"Bearer {token}"}
+        post(client, sid, headers, [report])
+        picture = client.get(f"/v1/sessions/{sid}/tracks", headers=headers).json()
+        page.goto(f"{live_server.url}/#session={sid}&token={token}")
+        shown = wait_for_seq(page, 1)
+        page.screenshot(path=tmp_path / "viewer-geodetic.png")
+
+    axes, mpp = shown["axes"], shown["metresPerPixel"]
+    assert "longitude" in axes["x"]["title"] and "latitude" in axes["y"]["title"]
+    anchor = picture["tracks"][0]
+    mark = next(m for m in shown["drawn"] if m["id"] == anchor["id"])
+    for axis, ticks in (("x", axes["x"]["ticks"]), ("y", axes["y"]["ticks"])):
+        assert len(ticks) >= 3
+        for tick in ticks:
+            assert tick["label"].endswith("°")
+            text = tick["label"][:-1]
+            precision = 10.0 ** -(len(text.split(".")[1]) if "." in text else 0)
+            if axis == "x":  # the tick's east offset, from the track's screen position
+                east = anchor["state"][0] + (tick["px"] - mark["x"]) * mpp
+                _, expected, _ = oracle.transform(east, 0.0, 0.0, direction="INVERSE")
+            else:
+                north = anchor["state"][2] - (tick["px"] - mark["y"]) * mpp
+                expected, _, _ = oracle.transform(0.0, north, 0.0, direction="INVERSE")
+            assert float(text) == pytest.approx(expected, abs=precision / 2), (axis, tick)
+            # the page's tangent plane is good to well under a pixel here (~20 m)
+            assert float(text) == pytest.approx(expected, abs=1e-4), (axis, tick)
+    # the ticks span the two tracks' ~0.2° of longitude
+    lons = [float(t["label"][:-1]) for t in axes["x"]["ticks"]]
+    assert max(lons) - min(lons) >= 0.15
+
+    page.evaluate("id => window.__viewer.select(id)", anchor["id"])
+    details = page.locator("#geodetic").inner_text()
+    lat, lon, alt = oracle.transform(
+        anchor["state"][0], anchor["state"][2], 0.0, direction="INVERSE"
+    )
+    shown_lat, shown_lon, shown_alt = (
+        float(part.split()[1].rstrip("°m")) for part in details.split(" · ")
+    )
+    assert shown_lat == pytest.approx(lat, abs=1e-6)
+    assert shown_lon == pytest.approx(lon, abs=1e-6)
+    assert shown_alt == pytest.approx(alt, abs=0.1)
+    assert alt > origin["alt"] + 10.0  # the tangent plane rises above the ellipsoid: ~15 m
+    page.screenshot(path=tmp_path / "viewer-geodetic-details.png")
+    assert not log.console_errors, log.console_errors
+    assert not log.failures, log.failures
 
 
 def test_the_viewer_login_subscribes_with_the_bearer_subprotocol(live_server: LiveServer) -> None:
