@@ -262,12 +262,12 @@ class SensorConfig(WireModel):
         default=None,
         description="where the sensor stands (default: the session frame's origin, heading 0)",
     )
-    clutter_density: PositiveFloat = Field(
-        default=1e-6,
+    clutter_density: PositiveFloat | None = Field(
+        default=None,
         description=(
             "false detections per unit of position space (m² in 2-D, m³ in 3-D) per scan: "
-            "β_FT of this sensor's track score and gate-emptiness termination (the core's "
-            "default 1e-6)"
+            "β_FT of this sensor's track score and gate-emptiness termination (default "
+            "null: one per km² or km³, 1e-6 in 2-D, 1e-9 in 3-D)"
         ),
     )
 
@@ -396,11 +396,12 @@ class TrackingConfig(WireModel):
     )
     association: LocalAssociationConfig = Field(default_factory=LocalAssociationConfig)
     thresholds: TrackThresholds = Field(default_factory=TrackThresholds)
-    birth_density: PositiveFloat = Field(
-        default=1e-6,
+    birth_density: PositiveFloat | None = Field(
+        default=None,
         description=(
             "new targets per unit of position space (m² in 2-D, m³ in 3-D) per scan: β_NT of "
-            "the track score and of gate-emptiness termination (the core's default 1e-6)"
+            "the track score and of gate-emptiness termination (default null: one per km² or "
+            "km³, 1e-6 in 2-D, 1e-9 in 3-D)"
         ),
     )
     initiation: Initiation = Field(default_factory=TwoPointInitiation)

@@ -76,6 +76,18 @@ def _check_probability(value: float, name: str, *, closed_low: bool = False) -> 
         raise InvalidInput(f"{name} must be in {interval}, got {value!r}")
 
 
+def default_density(dim: int) -> float:
+    """One false alarm (or new target) per km^q per scan, in m^-q: 1e-6 in 2-D, 1e-9 in 3-D.
+
+    A density is per unit of the q-dimensional position space, so one number
+    cannot serve every q: 1e-6 m⁻³ is a thousand false alarms per km³ and
+    above the peak density (2π)^{-3/2} |S|^{-1/2} of a target seen with
+    σ ≈ 60 m (about 1.6e-7 m⁻³), so that every hit lowers the score of
+    [MTT] §4.3 and a 3-D track is never confirmed.
+    """
+    return float(10.0 ** (-3 * dim))
+
+
 @dataclass(frozen=True)
 class ScoreModel:
     """Parameters of the SPRT track score of one sensor (built by :meth:`LifeCycleConfig.score_model`).
@@ -194,7 +206,8 @@ class LifeCycleConfig:
     ----------
     false_confirmation : α, P(a false track is confirmed), in (0, 1).
     true_deletion : β, P(a true track is deleted), in (0, 1).
-    false_target_density : β_FT (= ρ_FA), false alarms per unit of position space per scan.
+    false_target_density : β_FT (= ρ_FA), false alarms per unit of position space per scan
+        (default: :func:`default_density` of 2-D; give ``default_density(3)`` in 3-D).
     new_target_density : β_NT (= ρ_NT), new targets per unit of position space per scan.
     termination_probability : gate-emptiness threshold ([HZ] §4.2) in [0, 1); 0 turns it off.
     gate_probability : γ of the gate volume A_G (as a χ² probability) and of the
@@ -213,8 +226,8 @@ class LifeCycleConfig:
 
     false_confirmation: float = 1e-3
     true_deletion: float = 1e-3
-    false_target_density: float = 1e-6
-    new_target_density: float = 1e-6
+    false_target_density: float = default_density(2)
+    new_target_density: float = default_density(2)
     termination_probability: float = 0.5
     gate_probability: float = 0.999
     min_points: int | None = None

@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
 import pytest
 from pydantic import ValidationError
 
@@ -61,15 +62,30 @@ def test_a_session_without_thresholds_runs_the_core_defaults_in_both_layers() ->
     assert fusion.management == LifeCycleConfig()
     tracker = fusion.sensor("radar").tracker
     assert tracker is not None and tracker.life_cycle == LifeCycleConfig()
-    assert life_cycle_config(TrackThresholds(), TrackingConfig().birth_density) == LifeCycleConfig()
+    assert life_cycle_config(TrackThresholds(), 1e-6) == LifeCycleConfig()
+
+
+def test_a_3d_session_defaults_to_one_false_alarm_and_one_birth_per_cubic_kilometre() -> None:
+    config = SessionConfig.model_validate(
+        {
+            "state": {"dim": 6, "position": [0, 2, 4], "velocity": [1, 3, 5]},
+            "sensors": [{"id": "radar", "measurement": {"r": np.eye(3).tolist()}}],
+        }
+    )
+    fusion = fusion_config(config)
+    tracker = fusion.sensor("radar").tracker
+    assert tracker is not None
+    for life in (tracker.life_cycle, fusion.management):
+        assert life.false_target_density == pytest.approx(1e-9, rel=1e-12)
+        assert life.new_target_density == pytest.approx(1e-9, rel=1e-12)
 
 
 def test_the_wire_densities_and_initiation_default_to_the_core_s() -> None:
     """``sensors[i].clutter_density``, ``tracking.birth_density`` and ``tracking.initiation``."""
-    core, tracker = LifeCycleConfig(), LocalTrackerConfig()
-    assert SensorConfig(id="s").clutter_density == core.false_target_density
+    tracker = LocalTrackerConfig()
+    assert SensorConfig(id="s").clutter_density is None  # the dimension's default_density
     tracking = TrackingConfig()
-    assert tracking.birth_density == core.new_target_density
+    assert tracking.birth_density is None
     assert tracking.initiation.kind == tracker.initiation
     assert tracking.initiation.max_speed == tracker.max_speed
     assert tracking.initiation.velocity_std == tracker.initial_velocity_std
