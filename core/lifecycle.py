@@ -88,6 +88,16 @@ def default_density(dim: int) -> float:
     return float(10.0 ** (-3 * dim))
 
 
+def confirm_threshold(false_confirmation: float, true_deletion: float) -> float:
+    """The SPRT's confirm threshold ``ln((1 − β) / α)`` ([MTT] §4.3; Wald)."""
+    return math.log((1.0 - true_deletion) / false_confirmation)
+
+
+def delete_threshold(false_confirmation: float, true_deletion: float) -> float:
+    """The SPRT's delete threshold ``ln(β / (1 − α))``."""
+    return math.log(true_deletion / (1.0 - false_confirmation))
+
+
 @dataclass(frozen=True)
 class ScoreModel:
     """Parameters of the SPRT track score of one sensor (built by :meth:`LifeCycleConfig.score_model`).
@@ -143,12 +153,12 @@ class ScoreModel:
     @property
     def confirm_threshold(self) -> float:
         """Confirm when L ≥ ln((1 − β) / α)."""
-        return math.log((1.0 - self.true_deletion) / self.false_confirmation)
+        return confirm_threshold(self.false_confirmation, self.true_deletion)
 
     @property
     def delete_threshold(self) -> float:
         """Delete when L ≤ ln(β / (1 − α))."""
-        return math.log(self.true_deletion / (1.0 - self.false_confirmation))
+        return delete_threshold(self.false_confirmation, self.true_deletion)
 
     @property
     def miss_increment(self) -> float:
@@ -273,12 +283,12 @@ class LifeCycleConfig:
     @property
     def confirm_threshold(self) -> float:
         """ln((1 − β) / α): it depends on α and β only."""
-        return math.log((1.0 - self.true_deletion) / self.false_confirmation)
+        return confirm_threshold(self.false_confirmation, self.true_deletion)
 
     @property
     def delete_threshold(self) -> float:
         """ln(β / (1 − α))."""
-        return math.log(self.true_deletion / (1.0 - self.false_confirmation))
+        return delete_threshold(self.false_confirmation, self.true_deletion)
 
     @property
     def score_ceiling(self) -> float:
