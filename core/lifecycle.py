@@ -322,11 +322,20 @@ CONFIRMED = STATUSES.index(TrackStatus.CONFIRMED)
 COASTING = STATUSES.index(TrackStatus.COASTING)
 PHANTOM = STATUSES.index(TrackStatus.PHANTOM)
 TERMINATED = STATUSES.index(TrackStatus.TERMINATED)
+STATUS_CODES: dict[TrackStatus, int] = {status: code for code, status in enumerate(STATUSES)}
+"""The integer code of each status in :class:`LifeState` arrays."""
+REASON_CODES: dict[StatusReason, int] = {reason: code for code, reason in enumerate(REASONS)}
+"""The integer code of each reason in :class:`LifeState` arrays."""
+
+
+def established(status: IntArray) -> BoolArray:
+    """Tracks that are confirmed or coasting (the occluders and the tracks a miss coasts)."""
+    return np.asarray((status == CONFIRMED) | (status == COASTING), dtype=np.bool_)
 
 
 def reason_code(reason: StatusReason) -> int:
     """The integer code of ``reason`` in :class:`LifeState` arrays."""
-    return REASONS.index(reason)
+    return REASON_CODES[reason]
 
 
 @dataclass(frozen=True)
@@ -535,12 +544,12 @@ def advance(
     decide(expired, TERMINATED, StatusReason.PHANTOM_EXPIRED)
     undecided &= ~is_phantom
     if config.phantoms:
-        established = (status == CONFIRMED) | (status == COASTING)
+        established_rows = established(status)
         for hidden, why in (
             ((evidence.visibility == Visibility.BLIND_ZONE) & ~detected, StatusReason.BLIND_ZONE),
             (evidence.occluded & ~detected, StatusReason.OCCLUDED),
         ):
-            entering = hidden & established & undecided
+            entering = hidden & established_rows & undecided
             phantom_since = np.where(entering, evidence.time, phantom_since)
             decide(entering, PHANTOM, why)
             decide(hidden & (status == TENTATIVE), TERMINATED, why)

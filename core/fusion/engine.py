@@ -73,16 +73,15 @@ from core.fusion.reports import (
 from core.fusion.table import EstimateTable
 from core.fusion.track import FusedTrack, SensorEstimate
 from core.lifecycle import (
-    COASTING,
-    CONFIRMED,
-    REASONS,
-    STATUSES,
+    REASON_CODES,
+    STATUS_CODES,
     TERMINATED,
     Evidence,
     LifeState,
     StatusReason,
     TrackStatus,
     advance,
+    established,
     everywhere,
     hand_over,
     sensor_view,
@@ -539,16 +538,16 @@ class SessionEngine:
         position = self._position
         if live:
             live_status = before.status[live_index]
-            established = (live_status == CONFIRMED) | (live_status == COASTING)
+            established_rows = established(live_status)
             if len(position) >= 2:
                 plane = states[:, position[:2]]
                 live_seen, live_hidden = sensor_view(
-                    sensor.fov, plane, plane[established], management.occlusion_radius
+                    sensor.fov, plane, plane[established_rows], management.occlusion_radius
                 )
             else:
                 _, live_seen, live_hidden = everywhere(len(live))
             seen[live_index], hidden[live_index] = live_seen, live_hidden
-            established_miss = np.flatnonzero(live_seen & ~detected[live_index] & established)
+            established_miss = np.flatnonzero(live_seen & ~detected[live_index] & established_rows)
             if len(established_miss):
                 gate_log_det[live_index[established_miss]] = self._gate_log_dets(
                     [live[row] for row in established_miss.tolist()],
@@ -648,13 +647,13 @@ class SessionEngine:
             if track.status is TrackStatus.TENTATIVE
             or (id(track) in fresh and track.status is TrackStatus.CONFIRMED)
         ]
-        established = [
+        established_tracks = [
             track
             for track in self.tracks
             if track.status in (TrackStatus.CONFIRMED, TrackStatus.COASTING)
             and id(track) not in fresh
         ]
-        self._merge(established, tentative, StatusReason.DUPLICATE, terminated)
+        self._merge(established_tracks, tentative, StatusReason.DUPLICATE, terminated)
 
     def _merge(
         self,
@@ -886,10 +885,6 @@ def check_detection_magnitudes(report: DetectionReport) -> None:
     if covariances is None or covariances.shape != (*measurements.shape, measurements.shape[1]):
         covariances = np.ones((len(measurements), 1, 1))
     check_magnitudes(measurements, covariances, "detections", ("z", "r"))
-
-
-STATUS_CODES = {status: code for code, status in enumerate(STATUSES)}
-REASON_CODES = {reason: code for code, reason in enumerate(REASONS)}
 
 
 def _read_life(tracks: list[FusedTrack]) -> LifeState:

@@ -57,10 +57,10 @@ from core.distance import DistanceModel, Estimates, ModifiedScale, steady_state_
 from core.distance.estimates import check_covariances
 from core.errors import TrackingError
 from core.lifecycle import (
-    COASTING,
-    CONFIRMED,
     PHANTOM,
+    REASON_CODES,
     REASONS,
+    STATUS_CODES,
     STATUSES,
     TERMINATED,
     Evidence,
@@ -68,6 +68,7 @@ from core.lifecycle import (
     StatusReason,
     TrackStatus,
     advance,
+    established,
     everywhere,
     hand_over,
     visibility,
@@ -125,6 +126,7 @@ class LocalTracker:
 
     def __init__(self, config: LocalTrackerConfig) -> None:
         self.config = config
+        self._score_model = config.score  # the SPRT of this tracker's sensors, built once
         found: TrackingPreset | None = config.tracking_preset()
         self.bank = config.model_bank()
         self.predictor = IMMPredictor(self.bank)
@@ -285,7 +287,7 @@ class LocalTracker:
         gain = np.zeros(tracks)
         gain[candidates] = hit_gain
         status = self._life.status
-        established_miss = seen & ~detected & ((status == CONFIRMED) | (status == COASTING))
+        established_miss = seen & ~detected & established(status)
         self._life, newly_confirmed = advance(
             self.config.life_cycle,
             self._life,
@@ -294,7 +296,7 @@ class LocalTracker:
                 detected=detected,
                 hit_increment=gain,
                 seen=seen,
-                miss_increment=self.config.score.miss_increment,
+                miss_increment=self._score_model.miss_increment,
                 # log|S|: A_G of the tracks that coast through a miss
                 gate_log_det=(
                     np.linalg.slogdet(combined_s)[1]
@@ -380,8 +382,8 @@ class LocalTracker:
             return np.zeros(0, dtype=bool)
         sign, log_det = np.linalg.slogdet(prediction.innovation_covariances - self._noise)
         log_det = np.where(sign > 0.0, log_det, -np.inf).min(axis=1)
-        best = self.config.score.hit_increment(np.zeros_like(log_det), log_det, self._q)
-        return np.asarray(score + best > self.config.score.delete_threshold, dtype=np.bool_)
+        best = self._score_model.hit_increment(np.zeros_like(log_det), log_det, self._q)
+        return np.asarray(score + best > self._score_model.delete_threshold, dtype=np.bool_)
 
     def _visibility(
         self, positions: FloatArray, sensor: str
@@ -392,7 +394,7 @@ class LocalTracker:
             return everywhere(len(positions))
         positions = positions[:, :2]  # fields of view are planar: x, y of a 3-D track
         status = self._life.status
-        occluders = positions[(status == CONFIRMED) | (status == COASTING)]
+        occluders = positions[established(status)]
         return visibility(
             self._coverage,
             self._views[sensor],
@@ -403,7 +405,7 @@ class LocalTracker:
 
     # ------------------------------------------------------- association
     def _hit_gain(self, distance: FloatArray, log_det: FloatArray) -> FloatArray:
-        return self.config.score.hit_increment(distance, log_det, self._q)
+        return self._score_model.hit_increment(distance, log_det, self._q)
 
     def _associate(
         self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None
@@ -551,7 +553,7 @@ class LocalTracker:
                 # scoring at or below the delete threshold starts no track.
                 spread = self.config.initial_velocity_std**2 * interval**2
                 pair_covariance = 2.0 * self._noise + spread * np.eye(self._q)
-                start_score = self.config.score.two_point_initial(
+                start_score = self._score_model.two_point_initial(
                     z[starts] - first, pair_covariance
                 )
                 alive = start_score > self.config.life_cycle.delete_threshold
@@ -586,7 +588,7 @@ class LocalTracker:
         self.next_number += count
         numbers[detections] = new_numbers
         self._numbers = np.concatenate([self._numbers, new_numbers])
-        start = self.config.score.initial if score is None else score
+        start = self._score_model.initial if score is None else score
         self._life = self._life.concatenate(LifeState.new(count, start, hits))
         self._state = _concatenate(self._state, state)
         if self.classifier is not None and self._classes is not None:
@@ -697,10 +699,10 @@ class LocalTracker:
         tracker._numbers = np.array([e["number"] for e in entries], dtype=np.int64)
         tracker._life = LifeState(
             status=np.array(
-                [STATUSES.index(TrackStatus(e["status"])) for e in entries], dtype=np.int64
+                [STATUS_CODES[TrackStatus(e["status"])] for e in entries], dtype=np.int64
             ),
             reason=np.array(
-                [REASONS.index(StatusReason(e["reason"])) for e in entries], dtype=np.int64
+                [REASON_CODES[StatusReason(e["reason"])] for e in entries], dtype=np.int64
             ),
             score=float_array([e["score"] for e in entries]).reshape(-1),
             hits=np.array([e["hits"] for e in entries], dtype=np.int64),
