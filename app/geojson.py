@@ -22,20 +22,21 @@ GEOJSON_MEDIA_TYPE = "application/geo+json"
 PlainTrack = dict[str, Any]
 
 
-def _positions(tracks: Sequence[PlainTrack], position_indices: tuple[int, ...]) -> np.ndarray:
-    """Session ENU positions (N, 3); a 2-D session's tracks sit at the origin's height (z = 0)."""
-    positions = np.zeros((len(tracks), 3))
-    if tracks:
+def _columns(tracks: Sequence[PlainTrack], indices: tuple[int, ...]) -> np.ndarray:
+    """State components ``indices`` of every track as ENU columns (N, 3), zero-padded: a
+    2-D session's tracks sit at the origin's height (z = 0) and move horizontally."""
+    columns = np.zeros((len(tracks), 3))
+    if tracks and indices:
         states = np.array([track["state"] for track in tracks], dtype=np.float64)
-        positions[:, : len(position_indices)] = states[:, list(position_indices)]
-    return positions
+        columns[:, : len(indices)] = states[:, list(indices)]
+    return columns
 
 
 def with_geodetic(
     tracks: Sequence[PlainTrack], frame: LocalFrame, position_indices: tuple[int, ...]
 ) -> list[PlainTrack]:
     """The tracks with ``geodetic: {lat, lon, alt}`` added (``?frame=geodetic``)."""
-    geodetic = frame.to_geodetic(_positions(tracks, position_indices))
+    geodetic = frame.to_geodetic(_columns(tracks, position_indices))
     return [
         {**track, "geodetic": {"lat": float(lat), "lon": float(lon), "alt": float(alt)}}
         for track, (lat, lon, alt) in zip(tracks, geodetic.tolist(), strict=True)
@@ -49,11 +50,8 @@ def feature_collection(
     velocity_indices: tuple[int, ...],
 ) -> dict[str, Any]:
     """A FeatureCollection of the tracks' positions (module docstring)."""
-    geodetic = frame.to_geodetic(_positions(tracks, position_indices))
-    velocities = np.zeros((len(tracks), 3))
-    if tracks and velocity_indices:
-        states = np.array([track["state"] for track in tracks], dtype=np.float64)
-        velocities[:, : len(velocity_indices)] = states[:, list(velocity_indices)]
+    geodetic = frame.to_geodetic(_columns(tracks, position_indices))
+    velocities = _columns(tracks, velocity_indices)
     local = np.einsum("tij,tj->ti", frame.rotation_to(geodetic[:, 0], geodetic[:, 1]), velocities)
     features = []
     for track, (lat, lon, alt), velocity in zip(

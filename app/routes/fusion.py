@@ -45,9 +45,8 @@ def origin_of(config: SessionConfig, parameter: str) -> LocalFrame:
     return frame
 
 
-def geodetic_result(result: str, config: SessionConfig) -> str:
+def geodetic_result(result: str, frame: LocalFrame, config: SessionConfig) -> str:
     """A step result's JSON text with ``geodetic`` added to each fused track."""
-    frame = origin_of(config, "frame")
     document: dict[str, Any] = orjson.loads(result)
     document["tracks"] = with_geodetic(document["tracks"], frame, tuple(config.state.position))
     return dumps(document)
@@ -72,11 +71,11 @@ async def submit_tracks(
     409 ``stale-report`` (with ``time`` and ``last_time``) for a report not
     newer than the sensor's previous one.
     """
-    if frame == "geodetic":
-        origin_of(session.config, "frame")  # refused before anything is applied
+    # refused before anything is applied
+    origin = origin_of(session.config, "frame") if frame == "geodetic" else None
     result = await registry.submit_tracks(session, report, explain=explain)
-    if frame == "geodetic":
-        result = geodetic_result(result, session.config)
+    if origin is not None:
+        result = geodetic_result(result, origin, session.config)
     return JSONTextResponse(result)
 
 
@@ -101,11 +100,11 @@ async def submit_detections(
     previous input (scans may come at any increasing times, on no grid);
     422 for a sensor without a measurement model.
     """
-    if frame == "geodetic":
-        origin_of(session.config, "frame")  # refused before anything is applied
+    # refused before anything is applied
+    origin = origin_of(session.config, "frame") if frame == "geodetic" else None
     result = await registry.submit_detections(session, report, explain=explain)
-    if frame == "geodetic":
-        result = geodetic_result(result, session.config)
+    if origin is not None:
+        result = geodetic_result(result, origin, session.config)
     return JSONTextResponse(result)
 
 
