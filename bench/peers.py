@@ -109,6 +109,8 @@ START = datetime.datetime(2026, 1, 1)
 SIGMA = 1.0  # m, measurement noise per axis
 Q = 0.05  # m²/s³, Stone Soup ConstantVelocity noise_diff_coeff
 DT = 1.0  # s
+SERVER_START_TIMEOUT_S = 20.0
+"""The in-thread service must answer by then (else the bench stops, not hangs)."""
 P_DETECT = 0.9
 CUTOFF = 10.0 * SIGMA
 SIAP_MAX_TARGETS = 15
@@ -432,6 +434,7 @@ def live_service() -> Iterator[str]:
     """The application on uvicorn in a thread, memory store, a free loopback port."""
     import uvicorn
 
+    from app.keepalive import server_options
     from app.main import create_app
     from app.settings import Settings
 
@@ -446,17 +449,25 @@ def live_service() -> Iterator[str]:
     listener.bind(("127.0.0.1", 0))
     port = listener.getsockname()[1]
     server = uvicorn.Server(
-        uvicorn.Config(create_app(settings), log_level="warning", access_log=False)
+        uvicorn.Config(
+            create_app(settings),
+            log_level="warning",
+            access_log=False,
+            **server_options(settings),  # as `credal-fusion serve` runs it
+        )
     )
     thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
     thread.start()
+    deadline = time.monotonic() + SERVER_START_TIMEOUT_S
     while not server.started:
+        if not thread.is_alive() or time.monotonic() > deadline:
+            raise RuntimeError("uvicorn did not start")
         time.sleep(0.01)
     try:
         yield f"http://127.0.0.1:{port}"
     finally:
         server.should_exit = True
-        thread.join(timeout=20)
+        thread.join(timeout=SERVER_START_TIMEOUT_S)
         listener.close()
 
 

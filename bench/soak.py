@@ -30,7 +30,6 @@ from __future__ import annotations
 import asyncio
 import os
 import re
-import socket
 import statistics
 import subprocess
 import sys
@@ -41,15 +40,14 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import httpx
-import numpy as np
 import redis
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from machine import describe_machine
+from service import config, free_port, track_list
 
 ROOT = Path(__file__).resolve().parents[1]
 SOAK_SECONDS = float(os.environ.get("SOAK_SECONDS", "100"))
@@ -65,37 +63,6 @@ LOG_RETENTION = 100
 SAMPLE_EVERY_S = 4.0
 MAX_GROWTH = 0.05
 START_TIMEOUT_S = 30.0
-COVARIANCE = [[4, 0, 0, 0], [0, 1, 0, 0], [0, 0, 4, 0], [0, 0, 0, 1]]
-
-
-def track_list(sensor: str, time_s: float, count: int) -> dict[str, Any]:
-    """``count`` targets on a grid, each reported by ``sensor`` at ``time_s``."""
-    rng = np.random.default_rng(int(time_s * 1000) % 2**31)
-    tracks = []
-    for index in range(count):
-        x0, y0 = 300.0 * (index % 40), 300.0 * (index // 40)
-        state = np.array([x0 + 5.0 * time_s, 5.0, y0 - 2.0 * time_s, -2.0]) + rng.normal(0, 1, 4)
-        tracks.append(
-            {
-                "id": f"t{index}",
-                "state": [round(float(v), 4) for v in state],
-                "covariance": COVARIANCE,
-            }
-        )
-    return {"sensor": sensor, "time": time_s, "tracks": tracks}
-
-
-def config(sensors: list[str]) -> dict[str, Any]:
-    return {
-        "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
-        "sensors": [{"id": sensor} for sensor in sensors],
-    }
-
-
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return int(probe.getsockname()[1])
 
 
 @contextmanager
