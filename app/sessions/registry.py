@@ -93,7 +93,6 @@ from app.sessions.translate import (
 from app.settings import Settings
 from app.stores import (
     LogEntry,
-    MemoryStore,
     SequenceConflict,
     SessionLoad,
     SessionRecord,
@@ -147,7 +146,6 @@ class SessionRegistry:
         self.owner = owner or new_owner_id()
         self._sessions: dict[str, LiveSession] = {}
         self._load_lock = asyncio.Lock()
-        self._store_inline = isinstance(store, MemoryStore)
         self._forwarders: dict[str, asyncio.Task[None]] = {}
         self._tokens: dict[str, str] = {}
         """Token hash → id of the live sessions in memory (the rate limit's verified identities)."""
@@ -162,8 +160,8 @@ class SessionRegistry:
 
     # ------------------------------------------------------------ running work
     async def _io(self, function: Callable[..., T], *args: Any) -> T:
-        """A store call: inline for the memory store, in a worker thread otherwise."""
-        if self._store_inline:
+        """A store call: in a worker thread if the store may block on I/O, else inline."""
+        if not self.store.blocking:
             return function(*args)
         return await anyio.to_thread.run_sync(functools.partial(function, *args))
 

@@ -145,6 +145,11 @@ class Store(Protocol):
     shared: bool
     """Whether several service instances may share the store: then the registry takes
     leases, fans results out through it and checks reads against it."""
+    blocking: bool
+    """Whether a call may wait on I/O (a disk's fsync, a network round trip): the registry
+    then makes its calls in a worker thread; a store that never waits (memory: a dict
+    under a lock, microseconds) is called on the event loop, where a thread hop would
+    cost more than the call."""
 
     def create_session(self, record: SessionRecord) -> None:
         """Store a new session; :class:`SessionExists` if the id is taken."""

@@ -62,6 +62,8 @@ class MemoryStore:
     kind = "memory"
     shared = False
     """Whether several service instances may share this store (leases, fan-out, fresh reads)."""
+    blocking = False
+    """Whether a call may wait on I/O (then the registry calls it in a worker thread)."""
 
     def __init__(self) -> None:
         self._lock = threading.Lock()

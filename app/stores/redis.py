@@ -209,6 +209,8 @@ class RedisStore:
     kind = "redis"
     shared = True
     """Whether several service instances may share this store (leases, fan-out, fresh reads)."""
+    blocking = True
+    """Whether a call may wait on I/O (then the registry calls it in a worker thread)."""
 
     def __init__(self, url: str = DEFAULT_URL, prefix: str = DEFAULT_PREFIX) -> None:
         self.url = url

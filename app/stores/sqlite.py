@@ -106,6 +106,8 @@ class SqliteStore:
     kind = "sqlite"
     shared = False
     """Whether several service instances may share this store (leases, fan-out, fresh reads)."""
+    blocking = True
+    """Whether a call may wait on I/O (then the registry calls it in a worker thread)."""
 
     def __init__(self, path: Path | str, synchronous: Synchronous = "FULL") -> None:
         self.path = Path(path)

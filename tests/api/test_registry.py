@@ -4,8 +4,12 @@ from __future__ import annotations
 
 import asyncio
 import json
+import threading
 from datetime import UTC, datetime, timedelta
+from pathlib import Path
 from typing import Any
+
+import pytest
 
 from api_schemas.reports import TrackReport
 from app.metrics import ServiceMetrics
@@ -13,6 +17,8 @@ from app.sessions.hub import SESSION_ENDED, Hub
 from app.sessions.registry import SessionRegistry
 from app.stores import MemoryStore, SessionRecord
 from app.stores.base import StoreUsage
+from app.stores.redis import RedisStore
+from app.stores.sqlite import SqliteStore
 from tests.api.conftest import make_settings
 from tests.api.scenario import reports, session_config
 
@@ -132,3 +138,35 @@ def test_subscriber_receives_published_results() -> None:
         assert received == results
 
     asyncio.run(scenario())
+
+
+class ThreadRecordingStore(MemoryStore):
+    """A memory store that says whether it blocks and records the thread of each append."""
+
+    def __init__(self, blocking: bool) -> None:
+        super().__init__()
+        self.blocking = blocking
+        self.append_threads: list[int] = []
+
+    def append(self, *args: Any, **kwargs: Any) -> None:
+        self.append_threads.append(threading.get_ident())
+        super().append(*args, **kwargs)
+
+
+@pytest.mark.parametrize("blocking", [False, True])
+def test_store_calls_leave_the_event_loop_only_for_a_store_that_blocks(blocking: bool) -> None:
+    """The registry asks the store's ``blocking`` capability, not its class."""
+    store = ThreadRecordingStore(blocking)
+    target = SessionRegistry(store, make_settings(), ServiceMetrics.create())
+    new_session(target, session_config())
+    loop_thread = threading.get_ident()  # asyncio.run runs the loop in this thread
+    asyncio.run(feed(target, "s1", reports(3)))
+    assert len(store.append_threads) == 3
+    on_loop = [thread == loop_thread for thread in store.append_threads]
+    assert on_loop == [not blocking] * 3
+
+
+def test_only_the_memory_store_is_called_on_the_event_loop(tmp_path: Path) -> None:
+    assert MemoryStore.blocking is False
+    assert SqliteStore(tmp_path / "s.db").blocking is True
+    assert RedisStore.blocking is True
