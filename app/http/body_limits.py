@@ -22,13 +22,11 @@ Every limit is a setting (``app/settings.py``) checked before the work it bounds
 
 from __future__ import annotations
 
-from http import HTTPStatus
-
 import anyio
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from api_schemas.limits import ACTIVE_LIMITS, WireLimits
-from app.http.errors import problem_response
+from app.http.errors import BodyTooLarge, BodyTooSlow, ServiceError, problem_response
 
 BODY_LIMIT = "max_body_bytes"
 READ_TIMEOUT = "body_read_timeout"
@@ -108,35 +106,22 @@ class BodyLimits:
     async def _refuse(
         self, scope: Scope, receive: Receive, send: Send, declared: int | None, ended: bool
     ) -> None:
-        got = "" if declared is None else f" (Content-Length {declared})"
-        response = problem_response(
-            None,
-            status=HTTPStatus.REQUEST_ENTITY_TOO_LARGE,
-            slug="body-too-large",
-            title="Body too large",
-            detail=f"request body exceeds limit {BODY_LIMIT} = {self.max_bytes} bytes{got}",
-            instance=scope.get("path"),
-            limit=BODY_LIMIT,
-            maximum=self.max_bytes,
-        )
-        if not ended:
-            response.headers["Connection"] = "close"
-        await response(scope, receive, send)
+        refusal = BodyTooLarge(BODY_LIMIT, self.max_bytes, declared)
+        await _answer(scope, receive, send, refusal, close=not ended)
 
     async def _too_slow(self, scope: Scope, receive: Receive, send: Send, received: int) -> None:
-        response = problem_response(
-            None,
-            status=HTTPStatus.REQUEST_TIMEOUT,
-            slug="body-too-slow",
-            title="Request body too slow",
-            detail=f"the request body was not received within limit {READ_TIMEOUT} = "
-            f"{self.read_timeout} s ({received} bytes received)",
-            instance=scope.get("path"),
-            limit=READ_TIMEOUT,
-            maximum=self.read_timeout,
-        )
+        refusal = BodyTooSlow(READ_TIMEOUT, self.read_timeout, received)
+        await _answer(scope, receive, send, refusal, close=True)
+
+
+async def _answer(
+    scope: Scope, receive: Receive, send: Send, refusal: ServiceError, *, close: bool
+) -> None:
+    """Send the problem answer of ``refusal``; ``close``: and close the connection after it."""
+    response = problem_response(refusal, scope.get("path"))
+    if close:
         response.headers["Connection"] = "close"
-        await response(scope, receive, send)
+    await response(scope, receive, send)
 
 
 async def _drain(receive: Receive, budget: int) -> bool:

@@ -130,7 +130,20 @@ class StaleReport(Conflict):
         )
 
 
-class SessionLeased(ServiceError):  # noqa: N818 - HTTP vocabulary
+class RetryLater(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """A refusal that says when to try again: ``Retry-After`` and ``retry_after`` (seconds)."""
+
+    retry_after_s: int
+
+    def __init__(self, detail: str, retry_after_s: int, **extensions: Any) -> None:
+        super().__init__(detail, **extensions, retry_after=retry_after_s)
+        self.retry_after_s = retry_after_s
+
+    def headers(self) -> dict[str, str]:
+        return {"Retry-After": str(self.retry_after_s)}
+
+
+class SessionLeased(RetryLater):
     """Another service instance holds the session's lease (it applies the session's inputs)."""
 
     status = HTTPStatus.SERVICE_UNAVAILABLE
@@ -141,16 +154,12 @@ class SessionLeased(ServiceError):  # noqa: N818 - HTTP vocabulary
         super().__init__(
             f"session {session_id!r} is applied by another service instance; "
             f"its lease lapses within {retry_after_s} s if that instance is gone",
+            retry_after_s,
             session=session_id,
-            retry_after=retry_after_s,
         )
-        self.retry_after_s = retry_after_s
-
-    def headers(self) -> dict[str, str]:
-        return {"Retry-After": str(self.retry_after_s)}
 
 
-class StoreUnavailable(ServiceError):  # noqa: N818 - HTTP vocabulary
+class StoreUnavailable(RetryLater):
     """The session store cannot be reached (or cannot write): nothing was stored, retry later.
 
     Raised by the stores for their backend's connection and I/O errors, so an
@@ -160,17 +169,62 @@ class StoreUnavailable(ServiceError):  # noqa: N818 - HTTP vocabulary
     status = HTTPStatus.SERVICE_UNAVAILABLE
     slug = "store-unavailable"
     title = "Session store unavailable"
-    retry_after_s: ClassVar[int] = 2
+    retry_after_s = 2
 
     def __init__(self, store: str, reason: str) -> None:
         super().__init__(
             f"the {store} store is unavailable ({reason}); nothing was stored, retry later",
+            type(self).retry_after_s,
             store=store,
-            retry_after=self.retry_after_s,
         )
 
-    def headers(self) -> dict[str, str]:
-        return {"Retry-After": str(self.retry_after_s)}
+
+class RateLimited(RetryLater):
+    """More requests than ``limit`` allows ``who`` (:mod:`app.http.rate_limit`)."""
+
+    status = HTTPStatus.TOO_MANY_REQUESTS
+    slug = "rate-limited"
+    title = "Too many requests"
+
+    def __init__(self, limit: str, rate: str, who: str, retry_after_s: int) -> None:
+        super().__init__(
+            f"rate limit {limit} = {rate} exceeded for {who}; retry after {retry_after_s} s",
+            retry_after_s,
+            limit=limit,
+            rate=rate,
+        )
+
+
+class BodyTooLarge(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """A request body beyond ``limit`` bytes (:mod:`app.http.body_limits`), refused unparsed."""
+
+    status = HTTPStatus.REQUEST_ENTITY_TOO_LARGE
+    slug = "body-too-large"
+    title = "Body too large"
+
+    def __init__(self, limit: str, maximum: int, declared: int | None) -> None:
+        got = "" if declared is None else f" (Content-Length {declared})"
+        super().__init__(
+            f"request body exceeds limit {limit} = {maximum} bytes{got}",
+            limit=limit,
+            maximum=maximum,
+        )
+
+
+class BodyTooSlow(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """A request body not received within ``limit`` seconds (:mod:`app.http.body_limits`)."""
+
+    status = HTTPStatus.REQUEST_TIMEOUT
+    slug = "body-too-slow"
+    title = "Request body too slow"
+
+    def __init__(self, limit: str, maximum: float, received: int) -> None:
+        super().__init__(
+            f"the request body was not received within limit {limit} = "
+            f"{maximum} s ({received} bytes received)",
+            limit=limit,
+            maximum=maximum,
+        )
 
 
 class TrackNotFound(ServiceError):  # noqa: N818 - HTTP vocabulary
@@ -290,35 +344,6 @@ def request_validation_error(
     )
 
 
-def problem_response(
-    request: Request | None,
-    *,
-    status: int,
-    slug: str,
-    title: str,
-    detail: str,
-    errors: list[FieldError] | None = None,
-    headers: Mapping[str, str] | None = None,
-    instance: str | None = None,
-    **extensions: Any,
-) -> ProblemResponse:
-    """Build a problem+json response (``instance`` defaults to the request path)."""
-    problem = Problem(
-        type=problem_type(slug),
-        title=title,
-        status=status,
-        detail=detail,
-        instance=instance if instance is not None or request is None else request.url.path,
-        errors=errors,
-        **extensions,
-    )
-    return ProblemResponse(
-        problem.model_dump(mode="json", exclude_none=True),
-        status_code=status,
-        headers=dict(headers or {}),
-    )
-
-
 MAX_LISTED_ERRORS = 50
 """Default of ``max_listed_errors``: a 422 lists at most this many errors (``error_count`` has all)."""
 
@@ -350,9 +375,9 @@ def _validation_problem(
     if breach is not None:
         context = breach.get("ctx") or {}
         return Problem(
-            type=problem_type("limit-exceeded"),
-            title="Limit exceeded",
-            status=HTTPStatus.UNPROCESSABLE_ENTITY,
+            type=problem_type(LimitExceeded.slug),
+            title=LimitExceeded.title,
+            status=LimitExceeded.status,
             detail=_validation_detail(errors, len(raw)),
             instance=instance,
             errors=errors,
@@ -423,9 +448,9 @@ def problem_for(
     reference = uuid.uuid4().hex
     logger.error("unexpected error (reference %s) on %s", reference, instance, exc_info=error)
     return Problem(
-        type=problem_type("internal-error"),
-        title="Internal server error",
-        status=HTTPStatus.INTERNAL_SERVER_ERROR,
+        type=problem_type(ServiceError.slug),
+        title=ServiceError.title,
+        status=ServiceError.status,
         detail=f"unexpected error; the server log has the details under reference {reference}",
         instance=instance,
         reference=reference,
@@ -440,18 +465,32 @@ def _headers_of(error: Exception) -> dict[str, str]:
     return {}
 
 
+def problem_response(
+    error: Exception,
+    instance: str | None,
+    *,
+    listed: int = MAX_LISTED_ERRORS,
+    root: object = None,
+) -> ProblemResponse:
+    """The problem+json answer of ``error`` (:func:`problem_for`, with the error's headers).
+
+    What HTTP handlers, middleware and WebSocket upgrade denials send.
+    """
+    problem = problem_for(error, instance, listed=listed, root=root)
+    return ProblemResponse(
+        problem.model_dump(mode="json", exclude_none=True),
+        status_code=problem.status,
+        headers=_headers_of(error),
+    )
+
+
 def problem_answer(request: Request, error: Exception) -> ProblemResponse:
     """The problem+json answer of ``error`` to ``request``."""
     settings = getattr(request.app.state, "settings", None)
     listed = getattr(settings, "max_listed_errors", MAX_LISTED_ERRORS)
     endpoint = request.scope.get("endpoint")
     root = body_model(endpoint) if callable(endpoint) else None
-    problem = problem_for(error, request.url.path, listed=listed, root=root)
-    return ProblemResponse(
-        problem.model_dump(mode="json", exclude_none=True),
-        status_code=problem.status,
-        headers=_headers_of(error),
-    )
+    return problem_response(error, request.url.path, listed=listed, root=root)
 
 
 async def _on_error(request: Request, error: Exception) -> ProblemResponse:
@@ -506,11 +545,7 @@ class InternalErrors:
             self.on_error()
             if started:
                 raise  # half an answer is out: only closing the connection can say so
-            problem = problem_for(error, scope.get("path"))
-            response = ProblemResponse(
-                problem.model_dump(mode="json", exclude_none=True), status_code=problem.status
-            )
-            await response(scope, receive, send)
+            await problem_response(error, scope.get("path"))(scope, receive, send)
 
 
 PROBLEM_STATUSES: dict[int, str] = {

@@ -31,7 +31,6 @@ import hmac
 import math
 import time
 from collections.abc import Callable
-from http import HTTPStatus
 
 from limits import RateLimitItem, parse_many
 from limits.aio.storage import MemoryStorage
@@ -40,7 +39,7 @@ from starlette.responses import Response
 from starlette.types import ASGIApp, Receive, Scope, Send
 from starlette.websockets import WebSocket
 
-from app.http.errors import problem_response
+from app.http.errors import RateLimited, problem_response
 from app.http.security import hash_token
 
 RATE_LIMIT = "rate_limit"
@@ -127,16 +126,7 @@ class RateLimit:
         rate = _rate_text(item)
         who = "this token" if key.startswith("token:") else "this client address"
         response = problem_response(
-            None,
-            status=HTTPStatus.TOO_MANY_REQUESTS,
-            slug="rate-limited",
-            title="Too many requests",
-            detail=f"rate limit {RATE_LIMIT} = {rate} exceeded for {who}; retry after {retry_after} s",
-            headers={"Retry-After": str(retry_after)},
-            instance=scope.get("path"),
-            limit=RATE_LIMIT,
-            rate=rate,
-            retry_after=retry_after,
+            RateLimited(RATE_LIMIT, rate, who, retry_after), scope.get("path")
         )
         if scope["type"] == "websocket":
             await _deny_websocket(scope, receive, send, response)

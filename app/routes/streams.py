@@ -99,16 +99,7 @@ async def _open(websocket: WebSocket, sid: str) -> LiveSession | None:
         return await registry.current(await registry.get(record.id))
     except ServiceError as error:
         if "websocket.http.response" in websocket.scope.get("extensions", {}):
-            response = problem_response(
-                None,
-                status=error.status_code,
-                slug=error.slug,
-                title=error.title,
-                detail=error.detail,
-                headers=error.headers(),
-                instance=websocket.url.path,
-                **error.extensions,
-            )
+            response = problem_response(error, websocket.url.path)
             await websocket.send_denial_response(response)
         else:
             await websocket.close(code=POLICY_VIOLATION, reason=error.detail[:120])
