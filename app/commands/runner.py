@@ -17,13 +17,12 @@ import httpx
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport, TrackReport
 from app.commands.errors import http_failure
-from app.http.responses import dumps
 from app.sessions.live import engine_from_snapshot
 from app.sessions.translate import (
     core_detection_report,
     fusion_config,
     session_frame_report,
-    step_plain,
+    step_json,
 )
 from core.fusion.engine import SessionEngine
 
@@ -57,7 +56,7 @@ def run_locally(config: Body, inputs: Iterable[Input]) -> Iterator[Body]:
             step = engine.apply_detections(
                 core_detection_report(DetectionReport.model_validate(body), session)
             )
-        yield json.loads(dumps(step_plain(step, seq)))
+        yield json.loads(step_json(step, seq))
 
 
 def run_on_server(

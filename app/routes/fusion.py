@@ -22,8 +22,8 @@ from app.http.errors import (
     request_validation_error,
 )
 from app.http.requests import WireRoute
-from app.http.responses import JSONTextResponse, PlainJSONResponse, dumps
-from app.sessions.translate import session_origin
+from app.http.responses import JSONTextResponse, dumps
+from app.sessions.translate import session_origin, wire_json
 
 router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
 
@@ -145,7 +145,7 @@ async def list_fused_tracks(
         origin = origin_of(config, "frame")
         seq, time_of, tracks = await registry.picture(session, time)
         geodetic = with_geodetic(tracks, origin, tuple(config.state.position))
-        return JSONTextResponse(dumps({"seq": seq, "time": time_of, "tracks": geodetic}))
+        return JSONTextResponse(wire_json({"seq": seq, "time": time_of, "tracks": geodetic}))
     return JSONTextResponse(await registry.picture_json(session, time))
 
 
@@ -159,7 +159,7 @@ async def get_fused_track(
     session: CurrentSessionDep,
     registry: RegistryDep,
     frame: OutputFrame = "session",
-) -> PlainJSONResponse:
+) -> JSONTextResponse:
     """One live fused track with its recent history (fused states, oldest first).
 
     ``frame=geodetic`` adds ``geodetic: {lat, lon, alt}`` to the track (needs
@@ -173,4 +173,4 @@ async def get_fused_track(
     if origin is not None:
         (track,) = with_geodetic([detail["track"]], origin, tuple(config.state.position))
         detail = {**detail, "track": track}
-    return PlainJSONResponse(detail)
+    return JSONTextResponse(wire_json(detail))

@@ -88,7 +88,8 @@ from app.sessions.translate import (
     fusion_config,
     session_frame_report,
     step_json,
-    tracks_plain,
+    track_fields,
+    wire_json,
 )
 from app.settings import Settings
 from app.stores import (
@@ -630,7 +631,8 @@ class SessionRegistry:
     async def picture(
         self, session: LiveSession, at: float | None
     ) -> tuple[int, float | None, list[PlainObject]]:
-        """``(seq, time, tracks)``: the live fused tracks predicted to ``at`` (default: fusion time)."""
+        """``(seq, time, tracks)``: the live fused tracks predicted to ``at`` (default: fusion
+        time), as :func:`~app.sessions.translate.track_fields` (written by ``wire_json``)."""
         async with session.lock:
             engine = session.engine
             if engine is None or engine.time is None:
@@ -638,7 +640,7 @@ class SessionRegistry:
             views: tuple[FusedTrackView, ...] = await self._compute(
                 len(engine.tracks), functools.partial(engine.picture, at)
             )
-            return session.seq, engine.time if at is None else at, tracks_plain(views)
+            return session.seq, engine.time if at is None else at, track_fields(views)
 
     async def picture_json(self, session: LiveSession, at: float | None) -> str:
         """:meth:`picture` as the JSON text of a ``FusedPicture``, built off the event loop."""
@@ -651,13 +653,13 @@ class SessionRegistry:
 
             def build() -> str:
                 # one track at a time: no single C call holds the GIL for the whole answer
-                tracks = ",".join(dumps(track) for track in tracks_plain(engine.picture(at)))
+                tracks = ",".join(wire_json(track) for track in track_fields(engine.picture(at)))
                 return f'{{"seq":{seq},"time":{dumps(time_of)},"tracks":[{tracks}]}}'
 
             return await self._compute(len(engine.tracks), build)
 
     async def track_detail(self, session: LiveSession, track_id: str) -> PlainObject | None:
-        """One live fused track at the fusion time with its history, or ``None``."""
+        """One live fused track at the fusion time with its history (for ``wire_json``), or ``None``."""
         async with session.lock:
             engine = session.engine
             track = next((t for t in session.tracks if t.id == track_id), None)
@@ -665,7 +667,7 @@ class SessionRegistry:
                 return None
             view = next(view for view in engine.picture() if view.id == track_id)
             return {
-                "track": tracks_plain([view])[0],
+                "track": track_fields([view])[0],
                 "history": [{"time": time, "state": state} for time, state in track.history],
             }
 

@@ -3,13 +3,14 @@
 Config: :func:`fusion_config` turns a validated ``SessionConfig`` into the
 engine's ``FusionConfig``; what the core still refuses (a self-intersecting
 field-of-view polygon) comes back as a validation error located at the field.
-Inputs: :func:`core_track_report`. Outputs: :func:`step_plain` and
-:func:`tracks_plain` give the contract's JSON shape as plain data (served
-as-is: :mod:`api_schemas.results` documents it and the tests validate it),
-with every non-finite score of a matrix as ``null``. :func:`step_json` writes
-the same document as JSON text straight from the engine's views (numpy arrays
-and ``Source`` dataclasses serialised by orjson in C, no intermediate lists):
-the per-input hot path. A test holds it equal to ``step_plain``.
+Inputs: :func:`core_track_report`. Outputs: the one writer of the
+contract's result shape (:mod:`api_schemas.results` documents it, and
+``tests/api/test_result_writer.py`` validates its output against those
+models): :func:`step_json` for a step result (the per-input hot path),
+:func:`track_fields` for fused tracks (``GET …/tracks``), both written by
+orjson in C straight from the engine's views (numpy arrays and ``Source``
+dataclasses, no intermediate lists); every non-finite score of a matrix is
+``null``, any other non-finite number refused.
 """
 
 from __future__ import annotations
@@ -50,8 +51,6 @@ from core.fusion.reports import (
     FusedTrackView,
     ReportedTrack,
     StepResult,
-    class_to_plain,
-    step_to_plain,
 )
 from core.fusion.reports import DetectionReport as CoreDetectionReport
 from core.fusion.reports import TrackReport as CoreTrackReport
@@ -66,8 +65,6 @@ PlainObject = dict[str, Any]
 
 ENGINE_ONLY_OPTIONS = frozenset({"distance", "imm_distance"})
 """Wire options that are not method options of the core (the distance is its own argument)."""
-
-NO_ASSOCIATION = AssociationView(method="", pairs=(), new=(), missed=())
 
 
 # ------------------------------------------------------------------ config
@@ -438,19 +435,6 @@ def finite_or_none(value: float | None) -> float | None:
     return value if value is not None and math.isfinite(value) else None
 
 
-def step_plain(step: StepResult, seq: int) -> PlainObject:
-    """A step result in the contract's shape, numbered ``seq`` (the session's input number)."""
-    plain = step_to_plain(step)
-    plain["seq"] = seq
-    association = plain["association"]
-    for pair in association["pairs"]:
-        pair["score"] = finite_or_none(pair["score"])
-    matrix = association["matrix"]
-    if matrix is not None:
-        matrix["values"] = [[finite_or_none(value) for value in row] for row in matrix["values"]]
-    return plain
-
-
 def _check_finite(views: Sequence[FusedTrackView]) -> None:
     """Raise ``ValueError`` naming the first track with a non-finite state or covariance.
 
@@ -470,12 +454,41 @@ def _check_finite(views: Sequence[FusedTrackView]) -> None:
 
 
 def _class_fast(assessment: ClassAssessment | None) -> PlainObject | None:
-    """A track's classification as ``step_to_plain`` gives it; a non-finite conflict raises."""
+    """A track's classification in the contract's shape; a non-finite conflict raises.
+
+    Under total conflict every distribution is ``None`` (only the state and the
+    conflict are known).
+    """
     if assessment is None:
         return None
-    if not math.isfinite(float(assessment.conflict)):
+    conflict = float(assessment.conflict)
+    if not math.isfinite(conflict):
         raise ValueError("non-finite class conflict")
-    return class_to_plain(assessment)
+    mass = assessment.mass
+    if mass is None:
+        return {
+            "state": assessment.state.value,
+            "mass": None,
+            "pignistic": None,
+            "belief": None,
+            "plausibility": None,
+            "conflict": assessment.conflict,
+            "decision": None,
+            "decision_state": assessment.decision_state.value,
+            "summarized": assessment.summarized,
+        }
+    labels = mass.frame.labels
+    return {
+        "state": assessment.state.value,
+        "mass": [{"set": list(subset), "mass": value} for subset, value in mass.focal_sets()],
+        "pignistic": dict(zip(labels, assessment.pignistic.tolist(), strict=True)),
+        "belief": dict(zip(labels, assessment.belief.tolist(), strict=True)),
+        "plausibility": dict(zip(labels, assessment.plausibility.tolist(), strict=True)),
+        "conflict": assessment.conflict,
+        "decision": assessment.decision,
+        "decision_state": assessment.decision_state.value,
+        "summarized": assessment.summarized,
+    }
 
 
 def _track_fast(view: FusedTrackView) -> PlainObject:
@@ -515,28 +528,35 @@ def _association_plain(association: AssociationView) -> PlainObject:
 
 
 def step_json(step: StepResult, seq: int) -> str:
-    """:func:`step_plain` as compact JSON text, built without intermediate lists (hot path).
+    """A step result in the contract's shape (``StepResult``), numbered ``seq`` (the
+    session's input number), as compact JSON text (hot path).
 
-    Refuses (``ValueError``) any non-finite number instead of writing ``null``.
+    Refuses (``ValueError``) a non-finite time, state, covariance or score instead
+    of writing ``null``; a pair's or a matrix cell's non-finite score is ``null``.
     """
     if not math.isfinite(step.time):
         raise ValueError("non-finite step time")
-    _check_finite(step.tracks)
     document = {
         "seq": seq,
         "time": step.time,
         "sensor": step.sensor,
-        "tracks": [_track_fast(view) for view in step.tracks],
+        "tracks": track_fields(step.tracks),
         "association": _association_plain(step.association),
     }
+    return wire_json(document)
+
+
+def track_fields(views: Sequence[FusedTrackView]) -> list[PlainObject]:
+    """Fused tracks in the contract's shape (``FusedTrack``), for :func:`wire_json`: states
+    and covariances stay numpy arrays, sources ``Source`` dataclasses (orjson writes both
+    in C). Refuses (``ValueError``) a non-finite state, covariance or score."""
+    _check_finite(views)
+    return [_track_fast(view) for view in views]
+
+
+def wire_json(document: object) -> str:
+    """Compact JSON text of a document holding :func:`track_fields` output."""
     return orjson.dumps(document, option=orjson.OPT_SERIALIZE_NUMPY).decode()
-
-
-def tracks_plain(views: Iterable[FusedTrackView]) -> list[PlainObject]:
-    """Fused tracks in the contract's shape (through ``step_to_plain``: one source of field names)."""
-    holder = StepResult(seq=0, time=0.0, sensor="", tracks=tuple(views), association=NO_ASSOCIATION)
-    tracks: list[PlainObject] = step_to_plain(holder)["tracks"]
-    return tracks
 
 
 # ------------------------------------------------------- stateless associate

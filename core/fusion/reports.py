@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 from core.arrays import FloatArray
 from core.belief import MassFunction
@@ -99,75 +98,3 @@ class StepResult:
     sensor: str
     tracks: tuple[FusedTrackView, ...]
     association: AssociationView
-
-
-def step_to_plain(step: StepResult) -> dict[str, Any]:
-    """A step result as plain JSON-ready data, with the wire contract's field names."""
-    return {
-        "seq": step.seq,
-        "time": step.time,
-        "sensor": step.sensor,
-        "tracks": [_track_to_plain(track) for track in step.tracks],
-        "association": {
-            "method": step.association.method,
-            "pairs": [
-                {"fused": fused, "track": track, "score": score, "basis": basis}
-                for fused, track, score, basis in step.association.pairs
-            ],
-            "new": list(step.association.new),
-            "missed": list(step.association.missed),
-            "matrix": None
-            if step.association.matrix is None
-            else {
-                "rows": list(step.association.matrix[0]),
-                "cols": list(step.association.matrix[1]),
-                "values": step.association.matrix[2].tolist(),
-            },
-        },
-    }
-
-
-def _track_to_plain(track: FusedTrackView) -> dict[str, Any]:
-    return {
-        "id": track.id,
-        "status": track.status.value,
-        "state": track.state.tolist(),
-        "covariance": track.covariance.tolist(),
-        "sources": [{"sensor": s.sensor, "track": s.track, "time": s.time} for s in track.sources],
-        "classification": None
-        if track.classification is None
-        else class_to_plain(track.classification),
-        "score": track.score,
-        "reason": track.reason.value,
-    }
-
-
-def class_to_plain(assessment: ClassAssessment) -> dict[str, Any]:
-    """A class assessment in the contract's shape; under total conflict every
-    distribution is ``None`` (only the state and the conflict are known)."""
-    if assessment.mass is None:
-        return {
-            "state": assessment.state.value,
-            "mass": None,
-            "pignistic": None,
-            "belief": None,
-            "plausibility": None,
-            "conflict": assessment.conflict,
-            "decision": None,
-            "decision_state": assessment.decision_state.value,
-            "summarized": assessment.summarized,
-        }
-    labels = assessment.mass.frame.labels
-    return {
-        "state": assessment.state.value,
-        "mass": [
-            {"set": list(subset), "mass": mass} for subset, mass in assessment.mass.focal_sets()
-        ],
-        "pignistic": dict(zip(labels, assessment.pignistic.tolist(), strict=True)),
-        "belief": dict(zip(labels, assessment.belief.tolist(), strict=True)),
-        "plausibility": dict(zip(labels, assessment.plausibility.tolist(), strict=True)),
-        "conflict": assessment.conflict,
-        "decision": assessment.decision,
-        "decision_state": assessment.decision_state.value,
-        "summarized": assessment.summarized,
-    }

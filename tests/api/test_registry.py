@@ -52,13 +52,13 @@ def test_rebuilt_session_equals_the_live_one() -> None:
         new_session(live, session_config())
         await feed(live, "s1", reports(STEPS))
         session = await live.get("s1")
-        picture = await live.picture(session, None)
+        picture = await live.picture_json(session, None)
         load = live.store.load("s1")
         assert load.snapshot is not None and load.snapshot.seq == 8 and len(load.entries) == 1
         live.discard("s1")  # forget it in memory: the next use rebuilds it from the store
         rebuilt = await live.get("s1")
         assert rebuilt is not session and rebuilt.seq == STEPS
-        assert await live.picture(rebuilt, None) == picture
+        assert await live.picture_json(rebuilt, None) == picture
         assert rebuilt.sensor_inputs == session.sensor_inputs
         assert rebuilt.last_input_at == session.last_input_at
 
@@ -86,7 +86,7 @@ def test_session_without_sensors_accepts_any_sensor_up_to_the_limit() -> None:
         target.discard("s1")
         rebuilt = await target.get("s1")
         assert rebuilt.sensor_ids() == ["radar-1", "radar-2"]
-        assert await target.picture(rebuilt, None) == await target.picture(session, None)
+        assert await target.picture_json(rebuilt, None) == await target.picture_json(session, None)
 
     asyncio.run(scenario())
 

@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Iterable, Mapping
+from enum import Enum
 from typing import Any
 
 import numpy as np
 
+from core.belief import MassFunction
 from core.fusion.config import FusionConfig, SensorSpec
 from core.fusion.engine import SessionEngine
 from core.fusion.motion import MotionModel, StateLayout
-from core.fusion.reports import ReportedTrack, StepResult, TrackReport, step_to_plain
+from core.fusion.reports import ReportedTrack, StepResult, TrackReport
 from core.geometry import FieldOfView, PolygonView
 from core.lifecycle import LifeCycleConfig
 from core.simulation.tracklists import SensorTrackList
@@ -65,9 +68,21 @@ def to_report(track_list: SensorTrackList) -> TrackReport:
     )
 
 
+def _canonical(value: object) -> object:
+    """What ``json`` cannot write itself of a step: arrays, enums, mass functions."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, Enum):
+        return value.value
+    if isinstance(value, MassFunction):
+        return value.focal_sets()
+    raise TypeError(f"no canonical form for {type(value).__name__}")
+
+
 def serialise(step: StepResult) -> str:
-    """The step as canonical JSON text (what a client would receive)."""
-    return json.dumps(step_to_plain(step), sort_keys=True, allow_nan=False)
+    """Every field of the step as canonical JSON text (the determinism checks compare these;
+    the wire's shape is the service's business: ``app.sessions.translate.step_json``)."""
+    return json.dumps(dataclasses.asdict(step), default=_canonical, sort_keys=True, allow_nan=False)
 
 
 def run(engine: SessionEngine, reports: Iterable[SensorTrackList]) -> list[StepResult]:

@@ -1,0 +1,345 @@
+"""The one writer of results and the response models say the same thing.
+
+:func:`app.sessions.translate.step_json` and ``track_fields`` are the only
+writers of the result shape; ``api_schemas.results`` states it for openapi.
+Their outputs, over step results with every kind of content (class masses
+defined, totally conflicting, tied, summarized; likelihood evidence;
+tentative, confirmed, phantom and terminated tracks; continuity and
+association pairs; explanation matrices; detections; geodetic positions),
+must validate against the models *and* come back unchanged from them (no
+field the model does not know, none it would coerce), on the engine's views
+and over a live server (REST, WebSocket, the reads).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections import Counter
+from collections.abc import Iterator
+from dataclasses import replace
+from typing import Any
+
+import httpx
+import numpy as np
+import pytest
+from pydantic import BaseModel
+from websockets.sync.client import connect
+
+from api_schemas.config import SessionConfig
+from api_schemas.reports import DetectionReport, TrackReport
+from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
+from app.routes.fusion import geodetic_result
+from app.sessions.translate import (
+    core_detection_report,
+    fusion_config,
+    session_frame_report,
+    session_origin,
+    step_json,
+    track_fields,
+    wire_json,
+)
+from core.fusion.engine import SessionEngine
+from core.fusion.reports import StepResult as CoreStepResult
+from tests.api.conftest import LiveServer
+
+LABELS = [f"c{index}" for index in range(8)]
+COVARIANCE = [[4.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 4.0, 0], [0, 0, 0, 1.0]]
+ORIGIN = {"lat": 48.85, "lon": 2.35, "alt": 35.0}
+CLASS_TARGETS = 4
+
+
+def many_focal_sets(seed: int, count: int = 24) -> list[dict[str, Any]]:
+    """``count`` distinct focal sets of 2 to 5 labels: two of these combine beyond 32 sets."""
+    rng = np.random.default_rng(seed)
+    sets: set[tuple[str, ...]] = set()
+    while len(sets) < count:
+        size = int(rng.integers(2, 6))
+        sets.add(tuple(sorted(rng.choice(LABELS, size=size, replace=False).tolist())))
+    weights = rng.random(count)
+    weights /= weights.sum()
+    return [
+        {"set": list(labels), "mass": float(mass)}
+        for labels, mass in zip(sorted(sets), weights, strict=True)
+    ]
+
+
+def class_evidence(sensor: str, target: int) -> dict[str, Any]:
+    """Target 0: categorical and contradictory (total conflict); 1: tied BetP; 2: many focal
+    sets (summarized); 3: likelihoods."""
+    if target == 0:
+        return {"mass": [{"set": ["c0"] if sensor == "s1" else ["c1"], "mass": 1.0}]}
+    if target == 1:
+        return {"mass": [{"set": ["c0", "c1"], "mass": 1.0}]}
+    if target == 2:
+        return {"mass": many_focal_sets(1 if sensor == "s1" else 2)}
+    return {"likelihoods": {"c3": 0.9, "c4": 0.2}}
+
+
+def class_config() -> dict[str, Any]:
+    return {
+        "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+        "motion": {"model": "constant_velocity", "q": 0.5},
+        "classes": LABELS,
+        "origin": ORIGIN,
+        "sensors": [{"id": "s1", "reliability": 1.0}, {"id": "s2", "reliability": 1.0}],
+    }
+
+
+def class_reports(steps: int) -> list[dict[str, Any]]:
+    """Two sensors taking turns over :data:`CLASS_TARGETS` targets 3 km apart."""
+    bodies = []
+    for index in range(steps):
+        sensor = ("s1", "s2")[index % 2]
+        time = 1.0 + 0.5 * index
+        tracks = [
+            {
+                "id": f"{sensor}/{target}",
+                "state": [3000.0 * target + 10.0 * time, 10.0, 500.0, 0.0],
+                "covariance": COVARIANCE,
+                "classification": class_evidence(sensor, target),
+            }
+            for target in range(CLASS_TARGETS)
+        ]
+        bodies.append({"sensor": sensor, "time": time, "tracks": tracks})
+    return bodies
+
+
+def sector(origin: list[float], heading: float, far: float) -> dict[str, Any]:
+    return {
+        "kind": "sector",
+        "origin": origin,
+        "heading_deg": heading,
+        "half_angle_deg": 89.0,
+        "range": [0.0, far],
+    }
+
+
+def blind_zone_config() -> dict[str, Any]:
+    """s1 sees x in [0, 100], s2 x >= 150 along the axis; between them a blind zone of the region."""
+    return {
+        "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+        "motion": {"model": "constant_velocity", "q": 0.5},
+        "origin": ORIGIN,
+        "region": {
+            "kind": "polygon",
+            "vertices": [[-50.0, -200.0], [350.0, -200.0], [350.0, 200.0], [-50.0, 200.0]],
+        },
+        "sensors": [
+            {"id": "s1", "p_detect": 0.9, "fov": sector([0.0, 0.0], 0.0, 100.0)},
+            {"id": "s2", "p_detect": 0.9, "fov": sector([300.0, 0.0], 180.0, 150.0)},
+        ],
+    }
+
+
+def blind_zone_reports() -> list[dict[str, Any]]:
+    """A target at 10 m/s through s1's view, the blind zone (a phantom), then s2's view."""
+    small = [[1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 1.0, 0], [0, 0, 0, 1.0]]
+    bodies = []
+    for second in range(25):
+        for sensor, time, track in (("s1", float(second), "t"), ("s2", second + 0.5, "u")):
+            x = 10.0 + 10.0 * time
+            seen = x <= 100.0 if sensor == "s1" else x >= 150.0
+            tracks = [{"id": track, "state": [x, 10.0, 0.0, 0.0], "covariance": small}]
+            bodies.append({"sensor": sensor, "time": time, "tracks": tracks if seen else []})
+    return bodies
+
+
+def detection_config() -> dict[str, Any]:
+    return {
+        "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+        "classes": LABELS[:3],
+        "sensors": [{"id": "radar", "measurement": {"r": [[4.0, 0.0], [0.0, 4.0]]}}],
+    }
+
+
+def detection_reports(steps: int) -> list[dict[str, Any]]:
+    return [
+        {
+            "sensor": "radar",
+            "time": float(scan),
+            "detections": [{"z": [1000.0 * target + 10.0 * scan, 50.0]} for target in range(3)],
+        }
+        for scan in range(steps)
+    ]
+
+
+def engine_steps(
+    config: dict[str, Any], bodies: list[dict[str, Any]], detections: bool = False
+) -> Iterator[tuple[SessionConfig, SessionEngine, CoreStepResult]]:
+    """Every step of ``bodies`` applied by an engine (an explanation on every third)."""
+    session = SessionConfig.model_validate(config)
+    engine = SessionEngine(fusion_config(session))
+    for index, body in enumerate(bodies):
+        explain = index % 3 == 0
+        if detections:
+            report = core_detection_report(DetectionReport.model_validate(body), session)
+            yield session, engine, engine.apply_detections(report, explain=explain)
+        else:
+            report_ = session_frame_report(TrackReport.model_validate(body), session)
+            yield session, engine, engine.apply(report_, explain=explain)
+
+
+OPTIONAL_FIELDS = {("FusedTrack", "geodetic")}
+"""Fields the writer leaves out by design (``geodetic``: only with ``frame=geodetic``)."""
+
+
+def written_in_full(parsed: object, document: object) -> None:
+    """Every field of every model in ``parsed`` is in ``document`` (a default is no excuse)."""
+    if isinstance(parsed, BaseModel):
+        assert isinstance(document, dict)
+        name = type(parsed).__name__
+        required = {
+            field for field in type(parsed).model_fields if (name, field) not in OPTIONAL_FIELDS
+        }
+        assert required <= set(document), (name, required - set(document))
+        for field in document:
+            written_in_full(getattr(parsed, field), document[field])
+    elif isinstance(parsed, list):
+        assert isinstance(document, list)
+        for item, written in zip(parsed, document, strict=True):
+            written_in_full(item, written)
+
+
+def round_trip(model: type[BaseModel], text: str) -> dict[str, Any]:
+    """``text`` validated as ``model``: it comes back unchanged from the model and writes
+    every field the model has."""
+    document: dict[str, Any] = json.loads(text)
+    parsed = model.model_validate_json(text)
+    assert parsed.model_dump(mode="json", exclude_unset=True) == document
+    written_in_full(parsed, document)
+    return document
+
+
+class Seen:
+    """What the written documents held, to check the scenes cover every kind of content."""
+
+    def __init__(self) -> None:
+        self.values: Counter[tuple[str, object]] = Counter()
+
+    def step(self, document: dict[str, Any]) -> None:
+        association = document["association"]
+        self.values["matrix", association["matrix"] is not None] += 1
+        for pair in association["pairs"]:
+            self.values["basis", pair["basis"]] += 1
+        self.tracks(document["tracks"])
+
+    def tracks(self, tracks: list[dict[str, Any]]) -> None:
+        for track in tracks:
+            self.values["status", track["status"]] += 1
+            self.values["geodetic", "geodetic" in track] += 1
+            classification = track["classification"]
+            if classification is not None:
+                self.values["class state", classification["state"]] += 1
+                self.values["decision", classification["decision_state"]] += 1
+                self.values["summarized", classification["summarized"]] += 1
+
+    def kinds(self, what: str) -> set[object]:
+        return {value for (name, value) in self.values if name == what}
+
+
+SCENES = [
+    (class_config(), class_reports(10), False),
+    (blind_zone_config(), blind_zone_reports(), False),
+    (detection_config(), detection_reports(6), True),
+]
+
+
+def test_every_written_result_is_the_response_models() -> None:
+    seen = Seen()
+    for config, bodies, detections in SCENES:
+        for seq, (session, engine, step) in enumerate(
+            engine_steps(config, bodies, detections), start=1
+        ):
+            text = step_json(step, seq)
+            seen.step(round_trip(StepResult, text))
+            origin = session_origin(session)
+            if origin is not None:
+                seen.step(round_trip(StepResult, geodetic_result(text, origin, session)))
+            picture = {"seq": seq, "time": step.time, "tracks": track_fields(engine.picture())}
+            seen.tracks(round_trip(FusedPicture, wire_json(picture))["tracks"])
+    assert seen.kinds("status") >= {"tentative", "confirmed", "phantom", "terminated"}
+    assert seen.kinds("class state") == {"defined", "total_conflict"}
+    assert seen.kinds("decision") == {"decided", "tied", "undefined"}
+    assert seen.kinds("summarized") == {True, False}
+    assert seen.kinds("matrix") == {True, False}
+    assert seen.kinds("basis") == {"continuity", "association"}
+    assert seen.kinds("geodetic") == {True, False}
+
+
+def test_the_wire_answers_are_the_response_models(live_server: LiveServer) -> None:
+    """The same over a live server: POST (with ``explain``, ``frame=geodetic``), the stream,
+    the fused picture and a track's detail."""
+    seen = Seen()
+    with httpx.Client(base_url=live_server.url) as client:
+        created = client.post("/v1/sessions", json=class_config()).json()
+        sid, headers = created["id"], {"Authorization": f"Bearer {created['token']}"}
+        bodies = class_reports(8)
+        for index, body in enumerate(bodies[:4]):
+            params = {"explain": "true", "frame": "geodetic"} if index % 2 else {}
+            answer = client.post(
+                f"/v1/sessions/{sid}/tracks", json=body, params=params, headers=headers
+            )
+            assert answer.status_code == 200, answer.text
+            seen.step(round_trip(StepResult, answer.text))
+        url = live_server.url.replace("http://", "ws://") + f"/v1/sessions/{sid}/stream"
+        with connect(url, additional_headers=headers) as stream:
+            json.loads(stream.recv())  # ack
+            for body in bodies[4:]:
+                stream.send(json.dumps(body | {"type": "tracks"}))
+                message = json.loads(stream.recv())
+                assert message["type"] == "result", message
+                seen.step(round_trip(StepResult, json.dumps(message["result"])))
+        for params in ({}, {"frame": "geodetic"}, {"time": "9.5"}):
+            answer = client.get(f"/v1/sessions/{sid}/tracks", params=params, headers=headers)
+            assert answer.status_code == 200, answer.text
+            seen.tracks(round_trip(FusedPicture, answer.text)["tracks"])
+        track = answer.json()["tracks"][0]["id"]
+        for params in ({}, {"frame": "geodetic"}):
+            answer = client.get(
+                f"/v1/sessions/{sid}/tracks/{track}", params=params, headers=headers
+            )
+            assert answer.status_code == 200, answer.text
+            detail = round_trip(FusedTrackDetail, answer.text)
+            assert detail["track"]["id"] == track and detail["history"]
+            seen.tracks([detail["track"]])
+    assert seen.kinds("class state") == {"defined", "total_conflict"}
+    assert seen.kinds("decision") == {"decided", "tied", "undefined"}
+    assert seen.kinds("summarized") == {True, False}
+    assert seen.kinds("matrix") == {True, False}
+    assert seen.kinds("geodetic") == {True, False}
+
+
+def class_steps() -> list[CoreStepResult]:
+    return [step for _, _, step in engine_steps(class_config(), class_reports(4))]
+
+
+def test_step_json_refuses_non_finite_numbers() -> None:
+    step = class_steps()[-1]
+    track = step.tracks[0]
+    state = track.state.copy()
+    state[0] = math.nan
+    broken = replace(step, tracks=(replace(track, state=state), *step.tracks[1:]))
+    with pytest.raises(ValueError, match="non-finite state"):
+        step_json(broken, 1)
+    last = step.tracks[-1]
+    covariance = last.covariance.copy()
+    covariance[1, 1] = math.inf
+    broken = replace(step, tracks=(*step.tracks[:-1], replace(last, covariance=covariance)))
+    with pytest.raises(ValueError, match=rf"fused track '{last.id}': non-finite covariance"):
+        step_json(broken, 1)
+    broken = replace(step, tracks=(replace(track, score=-math.inf), *step.tracks[1:]))
+    with pytest.raises(ValueError, match="non-finite score"):
+        step_json(broken, 1)
+    with pytest.raises(ValueError, match="non-finite step time"):
+        step_json(replace(step, time=math.nan), 1)
+
+
+def test_step_json_writes_arrays_in_their_logical_order() -> None:
+    """A Fortran-ordered (transposed) covariance is written row by row, as numpy reads it."""
+    step = class_steps()[-1]
+    track = step.tracks[0]
+    skewed = track.covariance + np.triu(np.ones_like(track.covariance), 1)  # not symmetric
+    transposed = replace(step, tracks=(replace(track, covariance=np.asfortranarray(skewed.T)),))
+    written = json.loads(step_json(transposed, 1))["tracks"][0]["covariance"]
+    assert written == skewed.T.tolist()
