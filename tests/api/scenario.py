@@ -1,4 +1,5 @@
-"""A small deterministic two-sensor scene for the service tests: bodies only, no service code."""
+"""A small deterministic two-sensor scene for the service tests: bodies only, no service code
+(the wire models name the fields a result carries)."""
 
 from __future__ import annotations
 
@@ -6,6 +7,8 @@ import math
 from typing import Any
 
 import numpy as np
+
+from api_schemas.results import FusedClassification, FusedTrack
 
 CLASSES = ["liner", "bomber", "fighter"]
 SENSORS = ["radar-1", "radar-2"]
@@ -71,27 +74,9 @@ def reports(steps: int, sensors: list[str] | None = None) -> list[dict[str, Any]
     ]
 
 
-FUSED_TRACK_KEYS = {
-    "id",
-    "status",
-    "state",
-    "covariance",
-    "sources",
-    "classification",
-    "score",
-    "reason",
-}
-CLASSIFICATION_KEYS = {
-    "state",
-    "mass",
-    "pignistic",
-    "belief",
-    "plausibility",
-    "conflict",
-    "decision",
-    "decision_state",
-    "summarized",
-}
+FUSED_TRACK_KEYS = set(FusedTrack.model_fields) - {"geodetic"}
+"""What every fused track carries (``geodetic`` only with ``frame=geodetic``)."""
+CLASSIFICATION_KEYS = set(FusedClassification.model_fields)
 
 
 def check_fused_track(track: dict[str, Any]) -> None:
