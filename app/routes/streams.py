@@ -36,7 +36,6 @@ from pydantic import ValidationError
 from starlette.websockets import WebSocketDisconnect
 
 from api_schemas.problem import Problem
-from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.ws import DetectionsMessage, TracksMessage, client_message_adapter
 from app.http.deps import open_record
 from app.http.errors import (
@@ -194,15 +193,9 @@ async def _answer(session: LiveSession, registry: SessionRegistry, text: str, pa
         if session.closed:  # evicted (store down, or a failed step): the registry reloads it
             session = await registry.get(session.id)
         if isinstance(message, DetectionsMessage):
-            detections = DetectionReport.model_construct(
-                sensor=message.sensor, time=message.time, detections=message.detections
-            )
-            result = await registry.submit_detections(session, detections)
+            result = await registry.submit_detections(session, message.report())
         else:
-            report = TrackReport.model_construct(
-                sensor=message.sensor, time=message.time, tracks=message.tracks
-            )
-            result = await registry.submit_tracks(session, report)
+            result = await registry.submit_tracks(session, message.report())
     except Exception as error:  # every failure is answered; the connection stays open
         return _error(problem_for(error, path), ref)
     return result_message(result, ref)
