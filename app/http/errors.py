@@ -369,26 +369,17 @@ def _validation_problem(
     """
     errors = field_errors(raw[:listed], root)
     breach = next((error for error in raw if error.get("type") == LIMIT_EXCEEDED), None)
+    slug, title = "validation-error", "Invalid request"
     extensions: dict[str, Any] = {}
-    if len(raw) > len(errors):
-        extensions["error_count"] = len(raw)
     if breach is not None:
         context = breach.get("ctx") or {}
-        return Problem(
-            type=problem_type(LimitExceeded.slug),
-            title=LimitExceeded.title,
-            status=LimitExceeded.status,
-            detail=_validation_detail(errors, len(raw)),
-            instance=instance,
-            errors=errors,
-            limit=context.get("limit"),
-            maximum=context.get("maximum"),
-            actual=context.get("actual"),
-            **extensions,
-        )
+        slug, title = LimitExceeded.slug, LimitExceeded.title
+        extensions = {key: context.get(key) for key in ("limit", "maximum", "actual")}
+    if len(raw) > len(errors):
+        extensions["error_count"] = len(raw)
     return Problem(
-        type=problem_type("validation-error"),
-        title="Invalid request",
+        type=problem_type(slug),
+        title=title,
         status=HTTPStatus.UNPROCESSABLE_ENTITY,
         detail=_validation_detail(errors, len(raw)),
         instance=instance,
