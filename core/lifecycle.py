@@ -137,17 +137,18 @@ class ScoreModel:
         """Start scores of two-point tracks: L₀ + the second detection's hit ΔL, vectorised.
 
         Given the first detection z₀, a true target's second detection z₁ is
-        Gaussian about z₀ with covariance ``pair_covariance`` (2R + Σ_v ΔT²:
-        both measurement noises and the velocity prior over the interval); the
-        hit ΔL of ``z₁ − z₀`` (``displacement``, shape (T, q)) under it is the
-        same SPRT increment as any hit (Blackman & Popoli pp. 328-330). Without
-        it a two-point track would start one detection short of its evidence.
+        Gaussian about z₀ with covariance ``pair_covariance`` (R₀ + R₁ + Σ_v ΔT²:
+        both measurement noises and the velocity prior over the interval; one
+        (q, q) for every pair or one per pair, (T, q, q)); the hit ΔL of
+        ``z₁ − z₀`` (``displacement``, shape (T, q)) under it is the same SPRT
+        increment as any hit (Blackman & Popoli pp. 328-330). Without it a
+        two-point track would start one detection short of its evidence.
         """
         d = np.atleast_2d(np.asarray(displacement, dtype=np.float64))
-        s = np.asarray(pair_covariance, dtype=np.float64)
-        distance = np.einsum("ti,ij,tj->t", d, np.linalg.inv(s), d)
-        log_det = float(np.linalg.slogdet(s)[1])
-        increment = self.hit_increment(distance, np.full(len(d), log_det), d.shape[1])
+        s = np.broadcast_to(np.asarray(pair_covariance, dtype=np.float64), (*d.shape, d.shape[1]))
+        distance = np.einsum("ti,ti->t", d, np.linalg.solve(s, d[:, :, None])[:, :, 0])
+        log_det = np.linalg.slogdet(s)[1]
+        increment = self.hit_increment(distance, log_det, d.shape[1])
         return np.asarray(self.initial + increment, dtype=np.float64)
 
     @property

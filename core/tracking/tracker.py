@@ -81,7 +81,9 @@ from core.tracking.jpda import cheap_jpda_weights, pda_update
 from core.tracking.presets import VELOCITY, TrackingPreset, VelocityConvention
 from core.tracking.track import LocalTrack, TrackerStep, float_array, mass_to_plain, plain_floats
 
-EXPORT_VERSION = 1
+EXPORT_VERSION = 2
+"""2: the seeds' covariances (``seed_covariances``); a version-1 export (without them)
+restores its seeds with the bank's R, the R they were started with then."""
 SEED_NOISE_GATE = 0.999
 """Gate probability of the measurement-noise part of the seed distance bound."""
 
@@ -194,6 +196,7 @@ class LocalTracker:
             None if self.classifier is None else self.classifier.initial(0)
         )
         self._seeds: FloatArray = np.zeros((0, self._q))
+        self._seed_noises: FloatArray = np.zeros((0, self._q, self._q))
         self._seed_times: FloatArray = np.zeros(0)
         self._seed_sensors: IntArray = np.zeros(0, dtype=np.int64)
 
@@ -315,7 +318,12 @@ class LocalTracker:
         self._hand_over(newly_confirmed, numbers)
         free = np.ones(len(z), dtype=bool)
         free[used] = False
-        self._initiate(time, sensor_name, z, free, numbers)
+        noises = (
+            np.broadcast_to(self._noise, (len(z), self._q, self._q))
+            if own_noise is None
+            else own_noise
+        )
+        self._initiate(time, sensor_name, z, noises, free, numbers)
         return self._result(time, sensor_name, numbers)
 
     # ------------------------------------------------------------ checks
@@ -525,41 +533,61 @@ class LocalTracker:
 
     # -------------------------------------------------------- initiation
     def _initiate(
-        self, time: float, sensor: str, z: FloatArray, free: BoolArray, numbers: IntArray
+        self,
+        time: float,
+        sensor: str,
+        z: FloatArray,
+        noises: FloatArray,
+        free: BoolArray,
+        numbers: IntArray,
     ) -> None:
-        """New tentative tracks from the detections nobody used (config Readings)."""
+        """New tentative tracks from the detections nobody used (config Readings), each
+        started and scored with its detections' own covariances ``noises`` (m, q, q)."""
         detections = np.flatnonzero(free)
         if self.config.initiation == "single_point":
             starts = detections
-            state = single_point_initiation(self.bank, z[starts], self.config.initial_velocity_std)
+            state = single_point_initiation(
+                self.bank, z[starts], self.config.initial_velocity_std, noises=noises[starts]
+            )
             self._append(state, starts, numbers)
             return
         sensor_index = self.config.sensors.index(sensor)
         mine = self._seed_sensors == sensor_index
         older = mine & (self._seed_times < time)
-        seeds, seed_times = self._seeds[older], self._seed_times[older]
+        seeds, seed_noises = self._seeds[older], self._seed_noises[older]
+        seed_times = self._seed_times[older]
         starts = np.zeros(0, dtype=np.int64)
         if len(seeds) and len(detections):
             # The sensor's seeds all come from its latest earlier scan (older ones are dropped below).
             interval = float(time - seed_times.max())
             noise_gate = float(chi2.ppf(SEED_NOISE_GATE, self._q))
-            largest_noise = float(np.linalg.eigvalsh(self._noise)[-1])
-            radius = self.config.max_speed * interval + math.sqrt(noise_gate * 2.0 * largest_noise)
+            # the gate on R₀ + R₁ by its largest eigenvalue, pair by pair
+            seed_largest = np.linalg.eigvalsh(seed_noises)[:, -1]
+            detection_largest = np.linalg.eigvalsh(noises[detections])[:, -1]
+            radius = self.config.max_speed * interval + np.sqrt(
+                noise_gate * (seed_largest[:, None] + detection_largest[None, :])
+            )
             seed_index, detection_index = pair_seeds(seeds, z[detections], radius)
             if len(seed_index):
                 starts = detections[detection_index]
-                first = seeds[seed_index]
+                first, first_noises = seeds[seed_index], seed_noises[seed_index]
                 # [MTT] §4.3: the pair's score has both detections' evidence; a pair
                 # scoring at or below the delete threshold starts no track.
                 spread = self.config.initial_velocity_std**2 * interval**2
-                pair_covariance = 2.0 * self._noise + spread * np.eye(self._q)
+                pair_covariance = first_noises + noises[starts] + spread * np.eye(self._q)
                 start_score = self._score_model.two_point_initial(
                     z[starts] - first, pair_covariance
                 )
                 alive = start_score > self.config.life_cycle.delete_threshold
                 starts, first, start_score = starts[alive], first[alive], start_score[alive]
                 state = two_point_initiation(
-                    self.bank, first, z[starts], interval, velocity=self._conventions
+                    self.bank,
+                    first,
+                    z[starts],
+                    interval,
+                    first_noises=first_noises[alive],
+                    second_noises=noises[starts],
+                    velocity=self._conventions,
                 )
                 order = np.argsort(starts, kind="stable")
                 starts = starts[order]
@@ -568,6 +596,7 @@ class LocalTracker:
         remaining = np.setdiff1d(detections, starts)
         kept = ~older
         self._seeds = np.concatenate([self._seeds[kept], z[remaining]])
+        self._seed_noises = np.concatenate([self._seed_noises[kept], noises[remaining]])
         self._seed_times = np.concatenate([self._seed_times[kept], np.full(len(remaining), time)])
         self._seed_sensors = np.concatenate(
             [self._seed_sensors[kept], np.full(len(remaining), sensor_index, dtype=np.int64)]
@@ -678,6 +707,7 @@ class LocalTracker:
             "time": None if self.time is None else plain_floats(np.float64(self.time)),
             "next_number": self.next_number,
             "seeds": plain_floats(self._seeds),
+            "seed_covariances": plain_floats(self._seed_noises),
             "seed_times": plain_floats(self._seed_times),
             "seed_sensors": self._seed_sensors.tolist(),
             "tracks": tracks,
@@ -686,12 +716,19 @@ class LocalTracker:
     @classmethod
     def restore(cls, config: LocalTrackerConfig, plain: dict[str, Any]) -> LocalTracker:
         """Rebuild a tracker from :meth:`export`'s output and the same configuration."""
-        if plain.get("version") != EXPORT_VERSION:
-            raise TrackingError(f"unknown tracker export version {plain.get('version')!r}")
+        version = plain.get("version")
+        if version not in (1, EXPORT_VERSION):
+            raise TrackingError(f"unknown tracker export version {version!r}")
         tracker = cls(config)
         tracker.time = None if plain["time"] is None else float(float_array(plain["time"]))
         tracker.next_number = int(plain["next_number"])
-        tracker._seeds = float_array(plain["seeds"]).reshape(-1, tracker._q)
+        q = tracker._q
+        tracker._seeds = float_array(plain["seeds"]).reshape(-1, q)
+        tracker._seed_noises = (
+            float_array(plain["seed_covariances"]).reshape(-1, q, q)
+            if version == EXPORT_VERSION
+            else np.broadcast_to(tracker._noise, (len(tracker._seeds), q, q)).copy()
+        )
         tracker._seed_times = float_array(plain["seed_times"]).reshape(-1)
         tracker._seed_sensors = np.array(plain["seed_sensors"], dtype=np.int64).reshape(-1)
         entries = plain["tracks"]
