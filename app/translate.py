@@ -171,12 +171,15 @@ def polar_reference_noise(
 ) -> tuple[tuple[float, ...], ...]:
     """The R a polar sensor's tracker uses where a detection's own covariance is not passed.
 
-    Every polar detection is updated with its own converted covariance
-    (:mod:`app.polar`); the tracker still uses the bank's R to start tracks
-    (two-point velocity variance, seed radius). That R is the largest converted
-    noise over the sensor's coverage, isotropic: ``max(σ_ρ², (ρ_max σ_a)²)``
-    per axis, ``ρ_max`` the sector's far range or :data:`POLAR_REFERENCE_RANGE`,
-    so new tracks start no more confident than their detections.
+    Every polar detection is gated, scored, updated and starts its tracks
+    with its own converted covariance (:mod:`app.polar`,
+    :mod:`core.tracking.initiator`); the bank's R is left only where a
+    track has no detection: the gate volume of a coasting track and the
+    zero-step prediction of a second scan at the same time. That R is the
+    largest converted noise over the sensor's coverage, isotropic:
+    ``max(σ_ρ², (ρ_max σ_a)²)`` per axis, ``ρ_max`` the sector's far range or
+    :data:`POLAR_REFERENCE_RANGE`, so a coasting track's gate is never
+    smaller than its detections'.
     """
     far = fov.range_max if isinstance(fov, Sector) else POLAR_REFERENCE_RANGE
     sigma_range, sigma_azimuth_deg = noise.polar_sigmas

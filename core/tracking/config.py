@@ -12,10 +12,12 @@ Readings
     ``max_speed · Δt`` (plus the gate on R) starts a tentative track by
     :func:`~core.tracking.initiator.two_point_initiation`, scored from
     ``L₀ = ln(β_NT/β_FT)`` plus the second detection's hit ΔL under
-    ``2R + initial_velocity_std² Δt² I`` (the pair's evidence, so a pair of a
+    ``R₀ + R₁ + initial_velocity_std² Δt² I`` (the pair's evidence, so a pair of a
     true target starts well above the delete threshold; a pair at or below it
-    starts nothing). ``"single_point"``: every unassigned detection
-    starts a tentative track at once, position from z (covariance R), velocity
+    starts nothing). R₀, R₁ are the two detections' own covariances (the
+    bank's R for a detection without one; a seed keeps its R until the next
+    scan). ``"single_point"``: every unassigned detection
+    starts a tentative track at once, position from z (its covariance R), velocity
     0 with standard deviation ``initial_velocity_std`` per axis (for the
     heading convention of the pedestrian models: heading 0 with variance
     ``initial_velocity_std²``); the large velocity variance makes the first
