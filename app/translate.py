@@ -57,7 +57,7 @@ from core.fusion.reports import DetectionReport as CoreDetectionReport
 from core.fusion.reports import TrackReport as CoreTrackReport
 from core.fusion.state import StateFusion
 from core.geometry import FieldOfView, PolygonView, Sector
-from core.lifecycle import LifeCycleConfig, default_density
+from core.lifecycle import LifeCycleConfig
 from core.tracking.config import ClassificationOptions, LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
 from core.tracking.presets import MIN_MANOEUVRE_DENSITY, preset
@@ -133,7 +133,6 @@ def local_tracker_config(
     options = tracking.association.options
     thresholds = tracking.thresholds
     initiation = tracking.initiation
-    default = default_density(axes)
     return LocalTrackerConfig(
         preset=tracking.preset or "aircraft",
         time_interval=interval,
@@ -145,9 +144,7 @@ def local_tracker_config(
         imm_distance=options.imm_distance or "closest_model",
         p_detect=sensor.p_detect,
         life_cycle=life_cycle_config(
-            thresholds,
-            tracking.birth_density or default,
-            clutter_density=sensor.clutter_density or default,
+            thresholds, tracking.birth_density, clutter_density=sensor.clutter_density
         ),
         initiation=initiation.kind,
         max_speed=(
@@ -194,14 +191,15 @@ def polar_reference_noise(
 
 def life_cycle_config(
     thresholds: TrackThresholds,
-    birth_density: float,
-    clutter_density: float = LifeCycleConfig.false_target_density,
+    birth_density: float | None,
+    clutter_density: float | None = None,
 ) -> LifeCycleConfig:
     """The life cycle of both layers from the wire thresholds and densities.
 
     A local tracker gets its sensor's ``clutter_density``; the fused layer,
-    whose inputs are tracks and not detections, the default of its dimension
-    (:func:`~core.lifecycle.default_density`, as are the wire's ``null``).
+    whose inputs are tracks and not detections, the default of its dimension.
+    A ``null`` density stays None: the core config fills in
+    :func:`~core.lifecycle.default_density` of its dimension (one source).
     """
     return LifeCycleConfig(
         false_confirmation=thresholds.false_confirmation,
@@ -269,11 +267,7 @@ def fusion_config(config: SessionConfig, extra_sensors: Iterable[str] = ()) -> F
         association_options=method_options(association.options),
         distance=association.options.distance or "sum",
         state_fusion=StateFusion(config.fusion.state),
-        management=life_cycle_config(
-            thresholds,
-            config.tracking.birth_density or default_density(len(config.state.position)),
-            clutter_density=default_density(len(config.state.position)),
-        ),
+        management=life_cycle_config(thresholds, config.tracking.birth_density),
     )
 
 

@@ -26,6 +26,7 @@ gate on D). The track is terminated when P falls below
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 import math
 from dataclasses import dataclass
@@ -217,9 +218,12 @@ class LifeCycleConfig:
     ----------
     false_confirmation : α, P(a false track is confirmed), in (0, 1).
     true_deletion : β, P(a true track is deleted), in (0, 1).
-    false_target_density : β_FT (= ρ_FA), false alarms per unit of position space per scan
-        (default: :func:`default_density` of 2-D; give ``default_density(3)`` in 3-D).
-    new_target_density : β_NT (= ρ_NT), new targets per unit of position space per scan.
+    false_target_density : β_FT (= ρ_FA), false alarms per unit of position space per scan;
+        None (the default): :func:`default_density` of the layer's position dimension,
+        filled in by :meth:`for_dimension` (``LocalTrackerConfig`` and ``FusionConfig``
+        call it, so a layer always runs numbers; the wire's ``null`` is this None).
+    new_target_density : β_NT (= ρ_NT), new targets per unit of position space per scan;
+        None as for β_FT.
     termination_probability : gate-emptiness threshold ([HZ] §4.2) in [0, 1); 0 turns it off.
     gate_probability : γ of the gate volume A_G (as a χ² probability) and of the
         hand-over to phantoms, in (0, 1).
@@ -237,8 +241,8 @@ class LifeCycleConfig:
 
     false_confirmation: float = 1e-3
     true_deletion: float = 1e-3
-    false_target_density: float = default_density(2)
-    new_target_density: float = default_density(2)
+    false_target_density: float | None = None
+    new_target_density: float | None = None
     termination_probability: float = 0.5
     gate_probability: float = 0.999
     min_points: int | None = None
@@ -260,6 +264,8 @@ class LifeCycleConfig:
             "phantom_min_speed",
         ):
             value = getattr(self, name)
+            if value is None and name.endswith("density"):
+                continue
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInput(f"{name} must be a positive number, got {value!r}")
         if self.score_margin is not None and not (
@@ -276,6 +282,30 @@ class LifeCycleConfig:
             raise InvalidInput(
                 f"min_points must be in [1, {MAX_MIN_POINTS}] or None, got {self.min_points}"
             )
+
+    def for_dimension(self, dim: int) -> LifeCycleConfig:
+        """This life cycle with every unset density at :func:`default_density` of ``dim``."""
+        default = default_density(dim)
+        return dataclasses.replace(
+            self,
+            false_target_density=(
+                default if self.false_target_density is None else self.false_target_density
+            ),
+            new_target_density=(
+                default if self.new_target_density is None else self.new_target_density
+            ),
+        )
+
+    @property
+    def densities(self) -> tuple[float, float]:
+        """``(β_FT, β_NT)`` of a life cycle set for its dimension (:meth:`for_dimension`)."""
+        clutter, birth = self.false_target_density, self.new_target_density
+        if clutter is None or birth is None:
+            raise InvalidInput(
+                "the life cycle's densities depend on the position dimension: "
+                "call for_dimension(dim) first"
+            )
+        return clutter, birth
 
     def score_model(self, p_detect: float) -> ScoreModel:
         """The SPRT score of a sensor with detection probability ``p_detect`` (built once)."""
@@ -306,10 +336,11 @@ class LifeCycleConfig:
 
 @lru_cache(maxsize=64)
 def _score_model(config: LifeCycleConfig, p_detect: float) -> ScoreModel:
+    clutter, birth = config.densities
     return ScoreModel(
         p_detect=p_detect,
-        false_target_density=config.false_target_density,
-        new_target_density=config.new_target_density,
+        false_target_density=clutter,
+        new_target_density=birth,
         false_confirmation=config.false_confirmation,
         true_deletion=config.true_deletion,
     )
@@ -526,9 +557,7 @@ def advance(
         volume = gate_volume(
             gate, np.where(coasting_miss, evidence.gate_log_det, 0.0), evidence.gate_dim
         )
-        factor = gate_emptiness_factor(
-            config.false_target_density, config.new_target_density, volume
-        )
+        factor = gate_emptiness_factor(*config.densities, volume)
         empty_gate = np.where(coasting_miss, empty_gate * factor, empty_gate)
 
     undecided = np.ones(len(status), dtype=bool)

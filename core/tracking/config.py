@@ -139,7 +139,9 @@ class LocalTrackerConfig:
     modified_beta, modified_k, modified_alpha : β, k, α of the modified distance.
     p_detect : P_D of the system's sensors (the track score).
     life_cycle : score thresholds and densities, confirmation, deletion, gate
-        emptiness, occlusion and phantoms (:class:`~core.lifecycle.LifeCycleConfig`).
+        emptiness, occlusion and phantoms (:class:`~core.lifecycle.LifeCycleConfig`);
+        densities left None become :func:`~core.lifecycle.default_density` of the
+        measured positions (``axes``, or the explicit bank's measurement dimension).
     initiation, max_speed, initial_velocity_std : see the module Readings.
     fields_of_view : the system's sensors and their fields of view.
     region : the surveillance region (default: union of the sensors' ranges).
@@ -202,6 +204,9 @@ class LocalTrackerConfig:
                 raise TrackingError(f"{name} must be a positive number, got {value!r}")
         if not self.fields_of_view:
             raise TrackingError("fields_of_view needs at least one sensor")
+        # densities left unset are per m^q of the measured positions (core.lifecycle)
+        measured = self.axes if self.bank is None else self.bank.measurement.dim
+        object.__setattr__(self, "life_cycle", self.life_cycle.for_dimension(measured))
 
     def tracking_preset(self) -> TrackingPreset | None:
         """The preset, or None when an explicit bank replaces it."""
