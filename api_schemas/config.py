@@ -143,7 +143,10 @@ class MeasurementModel(WireModel):
     ``{"range", "azimuth_deg", "elevation_deg"?, "range_rate"?}`` at the
     sensor's ``site``, azimuth clockwise from north. They are tracked as
     converted Cartesian measurements with each detection's own covariance
-    (:mod:`app.polar`); ``range_rate`` is accepted and not used yet.
+    (:mod:`app.polar`). With ``sigma_range_rate`` a detection's
+    ``range_rate`` updates its track's velocity after the position (a
+    sequential extended Kalman update, :mod:`core.tracking.range_rate`);
+    without it a ``range_rate`` is accepted and not used.
     """
 
     kind: Literal["cartesian", "polar"] = "cartesian"
@@ -158,7 +161,11 @@ class MeasurementModel(WireModel):
         default=None, description="polar: elevation standard deviation (deg); required in 3-D"
     )
     sigma_range_rate: PositiveFloat | None = Field(
-        default=None, description="polar: range-rate standard deviation (m/s); not used yet"
+        default=None,
+        description=(
+            "polar: range-rate standard deviation (m/s); with it, the detections' "
+            "range_rate updates the tracks' velocities (without it, range_rate is not used)"
+        ),
     )
 
     @model_validator(mode="after")

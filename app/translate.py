@@ -61,6 +61,7 @@ from core.lifecycle import LifeCycleConfig
 from core.tracking.config import ClassificationOptions, LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
 from core.tracking.presets import MIN_MANOEUVRE_DENSITY, preset
+from core.tracking.range_rate import RangeRateModel
 
 PlainObject = dict[str, Any]
 
@@ -153,10 +154,23 @@ def local_tracker_config(
             else LocalTrackerConfig.max_speed
         ),
         initial_velocity_std=initiation.velocity_std,
+        range_rate=range_rate_model(config, sensor, axes),
         fields_of_view={sensor.id: fov},
         classification=ClassificationOptions() if config.classes else None,
         id_prefix=f"{sensor.id}:",
     )
+
+
+def range_rate_model(
+    config: SessionConfig, sensor: SensorConfig, axes: int
+) -> RangeRateModel | None:
+    """A polar sensor's range-rate model (its site, ``sigma_range_rate``), or None without σ:
+    the detections' ``range_rate`` then stays unused."""
+    noise = sensor.measurement
+    if noise is None or noise.kind != "polar" or noise.sigma_range_rate is None:
+        return None
+    site, _ = sensor_site(config, sensor)
+    return RangeRateModel(tuple(float(x) for x in site[:axes]), noise.sigma_range_rate)
 
 
 POLAR_REFERENCE_RANGE = 50_000.0
@@ -407,7 +421,15 @@ def polar_detection_report(
     if turn is not None:
         offsets = offsets @ turn.T
         covariances = rotate_covariances(np.broadcast_to(turn, covariances.shape), covariances)
-    return CoreDetectionReport(report.sensor, report.time, offsets + site[:dim], covariances)
+    range_rates = None
+    if noise.sigma_range_rate is not None and any(d.range_rate is not None for d in detections):
+        range_rates = np.array(
+            [math.nan if d.range_rate is None else d.range_rate for d in detections],
+            dtype=np.float64,
+        )
+    return CoreDetectionReport(
+        report.sensor, report.time, offsets + site[:dim], covariances, range_rates
+    )
 
 
 # ------------------------------------------------------------------ outputs

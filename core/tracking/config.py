@@ -74,6 +74,7 @@ from core.geometry import Coverage, FieldOfView, PolygonView
 from core.lifecycle import LifeCycleConfig, ScoreModel
 from core.tracking.models import LinearMeasurementModel, ModelBank
 from core.tracking.presets import TrackingPreset, preset
+from core.tracking.range_rate import RangeRateModel
 
 ImmDistance = Literal["closest_model", "combined"]
 DistanceKind = Literal["plain", "modified"]
@@ -143,6 +144,8 @@ class LocalTrackerConfig:
         densities left None become :func:`~core.lifecycle.default_density` of the
         measured positions (``axes``, or the explicit bank's measurement dimension).
     initiation, max_speed, initial_velocity_std : see the module Readings.
+    range_rate : the system's range-rate measurement (site and σ), or None; a scan
+        may then give each detection's range-rate (:mod:`core.tracking.range_rate`).
     fields_of_view : the system's sensors and their fields of view.
     region : the surveillance region (default: union of the sensors' ranges).
     classification : credal options, or None for no classification; ignored
@@ -170,6 +173,7 @@ class LocalTrackerConfig:
     initiation: Initiation = "two_point"
     max_speed: float = 1000.0
     initial_velocity_std: float = 300.0
+    range_rate: RangeRateModel | None = None
     fields_of_view: Mapping[str, FieldOfView | None] = field(
         default_factory=lambda: MappingProxyType({"sensor": None})
     )

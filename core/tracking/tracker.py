@@ -79,6 +79,7 @@ from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState, IMMUpdate, 
 from core.tracking.initiator import pair_seeds, single_point_initiation, two_point_initiation
 from core.tracking.jpda import cheap_jpda_weights, pda_update
 from core.tracking.presets import VELOCITY, TrackingPreset, VelocityConvention
+from core.tracking.range_rate import range_rate_update
 from core.tracking.track import LocalTrack, TrackerStep, float_array, mass_to_plain, plain_floats
 
 EXPORT_VERSION = 2
@@ -139,6 +140,8 @@ class LocalTracker:
         self._conventions: tuple[VelocityConvention, ...] = (
             (VELOCITY,) * self.bank.axes if found is None else found.conventions
         )
+        if config.range_rate is not None and set(self._conventions) != {VELOCITY}:
+            raise TrackingError("a range-rate needs velocities in the state, not headings")
         self.classifier: BatchedCredalClassifier | None = None
         if found is not None and config.classification is not None:
             chosen = config.classification
@@ -212,6 +215,7 @@ class LocalTracker:
         measurements: ArrayLike,
         measurement_covariances: ArrayLike | None = None,
         sensor: str | None = None,
+        range_rates: ArrayLike | None = None,
     ) -> TrackerStep:
         """Process one scan of ``sensor`` (default: the first configured sensor).
 
@@ -224,6 +228,9 @@ class LocalTracker:
         measurement_covariances : array (m, q, q), optional
             Each detection's own R (default: the bank's R).
         sensor : str, optional
+        range_rates : array (m,), optional
+            Each detection's range-rate (NaN: none), for a tracker configured
+            with a ``range_rate`` model (:mod:`core.tracking.range_rate`).
 
         Raises
         ------
@@ -233,7 +240,7 @@ class LocalTracker:
         """
         before = self.checkpoint()
         try:
-            return self._step(time, measurements, measurement_covariances, sensor)
+            return self._step(time, measurements, measurement_covariances, sensor, range_rates)
         except BaseException:
             self.rollback(before)
             raise
@@ -253,10 +260,12 @@ class LocalTracker:
         measurements: ArrayLike,
         measurement_covariances: ArrayLike | None,
         sensor: str | None,
+        range_rates: ArrayLike | None = None,
     ) -> TrackerStep:
         z, own_noise, sensor_name, elapsed = self._check(
             time, measurements, measurement_covariances, sensor
         )
+        doppler = self._check_range_rates(range_rates, len(z))
         prediction = self._predict(elapsed)
         tracks = len(self._numbers)
         combined_z, combined_s = prediction.combined_measurement()
@@ -268,6 +277,15 @@ class LocalTracker:
             update, pair_rows, pair_cols, hit_gain, used = self._jpda(sub, z, own_noise)
         else:
             update, pair_rows, pair_cols, hit_gain, used = self._associate(sub, z, own_noise)
+        if doppler is not None and self.config.range_rate is not None and len(pair_rows):
+            measured = np.isfinite(doppler[pair_cols])
+            update = range_rate_update(
+                update,
+                pair_rows[measured],
+                doppler[pair_cols[measured]],
+                self.config.range_rate,
+                self.bank.axes,
+            )
         detected = np.zeros(tracks, dtype=bool)
         detected[candidates] = update.detected
         means = prediction.means.copy()
@@ -365,6 +383,19 @@ class LocalTracker:
                     f"scan time {time!r} is before the previous scan's time {self.time!r}"
                 )
         return z, own, sensor_name, elapsed
+
+    def _check_range_rates(self, range_rates: ArrayLike | None, count: int) -> FloatArray | None:
+        """Each detection's range-rate (NaN: none), or None; only with a ``range_rate`` model."""
+        if range_rates is None:
+            return None
+        if self.config.range_rate is None:
+            raise TrackingError("range_rates need a tracker configured with a range_rate model")
+        if self._method == CHEAP_JPDA:
+            raise TrackingError("cheap_jpda takes no range-rates")
+        doppler = np.asarray(range_rates, dtype=np.float64).reshape(-1)
+        if doppler.shape != (count,) or np.any(np.isinf(doppler)):
+            raise TrackingError(f"range_rates must be {count} finite numbers (NaN: none)")
+        return doppler
 
     # ---------------------------------------------------------- predict
     def _predict(self, elapsed: float) -> IMMPrediction:
