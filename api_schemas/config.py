@@ -143,7 +143,7 @@ class MeasurementModel(WireModel):
     ``{"range", "azimuth_deg", "elevation_deg"?, "range_rate"?}`` at the
     sensor's ``site``, azimuth clockwise from north. They are tracked as
     converted Cartesian measurements with each detection's own covariance
-    (:mod:`app.polar`). With ``sigma_range_rate`` a detection's
+    (:mod:`app.geo.polar`). With ``sigma_range_rate`` a detection's
     ``range_rate`` updates its track's velocity after the position (a
     sequential extended Kalman update, :mod:`core.tracking.range_rate`);
     without it a ``range_rate`` is accepted and not used.

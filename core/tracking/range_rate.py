@@ -7,7 +7,7 @@ with position ``p`` and velocity ``v``,
     h(x) = uᵀ v,   u = (p − s) / ρ,   ρ = |p − s|,
 
 with the Jacobian ``∂h/∂p = (v − h u) / ρ``, ``∂h/∂v = u``. The position
-(the converted measurement, :mod:`app.polar`) and the range-rate have
+(the converted measurement, :mod:`app.geo.polar`) and the range-rate have
 independent noises, so the update of both is the position update
 (:class:`~core.tracking.imm.IMMUpdater`) followed by this scalar EKF update,
 linearised at the position-updated estimate of every model of every track:
