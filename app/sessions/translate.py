@@ -36,7 +36,13 @@ from api_schemas.config import (
 )
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import DetectionReport, SensorTrack, TrackReport
-from app.geo.geodesy import LocalFrame, geodetic_to_session, rotate_covariances, sensor_to_session
+from app.geo.geodesy import (
+    LocalFrame,
+    geodetic_to_session,
+    heading_rotation,
+    rotate_covariances,
+    sensor_to_session,
+)
 from app.geo.polar import polar_to_cartesian
 from app.http.errors import request_validation_error
 from core.association import AssociationResult
@@ -77,23 +83,41 @@ def class_frame(classes: Sequence[str]) -> Frame | None:
     return Frame(list(classes)) if classes else None
 
 
-def field_of_view(fov: SectorFieldOfView | PolygonFieldOfView) -> FieldOfView:
-    """A sensor's field of view as core geometry."""
+def field_of_view(
+    fov: SectorFieldOfView | PolygonFieldOfView,
+    site: np.ndarray | None = None,
+    heading_deg: float = 0.0,
+) -> FieldOfView:
+    """A field of view as core geometry in the session frame.
+
+    One given in the sensor's frame (``frame: "sensor"``) is moved to its
+    ``site`` and turned by its heading (the sensor frame of
+    :func:`~app.geo.geodesy.sensor_to_session`): a point ``p`` goes to
+    ``site + H p``, a sector's axis (counter-clockwise from +x) turns by
+    −heading (the heading is clockwise from north).
+    """
+    relative = fov.frame == "sensor"
+    place = np.zeros(2) if site is None or not relative else np.asarray(site[:2], dtype=float)
+    turn = heading_rotation(heading_deg if relative else 0.0, 2)
     if isinstance(fov, SectorFieldOfView):
+        apex = place + turn @ np.asarray(fov.origin or (0.0, 0.0), dtype=np.float64)
         return Sector(
-            origin=(fov.origin[0], fov.origin[1]),
-            heading_deg=fov.heading_deg,
+            origin=(float(apex[0]), float(apex[1])),
+            heading_deg=fov.heading_deg - (heading_deg if relative else 0.0),
             half_angle_deg=fov.half_angle_deg,
             range_min=fov.range[0],
             range_max=fov.range[1],
         )
-    return PolygonView(vertices=tuple((vertex[0], vertex[1]) for vertex in fov.vertices))
+    vertices = place + np.asarray(fov.vertices, dtype=np.float64)[:, :2] @ turn.T
+    return PolygonView(vertices=tuple((float(x), float(y)) for x, y in vertices.tolist()))
 
 
 def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> SensorSpec:
-    """One sensor; a field of view the core refuses is a validation error at ``sensors/i/fov``."""
+    """One sensor; a field of view the core refuses is a validation error at ``sensors/i/fov``.
+    A field of view in the sensor's frame is placed at its site and heading here, once."""
     try:
-        fov = None if sensor.fov is None else field_of_view(sensor.fov)
+        site, heading = sensor_site(config, sensor)
+        fov = None if sensor.fov is None else field_of_view(sensor.fov, site, heading)
     except InvalidInput as error:
         raise request_validation_error(
             [FieldIssue(("sensors", index, "fov"), str(error), None)]
