@@ -21,7 +21,8 @@ of the SPRT of [MTT] §4.3.
 The range-rate's line of sight is a direction in the tracker's frame; in a
 planar session it is the horizontal one (the radar's slant range-rate is taken
 for the horizontal one, as its range is). Tracks whose position is at the site
-(ρ below a millimetre) are not updated by it.
+(ρ below a millimetre) are not updated by it. A track's start (two-point or
+single-point) takes no range-rate: it enters from the track's first update.
 """
 
 from __future__ import annotations
