@@ -180,7 +180,7 @@ def engine_steps(
             yield session, engine, engine.apply(report_, explain=explain)
 
 
-OPTIONAL_FIELDS = {("FusedTrack", "geodetic")}
+OPTIONAL_FIELDS = {("FusedTrack", "geodetic"), ("TrackHistoryPoint", "geodetic")}
 """Fields the writer leaves out by design (``geodetic``: only with ``frame=geodetic``)."""
 
 
@@ -283,13 +283,14 @@ def test_the_wire_answers_are_the_response_models(live_server: LiveServer) -> No
             assert answer.status_code == 200, answer.text
             seen.step(round_trip(StepResult, answer.text))
         url = live_server.url.replace("http://", "ws://") + f"/v1/sessions/{sid}/stream"
-        with connect(url, additional_headers=headers) as stream:
-            json.loads(stream.recv())  # ack
-            for body in bodies[4:]:
-                stream.send(json.dumps(body | {"type": "tracks"}))
-                message = json.loads(stream.recv())
-                assert message["type"] == "result", message
-                seen.step(round_trip(StepResult, json.dumps(message["result"])))
+        for query, part in (("", bodies[4:6]), ("?frame=geodetic", bodies[6:])):
+            with connect(url + query, additional_headers=headers) as stream:
+                json.loads(stream.recv())  # ack
+                for body in part:
+                    stream.send(json.dumps(body | {"type": "tracks"}))
+                    message = json.loads(stream.recv())
+                    assert message["type"] == "result", message
+                    seen.step(round_trip(StepResult, json.dumps(message["result"])))
         for params in ({}, {"frame": "geodetic"}, {"time": "9.5"}):
             answer = client.get(f"/v1/sessions/{sid}/tracks", params=params, headers=headers)
             assert answer.status_code == 200, answer.text
@@ -303,11 +304,12 @@ def test_the_wire_answers_are_the_response_models(live_server: LiveServer) -> No
             detail = round_trip(FusedTrackDetail, answer.text)
             assert detail["track"]["id"] == track and detail["history"]
             seen.tracks([detail["track"]])
+            seen.values["geodetic history", "geodetic" in detail["history"][0]] += 1
     assert seen.kinds("class state") == {"defined", "total_conflict"}
     assert seen.kinds("decision") == {"decided", "tied", "undefined"}
     assert seen.kinds("summarized") == {True, False}
     assert seen.kinds("matrix") == {True, False}
-    assert seen.kinds("geodetic") == {True, False}
+    assert seen.kinds("geodetic") == seen.kinds("geodetic history") == {True, False}
 
 
 def class_steps() -> list[CoreStepResult]:
