@@ -3,11 +3,8 @@ step totals (from ``/metrics`` of a real server). No timing is asserted, only co
 
 from __future__ import annotations
 
-import importlib.util
 import os
-import sys
 import time
-from pathlib import Path
 from types import ModuleType
 
 import httpx
@@ -15,19 +12,12 @@ import pytest
 
 from tests.api.conftest import make_settings, serving
 from tests.api.examples import SESSION_CONFIG, TRACK_REPORT
-
-BENCH = Path(__file__).resolve().parents[1] / "bench"
+from tests.bench_scripts import load_bench
 
 
 @pytest.fixture(scope="module")
 def bench() -> ModuleType:
-    sys.path.insert(0, str(BENCH))
-    spec = importlib.util.spec_from_file_location("service_bench", BENCH / "service.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
+    return load_bench("service")
 
 
 def _spin(cpu_seconds: float) -> None:
