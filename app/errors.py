@@ -134,10 +134,19 @@ class StaleReport(Conflict):
         return [_located(CoreStaleReport.loc, self.detail, "stale_report")]
 
 
-class SessionLeased(ServiceError):  # noqa: N818 - HTTP vocabulary
-    """Another service instance holds the session's lease (it applies the session's inputs)."""
+class Unavailable(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """503: the request could not be served now; ``Retry-After`` says when to try again."""
 
     status = HTTPStatus.SERVICE_UNAVAILABLE
+    retry_after_s: int = 2
+
+    def headers(self) -> dict[str, str]:
+        return {"Retry-After": str(self.retry_after_s)}
+
+
+class SessionLeased(Unavailable):
+    """Another service instance holds the session's lease (it applies the session's inputs)."""
+
     slug = "session-leased"
     title = "Session applied by another instance"
 
@@ -150,21 +159,16 @@ class SessionLeased(ServiceError):  # noqa: N818 - HTTP vocabulary
         )
         self.retry_after_s = retry_after_s
 
-    def headers(self) -> dict[str, str]:
-        return {"Retry-After": str(self.retry_after_s)}
 
-
-class StoreUnavailable(ServiceError):  # noqa: N818 - HTTP vocabulary
+class StoreUnavailable(Unavailable):
     """The session store cannot be reached (or cannot write): nothing was stored, retry later.
 
     Raised by the stores for their backend's connection and I/O errors, so an
     outage answers 503 with ``Retry-After`` and is never mistaken for a bug.
     """
 
-    status = HTTPStatus.SERVICE_UNAVAILABLE
     slug = "store-unavailable"
     title = "Session store unavailable"
-    retry_after_s: ClassVar[int] = 2
 
     def __init__(self, store: str, reason: str) -> None:
         super().__init__(
@@ -172,9 +176,6 @@ class StoreUnavailable(ServiceError):  # noqa: N818 - HTTP vocabulary
             store=store,
             retry_after=self.retry_after_s,
         )
-
-    def headers(self) -> dict[str, str]:
-        return {"Retry-After": str(self.retry_after_s)}
 
 
 class TrackNotFound(ServiceError):  # noqa: N818 - HTTP vocabulary
