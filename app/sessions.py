@@ -55,7 +55,6 @@ import contextlib
 import functools
 import logging
 import math
-import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -117,11 +116,13 @@ T = TypeVar("T")
 
 @dataclass
 class Step:
-    """An applied (not yet logged) input: the engine that holds it and its result as JSON text."""
+    """An applied (not yet logged) input: the engine that holds it, its result as JSON text
+    and the input as it is logged (both built beside the step, off the event loop)."""
 
     engine: SessionEngine
     fusion: FusionConfig
     result: str
+    logged: PlainObject
 
 
 class SessionRegistry:
@@ -151,8 +152,6 @@ class SessionRegistry:
         self._forwarders: dict[str, asyncio.Task[None]] = {}
         self._tokens: dict[str, str] = {}
         """Token hash → id of the live sessions in memory (the rate limit's verified identities)."""
-        self.creating = threading.Lock()
-        """Held from counting the sessions to storing a new one: the limit holds under races."""
 
     def __len__(self) -> int:
         return len(self._sessions)
@@ -161,9 +160,10 @@ class SessionRegistry:
         return iter(list(self._sessions.values()))
 
     # ------------------------------------------------------------ running work
-    async def _io(self, function: Callable[..., T], *args: Any) -> T:
-        """A store call: inline for the memory store, in a worker thread otherwise."""
-        if self._store_inline:
+    async def _io(self, function: Callable[..., T], *args: Any, size: int = 0) -> T:
+        """A store call: inline for the memory store (unless it encodes more than
+        :data:`TINY_WORK` items), in a worker thread otherwise."""
+        if self._store_inline and size <= TINY_WORK:
             return function(*args)
         return await anyio.to_thread.run_sync(functools.partial(function, *args))
 
@@ -430,7 +430,7 @@ class SessionRegistry:
         except CoreStaleReport as stale:
             raise StaleReport(stale.sensor, stale.time, stale.last_time) from None
         result = step_json(step, session.seq + 1)  # serialised once, here
-        return Step(engine=engine, fusion=fusion, result=result)
+        return Step(engine=engine, fusion=fusion, result=result, logged=log_input(report))
 
     async def submit_tracks(
         self, session: LiveSession, report: TrackReport, *, explain: bool = False
@@ -530,7 +530,9 @@ class SessionRegistry:
         received_at = datetime.now(UTC)
         seq = session.seq + 1
         try:
-            await self._io(self.store.append, session.id, seq, log_input(report), received_at)
+            await self._io(
+                self.store.append, session.id, seq, step.logged, received_at, size=size
+            )
         except SequenceConflict:
             if not self.shared:
                 self.metrics.rebuilds.labels("unlogged").inc()
@@ -616,11 +618,11 @@ class SessionRegistry:
 
     async def _snapshot(self, session: LiveSession) -> None:
         """Snapshot the engine, then compact the log to ``log_retention`` inputs behind it."""
-        snapshot = Snapshot(
-            seq=session.seq, taken_at=datetime.now(UTC), state=session.snapshot_state()
-        )
+        size = len(session.tracks)
+        state = await self._compute(size, session.snapshot_state)
+        snapshot = Snapshot(seq=session.seq, taken_at=datetime.now(UTC), state=state)
         try:
-            await self._io(self.store.save_snapshot, session.id, snapshot)
+            await self._io(self.store.save_snapshot, session.id, snapshot, size=size)
             session.since_snapshot = 0
             through = snapshot.seq - self.settings.log_retention
             if through > 0:
