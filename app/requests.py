@@ -18,8 +18,9 @@ from typing import Any
 
 import anyio
 from fastapi import Request, Response
+from fastapi._compat import ModelField
 from fastapi.exceptions import RequestValidationError
-from fastapi.routing import APIRoute
+from fastapi.routing import APIRoute, _effective_route_context_var
 from pydantic import BaseModel, ValidationError
 
 
@@ -114,6 +115,12 @@ class WireRoute(APIRoute):
     def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:
         handler = super().get_route_handler()
         model = body_model(self.endpoint)
+        if model is not None:
+            # an included route runs with its own dependant (fastapi 0.165, pinned)
+            included = _effective_route_context_var.get()
+            owner = included if included is not None and included.original_route is self else self
+            for field in owner.dependant.body_params:
+                _accept_validated(field, model)
 
         async def handle(request: Request) -> Response:
             wire = WireRequest(request.scope, request.receive)
@@ -124,6 +131,25 @@ class WireRoute(APIRoute):
             return await handler(wire)
 
         return handle
+
+
+def _accept_validated(field: ModelField, model: type[BaseModel]) -> None:
+    """Let ``field`` take a ``model`` validated in the worker thread as it is.
+
+    pydantic runs a model's ``after`` validators again on an instance of the
+    model (the covariance batch of a track list, the geometry of a session
+    config), which would put that work back on the event loop.
+    """
+    validate = field.validate
+
+    def validate_once(
+        value: Any, values: dict[str, Any] | None = None, *, loc: tuple[int | str, ...] = ()
+    ) -> tuple[Any, list[dict[str, Any]]]:
+        if type(value) is model:
+            return value, []
+        return validate(value, values or {}, loc=loc)
+
+    field.validate = validate_once  # type: ignore[method-assign]
 
 
 def _is_json(request: Request) -> bool:
