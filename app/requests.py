@@ -23,6 +23,8 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.routing import APIRoute, _effective_route_context_var
 from pydantic import BaseModel, ValidationError
 
+from app.runtime import without_collection
+
 
 class DuplicateKeyError(ValueError):
     """An object of the body names a key twice."""
@@ -127,7 +129,8 @@ class WireRoute(APIRoute):
             if model is not None and _is_json(wire):
                 body = await wire.body()
                 if len(body) > OFFLOAD_BYTES:
-                    wire._json = await anyio.to_thread.run_sync(_validated, model, body)
+                    validate = functools.partial(_validated, model, body)
+                    wire._json = await anyio.to_thread.run_sync(without_collection(validate))
             return await handler(wire)
 
         return handle

@@ -80,6 +80,7 @@ from app.hub import SESSION_ENDED, SESSION_RELOADED, STORE_UNAVAILABLE, Ending, 
 from app.live_session import LiveSession, new_session, restore_snapshot
 from app.metrics import ServiceMetrics
 from app.responses import dumps
+from app.runtime import without_collection
 from app.session_log import event_from_entry, log_input
 from app.settings import Settings
 from app.stores import (
@@ -162,17 +163,20 @@ class SessionRegistry:
     # ------------------------------------------------------------ running work
     async def _io(self, function: Callable[..., T], *args: Any, size: int = 0) -> T:
         """A store call: inline for the memory store (unless it encodes more than
-        :data:`TINY_WORK` items), in a worker thread otherwise."""
-        if self._store_inline and size <= TINY_WORK:
-            return function(*args)
-        return await anyio.to_thread.run_sync(functools.partial(function, *args))
+        :data:`TINY_WORK` items), in a worker thread otherwise (without garbage
+        collection for a big one, :func:`app.runtime.collection_paused`)."""
+        call = functools.partial(function, *args)
+        if size <= TINY_WORK:
+            return call() if self._store_inline else await anyio.to_thread.run_sync(call)
+        return await anyio.to_thread.run_sync(without_collection(call))
 
     @staticmethod
     async def _compute(size: int, function: Callable[[], T]) -> T:
-        """Numeric work: inline when tiny, in a worker thread otherwise."""
+        """Numeric work: inline when tiny, in a worker thread otherwise (without garbage
+        collection: :func:`app.runtime.collection_paused`)."""
         if size <= TINY_WORK:
             return function()
-        return await anyio.to_thread.run_sync(function)
+        return await anyio.to_thread.run_sync(without_collection(function))
 
     # ------------------------------------------------------------ lifecycle
     def check_config(self, config: SessionConfig) -> None:
@@ -530,9 +534,7 @@ class SessionRegistry:
         received_at = datetime.now(UTC)
         seq = session.seq + 1
         try:
-            await self._io(
-                self.store.append, session.id, seq, step.logged, received_at, size=size
-            )
+            await self._io(self.store.append, session.id, seq, step.logged, received_at, size=size)
         except SequenceConflict:
             if not self.shared:
                 self.metrics.rebuilds.labels("unlogged").inc()

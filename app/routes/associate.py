@@ -12,6 +12,7 @@ from app.deps import SettingsDep
 from app.errors import LimitExceeded, problem_responses
 from app.requests import WireRoute
 from app.responses import JSONTextResponse, dumps
+from app.runtime import without_collection
 from app.settings import Settings
 from app.translate import PlainObject, associate_plain, class_frame, evidence_masses, side_arrays
 from core.association import associate
@@ -59,7 +60,9 @@ async def associate_tracks(request: AssociateRequest, settings: SettingsDep) -> 
     work = functools.partial(run_association, request)
     if len(request.known) * len(request.incoming) <= TINY_PROBLEM:
         return JSONTextResponse(dumps(work()))
-    return JSONTextResponse(await anyio.to_thread.run_sync(lambda: dumps(work())))
+    return JSONTextResponse(
+        await anyio.to_thread.run_sync(without_collection(lambda: dumps(work())))
+    )
 
 
 def check_pairs(request: AssociateRequest, settings: Settings) -> None:
