@@ -31,6 +31,7 @@ from api_schemas.keys import allowed_keys
 from api_schemas.limits import LIMIT_EXCEEDED
 from api_schemas.problem import FieldError, Problem
 from app.http.requests import body_model
+from app.http.responses import dumps
 from core.errors import InvalidInput
 from core.errors import StaleReport as CoreStaleReport
 
@@ -434,6 +435,13 @@ def problem_for(
         detail=f"unexpected error; the server log has the details under reference {reference}",
         instance=instance,
         reference=reference,
+    )
+
+
+def error_message(problem: Problem, ref: str | None) -> str:
+    """The WebSocket ``error`` message of ``problem`` (``api_schemas.ws.ErrorMessage``), as text."""
+    return dumps(
+        {"type": "error", "ref": ref, "problem": problem.model_dump(mode="json", exclude_none=True)}
     )
 
 

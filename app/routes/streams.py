@@ -44,6 +44,7 @@ from app.http.errors import (
     ServiceError,
     StoreUnavailable,
     Unauthorized,
+    error_message,
     problem_for,
     problem_response,
 )
@@ -119,12 +120,6 @@ def _ack(session: LiveSession) -> str:
     return dumps({"type": "ack", "ref": None, "seq": session.seq})
 
 
-def _error(problem: Problem, ref: str | None) -> str:
-    return dumps(
-        {"type": "error", "ref": ref, "problem": problem.model_dump(mode="json", exclude_none=True)}
-    )
-
-
 def _ref_of(document: object) -> str | None:
     """The ``ref`` of a message that failed validation, if it has a usable one."""
     ref = document.get("ref") if isinstance(document, dict) else None
@@ -182,7 +177,7 @@ class MessageRate:
 
 
 def _refusal(error: ServiceError, path: str) -> str:
-    return _error(problem_for(error, path), None)
+    return error_message(problem_for(error, path), None)
 
 
 async def _answer(session: LiveSession, registry: SessionRegistry, text: str, path: str) -> str:
@@ -192,12 +187,12 @@ async def _answer(session: LiveSession, registry: SessionRegistry, text: str, pa
     try:
         document = parse_json(text)
     except json.JSONDecodeError as error:
-        return _error(_json_problem(error, path), None)
+        return error_message(_json_problem(error, path), None)
     try:
         message = client_message_adapter.validate_python(document)
     except ValidationError as error:
         problem = _message_problem(error, path, document, settings.max_listed_errors)
-        return _error(problem, _ref_of(document))
+        return error_message(problem, _ref_of(document))
     ref = message.ref
     try:
         if session.closed:  # evicted (store down, or a failed step): the registry reloads it
@@ -213,7 +208,7 @@ async def _answer(session: LiveSession, registry: SessionRegistry, text: str, pa
             )
             result = await registry.submit_tracks(session, report)
     except Exception as error:  # every failure is answered; the connection stays open
-        return _error(problem_for(error, path), ref)
+        return error_message(problem_for(error, path), ref)
     return result_message(result, ref)
 
 
