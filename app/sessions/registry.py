@@ -246,6 +246,19 @@ class SessionRegistry:
             session.seq = entry.seq
             session.last_input_at = entry.received_at
 
+    async def restore_when_available(self, retry_s: float = 1.0) -> None:
+        """:meth:`restore_all` as soon as the store answers (started while it is down: the
+        service serves meanwhile, ``/readyz`` says 503 and inputs get 503 with ``Retry-After``)."""
+        while True:
+            await anyio.sleep(retry_s)
+            try:
+                restored = await self.restore_all()
+            except StoreUnavailable:
+                continue
+            self.metrics.sessions.set(await self._io(self.store.count_sessions))
+            logger.info("store available: %d sessions restored", restored)
+            return
+
     async def restore_all(self) -> int:
         """Load every stored session (on start); returns how many."""
         records = await self._io(self.store.list_sessions)

@@ -208,9 +208,10 @@ class RedisStore:
     prefix
         Start of every key name (``CREDAL_REDIS_PREFIX``).
 
-    The client is redis-py's thread-safe one with a connection pool; the
-    constructor pings the server so a wrong URL fails at start, not at the
-    first request.
+    The client is redis-py's thread-safe one with a connection pool. The
+    constructor does not connect: a server that is down at start (or later)
+    makes every call raise :class:`StoreUnavailable` until it answers again
+    (``/readyz`` says so; ``credal-fusion serve`` starts anyway).
     """
 
     kind = "redis"
@@ -233,7 +234,6 @@ class RedisStore:
         self._snapshot = self.client.register_script(_SNAPSHOT)
         self._load = self.client.register_script(_LOAD)
         self._compact = self.client.register_script(_COMPACT)
-        self.ping()
 
     @property
     def prefix(self) -> str:
