@@ -80,9 +80,9 @@ def _validated(model: type[BaseModel], body: bytes) -> BaseModel:
     try:
         document = parse_json(body.decode("utf-8"))
     except UnicodeDecodeError as error:
-        raise _json_error(f"body is not UTF-8 ({error.reason})", error.start) from None
+        raise json_error(f"body is not UTF-8 ({error.reason})", error.start) from None
     except json.JSONDecodeError as error:
-        raise _json_error(error.msg, error.pos) from None
+        raise json_error(error.msg, error.pos) from None
     try:
         return model.model_validate(document)
     except ValidationError as error:
@@ -91,12 +91,16 @@ def _validated(model: type[BaseModel], body: bytes) -> BaseModel:
         ) from None
 
 
-def _json_error(reason: str, position: int) -> RequestValidationError:
+def json_error(
+    reason: str, position: int, within: tuple[str, ...] = ("body",)
+) -> RequestValidationError:
+    """The validation error of a document that is not JSON (a request body, or a WebSocket
+    message: ``within=()``), at character ``position``."""
     return RequestValidationError(
         [
             {
                 "type": "json_invalid",
-                "loc": ("body", position),
+                "loc": (*within, position),
                 "msg": "JSON decode error",
                 "input": {},
                 "ctx": {"error": reason},

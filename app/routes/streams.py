@@ -24,10 +24,8 @@ pub/sub connection) fails: subscribe again once ``/readyz`` is ready.
 
 from __future__ import annotations
 
-import collections
 import json
 import logging
-import time
 
 import anyio
 from fastapi import APIRouter, WebSocket
@@ -48,7 +46,8 @@ from app.http.errors import (
     problem_for,
     problem_response,
 )
-from app.http.requests import WireRoute, parse_json
+from app.http.rate_limit import MessageRate
+from app.http.requests import WireRoute, json_error, parse_json
 from app.http.responses import dumps
 from app.sessions.hub import STORE_UNAVAILABLE, Ending
 from app.sessions.live import LiveSession
@@ -149,33 +148,6 @@ def _message_problem(error: ValidationError, path: str, document: object, listed
     return problem_for(RequestValidationError(errors), path, listed=listed, root=root)
 
 
-def _json_problem(error: json.JSONDecodeError, path: str) -> Problem:
-    entry = {
-        "loc": (),
-        "msg": "JSON decode error",
-        "type": "json_invalid",
-        "ctx": {"error": error.msg},
-    }
-    return problem_for(RequestValidationError([entry]), path)
-
-
-class MessageRate:
-    """At most ``per_second`` messages in any one-second window of a connection."""
-
-    def __init__(self, per_second: int) -> None:
-        self.per_second = per_second
-        self.window: collections.deque[float] = collections.deque()
-
-    def admit(self) -> bool:
-        now = time.monotonic()
-        while self.window and now - self.window[0] >= 1.0:
-            self.window.popleft()
-        if len(self.window) >= self.per_second:
-            return False
-        self.window.append(now)
-        return True
-
-
 def _refusal(error: ServiceError, path: str) -> str:
     return error_message(problem_for(error, path), None)
 
@@ -187,7 +159,7 @@ async def _answer(session: LiveSession, registry: SessionRegistry, text: str, pa
     try:
         document = parse_json(text)
     except json.JSONDecodeError as error:
-        return error_message(_json_problem(error, path), None)
+        return error_message(problem_for(json_error(error.msg, error.pos, ()), path), None)
     try:
         message = client_message_adapter.validate_python(document)
     except ValidationError as error:
