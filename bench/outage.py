@@ -5,7 +5,8 @@ append-only file) and a real service instance (``credal-fusion serve``) on
 it, as in ``tests/e2e/test_store_outage.py``, which checks what clients are
 told and that nothing is lost; this script only times it, a few rounds:
 
-- *killed*: Redis is killed (SIGKILL) under a live session; the time to the
+- *killed*: the service starts with Redis up (the start-up time: the baseline
+  of the next scenario's); Redis is killed (SIGKILL) under a live session; the time to the
   first input answered 503 ``store-unavailable``, then, after Redis restarts
   on the same port, the time until ``/readyz`` says ready and until the next
   input is accepted;
@@ -64,7 +65,9 @@ def killed(directory: Path) -> dict[str, float]:
     server = PrivateRedis(directory)
     server.start()
     try:
+        launched = time.monotonic()
         with instance(server.url) as (url, _), httpx.Client(base_url=url, timeout=30) as client:
+            alive = time.monotonic() - launched
             created = client.post("/v1/sessions", json=session_config()).json()
             headers = {"Authorization": f"Bearer {created['token']}"}
             path = f"/v1/sessions/{created['id']}/tracks"
@@ -80,6 +83,7 @@ def killed(directory: Path) -> dict[str, float]:
                 lambda: client.post(path, json=bodies[1], headers=headers).status_code == 200
             )
             return {
+                "alive after launch (Redis up: the baseline)": alive,
                 "first 503 after the kill": first_503,
                 "ready after Redis restarted": ready,
                 "next input accepted after ready": accepted,
