@@ -56,7 +56,9 @@ def _serve(args: argparse.Namespace) -> int:
 
 def _check_store(url: str, redis_prefix: str) -> None:
     """Open the store once before serving: a store that cannot be used is one line, not a
-    traceback from the application's start-up."""
+    traceback from the application's start-up. One that is only unreachable now (Redis
+    not up yet) is a warning: the service starts, ``/readyz`` answers 503 until it is."""
+    from app.http.errors import StoreUnavailable
     from app.stores import open_store
 
     try:
@@ -65,6 +67,8 @@ def _check_store(url: str, redis_prefix: str) -> None:
             store.count_sessions()
         finally:
             store.close()
+    except StoreUnavailable as error:
+        print(f"credal-fusion serve: warning: {error.detail}; serving anyway", flush=True)
     except Exception as error:
         raise CommandError(
             f"cannot use the store {url} ({type(error).__name__}: {error}): start it, "

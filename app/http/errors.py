@@ -26,12 +26,14 @@ from pydantic import ValidationError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from api_schemas.issues import FieldIssue
+from api_schemas.issues import FieldIssue, wire_location
 from api_schemas.keys import allowed_keys
 from api_schemas.limits import LIMIT_EXCEEDED
 from api_schemas.problem import FieldError, Problem
 from app.http.requests import body_model
+from app.http.responses import dumps
 from core.errors import InvalidInput
+from core.errors import StaleReport as CoreStaleReport
 
 PROBLEM_MEDIA_TYPE = "application/problem+json"
 PROBLEM_TYPE_PREFIX = "urn:credal-fusion:problem:"
@@ -128,6 +130,9 @@ class StaleReport(Conflict):
             time=time,
             last_time=last_time,
         )
+
+    def field_errors(self) -> list[FieldError] | None:
+        return [_located(CoreStaleReport.loc, self.detail, "stale_report")]
 
 
 class RetryLater(ServiceError):  # noqa: N818 - HTTP vocabulary
@@ -425,7 +430,7 @@ def problem_for(
             status=HTTPStatus.UNPROCESSABLE_ENTITY,
             detail=str(error),
             instance=instance,
-            errors=[_located(error.loc, str(error), "invalid_input")],
+            errors=[_located(wire_location(error.loc), str(error), "invalid_input")],
         )
     if isinstance(error, StarletteHTTPException):
         status = HTTPStatus(error.status_code)
@@ -445,6 +450,13 @@ def problem_for(
         detail=f"unexpected error; the server log has the details under reference {reference}",
         instance=instance,
         reference=reference,
+    )
+
+
+def error_message(problem: Problem, ref: str | None) -> str:
+    """The WebSocket ``error`` message of ``problem`` (``api_schemas.ws.ErrorMessage``), as text."""
+    return dumps(
+        {"type": "error", "ref": ref, "problem": problem.model_dump(mode="json", exclude_none=True)}
     )
 
 
