@@ -2,16 +2,22 @@
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterator
 
+import httpx
 import numpy as np
 import pytest
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
+from websockets.exceptions import InvalidStatus
+from websockets.sync.client import connect
 
 from app.http.errors import LimitExceeded, StaleReport, install_error_handlers
 from core.distance.estimates import check_covariances
 from core.errors import CovarianceError, MassError, TotalConflict
+from tests.api.conftest import ADMIN_TOKEN, LiveServer
+from tests.api.examples import SESSION_CONFIG
 
 SECRET = "/srv/secret/path/and-a-password"
 
@@ -121,3 +127,30 @@ def test_unknown_route_and_method_are_problems(failing_client: TestClient) -> No
     assert missing.status_code == 404
     assert missing.headers["content-type"].startswith("application/problem+json")
     assert failing_client.post("/stale").status_code == 405
+
+
+def test_a_refused_websocket_upgrade_is_the_rest_routes_problem(live_server: LiveServer) -> None:
+    """The upgrade's denial goes through the one mapping: the kind, title, status and
+    headers of the problem the same request gets on ``GET /v1/sessions/{sid}``."""
+    with httpx.Client(base_url=live_server.url) as client:
+        created = client.post("/v1/sessions", json=SESSION_CONFIG).json()
+        other = client.post("/v1/sessions", json=SESSION_CONFIG).json()
+        sid = created["id"]
+        cases = {
+            "no token": (sid, {}),
+            "another session's token": (sid, {"Authorization": f"Bearer {other['token']}"}),
+            "no such session": ("0" * 32, {"Authorization": f"Bearer {ADMIN_TOKEN}"}),
+        }
+        for case, (target, headers) in cases.items():
+            rest = client.get(f"/v1/sessions/{target}", headers=headers)
+            url = live_server.url.replace("http://", "ws://") + f"/v1/sessions/{target}/stream"
+            with pytest.raises(InvalidStatus) as refused:
+                connect(url, additional_headers=headers).close()
+            denial = refused.value.response
+            assert denial.status_code == rest.status_code >= 400, case
+            assert denial.headers["content-type"] == rest.headers["content-type"], case
+            assert denial.headers.get("www-authenticate") == rest.headers.get("www-authenticate")
+            upgrade, answer = json.loads(denial.body), rest.json()
+            for key in ("type", "title", "status"):
+                assert upgrade[key] == answer[key], (case, key)
+            assert upgrade["instance"] == f"/v1/sessions/{target}/stream"
