@@ -390,6 +390,35 @@ class LifeState:
 _LIFE_ARRAYS = ("status", "reason", "score", "hits", "empty_gate", "phantom_since")
 
 
+def initiated(
+    config: LifeCycleConfig,
+    count: int,
+    score: float | FloatArray,
+    hits: int = 1,
+    *,
+    confirmed_below: bool = False,
+) -> LifeState:
+    """The life of ``count`` tracks that start in this step.
+
+    Tentative (``initiated``) with ``score`` (one, or one each) and ``hits``;
+    or, ``confirmed_below``, tracks the layer below has already confirmed (a
+    local tracker's, where no second test could add anything: the session's
+    only sensor): confirmed at once (``local_confirmed``) at the confirm
+    threshold, clamped at the score ceiling.
+    """
+    if not confirmed_below:
+        return LifeState.new(count, score, hits)
+    life = LifeState.new(count, min(config.score_ceiling, config.confirm_threshold), hits)
+    return LifeState(
+        np.full(count, CONFIRMED, dtype=np.int64),
+        np.full(count, reason_code(StatusReason.LOCAL_CONFIRMED), dtype=np.int64),
+        life.score,
+        life.hits,
+        life.empty_gate,
+        life.phantom_since,
+    )
+
+
 @dataclass(frozen=True)
 class Evidence:
     """What one scan or report says about each of n tracks, for :func:`advance`.
