@@ -96,7 +96,7 @@ from core.tracking.tracker import LocalTracker
 
 EXPORT_VERSION = 1
 LIVE = (TrackStatus.TENTATIVE, TrackStatus.CONFIRMED, TrackStatus.COASTING)
-_LIVE_CODES = np.array([STATUS_CODES[status] for status in LIVE], dtype=np.int64)
+_LIVE_CODES = tuple(STATUS_CODES[status] for status in LIVE)
 CONTINUITY_GATE_PROBABILITY = 1.0 - 1e-9
 """Gate of track continuity: a sensor's own track id is strong evidence, so the
 gate only catches a sensor that reuses an id for another object (not the
@@ -585,6 +585,8 @@ class SessionEngine:
         tracks it has confirmed, and with no other sensor a second test could only
         delay them). With several sensors the fused layer tests again: it absorbs a
         sensor's duplicates and waits for corroboration."""
+        if len(cols) == 0:
+            return np.zeros(0, dtype=np.int64)
         management = self.config.management
         sensor = self.config.sensor(report.sensor)
         life = initiated(
@@ -692,14 +694,13 @@ class SessionEngine:
         shown = np.flatnonzero((status != TERMINATED) | ending)
         shown = shown[np.argsort(rows.numbers[shown], kind="stable")]
         states, covariances = self._table.fused_at(shown, self.time)
-        views = []
-        for row, state, plain, covariance in zip(
-            shown.tolist(), states, states.tolist(), covariances, strict=True
+        views = self._views(shown, states, covariances)
+        for row, plain in zip(
+            shown[status[shown] != TERMINATED].tolist(),
+            states[status[shown] != TERMINATED].tolist(),
+            strict=True,
         ):
-            track = self.tracks[row]
-            if status[row] != TERMINATED:
-                track.remember(self.time, plain)
-            views.append(self._view(track, state, covariance))
+            self.tracks[row].remember(self.time, plain)
         if len(terminated):
             self._keep(rows.alive)
         association = AssociationView(
@@ -716,7 +717,7 @@ class SessionEngine:
             seq=self.seq,
             time=self.time,
             sensor=report.sensor,
-            tracks=tuple(views),
+            tracks=views,
             association=association,
         )
 
@@ -740,16 +741,33 @@ class SessionEngine:
             track.row = row
         self.tracks = tracks
 
-    def _view(self, track: FusedTrack, state: FloatArray, covariance: FloatArray) -> FusedTrackView:
-        return FusedTrackView(
-            id=track.id,
-            status=track.status,
-            reason=track.reason,
-            state=state,
-            covariance=covariance,
-            sources=track.sources(),
-            classification=self._classify(track),
-            score=track.score,
+    def _views(
+        self, rows: IntArray, states: FloatArray, covariances: FloatArray
+    ) -> tuple[FusedTrackView, ...]:
+        """The tracks ``rows`` as a step shows them, with their fused states at a time."""
+        life = self._rows.rows.life.select(rows)
+        times = self._table.times[rows].tolist()
+        return tuple(
+            FusedTrackView(
+                id=track.id,
+                status=status,
+                reason=reason,
+                state=state,
+                covariance=covariance,
+                sources=track.sources(report_times),
+                classification=self._classify(track),
+                score=score,
+            )
+            for track, status, reason, score, report_times, state, covariance in zip(
+                [self.tracks[row] for row in rows.tolist()],
+                life.statuses(),
+                life.reasons(),
+                life.score.tolist(),
+                times,
+                states,
+                covariances,
+                strict=True,
+            )
         )
 
     def picture(self, time: float | None = None) -> tuple[FusedTrackView, ...]:
@@ -764,11 +782,7 @@ class SessionEngine:
         if not math.isfinite(at):
             raise InvalidInput(f"time must be finite, got {at!r}")
         shown = np.argsort(self._rows.rows.numbers, kind="stable")
-        states, covariances = self._table.fused_at(shown, at)
-        return tuple(
-            self._view(self.tracks[row], state, covariance)
-            for row, state, covariance in zip(shown.tolist(), states, covariances, strict=True)
-        )
+        return self._views(shown, *self._table.fused_at(shown, at))
 
     # ------------------------------------------------------ persistence
     def export(self) -> dict[str, Any]:
@@ -875,7 +889,10 @@ def check_detection_magnitudes(report: DetectionReport) -> None:
 
 def _is_live(status: IntArray) -> BoolArray:
     """Tentative, confirmed or coasting: the tracks a report is associated with."""
-    return np.isin(status, _LIVE_CODES)
+    live = np.zeros(len(status), dtype=bool)
+    for code in _LIVE_CODES:
+        live |= status == code
+    return live
 
 
 def _replaced_life(life: LifeState, rows: IntArray, by: LifeState) -> LifeState:

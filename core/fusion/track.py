@@ -104,8 +104,9 @@ class FusedTrack:
     estimates: dict[str, SensorEstimate] = field(default_factory=dict)
     history: list[tuple[float, list[float]]] = field(default_factory=list)
     number: int = field(default=0, init=False, compare=False, repr=False)
-    _sources: tuple[Source, ...] | None = field(default=None, init=False, compare=False, repr=False)
-    """A memo of :meth:`sources` (read from the table; dropped when an estimate changes)."""
+    _sources: dict[str, Source] = field(default_factory=dict, init=False, compare=False, repr=False)
+    """A memo of :meth:`sources` by sensor, made from the table's times (a sensor's entry
+    is dropped when its estimate changes)."""
 
     def __post_init__(self) -> None:
         self.number = int(self.id[1:])
@@ -147,21 +148,27 @@ class FusedTrack:
         self.__dict__ = checkpoint
 
     def set_estimate(self, sensor: str, estimate: SensorEstimate) -> None:
-        """Record ``sensor``'s latest estimate of this track (a new dict, see checkpoint)."""
+        """Record ``sensor``'s latest estimate of this track (new dicts, see checkpoint)."""
         self.estimates = {**self.estimates, sensor: estimate}
-        self._sources = None
+        if sensor in self._sources:
+            self._sources = {**self._sources}
+            del self._sources[sensor]
 
-    def sources(self) -> tuple[Source, ...]:
-        """The contributing sensor tracks, by sensor id, with their report times."""
-        if self._sources is None:
-            times = self.rows.table.times[self.row].tolist()
-            estimates = self.estimates
-            self._sources = tuple(
-                Source(sensor, estimates[sensor].track, times[slot])
+    def sources(self, report_times: list[float] | None = None) -> tuple[Source, ...]:
+        """The contributing sensor tracks, by sensor id, with their report times
+        (``report_times``: the table's times of this row by slot, when at hand)."""
+        memo, estimates = self._sources, self.estimates
+        if len(memo) != len(estimates):
+            times = (
+                self.rows.table.times[self.row].tolist() if report_times is None else report_times
+            )
+            memo = {
+                sensor: memo.get(sensor) or Source(sensor, estimates[sensor].track, times[slot])
                 for sensor, slot in self.rows.sorted_slots
                 if sensor in estimates
-            )
-        return self._sources
+            }
+            self._sources = memo
+        return tuple(memo.values())
 
     def remember(self, time: float, state: list[float]) -> None:
         """Append a fused state to the bounded history (replacing one at the same time);
