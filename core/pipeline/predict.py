@@ -41,9 +41,12 @@ def predict_estimates(
     Δt = 0: the estimate as it is, its covariance symmetrised (P + Pᵀ)/2; a
     negative Δt predicts backwards (a late report, ``MotionModel.predict``).
     """
-    predicted = states.copy()
-    predicted_cov = (covariances + covariances.swapaxes(-1, -2)) / 2.0
-    later = dt != 0.0
+    predicted, predicted_cov = states.copy(), covariances.copy()
+    now = dt == 0.0
+    if now.any():
+        own = covariances[now]
+        predicted_cov[now] = (own + own.swapaxes(-1, -2)) / 2.0
+    later = ~now
     if later.any():
         predicted[later], predicted_cov[later] = motion.predict(
             states[later], covariances[later], dt[later]

@@ -47,7 +47,6 @@ ENGINE_PARTS: list[tuple[Any, str]] = [
     (SessionEngine, name)
     for name in (
         "_check",
-        "_associate",
         "_record",
         "_start",
         "_life_cycle",
@@ -62,6 +61,7 @@ ENGINE_PARTS: list[tuple[Any, str]] = [
 ] + [
     (engine_module, "advance"),
     (engine_module, "hand_over"),
+    (engine_module, "associate_report"),
     (engine_module, "initiated"),
     (engine_module, "hand_over_pairs"),
     (EstimateTable, "fused_at"),
