@@ -6,7 +6,11 @@ engine"; docs/algorithms.md §6). Same configuration + same inputs in the same
 order → bit-identical outputs. Its whole state exports to plain data
 (:meth:`SessionEngine.export`) and restores exactly (:meth:`SessionEngine.restore`).
 
-One track-list step ([T2T] Fig 1-2, generalised to N sensors and to time):
+One track-list step ([T2T] Fig 1-2, generalised to N sensors and to time) is
+an assembly of the pipeline parts of :mod:`core.pipeline` (docs/algorithms.md
+§7.5; the local tracker is the other), over the engine's rows: the estimate
+table (kinematics, report times) and, row for row, the tracks' numbers and
+lives (:class:`~core.fusion.track.FusedRows`):
 
 1. check the report (sensor known, newer than that sensor's previous report,
    numbers finite and within the bounds of ``core.numerics``, shapes right,
@@ -14,7 +18,7 @@ One track-list step ([T2T] Fig 1-2, generalised to N sensors and to time):
 2. predict the live fused tracks to the report time: each track's state is
    the fusion of every sensor's latest estimate predicted to that time;
 3. associate the report's tracks with them by the session's method, with
-   class information when both sides carry it (§3.6);
+   class information when both sides carry it (§3.6; :mod:`core.fusion.associate`);
 4. each associated report track becomes its sensor's latest estimate of the
    fused track; unassociated ones start tentative tracks;
 5. life cycle, shared with the local tracker (:func:`core.lifecycle.advance`):
@@ -28,8 +32,8 @@ One track-list step ([T2T] Fig 1-2, generalised to N sensors and to time):
 6. class fusion per track from the sensors' latest class evidence.
 
 **Transactions.** A step checkpoints the tracks' fields (their containers
-are replaced, never changed in place), the estimate table and the sensor's
-local tracker; when anything in it
+are replaced, never changed in place), the rows (never changed in place), the
+estimate table and the sensor's local tracker; when anything in it
 raises — a refused input or an internal error — they come back and the
 export is bit-identical to before. There is no check-before-change: the
 step itself is the check.
@@ -208,7 +212,7 @@ class SessionEngine:
         sensor, incoming = self._check(report)
         t = float(report.time)
         live = np.flatnonzero(_is_live(self._rows.rows.life.status))
-        states, covariances = self._table.fused_at(live, t)
+        states, covariances = self._table.fused_at(live, t)  # predict
         decision = associate_report(
             self.config,
             [self.tracks[row] for row in live.tolist()],
@@ -222,7 +226,7 @@ class SessionEngine:
         rows = np.array([pair[0] for pair in decision.pairs], dtype=np.int64)
         cols = np.array([pair[1] for pair in decision.pairs], dtype=np.int64)
         increments = self._hit_increments(states[rows], covariances[rows], incoming, cols, sensor)
-        self._record(live[rows], cols, report, incoming)
+        self._record(live[rows], cols, report, incoming)  # update
         created = self._start(np.asarray(decision.new, dtype=np.int64), report, incoming)
 
         self.time = t if self.time is None else max(self.time, t)
@@ -233,9 +237,9 @@ class SessionEngine:
         )
         status = self._rows.rows.life.status
         fresh = np.concatenate([confirmed, created[status[created] == CONFIRMED]])
-        terminated = self._hand_over_to_phantoms(fresh, terminated)
+        terminated = self._hand_over_to_phantoms(fresh, terminated)  # hand-over
         terminated = self._absorb_duplicates(terminated, created)
-        return self._result(report, decision, live, terminated, explain)
+        return self._result(report, decision, live, terminated, explain)  # and keep the rows
 
     # ------------------------------------------------------------ checks
     def _check(self, report: TrackReport) -> tuple[SensorSpec, Estimates]:

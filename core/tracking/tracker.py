@@ -1,16 +1,21 @@
 """One sensor system's multi-target tracker: detections in, local tracks out ([MTT] Fig 6).
 
-:class:`LocalTracker` runs, for each scan of one of its sensors, with every
-array batched over tracks (and over the models of the IMM):
+:class:`LocalTracker` is one assembly of the pipeline parts of
+:mod:`core.pipeline` (docs/algorithms.md §7.5; the fusion engine is the
+other). It runs, for each scan of one of its sensors, with every array
+batched over tracks (and over the models of the IMM):
 
-1. **predict** every live track to the scan time (:class:`IMMPredictor`):
+1. **predict** every live track to the scan time
+   (:func:`core.pipeline.predict.predict_bank`, :class:`IMMPredictor`):
    one closed-form step over the time since the previous scan, whatever it
    is (scans need not lie on a grid; a gap costs what one scan costs), none
    for a second sensor at the same time;
-2. **visibility** of each predicted position ([HZ] §2.1): inside the scan
+2. **visibility** of each predicted position ([HZ] §2.1,
+   :mod:`core.pipeline.evidence`): inside the scan
    sensor's field of view and not occluded by a known track (then a missing
    detection is a miss), in a blind zone, or out of range of every sensor;
-3. **association** of detections with the non-phantom tracks by any method
+3. **association** (:mod:`core.tracking.associate`) of detections with the
+   non-phantom tracks by any method
    of :mod:`core.association` on the closest-model or combined distance, plain
    or modified (:mod:`core.tracking.gating`), or the ``cheap_jpda`` baseline
    (:mod:`core.tracking.jpda`);
@@ -22,7 +27,8 @@ array batched over tracks (and over the models of the IMM):
    coasting, empty-gate probability ([HZ] §4.2, A_G from the combined S) and
    the table of [HZ] §5.1 (out of range, phantom expiry, blind zone or
    occlusion → phantom, score deletion, gate emptiness, confirmation);
-6. **hand-over** ([HZ] §5.1, :func:`core.lifecycle.hand_over`): a track
+6. **hand-over** ([HZ] §5.1, :mod:`core.pipeline.handover`,
+   :func:`core.lifecycle.hand_over`): a track
    confirmed in this scan is compared with the phantoms (GNN, ``sum``
    distance on the full state, the life cycle's gate probability); a
    matching phantom takes its estimate and keeps its identity, and the
