@@ -565,8 +565,9 @@ def advance(
     def decide(mask: BoolArray, new_status: int, why: StatusReason) -> None:
         nonlocal status, reason, undecided
         chosen = mask & undecided
-        status, reason = changed(chosen, new_status, why)
-        undecided = undecided & ~chosen
+        if chosen.any():  # (most rows of the table match no track in most steps)
+            status, reason = changed(chosen, new_status, why)
+            undecided = undecided & ~chosen
 
     decide(evidence.visibility == Visibility.OUT_OF_RANGE, TERMINATED, StatusReason.OUT_OF_RANGE)
     expired = is_phantom & (evidence.time - phantom_since > config.phantom_lifetime)

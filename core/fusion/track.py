@@ -162,11 +162,11 @@ class FusedTrack:
             times = (
                 self.rows.table.times[self.row].tolist() if report_times is None else report_times
             )
-            memo = {
-                sensor: memo.get(sensor) or Source(sensor, estimates[sensor].track, times[slot])
-                for sensor, slot in self.rows.sorted_slots
-                if sensor in estimates
-            }
+            slots = self.rows.table.slots
+            memo = {**memo}
+            for sensor in estimates.keys() - memo.keys():  # the sensors that reported since
+                memo[sensor] = Source(sensor, estimates[sensor].track, times[slots[sensor]])
+            memo = dict(sorted(memo.items()))
             self._sources = memo
         return tuple(memo.values())
 
