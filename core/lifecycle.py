@@ -543,6 +543,8 @@ def advance(
     reason = state.reason
 
     def changed(mask: BoolArray, new_status: int, why: StatusReason) -> tuple[IntArray, IntArray]:
+        if not mask.any():  # the arrays are never changed in place: they may be shared
+            return status, reason
         return np.where(mask, new_status, status), np.where(mask, reason_code(why), reason)
 
     status, reason = changed(detected & (status == COASTING), CONFIRMED, StatusReason.REACQUIRED)
@@ -565,7 +567,7 @@ def advance(
     def decide(mask: BoolArray, new_status: int, why: StatusReason) -> None:
         nonlocal status, reason, undecided
         chosen = mask & undecided
-        if chosen.any():  # (most rows of the table match no track in most steps)
+        if chosen.any():  # most rules match no track in most steps
             status, reason = changed(chosen, new_status, why)
             undecided = undecided & ~chosen
 
