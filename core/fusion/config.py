@@ -137,7 +137,8 @@ class FusionConfig:
             if sensor.id == sensor_id:
                 return sensor
         raise InvalidInput(
-            f"unknown sensor {sensor_id!r}; the session has {[s.id for s in self.sensors]}"
+            f"unknown sensor {sensor_id!r}; the session has {[s.id for s in self.sensors]}",
+            loc=("sensor",),
         )
 
     @property

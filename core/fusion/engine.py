@@ -165,7 +165,8 @@ class SessionEngine:
         if tracker is None:
             raise InvalidInput(
                 f"sensor {sensor.id!r} sends track lists: it has no local tracker for detections "
-                "(configure its measurement model)"
+                "(configure its measurement model)",
+                loc=("sensor",),
             )
         check_time(report.time)
         last = self.last_report.get(sensor.id)
@@ -254,18 +255,21 @@ class SessionEngine:
         ids = [track.id for track in report.tracks]
         if len(set(ids)) != len(ids):
             repeated = sorted(track_id for track_id, n in Counter(ids).items() if n > 1)
-            raise InvalidInput(f"tracks: ids repeat: {repeated}")
+            first = {track_id: index for index, track_id in reversed(list(enumerate(ids)))}
+            second = next(index for index, track_id in enumerate(ids) if first[track_id] != index)
+            raise InvalidInput(f"tracks: ids repeat: {repeated}", loc=("tracks", second, "id"))
         dim = self.config.dim
         for index, track in enumerate(report.tracks):
             if track.state.shape != (dim,) or track.covariance.shape != (dim, dim):
                 raise InvalidInput(
                     f"tracks[{index}] (id {track.id!r}): state must have {dim} components and "
-                    f"covariance {dim}×{dim}, got {track.state.shape} and {track.covariance.shape}"
+                    f"covariance {dim}×{dim}, got {track.state.shape} and {track.covariance.shape}",
+                    loc=("tracks", index, "state" if track.state.shape != (dim,) else "covariance"),
                 )
             if self.config.classes is not None or (
                 track.class_mass is not None or track.class_likelihoods is not None
             ):
-                self._check_classes(track, f"tracks[{index}] (id {track.id!r})")
+                self._check_classes(track, index)
         estimates = Estimates.of(
             np.array([track.state for track in report.tracks]).reshape(-1, dim),
             np.array([track.covariance for track in report.tracks]).reshape(-1, dim, dim),
@@ -276,33 +280,42 @@ class SessionEngine:
         check_magnitudes(estimates.states, estimates.covariances, "tracks")
         return sensor, estimates
 
-    def _check_classes(self, track: ReportedTrack, where: str) -> None:
+    def _check_classes(self, track: ReportedTrack, index: int) -> None:
         frame = self.config.classes
+        where = f"tracks[{index}] (id {track.id!r})"
+        evidence = "class_mass" if track.class_mass is not None else "class_likelihoods"
         if track.class_mass is not None and track.class_likelihoods is not None:
-            raise InvalidInput(f"{where}: give a class mass or class likelihoods, not both")
+            raise InvalidInput(
+                f"{where}: give a class mass or class likelihoods, not both",
+                loc=("tracks", index, "class_likelihoods"),
+            )
         if frame is None:
             if track.class_mass is not None or track.class_likelihoods is not None:
                 raise InvalidInput(
-                    f"{where}: the session has no classes, but the track carries class evidence"
+                    f"{where}: the session has no classes, but the track carries class evidence",
+                    loc=("tracks", index, evidence),
                 )
             return
         if track.class_mass is not None and track.class_mass.frame != frame:
             raise InvalidInput(
-                f"{where}: class mass is not on the session's classes {list(frame.labels)}"
+                f"{where}: class mass is not on the session's classes {list(frame.labels)}",
+                loc=("tracks", index, "class_mass"),
             )
         if track.class_likelihoods is not None:
             likelihoods = track.class_likelihoods
+            at = ("tracks", index, "class_likelihoods")
             if likelihoods.shape != (len(frame),):
-                raise InvalidInput(f"{where}: need one likelihood per class ({len(frame)})")
+                raise InvalidInput(f"{where}: need one likelihood per class ({len(frame)})", loc=at)
             if (
                 not np.all(np.isfinite(likelihoods))
                 or likelihoods.min() < 0.0
                 or likelihoods.max() > 1.0
             ):
-                raise InvalidInput(f"{where}: class likelihoods must lie in [0, 1]")
+                raise InvalidInput(f"{where}: class likelihoods must lie in [0, 1]", loc=at)
             if likelihoods.max() == 0.0:
                 raise InvalidInput(
-                    f"{where}: class likelihoods are all zero: the evidence rules out every class"
+                    f"{where}: class likelihoods are all zero: the evidence rules out every class",
+                    loc=at,
                 )
 
     # ------------------------------------------------------- association
@@ -732,9 +745,11 @@ class SessionEngine:
 def check_time(time: float) -> None:
     """A report time must be finite and of magnitude at most :data:`core.numerics.MAX_TIME`."""
     if not math.isfinite(time):
-        raise InvalidInput(f"time must be finite, got {time!r}")
+        raise InvalidInput(f"time must be finite, got {time!r}", loc=("time",))
     if abs(time) > MAX_TIME:
-        raise InvalidInput(f"time: magnitude {time!r} is beyond the limit {MAX_TIME:g} s")
+        raise InvalidInput(
+            f"time: magnitude {time!r} is beyond the limit {MAX_TIME:g} s", loc=("time",)
+        )
 
 
 def check_detection_magnitudes(report: DetectionReport) -> None:

@@ -148,7 +148,8 @@ class DetectionAssociator:
         """The cheap JPDA baseline ([DH] §2): soft weights over gated pairs, PDA update."""
         if own_noise is not None:
             raise TrackingError(
-                "cheap_jpda uses the bank's R: detections must not carry covariances"
+                "cheap_jpda uses the bank's R: detections must not carry covariances",
+                loc=("measurement_covariances", 0),
             )
         tracks = len(sub.means)
         gated = gate_pairs(

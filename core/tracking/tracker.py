@@ -308,16 +308,22 @@ class LocalTracker:
     ) -> tuple[FloatArray, FloatArray | None, str, float]:
         sensor_name = self.config.sensors[0] if sensor is None else sensor
         if sensor_name not in self._views:
-            raise TrackingError(f"unknown sensor {sensor_name!r}; known: {list(self._views)}")
+            raise TrackingError(
+                f"unknown sensor {sensor_name!r}; known: {list(self._views)}", loc=("sensor",)
+            )
         if not math.isfinite(time):
-            raise TrackingError(f"time must be finite, got {time!r}")
+            raise TrackingError(f"time must be finite, got {time!r}", loc=("time",))
         z = np.asarray(measurements, dtype=np.float64)
         if z.size == 0:
             z = z.reshape(0, self._q)
         if z.ndim != 2 or z.shape[1] != self._q:
-            raise TrackingError(f"measurements must have shape (m, {self._q}), got {z.shape}")
+            raise TrackingError(
+                f"measurements must have shape (m, {self._q}), got {z.shape}",
+                loc=("measurements",),
+            )
         if not np.all(np.isfinite(z)):
-            raise TrackingError("measurements must be finite")
+            row = int(np.argmax(~np.isfinite(z).all(axis=1)))
+            raise TrackingError("measurements must be finite", loc=("measurements", row))
         own: FloatArray | None = None
         if measurement_covariances is not None:
             own = np.asarray(measurement_covariances, dtype=np.float64)
@@ -325,7 +331,8 @@ class LocalTracker:
                 own = own.reshape(0, self._q, self._q)
             if own.shape != (len(z), self._q, self._q):
                 raise TrackingError(
-                    f"measurement_covariances must have shape ({len(z)}, {self._q}, {self._q})"
+                    f"measurement_covariances must have shape ({len(z)}, {self._q}, {self._q})",
+                    loc=("measurement_covariances",),
                 )
             if len(own):
                 check_covariances(own, "measurement_covariances")
@@ -334,7 +341,8 @@ class LocalTracker:
             elapsed = time - self.time
             if elapsed < 0.0:
                 raise TrackingError(
-                    f"scan time {time!r} is before the previous scan's time {self.time!r}"
+                    f"scan time {time!r} is before the previous scan's time {self.time!r}",
+                    loc=("time",),
                 )
         return z, own, sensor_name, elapsed
 
