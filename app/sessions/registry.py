@@ -125,8 +125,8 @@ class Step:
     engine: SessionEngine
     fusion: FusionConfig
     result: str
-    engine_cpu_s: float
     logged: PlainObject
+    engine_cpu_s: float
 
 
 @dataclass(frozen=True)
@@ -478,8 +478,8 @@ class SessionRegistry:
             engine=engine,
             fusion=fusion,
             result=result,
-            engine_cpu_s=engine_cpu_s,
             logged=log_input(report),
+            engine_cpu_s=engine_cpu_s,
         )
 
     async def submit_tracks(
