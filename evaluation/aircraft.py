@@ -108,7 +108,9 @@ def aircraft_classification(seeds: Sequence[int] = tuple(range(20))) -> Aircraft
     scenario = aircraft_scenario(seed=seeds[0])
     bayesian = np.stack([replay.bayesian for replay in replays])
     matrix = class_given_behaviour(preset.relation)  # (|C|, |B|)
-    behaviour_posteriors = np.linalg.solve(matrix, bayesian.reshape(-1, 3).T).T
+    behaviour_posteriors = np.asarray(
+        np.linalg.solve(matrix, bayesian.reshape(-1, 3).T).T, dtype=np.float64
+    )
     return AircraftClassification(
         seeds=tuple(seeds),
         classes=preset.classes.labels,

@@ -23,6 +23,9 @@ def test_reproduce_writes_a_png(name: str, tmp_path: Path) -> None:
     assert len(content) > 20_000
     assert any("seed" in line for line in lines)  # every run says its seeds
     assert lines[-1] == f"wrote {path}"
+    numbers = (tmp_path / "figures" / f"{name}.txt").read_text().splitlines()
+    assert numbers[0] == f"$ credal-fusion reproduce {name} --reduced"
+    assert numbers[1:] == lines[: len(numbers) - 1]  # the lines the experiment echoed
 
 
 def test_the_registry_names_the_papers_figures() -> None:
