@@ -50,6 +50,10 @@ from evaluation.pedestrian import (
     pedestrian_classification,
     stop_outcomes,
 )
+from evaluation.peers import SCENES as PEER_SCENES
+from evaluation.peers import SEEDS as PEER_SEEDS
+from evaluation.peers import PeerScene, first_seed, peer_study
+from evaluation.peers import machine as peers_machine
 from evaluation.road_four import PAPER_TIME_MEANS, RoadFourStudy, road_four_study
 from evaluation.scenes import SCORE_GAPS, pedestrian_truths, tracked_aircraft
 from evaluation.two_class import ClassComparison, class_comparison
@@ -1244,6 +1248,145 @@ def _plot_overtaking_bars(axes: Axes, study: OvertakingStudy) -> None:
     axes.legend(fontsize=7, loc="upper center")
 
 
+# --------------------------------------------------------------------- peers
+def draw_peers(reduced: bool, echo: Echo) -> Figure:
+    """issue 13: GOSPA (parts), SIAP, id switches and per-scan time against Stone Soup."""
+    names = ("~10",) if reduced else PEER_SCENES
+    seeds = 2 if reduced else PEER_SEEDS
+    scans = 8 if reduced else None
+    echo(f"peers: {peers_machine()}")
+    echo(
+        f"peers: scenes {list(names)}, {seeds} seeds each from the bench's own "
+        f"({', '.join(f'{n}: {first_seed(n)}' for n in names)})"
+        + (f", first {scans} scans" if scans else "")
+    )
+    studies = peer_study(names, seeds, scans, progress=echo)
+    figure = Figure(figsize=(3.2 * len(studies) + 1, 7.5), layout="constrained")
+    grid = figure.subplots(2, len(studies), squeeze=False)
+    for column, study in enumerate(studies):
+        _plot_peer_gospa(grid[0][column], study)
+        _plot_peer_speed(grid[1][column], study)
+        echo(_peer_table(study))
+    return _titled(
+        figure,
+        "peers",
+        f"issue 13: our tracker and service vs Stone Soup 1.9.1, {seeds} seeds per scene "
+        "(bench/peers.py's scenes, trackers and metrics)",
+        reduced,
+    )
+
+
+def _plot_peer_gospa(axes: Axes, study: PeerScene) -> None:
+    trackers = [t for t in study.trackers if t not in study.timing_only]
+    positions = np.arange(len(trackers))
+    bottom = np.zeros(len(trackers))
+    for part, colour in (("localisation", "C0"), ("missed", "C1"), ("false", "C3")):
+        heights = np.array([study.scores[t][part].mean() for t in trackers])
+        axes.bar(positions, heights, 0.6, bottom=bottom, color=colour, label=part)
+        bottom += heights
+    totals = [mean_interval(study.scores[t]["gospa"]) for t in trackers]
+    axes.errorbar(
+        positions,
+        [i.estimate for i in totals],
+        yerr=np.array([[i.estimate - i.low, i.high - i.estimate] for i in totals]).T,
+        fmt="none",
+        ecolor="k",
+        capsize=3,
+    )
+    axes.set_xticks(positions, trackers, rotation=30, fontsize=7)
+    axes.set_ylabel("GOSPA (c = 10σ, p = 1, α = 2), scan mean")
+    axes.set_title(
+        f"{study.name}: {study.targets.mean():.0f} targets; 95 % t over seeds",
+        fontsize=9,
+        loc="left",
+    )
+    axes.legend(fontsize=6, loc="lower right")
+
+
+def _plot_peer_speed(axes: Axes, study: PeerScene) -> None:
+    trackers = [t for t in study.trackers if t != "ss-gnn"]
+    intervals = [mean_interval(study.speed_up(t)) for t in trackers]
+    positions = np.arange(len(trackers))
+    axes.bar(positions, [i.estimate for i in intervals], 0.6, color="0.6")
+    axes.errorbar(
+        positions,
+        [i.estimate for i in intervals],
+        yerr=np.array([[i.estimate - max(i.low, 1e-3), i.high - i.estimate] for i in intervals]).T,
+        fmt="none",
+        ecolor="k",
+        capsize=3,
+    )
+    for x, interval in zip(positions, intervals, strict=True):
+        axes.text(
+            float(x),
+            interval.estimate,
+            f"{interval.estimate:.0f}×",
+            ha="center",
+            va="bottom",
+            fontsize=7,
+        )
+    axes.set_yscale("log")
+    axes.set_xticks(positions, trackers, rotation=30, fontsize=7)
+    axes.set_ylabel("Stone Soup GNN's per-scan time / tracker's")
+    axes.set_title("speed-up, same process, same run", fontsize=9, loc="left")
+
+
+def _peer_table(study: PeerScene) -> str:
+    """The scene's rows as a Markdown table (estimates [95 % t interval over the seeds])."""
+
+    def cell(values: FloatArray, digits: int = 1) -> str:
+        if np.all(np.isnan(values)):
+            return "–"
+        interval = mean_interval(values)
+        return f"{interval.estimate:.{digits}f} [{interval.low:.{digits}f}, {interval.high:.{digits}f}]"
+
+    lines = [
+        f"peers {study.name}: {study.targets.mean():.1f} targets on average, seeds "
+        f"{list(study.seeds)}; GOSPA reference {study.reference}"
+        + (f"; {', '.join(study.timing_only)}: timing only" if study.timing_only else ""),
+        "",
+        "| tracker | GOSPA | localisation | missed | false | id switches | late (scans) "
+        "| SIAP C | SIAP S | SIAP PA | ms / scan | speed-up vs ss-gnn | GOSPA / reference |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for tracker, scores in study.scores.items():
+        scored = tracker not in study.timing_only
+        accuracy = [
+            cell(scores[f]) if scored else "–" for f in ("gospa", "localisation", "missed", "false")
+        ]
+        rest = [cell(scores[f]) if scored else "–" for f in ("switches", "late")]
+        siap = [
+            cell(scores[f], 2) if scored else "–"
+            for f in ("completeness", "spuriousness", "position")
+        ]
+        lines.append(
+            f"| {tracker} | "
+            + " | ".join(
+                [
+                    *accuracy,
+                    *rest,
+                    *siap,
+                    cell(scores["scan_ms"], 2),
+                    cell(study.speed_up(tracker)),
+                    cell(study.ratio(tracker), 2) if scored else "–",
+                ]
+            )
+            + " |"
+        )
+    for tracker in ("ours", "ours-rest"):
+        if tracker in study.scores:
+            difference = paired_difference(
+                study.scores[tracker]["gospa"], study.scores[study.reference]["gospa"]
+            )
+            lines.append(f"\n{tracker} − {study.reference}, GOSPA: {difference}")
+    if "ss-jpda" in study.scores:
+        difference = paired_difference(
+            study.scores["ours"]["gospa"], study.scores["ss-jpda"]["gospa"]
+        )
+        lines.append(f"ours − ss-jpda, GOSPA: {difference}")
+    return "\n".join(lines)
+
+
 DRAWINGS: dict[str, Callable[[bool, Echo], Figure]] = {
     "t2t-four": draw_t2t_four,
     "t2t-two-class": draw_t2t_two_class,
@@ -1257,6 +1400,7 @@ DRAWINGS: dict[str, Callable[[bool, Echo], Figure]] = {
     "overtaking": draw_overtaking,
     "mtt-scenes": draw_mtt_scenes,
     "hz-scale": draw_hz_scale,
+    "peers": draw_peers,
 }
 """Figure name → its drawing: one per entry of :data:`~evaluation.catalogue.CATALOGUE`."""
 
