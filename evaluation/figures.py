@@ -93,6 +93,11 @@ def _seeds(count: int, reduced: bool, small: int = 2) -> tuple[int, ...]:
     return tuple(range(small if reduced else count))
 
 
+def _extent(intervals: Sequence[Interval]) -> FloatArray:
+    """``yerr`` of matplotlib for estimates with 95 % intervals: (2, n) distances below, above."""
+    return np.array([[i.estimate - i.low, i.high - i.estimate] for i in intervals]).T.reshape(2, -1)
+
+
 def _titled(figure: Figure, name: str, heading: str, reduced: bool) -> Figure:
     command = f"{COMMAND} {name}" + (" --reduced" if reduced else "")
     figure.suptitle(f"{heading}\n$ {command}", fontsize=10)
@@ -697,7 +702,7 @@ def _plot_crossing_scores(axes: Axes, study: CrossingStudy) -> None:
             axes.errorbar(
                 study.variances,
                 [i.estimate for i in intervals],
-                yerr=np.array([[i.estimate - i.low, i.high - i.estimate] for i in intervals]).T,
+                yerr=_extent(intervals),
                 marker=marker,
                 ls=style,
                 capsize=2,
@@ -1160,15 +1165,11 @@ def _grouped_bars(
         intervals = [
             _share_interval(values) if share else mean_interval(values) for values in per_group
         ]
-        heights = np.array([interval.estimate for interval in intervals])
-        errors = np.array(
-            [[h - i.low, i.high - h] for h, i in zip(heights, intervals, strict=True)]
-        )
         bars = axes.bar(
             positions + (offset - (len(series) - 1) / 2) * width,
-            heights,
+            [interval.estimate for interval in intervals],
             width,
-            yerr=np.maximum(errors, 0.0).T,
+            yerr=np.maximum(_extent(intervals), 0.0),
             capsize=2,
             label=label,
         )
@@ -1252,13 +1253,13 @@ def _plot_overtaking_bars(axes: Axes, study: OvertakingStudy) -> None:
 def draw_peers(reduced: bool, echo: Echo) -> Figure:
     """issue 13: GOSPA (parts), SIAP, id switches and per-scan time against Stone Soup."""
     names = ("~10",) if reduced else PEER_SCENES
-    seeds = 2 if reduced else PEER_SEEDS
+    seeds = {"~10": 2} if reduced else PEER_SEEDS
     scans = 8 if reduced else None
     echo(f"peers: {peers_machine()}")
     echo(
-        f"peers: scenes {list(names)}, {seeds} seeds each from the bench's own "
-        f"({', '.join(f'{n}: {first_seed(n)}' for n in names)})"
-        + (f", first {scans} scans" if scans else "")
+        "peers: seeds per scene from the bench's own "
+        + ", ".join(f"{n}: {seeds[n]} from {first_seed(n)}" for n in names)
+        + (f"; first {scans} scans" if scans else "")
     )
     studies = peer_study(names, seeds, scans, progress=echo)
     figure = Figure(figsize=(3.2 * len(studies) + 1, 7.5), layout="constrained")
@@ -1270,7 +1271,9 @@ def draw_peers(reduced: bool, echo: Echo) -> Figure:
     return _titled(
         figure,
         "peers",
-        f"issue 13: our tracker and service vs Stone Soup 1.9.1, {seeds} seeds per scene "
+        "issue 13: our tracker and service vs Stone Soup 1.9.1, "
+        + ", ".join(f"{n} {seeds[n]}" for n in names)
+        + " seeds "
         "(bench/peers.py's scenes, trackers and metrics)",
         reduced,
     )
@@ -1285,18 +1288,11 @@ def _plot_peer_gospa(axes: Axes, study: PeerScene) -> None:
         axes.bar(positions, heights, 0.6, bottom=bottom, color=colour, label=part)
         bottom += heights
     totals = [mean_interval(study.scores[t]["gospa"]) for t in trackers]
-    axes.errorbar(
-        positions,
-        [i.estimate for i in totals],
-        yerr=np.array([[i.estimate - i.low, i.high - i.estimate] for i in totals]).T,
-        fmt="none",
-        ecolor="k",
-        capsize=3,
-    )
+    axes.errorbar(positions, bottom, yerr=_extent(totals), fmt="none", ecolor="k", capsize=3)
     axes.set_xticks(positions, trackers, rotation=30, fontsize=7)
     axes.set_ylabel("GOSPA (c = 10σ, p = 1, α = 2), scan mean")
     axes.set_title(
-        f"{study.name}: {study.targets.mean():.0f} targets; 95 % t over seeds",
+        f"{study.name}: {study.targets.mean():.0f} targets, {len(study.seeds)} seeds; 95 % t",
         fontsize=9,
         loc="left",
     )
@@ -1307,24 +1303,17 @@ def _plot_peer_speed(axes: Axes, study: PeerScene) -> None:
     trackers = [t for t in study.trackers if t != "ss-gnn"]
     intervals = [mean_interval(study.speed_up(t)) for t in trackers]
     positions = np.arange(len(trackers))
-    axes.bar(positions, [i.estimate for i in intervals], 0.6, color="0.6")
-    axes.errorbar(
+    bars = axes.bar(
         positions,
         [i.estimate for i in intervals],
-        yerr=np.array([[i.estimate - max(i.low, 1e-3), i.high - i.estimate] for i in intervals]).T,
-        fmt="none",
-        ecolor="k",
+        0.6,
+        yerr=np.minimum(
+            _extent(intervals), [[i.estimate * 0.999 for i in intervals], [np.inf] * len(intervals)]
+        ),
         capsize=3,
+        color="0.6",
     )
-    for x, interval in zip(positions, intervals, strict=True):
-        axes.text(
-            float(x),
-            interval.estimate,
-            f"{interval.estimate:.0f}×",
-            ha="center",
-            va="bottom",
-            fontsize=7,
-        )
+    axes.bar_label(bars, fmt="%.0f×", fontsize=7)
     axes.set_yscale("log")
     axes.set_xticks(positions, trackers, rotation=30, fontsize=7)
     axes.set_ylabel("Stone Soup GNN's per-scan time / tracker's")
@@ -1337,6 +1326,8 @@ def _peer_table(study: PeerScene) -> str:
     def cell(values: FloatArray, digits: int = 1) -> str:
         if np.all(np.isnan(values)):
             return "–"
+        if len(values) < 2:  # one draw: no interval
+            return f"{float(values[0]):.{digits}f}"
         interval = mean_interval(values)
         return f"{interval.estimate:.{digits}f} [{interval.low:.{digits}f}, {interval.high:.{digits}f}]"
 

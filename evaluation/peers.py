@@ -9,7 +9,10 @@ bench runs each scene once, at one seed; here every scene is drawn at
 :data:`SEEDS` seeds and every tracker runs on the same draws, so that each
 number has a 95 % t interval over the seeds and each comparison with Stone
 Soup's GNN is paired (the GOSPA ratio and the per-scan speed-up of each
-seed).
+seed). As in the bench, above ``GNN_FULL_MAX_TARGETS`` targets the tutorial
+GNN runs its first scans for its time only and its kd-tree form (the same
+tracks) is the GOSPA reference; below it the kd-tree form, which would repeat
+the tutorial GNN's tracks, is not run.
 
 The scenes' sizes are those of the bench's ``SCENES``
 (:data:`SCENE_SIZES`; a test checks that the first seed of each rebuilds the
@@ -46,8 +49,11 @@ SCENE_SIZES: Mapping[str, tuple[int, int, int]] = {
 CROSSING_SEED = 7
 """The bench's seed of the ``crossing`` scene."""
 SCENES = (*SCENE_SIZES, "crossing")
-SEEDS = 5
-"""Seeds per scene: the bench's own seed and the next ones."""
+SEEDS: Mapping[str, int] = {"~10": 5, "~50": 3, "~200": 1, "crossing": 10}
+"""Seeds per scene: the bench's own seed and the next ones. A draw of ``~200`` takes
+about 4 minutes on a loaded 2-core machine (Stone Soup's trackers in Python), so it
+has one draw — its numbers carry no interval and support no claim — and ``~50``
+three; ``~10`` and ``crossing`` carry the claims."""
 TRACKERS = ("ss-gnn", "ss-kdgnn", "ss-jpda", "ours", "ours-rest")
 FIELDS = ("gospa", "localisation", "missed", "false", "switches", "late", "scan_ms")
 SIAP_FIELDS = ("completeness", "spuriousness", "position")
@@ -136,10 +142,9 @@ def _runs(bench: ModuleType, built: Any, url: str) -> dict[str, tuple[Any, Any]]
     gnn_scene = (
         built if targets <= bench.GNN_FULL_MAX_TARGETS else built.head(bench.GNN_TIMING_SCANS)
     )
-    runs = {
-        "ss-gnn": (bench.stone_soup_run(gnn_scene, "ss-gnn"), gnn_scene),
-        "ss-kdgnn": (bench.stone_soup_run(built, "ss-kdgnn"), built),
-    }
+    runs = {"ss-gnn": (bench.stone_soup_run(gnn_scene, "ss-gnn"), gnn_scene)}
+    if gnn_scene is not built:
+        runs["ss-kdgnn"] = (bench.stone_soup_run(built, "ss-kdgnn"), built)
     if targets <= bench.JPDA_MAX_TARGETS:
         runs["ss-jpda"] = (bench.stone_soup_run(built, "ss-jpda"), built)
     runs["ours"] = (bench.local_run(built), built)
@@ -188,20 +193,18 @@ def peer_scene(
 
 def peer_study(
     names: Sequence[str] = SCENES,
-    seeds: int = SEEDS,
+    seeds: Mapping[str, int] = SEEDS,
     scans: int | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> tuple[PeerScene, ...]:
-    """Every scene of ``names`` at ``seeds`` seeds from the bench's own, one live service."""
+    """Every scene of ``names`` at ``seeds[name]`` seeds from the bench's own, one live service."""
     bench = load_bench()
     studies = []
     with bench.live_service() as url:
         for name in names:
+            chosen = tuple(range(first_seed(name), first_seed(name) + seeds[name]))
             if progress is not None:
-                progress(
-                    f"peers: scene {name}, seeds {first_seed(name)}..{first_seed(name) + seeds - 1}"
-                )
-            chosen = tuple(range(first_seed(name), first_seed(name) + seeds))
+                progress(f"peers: scene {name}, seeds {chosen[0]}..{chosen[-1]}")
             studies.append(peer_scene(name, chosen, scans, url))
     return tuple(studies)
 
