@@ -160,6 +160,7 @@ def draw_t2t_four(reduced: bool, echo: Echo) -> Figure:
         f"Fig 3: four targets, σ = {sweep.position_sigma} m, {n_steps} steps (seed {seeds[0]})",
     )
     _plot_sweep(right, sweep)
+    echo(_sweep_summary(sweep))
     return _titled(
         figure,
         "t2t-four",
@@ -193,6 +194,31 @@ def _rate_band(
         lw=0,
     )
     return line
+
+
+def _sweep_summary(sweep: ThresholdSweep) -> str:
+    lines = [f"t2t-four: decisions per run {sweep.decisions.tolist()}"]
+    best = {}
+    for method, rates in (("gnn", sweep.gnn), ("denoeux", sweep.denoeux)):
+        cells = [
+            f"λ {t:.3g}: {rate_interval(rates[:, col], sweep.decisions)}"
+            for col, t in enumerate(sweep.thresholds)
+        ]
+        best[method] = int(np.argmin(rates.mean(axis=0)))
+        lines.append(f"  {method}: " + "; ".join(cells))
+        lines.append(f"  {method} ties max {sweep.ties[method].max():.3f}")
+    for label, rates in sweep.hachour.items():
+        lines.append(
+            f"  hachour {label}: {rate_interval(rates, sweep.decisions)}, "
+            f"ties {sweep.ties[label].mean():.2f}"
+        )
+    gnn, denoeux = sweep.gnn[:, best["gnn"]], sweep.denoeux[:, best["denoeux"]]
+    lines.append(
+        f"  best λ gnn {sweep.thresholds[best['gnn']]:.3g}, denoeux "
+        f"{sweep.thresholds[best['denoeux']]:.3g}; denoeux − gnn at their best: "
+        f"{paired_difference(denoeux, gnn)}"
+    )
+    return "\n".join(lines)
 
 
 def _plot_sweep(axes: Axes, sweep: ThresholdSweep) -> None:
@@ -242,12 +268,35 @@ def draw_t2t_two_class(reduced: bool, echo: Echo) -> Figure:
         f"Fig 5: c1 at y = 0, c2 at y = {comparison.separation} m, {n_steps} steps (seed {seeds[0]})",
     )
     _plot_classes(right, comparison)
+    echo(_classes_summary(comparison))
     return _titled(
         figure,
         "t2t-two-class",
         f"[T2T] Fig 5–6: distance only vs distance + class, {len(seeds)} realisations",
         reduced,
     )
+
+
+def _classes_summary(comparison: ClassComparison) -> str:
+    decisions = comparison.decisions
+    lines = [
+        f"t2t-two-class: decisions per run {decisions.tolist()}; tuned λ {comparison.thresholds}"
+    ]
+    for label in comparison.labels:
+        mono = comparison.mono[label]
+        line = (
+            f"  {label}: mono {rate_interval(mono, decisions)} "
+            f"(ties {comparison.mono_ties[label].mean():.2f})"
+        )
+        if label in comparison.multi:
+            multi = comparison.multi[label]
+            line += (
+                f" → multi {rate_interval(multi, decisions)} "
+                f"(ties {comparison.multi_ties[label].mean():.2f}); multi − mono "
+                f"{paired_difference(multi, mono)}"
+            )
+        lines.append(line)
+    return "\n".join(lines)
 
 
 def _plot_classes(axes: Axes, comparison: ClassComparison) -> None:
