@@ -1425,6 +1425,8 @@ def _peer_table(study: PeerScene) -> str:
             )
             + " |"
         )
+    if len(study.seeds) < 2:  # one draw: no paired test
+        return "\n".join(lines)
     for tracker in ("ours", "ours-rest"):
         if tracker in study.scores:
             difference = paired_difference(
