@@ -1374,7 +1374,7 @@ def _plot_peer_speed(axes: Axes, study: PeerScene) -> None:
         capsize=3,
         color="0.6",
     )
-    axes.bar_label(bars, fmt="%.0f×", fontsize=7)
+    axes.bar_label(bars, fmt="%.2g×", fontsize=7)
     axes.set_yscale("log")
     axes.set_xticks(positions, trackers, rotation=30, fontsize=7)
     axes.set_ylabel("Stone Soup GNN's per-scan time / tracker's")
