@@ -186,19 +186,20 @@ def road_four_study(
     seeds: Sequence[int] = tuple(range(50)),
     *,
     n_steps: int = 100,
-    clutter_rate: float = 3.0,
     methods: Mapping[str, tuple[str, Mapping[str, object]]] = METHODS,
 ) -> RoadFourStudy:
-    """[DH] Fig 2–5: every method on the same M seeded runs (module docstring)."""
+    """[DH] Fig 2–5: every method on the same M seeded runs (module docstring).
+
+    The scene is :func:`~core.simulation.road_four_scenario` with its own
+    clutter and geometry (one definition, as in the figure's plan view).
+    """
     position: dict[str, FloatArray] = {}
     velocity: dict[str, FloatArray] = {}
     false: dict[str, FloatArray] = {}
     losses: dict[str, FloatArray] = {}
     false_counts: dict[str, FloatArray] = {}
     scores: dict[str, dict[str, FloatArray]] = {"ospa": {}, "gospa": {}, "switches": {}}
-    scenarios = [
-        road_four_scenario(seed, n_steps=n_steps, clutter_rate=clutter_rate) for seed in seeds
-    ]
+    scenarios = [road_four_scenario(seed, n_steps=n_steps) for seed in seeds]
     for label, (method, options) in methods.items():
         rows = []
         measured = []
