@@ -65,7 +65,7 @@ def load_bench() -> ModuleType:
     if not BENCH.is_file():
         raise InvalidInput(f"the peers figure needs a checkout with {BENCH}")
     sys.path.insert(0, str(BENCH.parent))
-    spec = importlib.util.spec_from_file_location("peers_bench", BENCH)
+    spec = importlib.util.spec_from_file_location("evaluation_peers_bench", BENCH)
     if spec is None or spec.loader is None:
         raise InvalidInput(f"cannot load {BENCH}")
     module = importlib.util.module_from_spec(spec)
