@@ -83,6 +83,55 @@ def sorted_members(indices: IntArray, size: int) -> IntArray:
     return np.unique(indices).astype(np.int64)
 
 
+SMALL_PAIRS = 64
+"""Up to this many positive pairs the components are found in plain Python (a local
+tracker's scan: a few tracks and detections, where array and sparse-graph set-up
+cost more than the work)."""
+
+
+def _small_matching(
+    rows: IntArray, cols: IntArray, gain: FloatArray, n_rows: int, solver: Solver
+) -> Matching:
+    """:func:`max_gain_matching` on few pairs: the same components, the same rules."""
+    row_list, col_list, gain_list = rows.tolist(), cols.tolist(), gain.tolist()
+    parent = list(range(n_rows + max(col_list) + 1))
+
+    def root(node: int) -> int:
+        while parent[node] != node:
+            parent[node] = parent[parent[node]]
+            node = parent[node]
+        return node
+
+    for row, col in zip(row_list, col_list, strict=True):
+        parent[root(row)] = root(n_rows + col)
+    members: dict[int, list[int]] = {}
+    for edge, row in enumerate(row_list):
+        members.setdefault(root(row), []).append(edge)
+    chosen: list[tuple[int, int]] = []
+    largest = 0
+    for edges in members.values():
+        local_rows = sorted({row_list[e] for e in edges})
+        local_cols = sorted({col_list[e] for e in edges})
+        largest = max(largest, len(local_rows) + len(local_cols))
+        if len(local_rows) == 1 or len(local_cols) == 1:  # a star: its best pair
+            best = min(edges, key=lambda e: (-gain_list[e], row_list[e], col_list[e]))
+            chosen.append((row_list[best], col_list[best]))
+            continue
+        row_slot = {row: slot for slot, row in enumerate(local_rows)}
+        col_slot = {col: slot for slot, col in enumerate(local_cols)}
+        dense = np.zeros((len(local_rows), len(local_cols)))
+        for e in edges:
+            dense[row_slot[row_list[e]], col_slot[col_list[e]]] = gain_list[e]
+        matched_rows, matched_cols = solve_dense(dense, solver)
+        chosen.extend(
+            (local_rows[r], local_cols[c])
+            for r, c in zip(matched_rows.tolist(), matched_cols.tolist(), strict=True)
+        )
+    chosen.sort()
+    matched = np.array(chosen, dtype=np.int64).reshape(-1, 2)
+    return Matching(matched[:, 0].copy(), matched[:, 1].copy(), len(members), largest)
+
+
 def max_gain_matching(
     rows: IntArray,
     cols: IntArray,
@@ -120,6 +169,8 @@ def max_gain_matching(
         dense[rows, cols] = gain
         matched_rows, matched_cols = solve_dense(dense, solver)
         return Matching(matched_rows, matched_cols, 1, n_rows + n_cols)
+    if len(rows) <= SMALL_PAIRS:
+        return _small_matching(rows, cols, gain, n_rows, solver)
 
     graph = coo_matrix(
         (np.ones(len(rows)), (rows, cols + n_rows)), shape=(n_rows + n_cols, n_rows + n_cols)
