@@ -16,6 +16,15 @@ Solvers: ``"lapjv"`` (Jonker–Volgenant from the ``lapx`` package, the
 default: faster, see ``bench/association.py``) and ``"scipy"``
 (``scipy.optimize.linear_sum_assignment``, the reference). Both are
 deterministic; on exact ties they may pick different optimal matchings.
+With ``"lapjv"``, a large component in which every pair has a positive gain
+(a dense layout: everything inside every gate) is solved on a few candidates
+per item and certified optimal on the whole matrix by LP duality
+(:func:`solve_complete`), four times faster than a dense solve of 1000 × 1000
+nearly tied gains; it falls back to the dense solve when it cannot certify.
+
+Tie rule: a star component takes its best pair, ties broken by the lowest
+row, then the lowest column; elsewhere an exactly tied optimum is the
+solver's.
 """
 
 from __future__ import annotations
@@ -26,8 +35,8 @@ from typing import Literal, get_args
 import lap
 import numpy as np
 from scipy.optimize import linear_sum_assignment
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse import coo_matrix, csr_matrix
+from scipy.sparse.csgraph import connected_components, min_weight_full_bipartite_matching
 
 from core.arrays import FloatArray, IntArray
 from core.errors import InvalidInput
@@ -74,6 +83,116 @@ def solve_dense(gain: FloatArray, solver: Solver = "lapjv") -> tuple[IntArray, I
     rows, cols = rows[keep], cols[keep]
     order = np.argsort(rows, kind="stable")
     return rows[order], cols[order]
+
+
+SPARSE_MIN_SIDE = 128
+"""Complete components (every pair has a positive gain) with both sides at least this
+large are solved on a few candidates per item, then certified (:func:`solve_complete`)."""
+
+SPARSE_CANDIDATES = 24
+"""Candidates kept per row and per column for the first sparse solve."""
+
+SPARSE_ROUNDS = 6
+"""Sparse solves before the certified path gives up and solves the dense matrix."""
+
+
+def solve_complete(gain: FloatArray) -> tuple[IntArray, IntArray] | None:
+    """Maximum-gain matching of a dense matrix whose every gain is > 0, through a sparse solve.
+
+    On such a matrix an optimal partial matching covers the smaller side (any
+    uncovered row and column would add a positive pair), so the problem is a
+    rectangular assignment. It is solved on the ``SPARSE_CANDIDATES`` best
+    pairs of every row and of every column (``min_weight_full_bipartite_matching``),
+    then **certified** on the whole matrix by LP duality: with rows covered and
+    u, v the duals of ``max Σ g x`` over partial matchings (u_i + v_j ≥ g_ij,
+    u, v ≥ 0, v = 0 on uncovered columns, equality on matched pairs), the
+    largest feasible v follows from the matching by shortest paths
+    (Bellman–Ford on the columns: ``v_k ≥ v_σ(i) + g_ik − g_iσ(i)``), and the
+    matching is optimal on the whole matrix when no pair outside the candidates
+    has ``g_ij > u_i + v_j``. Pairs that do are added and the sparse problem
+    solved again. The answer is the dense solvers' optimum (ties apart: an
+    exactly tied optimum may be another one). Returns None when the certificate
+    cannot be had in ``SPARSE_ROUNDS`` solves; the caller then solves densely.
+    """
+    transposed = gain.shape[0] > gain.shape[1]
+    matrix = gain.T if transposed else gain  # rows ≤ columns
+    n, m = matrix.shape
+    k = min(SPARSE_CANDIDATES, m - 1)
+    candidates = np.zeros((n, m), dtype=bool)
+    row_best = np.argpartition(-matrix, k, axis=1)[:, : k + 1]
+    candidates[np.arange(n)[:, None], row_best] = True
+    if n > k + 1:
+        col_best = np.argpartition(-matrix, k, axis=0)[: k + 1, :]
+        candidates[col_best, np.arange(m)[None, :]] = True
+    tolerance = 1e-12 * float(np.abs(matrix).max())
+    ceiling = float(matrix.max()) + 1.0
+    for _ in range(SPARSE_ROUNDS):
+        rows, cols = np.nonzero(candidates)
+        values = matrix[rows, cols]
+        graph = csr_matrix((ceiling - values, (rows, cols)), shape=(n, m))
+        try:
+            _, match = min_weight_full_bipartite_matching(graph)
+        except ValueError:  # the candidates hold no matching covering the rows
+            return None
+        match = np.asarray(match, dtype=np.int64)
+        column_row = np.full(m, -1, dtype=np.int64)
+        column_row[match] = np.arange(n)
+        # shortest paths over columns, node m standing for every uncovered column (v = 0):
+        # edge σ(i) → k of weight g_iσ(i) − g_ik for every candidate (i, k), k ≠ σ(i), and
+        # m → every covered column of weight 0; w = −v = the distances from node m
+        own = matrix[np.arange(n), match]
+        other = cols != match[rows]
+        sources = match[rows[other]]
+        targets = np.where(column_row[cols[other]] >= 0, cols[other], m)
+        weights = own[rows[other]] - values[other]
+        sources = np.concatenate([sources, np.full(n, m)])
+        targets = np.concatenate([targets, match])
+        weights = np.concatenate([weights, np.zeros(n)])
+        distance = _shortest_from(m, sources, targets, weights, m + 1)
+        if distance is None:  # a negative cycle (rounding on a tied optimum): dense decides
+            return None
+        v = np.where(column_row >= 0, -distance[:m], 0.0)
+        u = own - v[match]
+        if np.any(u < -tolerance) or not np.all(np.isfinite(v)):
+            return None
+        violated = (matrix > u[:, None] + v[None, :] + tolerance) & ~candidates
+        if not violated.any():
+            matched_rows, matched_cols = np.arange(n, dtype=np.int64), match
+            if transposed:
+                matched_rows, matched_cols = match, np.arange(n, dtype=np.int64)
+            order = np.argsort(matched_rows, kind="stable")
+            return matched_rows[order], matched_cols[order]
+        candidates |= violated
+    return None
+
+
+def _shortest_from(
+    source: int, sources: IntArray, targets: IntArray, weights: FloatArray, nodes: int
+) -> FloatArray | None:
+    """Bellman–Ford distances from ``source``, every edge relaxed at once per pass.
+
+    Parallel edges are allowed. Passes stop when nothing changes (as many as the
+    edges of the longest shortest path, a handful here); None after ``nodes``
+    passes (a negative cycle).
+    """
+    distance = np.full(nodes, np.inf)
+    distance[source] = 0.0
+    for _ in range(nodes):
+        relaxed = distance.copy()
+        np.minimum.at(relaxed, targets, distance[sources] + weights)
+        if np.array_equal(relaxed, distance):
+            return distance
+        distance = relaxed
+    return None
+
+
+def solve_component(gain: FloatArray, solver: Solver) -> tuple[IntArray, IntArray]:
+    """One component's matching: certified sparse for large complete ones, else dense."""
+    if solver == "lapjv" and min(gain.shape) >= SPARSE_MIN_SIDE and bool(np.all(gain > 0.0)):
+        found = solve_complete(gain)
+        if found is not None:
+            return found
+    return solve_dense(gain, solver)
 
 
 def sorted_members(indices: IntArray, size: int) -> IntArray:
@@ -222,7 +341,7 @@ def max_gain_matching(
             col_slot[local_cols] = np.arange(len(local_cols))
             dense = np.zeros((len(local_rows), len(local_cols)))
             dense[row_slot[edge_rows], col_slot[edge_cols]] = gain[edges]
-            matched_rows, matched_cols = solve_dense(dense, solver)
+            matched_rows, matched_cols = solve_component(dense, solver)
             chosen_rows.append(local_rows[matched_rows])
             chosen_cols.append(local_cols[matched_cols])
     all_rows = np.concatenate(chosen_rows)

@@ -258,10 +258,8 @@ def gated_pairs(
     w_known, w_incoming = COVARIANCE_WEIGHTS[model.covariance]
     known_states = known.states.T
     incoming_states = incoming.states.T
-    known_cov = np.moveaxis(known.covariances, 0, -1)
-    incoming_cov = (
-        None if incoming.covariances is None else np.moveaxis(incoming.covariances, 0, -1)
-    )
+    known_cov = known.covariances.transpose(1, 2, 0)
+    incoming_cov = None if incoming.covariances is None else incoming.covariances.transpose(1, 2, 0)
     distances = np.empty(len(rows))
     log_dets = np.empty(len(rows))
     for start in range(0, len(rows), BLOCK_PAIRS):

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.optimize import linear_sum_assignment
 
 import core.association.assignment as assignment
 from core.association.assignment import max_gain_matching
@@ -67,3 +68,46 @@ def test_star_ties_pick_the_lowest_row_then_column() -> None:
         (3, 1),
     ]
     assert (matching.clusters, matching.largest_cluster) == (2, 4)
+
+
+def geometric_gain(rng: np.random.Generator, n: int, m: int) -> np.ndarray:
+    """Every pair positive, nearly tied: positions in one small box (the dense layout)."""
+    known = rng.uniform(0.0, 1.0, (n, 2))
+    incoming = rng.uniform(0.0, 1.0, (m, 2))
+    squared = ((known[:, None, :] - incoming[None, :, :]) ** 2).sum(axis=2)
+    return 10.0 - squared
+
+
+@pytest.mark.parametrize(("n", "m"), [(60, 60), (40, 90), (90, 40), (150, 150)])
+@pytest.mark.parametrize("kind", ["geometric", "uniform"])
+def test_certified_sparse_solve_equals_the_dense_solvers(n: int, m: int, kind: str) -> None:
+    rng = np.random.default_rng(n * m + len(kind))
+    gain = geometric_gain(rng, n, m) if kind == "geometric" else rng.uniform(0.1, 1.0, (n, m))
+    found = assignment.solve_complete(gain)
+    assert found is not None  # certified, not handed back to the dense solver
+    rows, cols = found
+    reference_rows, reference_cols = linear_sum_assignment(gain, maximize=True)
+    np.testing.assert_array_equal(rows, reference_rows)
+    np.testing.assert_array_equal(cols, reference_cols)
+
+
+def test_large_complete_components_take_the_certified_path(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    rng = np.random.default_rng(3)
+    gain = geometric_gain(rng, 70, 50)
+    calls: list[tuple[int, int]] = []
+    certified = assignment.solve_complete
+
+    def spy(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        calls.append(matrix.shape)
+        return certified(matrix)
+
+    monkeypatch.setattr(assignment, "SPARSE_MIN_SIDE", 40)
+    monkeypatch.setattr(assignment, "solve_complete", spy)
+    rows, cols = np.nonzero(np.ones_like(gain, dtype=bool))
+    matching = max_gain_matching(rows, cols, gain[rows, cols], 70, 50)
+    assert calls == [(70, 50)]
+    reference_rows, reference_cols = linear_sum_assignment(gain, maximize=True)
+    np.testing.assert_array_equal(matching.rows, reference_rows)
+    np.testing.assert_array_equal(matching.cols, reference_cols)
