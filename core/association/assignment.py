@@ -290,6 +290,16 @@ def max_gain_matching(
         return Matching(matched_rows, matched_cols, 1, n_rows + n_cols)
     if len(rows) <= SMALL_PAIRS:
         return _small_matching(rows, cols, gain, n_rows, solver)
+    if len(rows) == n_rows * n_cols and min(n_rows, n_cols) >= 2:
+        # every pair positive: one component, neither a single pair nor a star
+        keys = rows * n_cols + cols
+        if np.array_equal(keys, np.arange(len(keys))):  # sorted by (row, column)
+            dense = gain.reshape(n_rows, n_cols)
+        else:
+            dense = np.zeros((n_rows, n_cols))
+            dense[rows, cols] = gain
+        matched_rows, matched_cols = solve_component(dense, solver)
+        return Matching(matched_rows, matched_cols, 1, n_rows + n_cols)
 
     graph = coo_matrix(
         (np.ones(len(rows)), (rows, cols + n_rows)), shape=(n_rows + n_cols, n_rows + n_cols)
