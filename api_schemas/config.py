@@ -143,7 +143,7 @@ class MeasurementModel(WireModel):
     ``{"range", "azimuth_deg", "elevation_deg"?, "range_rate"?}`` at the
     sensor's ``site``, azimuth clockwise from north. They are tracked as
     converted Cartesian measurements with each detection's own covariance
-    (:mod:`app.polar`); ``range_rate`` is accepted and not used yet.
+    (:mod:`app.geo.polar`); ``range_rate`` is accepted and not used yet.
     """
 
     kind: Literal["cartesian", "polar"] = "cartesian"

@@ -13,17 +13,17 @@ from api_schemas.config import SessionConfig
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
-from app.deps import CurrentSessionDep, LiveSessionDep, RegistryDep
-from app.errors import (
+from app.geo.geodesy import LocalFrame
+from app.geo.geojson import GEOJSON_MEDIA_TYPE, feature_collection, with_geodetic
+from app.http.deps import CurrentSessionDep, LiveSessionDep, RegistryDep
+from app.http.errors import (
     TrackNotFound,
     problem_responses,
     request_validation_error,
 )
-from app.geodesy import LocalFrame
-from app.geojson import GEOJSON_MEDIA_TYPE, feature_collection, with_geodetic
-from app.requests import WireRoute
-from app.responses import JSONTextResponse, PlainJSONResponse, dumps
-from app.translate import session_origin
+from app.http.requests import WireRoute
+from app.http.responses import JSONTextResponse, PlainJSONResponse, dumps
+from app.sessions.translate import session_origin
 
 router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
 

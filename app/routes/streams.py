@@ -14,9 +14,9 @@ order and puts its answer (one ``result`` or ``error``, echoing ``ref``) into
 a bounded queue; a writer task sends them. When the client does not read, the
 queue fills, the reader stops reading and TCP pushes back: nothing grows
 without bound. ``subscribe``: the session's hub gives each subscriber a
-bounded queue that keeps the latest results (:mod:`app.hub`); with the
+bounded queue that keeps the latest results (:mod:`app.sessions.hub`); with the
 redis store the hub is fed from Redis pub/sub, so results applied on any
-instance arrive (:meth:`app.sessions.SessionRegistry.subscribe`). The server
+instance arrive (:meth:`app.sessions.registry.SessionRegistry.subscribe`). The server
 closes a subscription with 1000 "session ended" when the session is deleted
 or expires, and with 1013 "store unavailable" when the store (or its
 pub/sub connection) fails: subscribe again once ``/readyz`` is ready.
@@ -38,8 +38,8 @@ from starlette.websockets import WebSocketDisconnect
 from api_schemas.problem import Problem
 from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.ws import DetectionsMessage, TracksMessage, client_message_adapter
-from app.deps import open_record
-from app.errors import (
+from app.http.deps import open_record
+from app.http.errors import (
     LimitExceeded,
     ServiceError,
     StoreUnavailable,
@@ -47,11 +47,11 @@ from app.errors import (
     problem_for,
     problem_response,
 )
-from app.hub import STORE_UNAVAILABLE, Ending
-from app.live_session import LiveSession
-from app.requests import WireRoute, parse_json
-from app.responses import dumps
-from app.sessions import SessionRegistry, result_message
+from app.http.requests import WireRoute, parse_json
+from app.http.responses import dumps
+from app.sessions.hub import STORE_UNAVAILABLE, Ending
+from app.sessions.live import LiveSession
+from app.sessions.registry import SessionRegistry, result_message
 
 router = APIRouter(prefix="/v1/sessions", route_class=WireRoute)
 logger = logging.getLogger("credal_fusion.streams")

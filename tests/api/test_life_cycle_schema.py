@@ -14,7 +14,7 @@ import pytest
 from pydantic import ValidationError
 
 from api_schemas.config import SensorConfig, SessionConfig, TrackingConfig, TrackThresholds
-from app.translate import fusion_config, life_cycle_config
+from app.sessions.translate import fusion_config, life_cycle_config
 from core.errors import InvalidInput
 from core.lifecycle import LifeCycleConfig
 from core.tracking.config import LocalTrackerConfig

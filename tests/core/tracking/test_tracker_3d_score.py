@@ -28,7 +28,7 @@ START = np.array([20_000.0, 1_000.0, 5_000.0])
 
 
 def _tracker(density: float, margin: float | None = 0.0) -> LocalTracker:
-    # the bank of app.translate.local_tracker_config for a session without preset
+    # the bank of app.sessions.translate.local_tracker_config for a session without preset
     bank = ModelBank(
         models=(constant_velocity(1.0, Q_DENSITY, axes=3, noise="continuous"),),
         measurement=LinearMeasurementModel.position(1.0, 6),

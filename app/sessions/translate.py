@@ -36,9 +36,9 @@ from api_schemas.config import (
 )
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import DetectionReport, SensorTrack, TrackReport
-from app.errors import request_validation_error
-from app.geodesy import LocalFrame, geodetic_to_session, rotate_covariances, sensor_to_session
-from app.polar import polar_to_cartesian
+from app.geo.geodesy import LocalFrame, geodetic_to_session, rotate_covariances, sensor_to_session
+from app.geo.polar import polar_to_cartesian
+from app.http.errors import request_validation_error
 from core.association import AssociationResult
 from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, TotalConflict
@@ -172,7 +172,7 @@ def polar_reference_noise(
     """The R a polar sensor's tracker uses where a detection's own covariance is not passed.
 
     Every polar detection is updated with its own converted covariance
-    (:mod:`app.polar`); the tracker still uses the bank's R to start tracks
+    (:mod:`app.geo.polar`); the tracker still uses the bank's R to start tracks
     (two-point velocity variance, seed radius). That R is the largest converted
     noise over the sensor's coverage, isotropic: ``max(σ_ρ², (ρ_max σ_a)²)``
     per axis, ``ρ_max`` the sector's far range or :data:`POLAR_REFERENCE_RANGE`,
@@ -340,7 +340,7 @@ def session_frame_report(report: TrackReport, config: SessionConfig) -> CoreTrac
 
     ``"sensor"``: turned by the sensor's heading and moved to its site;
     ``"geodetic"``: lat/lon/alt to session ENU, velocities and covariance
-    turned between the tangent planes (:mod:`app.geodesy`). States and
+    turned between the tangent planes (:mod:`app.geo.geodesy`). States and
     covariances of the whole report are converted in one vectorised pass.
     """
     core = core_track_report(report, class_frame(config.classes))
@@ -384,7 +384,7 @@ def polar_detection_report(
 
     Azimuth and elevation are measured in the site's own ENU axes: at a
     geodetic site the converted offsets and covariances are turned into the
-    session's axes (``R_origin R_siteᵀ``, exact: :mod:`app.geodesy`); the
+    session's axes (``R_origin R_siteᵀ``, exact: :mod:`app.geo.geodesy`); the
     tilt between the two planes is 0.009° per km from the origin.
     """
     noise = sensor.measurement
