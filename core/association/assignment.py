@@ -92,6 +92,9 @@ large are solved on a few candidates per item, then certified (:func:`solve_comp
 SPARSE_CANDIDATES = 24
 """Candidates kept per row and per column for the first sparse solve."""
 
+SHORTEST_PATH_PASSES = 256
+"""Relaxation passes of the certificate's shortest paths before it gives up."""
+
 SPARSE_ROUNDS = 6
 """Sparse solves before the certified path gives up and solves the dense matrix."""
 
@@ -173,11 +176,12 @@ def _shortest_from(
 
     Parallel edges are allowed. Passes stop when nothing changes (as many as the
     edges of the longest shortest path, a handful here); None after ``nodes``
-    passes (a negative cycle).
+    passes (a negative cycle) or ``SHORTEST_PATH_PASSES`` (the caller then solves
+    densely: slow convergence costs no more than that).
     """
     distance = np.full(nodes, np.inf)
     distance[source] = 0.0
-    for _ in range(nodes):
+    for _ in range(min(nodes, SHORTEST_PATH_PASSES)):
         relaxed = distance.copy()
         np.minimum.at(relaxed, targets, distance[sources] + weights)
         if np.array_equal(relaxed, distance):
