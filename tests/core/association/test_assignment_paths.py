@@ -111,3 +111,18 @@ def test_large_complete_components_take_the_certified_path(
     reference_rows, reference_cols = linear_sum_assignment(gain, maximize=True)
     np.testing.assert_array_equal(matching.rows, reference_rows)
     np.testing.assert_array_equal(matching.cols, reference_cols)
+
+
+def test_sparse_assignment_refuses_a_graph_without_a_perfect_matching() -> None:
+    # rows 0 and 1 can only take column 0: lapmod answers with a pair that is no candidate
+    candidates = np.zeros((3, 3), dtype=bool)
+    candidates[[0, 1, 2, 2], [0, 0, 1, 2]] = True
+    rows, cols = np.nonzero(candidates)
+    costs = np.array([1.0, 2.0, 1.0, 3.0])
+    assert assignment._sparse_assignment(rows, cols, costs, 3, 3, candidates) is None
+    candidates[1, 2] = True  # now 0-0, 1-2, 2-1 is the only perfect matching
+    rows, cols = np.nonzero(candidates)
+    costs = np.ones(len(rows))
+    found = assignment._sparse_assignment(rows, cols, costs, 3, 3, candidates)
+    assert found is not None
+    np.testing.assert_array_equal(found, [0, 2, 1])
