@@ -95,6 +95,10 @@ SPARSE_CANDIDATES = 24
 SHORTEST_PATH_PASSES = 256
 """Relaxation passes of the certificate's shortest paths before it gives up."""
 
+RESEED = 8
+"""After a round with violators, each row and column that had one also takes its RESEED
+pairs of smallest reduced cost under the round's duals (fewer rounds)."""
+
 SPARSE_ROUNDS = 6
 """Sparse solves before the certified path gives up and solves the dense matrix."""
 
@@ -112,7 +116,8 @@ def solve_complete(gain: FloatArray) -> tuple[IntArray, IntArray] | None:
     largest feasible v follows from the matching by shortest paths
     (Bellman–Ford on the columns: ``v_k ≥ v_σ(i) + g_ik − g_iσ(i)``), and the
     matching is optimal on the whole matrix when no pair outside the candidates
-    has ``g_ij > u_i + v_j``. Pairs that do are added and the sparse problem
+    has ``g_ij > u_i + v_j``. Pairs that do are added, with the pairs of
+    smallest reduced cost of their rows and columns, and the sparse problem
     solved again. The answer is the dense solvers' optimum (ties apart: an
     exactly tied optimum may be another one). Returns None when the certificate
     cannot be had in ``SPARSE_ROUNDS`` solves; the caller then solves densely.
@@ -164,6 +169,19 @@ def solve_complete(gain: FloatArray) -> tuple[IntArray, IntArray] | None:
             order = np.argsort(matched_rows, kind="stable")
             return matched_rows[order], matched_cols[order]
         candidates |= violated
+        # rows and columns that had a violator also take their next best pairs by reduced
+        # cost (u_i + v_j − g_ij): the next solve's duals move there first
+        reduced = u[:, None] + v[None, :] - matrix
+        bad_rows = np.flatnonzero(violated.any(axis=1))
+        bad_cols = np.flatnonzero(violated.any(axis=0))
+        extra = min(RESEED, m - 1)
+        if len(bad_rows) and extra > 0:
+            best = np.argpartition(reduced[bad_rows], extra, axis=1)[:, :extra]
+            candidates[bad_rows[:, None], best] = True
+        extra = min(RESEED, n - 1)
+        if len(bad_cols) and extra > 0:
+            best = np.argpartition(reduced[:, bad_cols], extra, axis=0)[:extra, :]
+            candidates[best, bad_cols[None, :]] = True
     return None
 
 
