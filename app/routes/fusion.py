@@ -162,8 +162,9 @@ async def get_fused_track(
 ) -> PlainJSONResponse:
     """One live fused track with its recent history (fused states, oldest first).
 
-    ``frame=geodetic`` adds ``geodetic: {lat, lon, alt}`` to the track (needs
-    the session's ``origin``, else 422); the history stays in the session frame.
+    ``frame=geodetic`` adds ``geodetic: {lat, lon, alt}`` to the track and to
+    each history point (needs the session's ``origin``, else 422); their
+    ``state`` stays in the session frame.
     """
     config = session.config
     origin = origin_of(config, "frame") if frame == "geodetic" else None
@@ -171,6 +172,11 @@ async def get_fused_track(
     if detail is None:
         raise TrackNotFound(session.id, tid)
     if origin is not None:
-        (track,) = with_geodetic([detail["track"]], origin, tuple(config.state.position))
-        detail = {**detail, "track": track}
+        positions = tuple(config.state.position)
+        (track,) = with_geodetic([detail["track"]], origin, positions)
+        detail = {
+            **detail,
+            "track": track,
+            "history": with_geodetic(detail["history"], origin, positions),
+        }
     return PlainJSONResponse(detail)
