@@ -16,7 +16,12 @@ import numpy as np
 from core.arrays import IntArray
 
 WORK_BUDGET = 1 << 22
-"""Largest rows × width × nodes of one block (about 32 MB per float temporary)."""
+"""Largest rows × width × ROW_TEMPORARIES of one block (about 32 MB of floats in all); the
+quadrature's rows × nodes × width temporaries are split further where they are formed
+(``core.belief.gbt.NODE_BUDGET``)."""
+
+ROW_TEMPORARIES = 16
+"""Row-sized arrays the BetP of one block holds at once (a bound, for the budget)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,7 +59,7 @@ class RaggedRows:
         while start < len(items):
             width = int(self.counts[items[start]])
             ceiling = 2 * width  # rows of up to twice the shortest share a block
-            cost_per_row = (ceiling + 1) * (ceiling // 2 + 2)
+            cost_per_row = (ceiling + 1) * ROW_TEMPORARIES
             stop = start + max(1, budget // cost_per_row)
             stop = min(
                 stop,

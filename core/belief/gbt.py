@@ -24,6 +24,13 @@ E_ρ gives, per row, the fewest nodes with a *proven* BetP error ≤ 1e-15
 8 at Pl ≈ 0.02). The leave-one-out products are then the full product over one
 factor (each factor is ≥ t > 0 at every node), one matrix product per block.
 
+Dense rows (Σ p in the hundreds) are cheaper still: with u = 1 − t every factor
+is ``1 − p u ≤ e^{−p u}``, so the integrands decay like ``e^{−S u}`` and the part
+of [0, 1] beyond a per-row ``U`` (:func:`truncation`) adds less than half the
+tolerance; on [0, U] the substitution u = U s turns each factor into one of
+plausibility ``U p`` (the same polynomials, ``growth`` scaled by U), so 18 nodes
+do where 105 did. Rows with ``U = 1`` are computed exactly as without it.
+
 Elements with plausibility 0 are removed before any product is formed: they
 cost nothing.
 """
@@ -50,6 +57,9 @@ def _gauss_legendre_01(n_nodes: int) -> tuple[FloatArray, FloatArray]:
     nodes, weights = np.polynomial.legendre.leggauss(max(n_nodes, 1))
     return (nodes + 1.0) / 2.0, weights / 2.0
 
+
+NODE_BUDGET = 1 << 22
+"""Largest rows × nodes × width of one temporary of the quadrature (32 MB of floats)."""
 
 BETP_TOLERANCE = 1e-15
 """Proven bound on the quadrature error of every BetP (absolute), when fewer nodes than
@@ -97,11 +107,29 @@ def leave_one_out_sums(terms: FloatArray) -> FloatArray:
     return np.asarray(prefix + suffix, dtype=np.float64)
 
 
-def _leave_one_out_integrals(
-    q: FloatArray, n_nodes: int, times_t: bool
-) -> tuple[FloatArray, FloatArray]:
-    """``∫₀¹ Π_k h_k`` and every ``∫₀¹ t^s Π_{k≠j} h_k`` (s = 1 if ``times_t``), ``h_k = 1 − q_k + q_k t``.
+def truncation(decay: FloatArray, width: int, tolerance: float) -> FloatArray:
+    """Per row, the ``U ∈ (0, 1]`` past which the integrals may be dropped (module docstring).
 
+    Every integrand of a row is ``t^s Π h_k`` over all factors but at most one,
+    with ``h_k = 1 − q_k u ≤ e^{−q_k u}`` (u = 1 − t), so its part over u > U is
+    at most ``e^{−D U} / D`` with ``D = decay`` (Σ q minus the largest q), while
+    the integral itself is ≥ ``∫ (1 − u)^w du = 1/(w + 1)``: the relative error
+    of dropping it is ≤ ``(w + 1) e^{−D U} / D``, ``tolerance`` at the U returned
+    (1 where no U < 1 reaches it).
+    """
+    positive = np.maximum(decay, 1e-300)
+    cut = (math.log((width + 1.0) / tolerance) - np.log(positive)) / positive
+    return np.where(decay > 0.0, np.minimum(cut, 1.0), 1.0)
+
+
+def _leave_one_out_integrals(
+    q: FloatArray, n_nodes: int, times_t: bool, upper: FloatArray | None = None
+) -> tuple[FloatArray, FloatArray]:
+    """``∫ Π_k h_k`` and every ``∫ t^s Π_{k≠j} h_k`` (s = 1 if ``times_t``), ``h_k = 1 − q_k + q_k t``.
+
+    Over ``t ∈ [1 − U, 1]``, U = ``upper`` per row (None: U = 1, all of [0, 1]).
+    With u = 1 − t = U s the factors become ``1 − (U q_k) s`` and t becomes
+    ``1 − U s``: the same integrals on [0, 1] of plausibilities U q, times U.
     ``n_nodes``-point Gauss–Legendre; each leave-one-out product is the full
     product divided by its own factor: ``h_k(t) ≥ t > 0`` at every node, so the
     division is exact to rounding. Where the full product underflows, the true
@@ -109,11 +137,26 @@ def _leave_one_out_integrals(
     negligible. Shapes: q (B, w) → (B,), (B, w).
     """
     nodes, weights = _gauss_legendre_01(n_nodes)
-    factors = 1.0 + q[:, None, :] * (nodes[None, :, None] - 1.0)  # (B, L, w)
-    full = np.prod(factors, axis=2)  # (B, L)
-    node_weights = weights * nodes if times_t else weights
-    loo = np.matmul((node_weights * full)[:, None, :], 1.0 / factors)[:, 0, :]
-    return full @ weights, loo
+    rows, width = q.shape
+    full_integral = np.empty(rows)
+    loo = np.empty((rows, width))
+    step = max(1, NODE_BUDGET // max(n_nodes * width, 1))  # rows per (B, L, w) temporary
+    for start in range(0, rows, step):
+        part = slice(start, start + step)
+        block_upper = None if upper is None else upper[part]
+        scaled = q[part] if block_upper is None else q[part] * block_upper[:, None]
+        factors = 1.0 + scaled[:, None, :] * (nodes[None, :, None] - 1.0)  # (B, L, w)
+        full = np.prod(factors, axis=2)  # (B, L)
+        if block_upper is None:
+            node_weights = np.broadcast_to(weights * nodes if times_t else weights, full.shape)
+        else:  # t = 1 − U s = 1 − U + U t' at the node t' of the scaled integral
+            at_node = 1.0 + block_upper[:, None] * (nodes[None, :] - 1.0)
+            node_weights = block_upper[:, None] * (weights * at_node if times_t else weights)
+        loo[part] = np.matmul((node_weights * full)[:, None, :], 1.0 / factors)[:, 0, :]
+        full_integral[part] = (
+            full @ weights if block_upper is None else (full @ weights) * block_upper
+        )
+    return full_integral, loo
 
 
 def _check_probabilities(values: FloatArray, name: str) -> None:
@@ -187,8 +230,17 @@ def gbt_betp_rows(plausibility: FloatArray) -> tuple[FloatArray, BoolArray]:
     largest = pc.max(axis=1)
     positive = largest > 0.0
     log_factor = np.log(4.0 * total[positive] / largest[positive])
-    order_needed = gauss_order(log_factor, total[positive] / 2.0, (width + 1) // 2)
-    _, integrals = _leave_one_out_integrals(pc, order_needed, times_t=False)
+    # truncation: BetP errs by at most twice the integrals' relative error, so a quarter
+    # of the tolerance there, and half of it left for the quadrature
+    upper = truncation(total - largest, width, BETP_TOLERANCE / 4.0)
+    truncated = bool(np.any(upper < 1.0))
+    if truncated:
+        log_factor = log_factor + np.log(2.0 * upper[positive])
+    growth = total[positive] / 2.0 if not truncated else (total * upper)[positive] / 2.0
+    order_needed = gauss_order(log_factor, growth, (width + 1) // 2)
+    _, integrals = _leave_one_out_integrals(
+        pc, order_needed, times_t=False, upper=upper if truncated else None
+    )
     numerators = pc * integrals
     normaliser = numerators.sum(axis=1)  # = 1 − Π(1 − p), no cancellation
     defined = normaliser > 0.0
@@ -283,8 +335,17 @@ def pairwise_evidence_betp_rows(
     if scaled.any():
         q = cc[scaled] / weight[scaled]
         exact_order = (width + 2) // 2  # degree width
-        order_needed = gauss_order(np.zeros(len(q)), (q.sum(axis=1) + 1.0) / 2.0, exact_order)
-        full_integral, loo_integral = _leave_one_out_integrals(q, order_needed, times_t=True)
+        q_total = q.sum(axis=1)
+        # truncation: each BetP errs by at most the integrals' relative error (their terms
+        # are ≤ the normaliser): half the tolerance there, half for the quadrature
+        upper = truncation(q_total - q.max(axis=1, initial=0.0), width, BETP_TOLERANCE / 2.0)
+        truncated = bool(np.any(upper < 1.0))
+        log_factor = np.log(2.0 * upper) if truncated else np.zeros(len(q))
+        growth = (q_total + 1.0) / 2.0 if not truncated else upper * (q_total + 1.0) / 2.0
+        order_needed = gauss_order(log_factor, growth, exact_order)
+        full_integral, loo_integral = _leave_one_out_integrals(
+            q, order_needed, times_t=True, upper=upper if truncated else None
+        )
         shared[scaled] = cc[scaled] * at_one[scaled] * loo_integral
         star[scaled] = full_at_one[scaled] * full_integral
     safe = np.where(defined, normaliser, 1.0)[:, None]

@@ -33,7 +33,7 @@ from scipy.spatial import cKDTree
 from scipy.stats import chi2
 
 from core.arrays import FloatArray, IntArray
-from core.distance.cholesky import quadratic_form_and_log_det
+from core.distance.cholesky import UNROLLED_MAX_DIMENSION, quadratic_form_and_log_det
 from core.distance.estimates import Estimates
 from core.distance.modified import ModifiedScale
 from core.errors import InvalidInput
@@ -188,6 +188,13 @@ def _largest_eigenvalue(covariances: FloatArray | None) -> float:
     return float(np.linalg.eigvalsh(covariances)[:, -1].max())
 
 
+def _all_pairs(n: int, m: int) -> tuple[IntArray, IntArray]:
+    """Every (row, column) index pair, sorted by row then column."""
+    rows = np.repeat(np.arange(n, dtype=np.int64), m)
+    cols = np.tile(np.arange(m, dtype=np.int64), n)
+    return rows, cols
+
+
 def _candidate_index_pairs(
     known: Estimates, incoming: Estimates, gate: float, model: DistanceModel
 ) -> tuple[IntArray, IntArray]:
@@ -198,8 +205,7 @@ def _candidate_index_pairs(
                 f"an unbounded gate on {n} known × {m} incoming items would solve {n * m} pairs; "
                 "use a finite gate (e.g. gate_probability < 1)"
             )
-        rows, cols = np.divmod(np.arange(n * m, dtype=np.int64), m)
-        return rows, cols
+        return _all_pairs(n, m)
     w_known, w_incoming = COVARIANCE_WEIGHTS[model.covariance]
     bound = w_known * _largest_eigenvalue(known.covariances) + w_incoming * _largest_eigenvalue(
         incoming.covariances
@@ -211,8 +217,7 @@ def _candidate_index_pairs(
     both = np.concatenate([known.states[:, columns], incoming.states[:, columns]])
     if float(np.linalg.norm(both.max(axis=0) - both.min(axis=0))) <= radius:
         # every pair is within the radius (dense layout): enumerate, no tree
-        rows, cols = np.divmod(np.arange(n * m, dtype=np.int64), m)
-        return rows, cols
+        return _all_pairs(n, m)
     known_tree = cKDTree(known.states[:, columns])
     incoming_tree = cKDTree(incoming.states[:, columns])
     close = known_tree.sparse_distance_matrix(incoming_tree, radius, output_type="ndarray")
@@ -220,6 +225,42 @@ def _candidate_index_pairs(
     cols = close["j"].astype(np.int64)
     order = np.lexsort((cols, rows))
     return rows[order], cols[order]
+
+
+def _combined_covariances(
+    known_cov: FloatArray,
+    incoming_cov: FloatArray | None,
+    rows: IntArray,
+    cols: IntArray,
+    w_known: float,
+    w_incoming: float,
+) -> FloatArray:
+    """``C = w₁ P₁ + w₂ P₂`` per pair, component-major (q, q, n).
+
+    The unrolled factorisation reads the lower triangle only, so for q ≤
+    ``UNROLLED_MAX_DIMENSION`` only that is formed (the upper entries are left
+    unset); a weight of 1 is not multiplied by.
+    """
+    q = known_cov.shape[0]
+    with_incoming = bool(w_incoming) and incoming_cov is not None
+    if q > UNROLLED_MAX_DIMENSION:
+        combined = known_cov[:, :, rows] * w_known
+        if with_incoming:
+            assert incoming_cov is not None
+            combined = combined + incoming_cov[:, :, cols] * w_incoming
+        return np.asarray(combined, dtype=np.float64)
+    combined = np.empty((q, q, len(rows)))
+    for i in range(q):
+        for j in range(i + 1):
+            entry = combined[i, j]
+            np.take(known_cov[i, j], rows, out=entry)
+            if w_known != 1.0:
+                entry *= w_known
+            if with_incoming:
+                assert incoming_cov is not None
+                other = incoming_cov[i, j].take(cols)
+                entry += other if w_incoming == 1.0 else other * w_incoming
+    return combined
 
 
 def gated_pairs(
@@ -258,25 +299,23 @@ def gated_pairs(
     w_known, w_incoming = COVARIANCE_WEIGHTS[model.covariance]
     known_states = known.states.T
     incoming_states = incoming.states.T
-    known_cov = np.moveaxis(known.covariances, 0, -1)
-    incoming_cov = (
-        None if incoming.covariances is None else np.moveaxis(incoming.covariances, 0, -1)
-    )
+    known_cov = known.covariances.transpose(1, 2, 0)
+    incoming_cov = None if incoming.covariances is None else incoming.covariances.transpose(1, 2, 0)
     distances = np.empty(len(rows))
     log_dets = np.empty(len(rows))
     for start in range(0, len(rows), BLOCK_PAIRS):
         r = rows[start : start + BLOCK_PAIRS]
         c = cols[start : start + BLOCK_PAIRS]
         differences = known_states[:, r] - incoming_states[:, c]
-        combined = known_cov[:, :, r] * w_known
-        if w_incoming and incoming_cov is not None:
-            combined = combined + incoming_cov[:, :, c] * w_incoming
+        combined = _combined_covariances(known_cov, incoming_cov, r, c, w_known, w_incoming)
         block_distance, block_log_det = quadratic_form_and_log_det(differences, combined)
         if ratio is not None:
             block_distance = block_distance * ratio[r]
         distances[start : start + BLOCK_PAIRS] = block_distance
         log_dets[start : start + BLOCK_PAIRS] = block_log_det
     keep = distances <= gate
+    if keep.all():
+        return CandidatePairs(rows, cols, distances, log_dets, n, m, q)
     return CandidatePairs(rows[keep], cols[keep], distances[keep], log_dets[keep], n, m, q)
 
 

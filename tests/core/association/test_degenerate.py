@@ -131,3 +131,18 @@ def test_measurement_to_track():
     assert result.pairs == [(0, 0, pytest.approx(0.25))]
     np.testing.assert_array_equal(result.new, [1])
     np.testing.assert_array_equal(result.missed, [1])
+
+
+def test_dang_han_best_partner_rule_by_hand() -> None:
+    """Highest score above ``*`` and > 0, ties to the lowest partner; total conflict chooses ``*``."""
+    from core.association.dang_han import best_partner
+
+    items = np.array([0, 0, 0, 1, 1, 2, 3], dtype=np.int64)
+    partners = np.array([4, 2, 7, 1, 0, 5, 6], dtype=np.int64)
+    values = np.array([0.3, 0.3, 0.1, 0.2, 0.25, 0.4, 0.9])
+    star = np.array([0.1, 0.22, 0.5, 0.0])
+    defined = np.array([True, True, True, False])
+    chosen = best_partner(items, partners, values, star, defined, 5)
+    # item 0: a tie at 0.3 between partners 4 and 2 -> 2; item 1: only 0.25 is above * -> 0;
+    # item 2: below * -> none; item 3: total conflict -> none; item 4: no pairs -> none
+    np.testing.assert_array_equal(chosen, [2, 0, -1, -1, -1])

@@ -36,7 +36,7 @@ def plausibility_rows(rng: np.random.Generator, width: int) -> np.ndarray:
     )
 
 
-@pytest.mark.parametrize("width", [1, 2, 5, 14, 40, 150, 400])
+@pytest.mark.parametrize("width", [1, 2, 5, 14, 40, 150, 400, 1000])
 def test_gbt_rows_match_the_exact_order(width: int) -> None:
     rng = np.random.default_rng(width)
     rows = plausibility_rows(rng, width)
