@@ -564,10 +564,18 @@ def advance(
     if evidence.sensors is not None:
         decide(tentative & (evidence.sensors >= 2), CONFIRMED, StatusReason.SECOND_SENSOR)
     if config.min_points is not None:
-        decide(tentative & (hits >= config.min_points), CONFIRMED, StatusReason.MIN_POINTS)
+        # by its hits only while it is more likely a target than a false one (L ≥ 0)
+        decide(
+            tentative & (hits >= config.min_points) & (score >= 0.0),
+            CONFIRMED,
+            StatusReason.MIN_POINTS,
+        )
     decide(tentative & (score >= config.confirm_threshold), CONFIRMED, StatusReason.SCORE_CONFIRMED)
+    confirmed = tentative & (status == CONFIRMED)
+    # an established track is under the ceiling from the scan that confirms it
+    score = np.where(confirmed, np.minimum(score, config.score_ceiling), score)
     new = LifeState(status, reason, score, hits, empty_gate, phantom_since)
-    return new, np.asarray(tentative & (status == CONFIRMED), dtype=bool)
+    return new, np.asarray(confirmed, dtype=bool)
 
 
 def hand_over(

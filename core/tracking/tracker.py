@@ -108,6 +108,25 @@ def _select_prediction(prediction: IMMPrediction, rows: IntArray) -> IMMPredicti
     )
 
 
+def _stitched(parts: tuple[tuple[IntArray, IMMUpdate], ...], tracks: int) -> IMMUpdate:
+    """One update of ``tracks`` rows from updates of disjoint row sets."""
+    _, sample = parts[0]
+    fields = {
+        name: np.zeros((tracks, *getattr(sample, name).shape[1:]), getattr(sample, name).dtype)
+        for name in ("detected", "innovations", "innovation_covariances", "log_likelihoods")
+    }
+    states = {
+        name: np.zeros((tracks, *getattr(sample.state, name).shape[1:]))
+        for name in ("means", "covariances", "log_mode_probabilities")
+    }
+    for rows, update in parts:
+        for name, values in fields.items():
+            values[rows] = getattr(update, name)
+        for name, values in states.items():
+            values[rows] = getattr(update.state, name)
+    return IMMUpdate(state=IMMState(**states), **fields)
+
+
 def _concatenate(first: IMMState, second: IMMState) -> IMMState:
     return IMMState(
         np.concatenate([first.means, second.means]),
@@ -261,10 +280,9 @@ class LocalTracker:
 
         candidates = np.flatnonzero((self._life.status != PHANTOM) & self._can_be_hit(prediction))
         sub = _select_prediction(prediction, candidates)
-        if self._method == CHEAP_JPDA:
-            update, pair_rows, pair_cols, hit_gain, used = self._jpda(sub, z, own_noise)
-        else:
-            update, pair_rows, pair_cols, hit_gain, used = self._associate(sub, z, own_noise)
+        update, pair_rows, pair_cols, hit_gain, used = self._associate_in_turn(
+            sub, z, own_noise, established(self._life.status[candidates])
+        )
         detected = np.zeros(tracks, dtype=bool)
         detected[candidates] = update.detected
         means = prediction.means.copy()
@@ -406,6 +424,37 @@ class LocalTracker:
     # ------------------------------------------------------- association
     def _hit_gain(self, distance: FloatArray, log_det: FloatArray) -> FloatArray:
         return self._score_model.hit_increment(distance, log_det, self._q)
+
+    def _associate_in_turn(
+        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None, first: BoolArray
+    ) -> tuple[IMMUpdate, IntArray, IntArray, FloatArray, IntArray]:
+        """The ``first`` tracks (the established ones) take their detections, then the
+        tentative tracks share the detections left (docs/algorithms.md §4, "Assignment").
+
+        A tentative track's first gate is wide (its velocity is a prior), so in one
+        assignment on D it takes a target's detection from that target's own track;
+        with min_points confirmation it is confirmed on it, and the target changes id.
+        """
+        associate = self._jpda if self._method == CHEAP_JPDA else self._associate
+        leading, trailing = np.flatnonzero(first), np.flatnonzero(~first)
+        if len(leading) == 0 or len(trailing) == 0:
+            return associate(sub, z, own_noise)
+        update, rows, cols, gain, used = associate(_select_prediction(sub, leading), z, own_noise)
+        left = np.setdiff1d(np.arange(len(z)), used)
+        later, later_rows, later_cols, later_gain, later_used = associate(
+            _select_prediction(sub, trailing),
+            z[left],
+            None if own_noise is None else own_noise[left],
+        )
+        hit_gain = np.zeros(len(first))
+        hit_gain[leading], hit_gain[trailing] = gain, later_gain
+        return (
+            _stitched(((leading, update), (trailing, later)), len(first)),
+            np.concatenate([leading[rows], trailing[later_rows]]),
+            np.concatenate([cols, left[later_cols]]),
+            hit_gain,
+            np.concatenate([used, left[later_used]]),
+        )
 
     def _associate(
         self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None

@@ -22,6 +22,7 @@ from core.simulation.scenario import Scenario
 from core.tracking import IMMPredictor, IMMUpdater, ModelBank, two_point_initiation
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.jpda import cheap_jpda_weights, pda_update
+from core.tracking.models import LinearMeasurementModel, constant_velocity
 from core.tracking.tracker import LocalTracker
 from evaluation.tracking import life_cycle
 
@@ -370,3 +371,53 @@ def test_closest_model_confuses_targets_closer_than_a_manoeuvre() -> None:
     sits on one of the track's models: ``closest_model`` gating cannot tell them apart
     (measured 46 % false assignments where ``combined`` has 1 %)."""
     assert _close_pair_rate(0.25, "closest_model", runs=5) > 0.2
+
+
+def test_established_tracks_take_their_detections_before_tentative_ones() -> None:
+    """A confirmed track keeps its target's detection that a fresh tentative track
+    (wide gate: its velocity is a prior) is closer to in D.
+
+    D by hand from the scan-2 posteriors: F, Q of the continuous white-noise
+    acceleration model (q = 0.05, Δt = 1), S = H(F P Fᵀ + Q)Hᵀ + R. One assignment
+    on D would give the detection to the tentative track (D 1.50 against 2.14).
+    """
+    bank = ModelBank(
+        (constant_velocity(1.0, 0.05, noise="continuous"),),
+        LinearMeasurementModel(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]), np.eye(2)),
+        np.ones((1, 1)),
+    )
+    life = LifeCycleConfig(
+        false_target_density=1e-4, new_target_density=1e-5, min_points=2, phantoms=False
+    )
+    tracker = LocalTracker(
+        LocalTrackerConfig(
+            bank=bank,
+            life_cycle=life,
+            initiation="single_point",
+            initial_velocity_std=2.0,
+            classification=None,
+        )
+    )
+    tracker.step(0.0, [[0.0, 0.0]])
+    tracker.step(1.0, [[1.0, 0.0]])
+    before = tracker.step(2.0, [[2.0, 0.0], [3.0, 5.6]])  # the target, and clutter
+    assert [(t.id, t.status.value) for t in before.tracks] == [
+        ("L1", "confirmed"),
+        ("L2", "tentative"),
+    ]
+    f = np.kron(np.eye(2), np.array([[1.0, 1.0], [0.0, 1.0]]))
+    q = np.kron(np.eye(2), 0.05 * np.array([[1 / 3, 1 / 2], [1 / 2, 1.0]]))
+    h = np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]])
+    z = np.array([3.0, 2.6])
+    distances = []
+    for track in before.tracks:
+        s = h @ (f @ track.covariance @ f.T + q) @ h.T + np.eye(2)
+        innovation = z - h @ f @ track.state
+        distances.append(float(innovation @ np.linalg.solve(s, innovation)))
+    assert distances[1] < distances[0] < 13.8  # both gated, the tentative track closer
+    after = tracker.step(3.0, [z])
+    assert after.assignment == ("L1",)
+    assert [(t.id, t.status.value) for t in after.tracks] == [
+        ("L1", "confirmed"),
+        ("L2", "tentative"),
+    ]
