@@ -132,7 +132,9 @@ class LocalTrackerConfig:
     association_method : ``gnn`` (default), ``denoeux``, ``hachour``,
         ``mercier``, ``dang_han`` or ``cheap_jpda``.
     association_options : the method's options; ``cheap_jpda`` takes
-        ``bias`` (B of [DH] eq 16, default 0) and ``gate_probability``.
+        ``bias`` (B of [DH] eq 16; default the PDA's clutter term from the life
+        cycle's ``false_target_density``, :func:`core.tracking.jpda.clutter_bias`)
+        and ``gate_probability``.
     imm_distance, distance : see the module Readings.
     modified_beta, modified_k, modified_alpha : β, k, α of the modified distance.
     p_detect : P_D of the system's sensors (the track score).

@@ -77,7 +77,7 @@ from core.tracking.config import CHEAP_JPDA, LocalTrackerConfig
 from core.tracking.gating import TrackGatingProblem, gate_pairs
 from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState, IMMUpdate, IMMUpdater
 from core.tracking.initiator import pair_seeds, single_point_initiation, two_point_initiation
-from core.tracking.jpda import cheap_jpda_weights, pda_update
+from core.tracking.jpda import cheap_jpda_weights, clutter_bias, pda_update
 from core.tracking.presets import VELOCITY, TrackingPreset, VelocityConvention
 from core.tracking.track import LocalTrack, TrackerStep, float_array, mass_to_plain, plain_floats
 
@@ -173,10 +173,17 @@ class LocalTracker:
             unknown = sorted(set(options) - {"bias", "gate_probability"})
             if unknown:
                 raise TrackingError(f"cheap_jpda: unknown option(s) {unknown}")
-            self._bias = float(options.get("bias", 0.0))  # type: ignore[arg-type]
             probability = float(options.get("gate_probability", 0.999))  # type: ignore[arg-type]
             if not 0.0 < probability < 1.0:
                 raise TrackingError("cheap_jpda: gate_probability must be in (0, 1)")
+            self._bias = float(
+                options.get(  # type: ignore[arg-type]
+                    "bias",
+                    clutter_bias(
+                        config.life_cycle.false_target_density, config.p_detect, probability
+                    ),
+                )
+            )
             self._jpda_gate = float(chi2.ppf(probability, self._q))
             self._parsed_options: Any = None
         elif self._method in METHODS:
