@@ -108,25 +108,6 @@ def _select_prediction(prediction: IMMPrediction, rows: IntArray) -> IMMPredicti
     )
 
 
-def _stitched(parts: tuple[tuple[IntArray, IMMUpdate], ...], tracks: int) -> IMMUpdate:
-    """One update of ``tracks`` rows from updates of disjoint row sets."""
-    _, sample = parts[0]
-    fields = {
-        name: np.zeros((tracks, *getattr(sample, name).shape[1:]), getattr(sample, name).dtype)
-        for name in ("detected", "innovations", "innovation_covariances", "log_likelihoods")
-    }
-    states = {
-        name: np.zeros((tracks, *getattr(sample.state, name).shape[1:]))
-        for name in ("means", "covariances", "log_mode_probabilities")
-    }
-    for rows, update in parts:
-        for name, values in fields.items():
-            values[rows] = getattr(update, name)
-        for name, values in states.items():
-            values[rows] = getattr(update.state, name)
-    return IMMUpdate(state=IMMState(**states), **fields)
-
-
 def _concatenate(first: IMMState, second: IMMState) -> IMMState:
     return IMMState(
         np.concatenate([first.means, second.means]),
@@ -287,9 +268,12 @@ class LocalTracker:
 
         candidates = np.flatnonzero((self._life.status != PHANTOM) & self._can_be_hit(prediction))
         sub = _select_prediction(prediction, candidates)
-        update, pair_rows, pair_cols, hit_gain, used = self._associate_in_turn(
-            sub, z, own_noise, established(self._life.status[candidates])
-        )
+        if self._method == CHEAP_JPDA:  # soft: every track shares every gated detection
+            update, pair_rows, pair_cols, hit_gain, used = self._jpda(sub, z, own_noise)
+        else:
+            update, pair_rows, pair_cols, hit_gain, used = self._associate(
+                sub, z, own_noise, established(self._life.status[candidates])
+            )
         detected = np.zeros(tracks, dtype=bool)
         detected[candidates] = update.detected
         means = prediction.means.copy()
@@ -432,41 +416,48 @@ class LocalTracker:
     def _hit_gain(self, distance: FloatArray, log_det: FloatArray) -> FloatArray:
         return self._score_model.hit_increment(distance, log_det, self._q)
 
-    def _associate_in_turn(
+    def _associate(
         self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None, first: BoolArray
     ) -> tuple[IMMUpdate, IntArray, IntArray, FloatArray, IntArray]:
-        """The ``first`` tracks (the established ones) take their detections, then the
-        tentative tracks share the detections left (docs/algorithms.md §4, "Assignment").
+        """Assignment by an association method, the ``first`` tracks (the established ones)
+        before the others, which share the detections left (docs/algorithms.md §4,
+        "Assignment"); returns the update, pairs, hit gains, used detections.
 
         A tentative track's first gate is wide (its velocity is a prior), so in one
         assignment on D it takes a target's detection from that target's own track;
         with min_points confirmation it is confirmed on it, and the target changes id.
         """
-        associate = self._jpda if self._method == CHEAP_JPDA else self._associate
         leading, trailing = np.flatnonzero(first), np.flatnonzero(~first)
         if len(leading) == 0 or len(trailing) == 0:
-            return associate(sub, z, own_noise)
-        update, rows, cols, gain, used = associate(_select_prediction(sub, leading), z, own_noise)
-        left = np.setdiff1d(np.arange(len(z)), used)
-        later, later_rows, later_cols, later_gain, later_used = associate(
-            _select_prediction(sub, trailing),
-            z[left],
-            None if own_noise is None else own_noise[left],
-        )
-        hit_gain = np.zeros(len(first))
-        hit_gain[leading], hit_gain[trailing] = gain, later_gain
-        return (
-            _stitched(((leading, update), (trailing, later)), len(first)),
-            np.concatenate([leading[rows], trailing[later_rows]]),
-            np.concatenate([cols, left[later_cols]]),
-            hit_gain,
-            np.concatenate([used, left[later_used]]),
-        )
+            rows, cols, hit_gain = self._assign(sub, z, own_noise)
+        else:
+            rows, cols, gain = self._assign(_select_prediction(sub, leading), z, own_noise)
+            left = np.setdiff1d(np.arange(len(z)), cols)
+            later_rows, later_cols, later_gain = self._assign(
+                _select_prediction(sub, trailing),
+                z[left],
+                None if own_noise is None else own_noise[left],
+            )
+            hit_gain = np.zeros(len(first))
+            hit_gain[leading], hit_gain[trailing] = gain, later_gain
+            rows = np.concatenate([leading[rows], trailing[later_rows]])
+            cols = np.concatenate([cols, left[later_cols]])
+        tracks = len(first)
+        assigned = np.zeros((tracks, self._q))
+        assigned[rows] = z[cols]
+        detected = np.zeros(tracks, dtype=bool)
+        detected[rows] = True
+        noises = None
+        if own_noise is not None:
+            noises = np.broadcast_to(self._noise, (tracks, self._q, self._q)).copy()
+            noises[rows] = own_noise[cols]
+        update = self.updater.update(sub, assigned, detected, noises)
+        return update, rows, cols, hit_gain, cols
 
-    def _associate(
+    def _assign(
         self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None
-    ) -> tuple[IMMUpdate, IntArray, IntArray, FloatArray, IntArray]:
-        """Assignment by an association method; returns the update, pairs, hit gains, used detections."""
+    ) -> tuple[IntArray, IntArray, FloatArray]:
+        """One association method's pairs of ``sub`` × ``z`` and each track's hit gain."""
         combined_z, combined_s = sub.combined_measurement()
         problem = TrackGatingProblem(
             known=Estimates(combined_z, combined_s, "tracks"),
@@ -480,8 +471,7 @@ class LocalTracker:
         )
         result = METHODS[self._method][1](problem, self._parsed_options)
         rows, cols = result.pair_known, result.pair_incoming
-        tracks = len(combined_z)
-        hit_gain = np.zeros(tracks)
+        hit_gain = np.zeros(len(combined_z))
         if len(rows):
             gated = problem.last["pairs"]
             keys = gated.pairs.rows * len(z) + gated.pairs.cols
@@ -489,16 +479,7 @@ class LocalTracker:
             hit_gain[rows] = self._hit_gain(
                 gated.plain_distance[position], gated.pairs.log_det[position]
             )
-        assigned = np.zeros((tracks, self._q))
-        assigned[rows] = z[cols]
-        detected = np.zeros(tracks, dtype=bool)
-        detected[rows] = True
-        noises = None
-        if own_noise is not None:
-            noises = np.broadcast_to(self._noise, (tracks, self._q, self._q)).copy()
-            noises[rows] = own_noise[cols]
-        update = self.updater.update(sub, assigned, detected, noises)
-        return update, rows, cols, hit_gain, cols
+        return rows, cols, hit_gain
 
     def _jpda(
         self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None
@@ -671,17 +652,23 @@ class LocalTracker:
             ]
         tracks = []
         life = self._life
+        track_numbers, status, reason = (
+            self._numbers.tolist(),
+            life.status.tolist(),
+            life.reason.tolist(),
+        )
+        score, hits = life.score.tolist(), life.hits.tolist()
         for row in order.tolist():
             tracks.append(
                 LocalTrack(
-                    id=self._track_id(int(self._numbers[row])),
-                    status=STATUSES[int(life.status[row])],
-                    reason=REASONS[int(life.reason[row])],
+                    id=self._track_id(track_numbers[row]),
+                    status=STATUSES[status[row]],
+                    reason=REASONS[reason[row]],
                     state=means[row],
                     covariance=covariances[row],
                     mode_probabilities=mu[row],
-                    score=float(life.score[row]),
-                    hits=int(life.hits[row]),
+                    score=score[row],
+                    hits=hits[row],
                     class_mass=class_masses[row],
                     pignistic=pignistic[row],
                 )
