@@ -102,11 +102,36 @@ class MotionModel(WireModel):
     )
 
 
+FovFrame = Literal["session", "sensor"]
+"""Where a field of view's coordinates are: the session frame, or the sensor's own frame
+(origin at its ``site``, y axis along its ``heading_deg``, x 90° clockwise from it: the
+frame of a ``"frame": "sensor"`` track list), converted to the session frame once, when
+the session is created."""
+
+FOV_FRAME_DESCRIPTION = (
+    "session (default): coordinates in the session frame; sensor: in the sensor's own frame "
+    "(origin at its site, y along its heading_deg, x 90° clockwise from y), converted once "
+    "when the session is created (a sensor without a site stands at the origin, heading 0)"
+)
+
+
 class SectorFieldOfView(WireModel):
-    """A sensor's field of view as a sector: origin, heading, half-angle, range interval."""
+    """A sensor's field of view as a sector: origin, heading, half-angle, range interval.
+
+    ``heading_deg`` is the sector's axis, counter-clockwise from the frame's +x
+    axis. In the sensor's frame (``frame: "sensor"``) the origin defaults to
+    the site and ``heading_deg: 90`` is the sensor's own heading: a radar
+    looking ±60° about its heading out to 50 km is ``{"kind": "sector",
+    "frame": "sensor", "heading_deg": 90, "half_angle_deg": 60, "range": [0,
+    50000]}``.
+    """
 
     kind: Literal["sector"]
-    origin: Point
+    frame: FovFrame = Field(default="session", description=FOV_FRAME_DESCRIPTION)
+    origin: Point | None = Field(
+        default=None,
+        description="the sector's apex (required in the session frame; default: the site)",
+    )
     heading_deg: FiniteFloat
     half_angle_deg: Annotated[float, Field(allow_inf_nan=False, gt=0.0, le=180.0)]
     range: Annotated[
@@ -116,11 +141,17 @@ class SectorFieldOfView(WireModel):
 
     @model_validator(mode="after")
     def _range_ordered(self) -> Self:
+        issues = []
         if self.range[0] >= self.range[1]:
-            raise_issues(
-                "SectorFieldOfView",
-                [FieldIssue(("range",), "range must be [min, max] with min < max", self.range)],
+            issues.append(
+                FieldIssue(("range",), "range must be [min, max] with min < max", self.range)
             )
+        if self.origin is None and self.frame == "session":
+            issues.append(
+                FieldIssue(("origin",), "a sector in the session frame needs its origin", None)
+            )
+        if issues:
+            raise_issues("SectorFieldOfView", issues)
         return self
 
 
@@ -128,6 +159,7 @@ class PolygonFieldOfView(WireModel):
     """A sensor's field of view as a simple polygon (vertices in order)."""
 
     kind: Literal["polygon"]
+    frame: FovFrame = Field(default="session", description=FOV_FRAME_DESCRIPTION)
     vertices: Annotated[list[Point], Field(min_length=3, max_length=1000)]
 
 
@@ -143,7 +175,10 @@ class MeasurementModel(WireModel):
     ``{"range", "azimuth_deg", "elevation_deg"?, "range_rate"?}`` at the
     sensor's ``site``, azimuth clockwise from north. They are tracked as
     converted Cartesian measurements with each detection's own covariance
-    (:mod:`app.polar`); ``range_rate`` is accepted and not used yet.
+    (:mod:`app.geo.polar`). With ``sigma_range_rate`` a detection's
+    ``range_rate`` updates its track's velocity after the position (a
+    sequential extended Kalman update, :mod:`core.tracking.range_rate`);
+    without it a ``range_rate`` is accepted and not used.
     """
 
     kind: Literal["cartesian", "polar"] = "cartesian"
@@ -158,7 +193,11 @@ class MeasurementModel(WireModel):
         default=None, description="polar: elevation standard deviation (deg); required in 3-D"
     )
     sigma_range_rate: PositiveFloat | None = Field(
-        default=None, description="polar: range-rate standard deviation (m/s); not used yet"
+        default=None,
+        description=(
+            "polar: range-rate standard deviation (m/s); with it, the detections' "
+            "range_rate updates the tracks' velocities (without it, range_rate is not used)"
+        ),
     )
 
     @model_validator(mode="after")
@@ -479,6 +518,14 @@ class SessionConfig(WireModel):
                         sensor.measurement.r,
                     )
                 )
+        if self.region is not None and self.region.frame != "session":
+            issues.append(
+                FieldIssue(
+                    ("region", "frame"),
+                    "the surveillance region is in the session frame",
+                    self.region.frame,
+                )
+            )
         if self.motion.model == "constant_velocity" and not self.state.velocity:
             issues.append(
                 FieldIssue(

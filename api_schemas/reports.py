@@ -109,7 +109,8 @@ class Detection(WireModel):
 
     A polar sensor's detection gives ``range`` (m) and ``azimuth_deg``
     (clockwise from north at the site), ``elevation_deg`` in 3-D, optionally
-    ``range_rate`` (m/s, accepted, not used yet) instead of ``z``.
+    ``range_rate`` (m/s, positive away from the site; used when the sensor
+    gives ``sigma_range_rate``) instead of ``z``.
     """
 
     z: Annotated[Vector, Field(min_length=1, max_length=3)] | None = None

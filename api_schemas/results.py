@@ -158,6 +158,9 @@ class TrackHistoryPoint(WireModel):
 
     time: FiniteFloat
     state: Vector
+    geodetic: GeodeticPosition | None = Field(
+        default=None, description="WGS84 position of the state (only with ?frame=geodetic)"
+    )
 
 
 class FusedTrackDetail(WireModel):

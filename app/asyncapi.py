@@ -87,6 +87,14 @@ it closes with code 1013, reason `store unavailable`: subscribe again once
 `GET /readyz` answers 200. An input sent on `stream` while the store is down
 gets an `error` with the 503 `store-unavailable` problem and is not applied.
 
+Both channels take the query parameter `frame` on connect
+(`…/stream?frame=geodetic`, `…/subscribe?frame=geodetic`), as the REST inputs
+and reads do: with `geodetic`, every fused track of every `result` sent on the
+connection carries `geodetic: {lat, lon, alt}` (WGS84) beside its
+session-frame `state`. The session needs an `origin`; without one, or for a
+value other than `session` and `geodetic`, the upgrade is refused with the 422
+problem naming `query/frame`.
+
 Both channels need the session's bearer token (or the admin token) in the
 `Authorization` header of the upgrade request, or, from a browser (which
 cannot set headers on an upgrade), offered as the two subprotocols `bearer`
@@ -118,12 +126,31 @@ def _refs(names: Sequence[str], prefix: str) -> list[dict[str, str]]:
     return [{"$ref": f"{prefix}/{name}"} for name in names]
 
 
+FRAME_QUERY: dict[str, Any] = {
+    "type": "object",
+    "properties": {
+        "frame": {
+            "type": "string",
+            "enum": ["session", "geodetic"],
+            "default": "session",
+            "description": (
+                "geodetic: every fused track of every `result` on this connection carries "
+                "`geodetic: {lat, lon, alt}` (WGS84; the session needs an `origin`, else the "
+                "upgrade is refused with 422 at `query/frame`)"
+            ),
+        }
+    },
+}
+"""The query parameters of both channels' upgrade request (the REST routes' ``?frame``)."""
+
+
 def _channel(address: str, description: str, names: Sequence[str]) -> dict[str, Any]:
     return {
         "address": address,
         "description": description,
         "parameters": {"sid": {"description": "The session id."}},
         "messages": {name: {"$ref": f"#/components/messages/{name}"} for name in names},
+        "bindings": {"ws": {"query": FRAME_QUERY, "bindingVersion": "0.1.0"}},
     }
 
 

@@ -22,7 +22,7 @@ from evaluation.catalogue import CATALOGUE
 def _serve(args: argparse.Namespace) -> int:
     import uvicorn
 
-    from app.keepalive import server_options
+    from app.http.keepalive import server_options
     from app.main import create_app
     from app.runtime import tune_garbage_collector
     from app.settings import get_settings

@@ -12,13 +12,13 @@ from fastapi import FastAPI
 from fastapi.middleware.cors import CORSMiddleware
 from fastapi.routing import APIRoute
 
-from app.errors import install_error_handlers
-from app.limits import BodyLimits
+from app.http.body_limits import BodyLimits
+from app.http.errors import install_error_handlers
+from app.http.rate_limit import RateLimit, parse_rates
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
-from app.rate_limit import RateLimit, parse_rates
 from app.routes import associate, docs, fusion, health, metrics, sessions, streams, viewer
-from app.sessions import SessionRegistry
+from app.sessions.registry import SessionRegistry
 from app.settings import Settings, get_settings
 from app.stores import open_store
 from core import __version__

@@ -17,7 +17,7 @@ from fastapi import FastAPI
 from fastapi.openapi.utils import get_openapi
 
 from api_schemas.problem import Problem
-from app.errors import PROBLEM_MEDIA_TYPE
+from app.http.errors import PROBLEM_MEDIA_TYPE
 
 DEFAULT_PATH = Path("openapi.json")
 

@@ -466,7 +466,7 @@ def live_service() -> Iterator[str]:
     """The application on uvicorn in a thread, memory store, a free loopback port."""
     import uvicorn
 
-    from app.keepalive import server_options
+    from app.http.keepalive import server_options
     from app.main import create_app
     from app.settings import Settings
 

@@ -30,8 +30,8 @@ import numpy as np
 
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport, TrackReport
-from app.geodesy import LocalFrame
-from app.translate import core_detection_report, fusion_config, session_frame_report
+from app.geo.geodesy import LocalFrame
+from app.sessions.translate import core_detection_report, fusion_config, session_frame_report
 from core.fusion.engine import SessionEngine
 
 TARGETS = 1000

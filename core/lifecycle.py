@@ -26,6 +26,7 @@ gate on D). The track is terminated when P falls below
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 import math
 from dataclasses import dataclass
@@ -137,17 +138,18 @@ class ScoreModel:
         """Start scores of two-point tracks: L₀ + the second detection's hit ΔL, vectorised.
 
         Given the first detection z₀, a true target's second detection z₁ is
-        Gaussian about z₀ with covariance ``pair_covariance`` (2R + Σ_v ΔT²:
-        both measurement noises and the velocity prior over the interval); the
-        hit ΔL of ``z₁ − z₀`` (``displacement``, shape (T, q)) under it is the
-        same SPRT increment as any hit (Blackman & Popoli pp. 328-330). Without
-        it a two-point track would start one detection short of its evidence.
+        Gaussian about z₀ with covariance ``pair_covariance`` (R₀ + R₁ + Σ_v ΔT²:
+        both measurement noises and the velocity prior over the interval; one
+        (q, q) for every pair or one per pair, (T, q, q)); the hit ΔL of
+        ``z₁ − z₀`` (``displacement``, shape (T, q)) under it is the same SPRT
+        increment as any hit (Blackman & Popoli pp. 328-330). Without it a
+        two-point track would start one detection short of its evidence.
         """
         d = np.atleast_2d(np.asarray(displacement, dtype=np.float64))
-        s = np.asarray(pair_covariance, dtype=np.float64)
-        distance = np.einsum("ti,ij,tj->t", d, np.linalg.inv(s), d)
-        log_det = float(np.linalg.slogdet(s)[1])
-        increment = self.hit_increment(distance, np.full(len(d), log_det), d.shape[1])
+        s = np.broadcast_to(np.asarray(pair_covariance, dtype=np.float64), (*d.shape, d.shape[1]))
+        distance = np.einsum("ti,ti->t", d, np.linalg.solve(s, d[:, :, None])[:, :, 0])
+        log_det = np.linalg.slogdet(s)[1]
+        increment = self.hit_increment(distance, log_det, d.shape[1])
         return np.asarray(self.initial + increment, dtype=np.float64)
 
     @property
@@ -216,9 +218,12 @@ class LifeCycleConfig:
     ----------
     false_confirmation : α, P(a false track is confirmed), in (0, 1).
     true_deletion : β, P(a true track is deleted), in (0, 1).
-    false_target_density : β_FT (= ρ_FA), false alarms per unit of position space per scan
-        (default: :func:`default_density` of 2-D; give ``default_density(3)`` in 3-D).
-    new_target_density : β_NT (= ρ_NT), new targets per unit of position space per scan.
+    false_target_density : β_FT (= ρ_FA), false alarms per unit of position space per scan;
+        None (the default): :func:`default_density` of the layer's position dimension,
+        filled in by :meth:`for_dimension` (``LocalTrackerConfig`` and ``FusionConfig``
+        call it, so a layer always runs numbers; the wire's ``null`` is this None).
+    new_target_density : β_NT (= ρ_NT), new targets per unit of position space per scan;
+        None as for β_FT.
     termination_probability : gate-emptiness threshold ([HZ] §4.2) in [0, 1); 0 turns it off.
     gate_probability : γ of the gate volume A_G (as a χ² probability) and of the
         hand-over to phantoms, in (0, 1).
@@ -237,8 +242,8 @@ class LifeCycleConfig:
 
     false_confirmation: float = 1e-3
     true_deletion: float = 1e-3
-    false_target_density: float = default_density(2)
-    new_target_density: float = default_density(2)
+    false_target_density: float | None = None
+    new_target_density: float | None = None
     termination_probability: float = 0.5
     gate_probability: float = 0.999
     min_points: int | None = None
@@ -260,6 +265,8 @@ class LifeCycleConfig:
             "phantom_min_speed",
         ):
             value = getattr(self, name)
+            if value is None and name.endswith("density"):
+                continue
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInput(f"{name} must be a positive number, got {value!r}")
         if self.score_margin is not None and not (
@@ -276,6 +283,30 @@ class LifeCycleConfig:
             raise InvalidInput(
                 f"min_points must be in [1, {MAX_MIN_POINTS}] or None, got {self.min_points}"
             )
+
+    def for_dimension(self, dim: int) -> LifeCycleConfig:
+        """This life cycle with every unset density at :func:`default_density` of ``dim``."""
+        default = default_density(dim)
+        return dataclasses.replace(
+            self,
+            false_target_density=(
+                default if self.false_target_density is None else self.false_target_density
+            ),
+            new_target_density=(
+                default if self.new_target_density is None else self.new_target_density
+            ),
+        )
+
+    @property
+    def densities(self) -> tuple[float, float]:
+        """``(β_FT, β_NT)`` of a life cycle set for its dimension (:meth:`for_dimension`)."""
+        clutter, birth = self.false_target_density, self.new_target_density
+        if clutter is None or birth is None:
+            raise InvalidInput(
+                "the life cycle's densities depend on the position dimension: "
+                "call for_dimension(dim) first"
+            )
+        return clutter, birth
 
     def score_model(self, p_detect: float) -> ScoreModel:
         """The SPRT score of a sensor with detection probability ``p_detect`` (built once)."""
@@ -306,10 +337,11 @@ class LifeCycleConfig:
 
 @lru_cache(maxsize=64)
 def _score_model(config: LifeCycleConfig, p_detect: float) -> ScoreModel:
+    clutter, birth = config.densities
     return ScoreModel(
         p_detect=p_detect,
-        false_target_density=config.false_target_density,
-        new_target_density=config.new_target_density,
+        false_target_density=clutter,
+        new_target_density=birth,
         false_confirmation=config.false_confirmation,
         true_deletion=config.true_deletion,
     )
@@ -526,9 +558,7 @@ def advance(
         volume = gate_volume(
             gate, np.where(coasting_miss, evidence.gate_log_det, 0.0), evidence.gate_dim
         )
-        factor = gate_emptiness_factor(
-            config.false_target_density, config.new_target_density, volume
-        )
+        factor = gate_emptiness_factor(*config.densities, volume)
         empty_gate = np.where(coasting_miss, empty_gate * factor, empty_gate)
 
     undecided = np.ones(len(status), dtype=bool)

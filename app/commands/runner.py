@@ -17,9 +17,9 @@ import httpx
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport, TrackReport
 from app.commands.errors import http_failure
-from app.live_session import engine_from_snapshot
-from app.responses import dumps
-from app.translate import (
+from app.http.responses import dumps
+from app.sessions.live import engine_from_snapshot
+from app.sessions.translate import (
     core_detection_report,
     fusion_config,
     session_frame_report,

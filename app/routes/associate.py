@@ -8,12 +8,18 @@ import anyio
 from fastapi import APIRouter
 
 from api_schemas.associate import AssociateRequest, AssociateResponse
-from app.deps import SettingsDep
-from app.errors import LimitExceeded, problem_responses
-from app.requests import WireRoute
-from app.responses import JSONTextResponse, dumps
+from app.http.deps import SettingsDep
+from app.http.errors import LimitExceeded, problem_responses
+from app.http.requests import WireRoute
+from app.http.responses import JSONTextResponse, dumps
+from app.sessions.translate import (
+    PlainObject,
+    associate_plain,
+    class_frame,
+    evidence_masses,
+    side_arrays,
+)
 from app.settings import Settings
-from app.translate import PlainObject, associate_plain, class_frame, evidence_masses, side_arrays
 from core.association import associate
 
 router = APIRouter(tags=["association"], route_class=WireRoute)

@@ -8,7 +8,7 @@ loads ``/docs`` and ``/redoc`` with every other host blocked). Two things in
 them would still call out: Swagger UI's validator badge (switched off) and the
 Redocly logo in ReDoc's sidebar, an ``<img>`` on Redocly's CDN (the page points
 it at the local icon before ReDoc runs). Both pages also carry the
-policy of :mod:`app.page_policy`, which lets the browser load nothing from elsewhere.
+policy of :mod:`app.http.page_policy`, which lets the browser load nothing from elsewhere.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from fastapi.openapi.docs import get_swagger_ui_html
 from fastapi.responses import HTMLResponse, Response
 from fastapi.staticfiles import StaticFiles
 
-from app.page_policy import local_only
+from app.http.page_policy import local_only
 
 router = APIRouter(include_in_schema=False)
 

@@ -13,17 +13,17 @@ from api_schemas.config import SessionConfig
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
-from app.deps import CurrentSessionDep, LiveSessionDep, RegistryDep
-from app.errors import (
+from app.geo.geodesy import LocalFrame
+from app.geo.geojson import GEOJSON_MEDIA_TYPE, feature_collection, with_geodetic
+from app.http.deps import CurrentSessionDep, LiveSessionDep, RegistryDep
+from app.http.errors import (
     TrackNotFound,
     problem_responses,
     request_validation_error,
 )
-from app.geodesy import LocalFrame
-from app.geojson import GEOJSON_MEDIA_TYPE, feature_collection, with_geodetic
-from app.requests import WireRoute
-from app.responses import JSONTextResponse, PlainJSONResponse, dumps
-from app.translate import session_origin
+from app.http.requests import WireRoute
+from app.http.responses import JSONTextResponse, PlainJSONResponse, dumps
+from app.sessions.translate import session_origin
 
 router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
 
@@ -162,8 +162,9 @@ async def get_fused_track(
 ) -> PlainJSONResponse:
     """One live fused track with its recent history (fused states, oldest first).
 
-    ``frame=geodetic`` adds ``geodetic: {lat, lon, alt}`` to the track (needs
-    the session's ``origin``, else 422); the history stays in the session frame.
+    ``frame=geodetic`` adds ``geodetic: {lat, lon, alt}`` to the track and to
+    each history point (needs the session's ``origin``, else 422); their
+    ``state`` stays in the session frame.
     """
     config = session.config
     origin = origin_of(config, "frame") if frame == "geodetic" else None
@@ -171,6 +172,11 @@ async def get_fused_track(
     if detail is None:
         raise TrackNotFound(session.id, tid)
     if origin is not None:
-        (track,) = with_geodetic([detail["track"]], origin, tuple(config.state.position))
-        detail = {**detail, "track": track}
+        positions = tuple(config.state.position)
+        (track,) = with_geodetic([detail["track"]], origin, positions)
+        detail = {
+            **detail,
+            "track": track,
+            "history": with_geodetic(detail["history"], origin, positions),
+        }
     return PlainJSONResponse(detail)

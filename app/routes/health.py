@@ -17,10 +17,10 @@ import anyio
 from fastapi import APIRouter, Request
 
 from api_schemas.health import ComponentState, Health, Readiness
-from app.errors import StoreUnavailable
-from app.requests import WireRoute
-from app.responses import PlainJSONResponse
-from app.sessions import SessionRegistry
+from app.http.errors import StoreUnavailable
+from app.http.requests import WireRoute
+from app.http.responses import PlainJSONResponse
+from app.sessions.registry import SessionRegistry
 from core import __version__
 
 router = APIRouter(tags=["health"], route_class=WireRoute)

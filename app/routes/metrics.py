@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from fastapi import APIRouter, Response
 
-from app.deps import MetricsDep, StoreDep
-from app.errors import StoreUnavailable, problem_responses
-from app.requests import WireRoute
+from app.http.deps import MetricsDep, StoreDep
+from app.http.errors import StoreUnavailable, problem_responses
+from app.http.requests import WireRoute
 
 router = APIRouter(tags=["health"], route_class=WireRoute)
 

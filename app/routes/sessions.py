@@ -19,7 +19,7 @@ from api_schemas.sessions import (
     SessionSummary,
     TrackCounts,
 )
-from app.deps import (
+from app.http.deps import (
     AdminDep,
     AuthorizedSession,
     CurrentSessionDep,
@@ -28,12 +28,12 @@ from app.deps import (
     SettingsDep,
     StoreDep,
 )
-from app.errors import LimitExceeded, problem_responses
-from app.live_session import LiveSession
-from app.requests import WireRoute
-from app.responses import JSONTextResponse, dumps
-from app.security import hash_token, issue_token
-from app.session_log import event_json
+from app.http.errors import LimitExceeded, problem_responses
+from app.http.requests import WireRoute
+from app.http.responses import JSONTextResponse, dumps
+from app.http.security import hash_token, issue_token
+from app.sessions.live import LiveSession
+from app.sessions.log import event_json
 from app.stores import SessionRecord
 from app.stores.base import history
 

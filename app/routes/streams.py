@@ -14,12 +14,18 @@ order and puts its answer (one ``result`` or ``error``, echoing ``ref``) into
 a bounded queue; a writer task sends them. When the client does not read, the
 queue fills, the reader stops reading and TCP pushes back: nothing grows
 without bound. ``subscribe``: the session's hub gives each subscriber a
-bounded queue that keeps the latest results (:mod:`app.hub`); with the
+bounded queue that keeps the latest results (:mod:`app.sessions.hub`); with the
 redis store the hub is fed from Redis pub/sub, so results applied on any
-instance arrive (:meth:`app.sessions.SessionRegistry.subscribe`). The server
+instance arrive (:meth:`app.sessions.registry.SessionRegistry.subscribe`). The server
 closes a subscription with 1000 "session ended" when the session is deleted
 or expires, and with 1013 "store unavailable" when the store (or its
 pub/sub connection) fails: subscribe again once ``/readyz`` is ready.
+
+Both channels take the query parameter ``frame`` on connect, as the REST
+inputs and reads do: ``geodetic`` adds ``geodetic: {lat, lon, alt}`` to every
+fused track of every ``result`` sent on that connection (the session needs an
+``origin``; otherwise, or for another value, the upgrade is refused with the
+422 problem naming ``query/frame``).
 """
 
 from __future__ import annotations
@@ -30,28 +36,34 @@ import logging
 import time
 
 import anyio
+import orjson
 from fastapi import APIRouter, WebSocket
 from fastapi.exceptions import RequestValidationError
 from pydantic import ValidationError
 from starlette.websockets import WebSocketDisconnect
 
+from api_schemas.issues import FieldIssue
 from api_schemas.problem import Problem
 from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.ws import DetectionsMessage, TracksMessage, client_message_adapter
-from app.deps import open_record
-from app.errors import (
+from app.geo.geodesy import LocalFrame
+from app.geo.geojson import with_geodetic
+from app.http.deps import open_record
+from app.http.errors import (
     LimitExceeded,
+    ProblemResponse,
     ServiceError,
     StoreUnavailable,
     Unauthorized,
     problem_for,
-    problem_response,
+    request_validation_error,
 )
-from app.hub import STORE_UNAVAILABLE, Ending
-from app.live_session import LiveSession
-from app.requests import WireRoute, parse_json
-from app.responses import dumps
-from app.sessions import SessionRegistry, result_message
+from app.http.requests import WireRoute, parse_json
+from app.http.responses import dumps
+from app.routes.fusion import geodetic_result, origin_of
+from app.sessions.hub import STORE_UNAVAILABLE, Ending
+from app.sessions.live import LiveSession
+from app.sessions.registry import SessionRegistry, result_message
 
 router = APIRouter(prefix="/v1/sessions", route_class=WireRoute)
 logger = logging.getLogger("credal_fusion.streams")
@@ -89,30 +101,54 @@ def _subprotocol(websocket: WebSocket) -> str | None:
     return BEARER_SUBPROTOCOL if offered.split(",")[0].strip() == BEARER_SUBPROTOCOL else None
 
 
-async def _open(websocket: WebSocket, sid: str) -> LiveSession | None:
-    """The session if the upgrade request may open it; otherwise refuse the upgrade."""
+OUTPUT_FRAMES = ("session", "geodetic")
+
+
+def _output_frame(websocket: WebSocket, session: LiveSession) -> LocalFrame | None:
+    """The session's origin frame when the connection asks ``?frame=geodetic``, else None."""
+    frame = websocket.query_params.get("frame", "session")
+    if frame not in OUTPUT_FRAMES:
+        raise request_validation_error(
+            [FieldIssue(("frame",), f"frame is one of {list(OUTPUT_FRAMES)}", frame)],
+            prefix="query",
+        )
+    return origin_of(session.config, "frame") if frame == "geodetic" else None
+
+
+async def _open(websocket: WebSocket, sid: str) -> tuple[LiveSession, LocalFrame | None] | None:
+    """The session (and the output frame the connection asks for) if the upgrade request may
+    open it; otherwise refuse the upgrade."""
     app = websocket.app
     registry: SessionRegistry = app.state.registry
     try:
         token = _bearer(websocket)
         record = open_record(sid, await registry.record(sid), token, app.state.settings)
-        return await registry.current(await registry.get(record.id))
-    except ServiceError as error:
+        session = await registry.current(await registry.get(record.id))
+        return session, _output_frame(websocket, session)
+    except (ServiceError, RequestValidationError) as error:
+        problem = problem_for(error, websocket.url.path)
         if "websocket.http.response" in websocket.scope.get("extensions", {}):
-            response = problem_response(
-                None,
-                status=error.status_code,
-                slug=error.slug,
-                title=error.title,
-                detail=error.detail,
-                headers=error.headers(),
-                instance=websocket.url.path,
-                **error.extensions,
+            headers = error.headers() if isinstance(error, ServiceError) else {}
+            await websocket.send_denial_response(
+                ProblemResponse(
+                    problem.model_dump(mode="json", exclude_none=True),
+                    status_code=problem.status,
+                    headers=headers,
+                )
             )
-            await websocket.send_denial_response(response)
         else:
-            await websocket.close(code=POLICY_VIOLATION, reason=error.detail[:120])
+            await websocket.close(code=POLICY_VIOLATION, reason=problem.detail[:120])
         return None
+
+
+def _geodetic_message(message: str, frame: LocalFrame, session: LiveSession) -> str:
+    """A hub message with ``geodetic`` added to its result's tracks (other messages as they are)."""
+    document = orjson.loads(message)
+    if document.get("type") != "result":
+        return message
+    positions = tuple(session.config.state.position)
+    document["result"]["tracks"] = with_geodetic(document["result"]["tracks"], frame, positions)
+    return dumps(document)
 
 
 def _ack(session: LiveSession) -> str:
@@ -185,8 +221,15 @@ def _refusal(error: ServiceError, path: str) -> str:
     return _error(problem_for(error, path), None)
 
 
-async def _answer(session: LiveSession, registry: SessionRegistry, text: str, path: str) -> str:
-    """The one answer (``result`` or ``error``) to one client message."""
+async def _answer(
+    session: LiveSession,
+    registry: SessionRegistry,
+    text: str,
+    path: str,
+    frame: LocalFrame | None = None,
+) -> str:
+    """The one answer (``result`` or ``error``) to one client message (``frame``: with the
+    tracks' geodetic positions)."""
     settings = registry.settings
     ref: str | None = None
     try:
@@ -214,15 +257,18 @@ async def _answer(session: LiveSession, registry: SessionRegistry, text: str, pa
             result = await registry.submit_tracks(session, report)
     except Exception as error:  # every failure is answered; the connection stays open
         return _error(problem_for(error, path), ref)
+    if frame is not None:
+        result = geodetic_result(result, frame, session.config)
     return result_message(result, ref)
 
 
 @router.websocket("/{sid}/stream")
 async def stream_session(websocket: WebSocket, sid: str) -> None:
     """Send inputs, receive one answer per input, in order."""
-    session = await _open(websocket, sid)
-    if session is None:
+    opened = await _open(websocket, sid)
+    if opened is None:
         return
+    session, frame = opened
     registry: SessionRegistry = websocket.app.state.registry
     path = websocket.url.path
     await websocket.accept(subprotocol=_subprotocol(websocket))
@@ -259,7 +305,7 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
                         path,
                     )
                 else:
-                    answer = await _answer(session, registry, text, path)
+                    answer = await _answer(session, registry, text, path, frame)
                 await send.send(answer)
 
     async def writer() -> None:
@@ -278,9 +324,10 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
 @router.websocket("/{sid}/subscribe")
 async def subscribe_session(websocket: WebSocket, sid: str) -> None:
     """Receive every result of the session, in order; a slow reader skips to the latest."""
-    session = await _open(websocket, sid)
-    if session is None:
+    opened = await _open(websocket, sid)
+    if opened is None:
         return
+    session, frame = opened
     registry: SessionRegistry = websocket.app.state.registry
     await websocket.accept(subprotocol=_subprotocol(websocket))
     try:
@@ -292,6 +339,8 @@ async def subscribe_session(websocket: WebSocket, sid: str) -> None:
 
     async def pump() -> None:
         while not isinstance(message := await subscriber.next(), Ending):
+            if frame is not None:
+                message = _geodetic_message(message, frame, session)
             await websocket.send_text(message)
         await websocket.close(code=message.code, reason=message.reason)
 

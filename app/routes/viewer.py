@@ -20,8 +20,8 @@ from importlib.resources import files
 from fastapi import APIRouter
 from fastapi.responses import HTMLResponse
 
-from app.page_policy import local_only
-from app.requests import WireRoute
+from app.http.page_policy import local_only
+from app.http.requests import WireRoute
 
 router = APIRouter(include_in_schema=False, route_class=WireRoute)
 

@@ -72,7 +72,8 @@ class FusionConfig:
     state_fusion : how the sensors' latest estimates are combined.
     management : the track life cycle (shared with the local trackers); its densities
         are per unit of position space (area in 2-D) per report: the score and the
-        gate volume are computed on the position components.
+        gate volume are computed on the position components (densities left None
+        become :func:`~core.lifecycle.default_density` of the layout's positions).
     region : the surveillance region; by default the union of the sensors'
         ranges (``core.geometry``): outside it a track is out of range.
     """
@@ -100,6 +101,8 @@ class FusionConfig:
         object.__setattr__(
             self, "association_options", MappingProxyType(dict(self.association_options))
         )
+        positions = len(self.motion.layout.position)
+        object.__setattr__(self, "management", self.management.for_dimension(positions))
         for sensor in self.sensors:
             if sensor.tracker is not None:
                 self._check_detecting_sensor(sensor, sensor.tracker)

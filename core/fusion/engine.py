@@ -186,7 +186,9 @@ class SessionEngine:
             raise StaleReport(sensor.id, report.time, last)
         check_detection_magnitudes(report)
         with self._transaction(tracker):
-            scan = tracker.step(report.time, report.measurements, report.covariances)
+            scan = tracker.step(
+                report.time, report.measurements, report.covariances, range_rates=report.range_rates
+            )
             tracks = local_track_report(
                 tracker, scan, self.config.motion.layout, self.config.classes
             )

@@ -39,12 +39,14 @@ class TrackReport:
 @dataclass(frozen=True)
 class DetectionReport:
     """A sensor's detections at one time: measurements ``z`` (m × q) and, optionally,
-    each detection's own noise covariance (m × q × q; default: the sensor's R)."""
+    each detection's own noise covariance (m × q × q; default: the sensor's R) and
+    range-rate (m,; NaN: none; for a sensor whose tracker has a range-rate model)."""
 
     sensor: str
     time: float
     measurements: FloatArray
     covariances: FloatArray | None = None
+    range_rates: FloatArray | None = None
 
 
 @dataclass(frozen=True)

@@ -12,10 +12,12 @@ Readings
     ``max_speed · Δt`` (plus the gate on R) starts a tentative track by
     :func:`~core.tracking.initiator.two_point_initiation`, scored from
     ``L₀ = ln(β_NT/β_FT)`` plus the second detection's hit ΔL under
-    ``2R + initial_velocity_std² Δt² I`` (the pair's evidence, so a pair of a
+    ``R₀ + R₁ + initial_velocity_std² Δt² I`` (the pair's evidence, so a pair of a
     true target starts well above the delete threshold; a pair at or below it
-    starts nothing). ``"single_point"``: every unassigned detection
-    starts a tentative track at once, position from z (covariance R), velocity
+    starts nothing). R₀, R₁ are the two detections' own covariances (the
+    bank's R for a detection without one; a seed keeps its R until the next
+    scan). ``"single_point"``: every unassigned detection
+    starts a tentative track at once, position from z (its covariance R), velocity
     0 with standard deviation ``initial_velocity_std`` per axis (for the
     heading convention of the pedestrian models: heading 0 with variance
     ``initial_velocity_std²``); the large velocity variance makes the first
@@ -79,6 +81,7 @@ from core.geometry import Coverage, FieldOfView, PolygonView
 from core.lifecycle import LifeCycleConfig, ScoreModel
 from core.tracking.models import LinearMeasurementModel, ModelBank
 from core.tracking.presets import TrackingPreset, preset
+from core.tracking.range_rate import RangeRateModel
 
 ImmDistance = Literal["closest_model", "combined", "gated_combined"]
 DistanceKind = Literal["plain", "modified"]
@@ -148,8 +151,12 @@ class LocalTrackerConfig:
     modified_beta, modified_k, modified_alpha : β, k, α of the modified distance.
     p_detect : P_D of the system's sensors (the track score).
     life_cycle : score thresholds and densities, confirmation, deletion, gate
-        emptiness, occlusion and phantoms (:class:`~core.lifecycle.LifeCycleConfig`).
+        emptiness, occlusion and phantoms (:class:`~core.lifecycle.LifeCycleConfig`);
+        densities left None become :func:`~core.lifecycle.default_density` of the
+        measured positions (``axes``, or the explicit bank's measurement dimension).
     initiation, max_speed, initial_velocity_std : see the module Readings.
+    range_rate : the system's range-rate measurement (site and σ), or None; a scan
+        may then give each detection's range-rate (:mod:`core.tracking.range_rate`).
     fields_of_view : the system's sensors and their fields of view.
     region : the surveillance region (default: union of the sensors' ranges).
     classification : credal options, or None for no classification; ignored
@@ -177,6 +184,7 @@ class LocalTrackerConfig:
     initiation: Initiation = "two_point"
     max_speed: float = 1000.0
     initial_velocity_std: float = 300.0
+    range_rate: RangeRateModel | None = None
     fields_of_view: Mapping[str, FieldOfView | None] = field(
         default_factory=lambda: MappingProxyType({"sensor": None})
     )
@@ -211,6 +219,9 @@ class LocalTrackerConfig:
                 raise TrackingError(f"{name} must be a positive number, got {value!r}")
         if not self.fields_of_view:
             raise TrackingError("fields_of_view needs at least one sensor")
+        # densities left unset are per m^q of the measured positions (core.lifecycle)
+        measured = self.axes if self.bank is None else self.bank.measurement.dim
+        object.__setattr__(self, "life_cycle", self.life_cycle.for_dimension(measured))
 
     def tracking_preset(self) -> TrackingPreset | None:
         """The preset, or None when an explicit bank replaces it."""

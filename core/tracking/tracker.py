@@ -79,9 +79,12 @@ from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState, IMMUpdate, 
 from core.tracking.initiator import pair_seeds, single_point_initiation, two_point_initiation
 from core.tracking.jpda import cheap_jpda_weights, clutter_bias, pda_update
 from core.tracking.presets import VELOCITY, TrackingPreset, VelocityConvention
+from core.tracking.range_rate import range_rate_update
 from core.tracking.track import LocalTrack, TrackerStep, float_array, mass_to_plain, plain_floats
 
-EXPORT_VERSION = 1
+EXPORT_VERSION = 2
+"""2: the seeds' covariances (``seed_covariances``); a version-1 export (without them)
+restores its seeds with the bank's R, the R they were started with then."""
 SEED_NOISE_GATE = 0.999
 """Gate probability of the measurement-noise part of the seed distance bound."""
 
@@ -137,6 +140,8 @@ class LocalTracker:
         self._conventions: tuple[VelocityConvention, ...] = (
             (VELOCITY,) * self.bank.axes if found is None else found.conventions
         )
+        if config.range_rate is not None and set(self._conventions) != {VELOCITY}:
+            raise TrackingError("a range-rate needs velocities in the state, not headings")
         self.classifier: BatchedCredalClassifier | None = None
         if found is not None and config.classification is not None:
             chosen = config.classification
@@ -161,7 +166,7 @@ class LocalTracker:
                 options.get(  # type: ignore[arg-type]
                     "bias",
                     clutter_bias(
-                        config.life_cycle.false_target_density, config.p_detect, probability
+                        self._score_model.false_target_density, config.p_detect, probability
                     ),
                 )
             )
@@ -201,6 +206,7 @@ class LocalTracker:
             None if self.classifier is None else self.classifier.initial(0)
         )
         self._seeds: FloatArray = np.zeros((0, self._q))
+        self._seed_noises: FloatArray = np.zeros((0, self._q, self._q))
         self._seed_times: FloatArray = np.zeros(0)
         self._seed_sensors: IntArray = np.zeros(0, dtype=np.int64)
 
@@ -216,6 +222,7 @@ class LocalTracker:
         measurements: ArrayLike,
         measurement_covariances: ArrayLike | None = None,
         sensor: str | None = None,
+        range_rates: ArrayLike | None = None,
     ) -> TrackerStep:
         """Process one scan of ``sensor`` (default: the first configured sensor).
 
@@ -228,6 +235,9 @@ class LocalTracker:
         measurement_covariances : array (m, q, q), optional
             Each detection's own R (default: the bank's R).
         sensor : str, optional
+        range_rates : array (m,), optional
+            Each detection's range-rate (NaN: none), for a tracker configured
+            with a ``range_rate`` model (:mod:`core.tracking.range_rate`).
 
         Raises
         ------
@@ -237,7 +247,7 @@ class LocalTracker:
         """
         before = self.checkpoint()
         try:
-            return self._step(time, measurements, measurement_covariances, sensor)
+            return self._step(time, measurements, measurement_covariances, sensor, range_rates)
         except BaseException:
             self.rollback(before)
             raise
@@ -257,10 +267,12 @@ class LocalTracker:
         measurements: ArrayLike,
         measurement_covariances: ArrayLike | None,
         sensor: str | None,
+        range_rates: ArrayLike | None = None,
     ) -> TrackerStep:
         z, own_noise, sensor_name, elapsed = self._check(
             time, measurements, measurement_covariances, sensor
         )
+        doppler = self._check_range_rates(range_rates, len(z))
         prediction = self._predict(elapsed)
         tracks = len(self._numbers)
         combined_z, combined_s = prediction.combined_measurement()
@@ -273,6 +285,15 @@ class LocalTracker:
         else:
             update, pair_rows, pair_cols, hit_gain, used = self._associate(
                 sub, z, own_noise, established(self._life.status[candidates])
+            )
+        if doppler is not None and self.config.range_rate is not None and len(pair_rows):
+            measured = np.isfinite(doppler[pair_cols])
+            update = range_rate_update(
+                update,
+                pair_rows[measured],
+                doppler[pair_cols[measured]],
+                self.config.range_rate,
+                self.bank.axes,
             )
         detected = np.zeros(tracks, dtype=bool)
         detected[candidates] = update.detected
@@ -324,7 +345,12 @@ class LocalTracker:
         self._hand_over(newly_confirmed, numbers)
         free = np.ones(len(z), dtype=bool)
         free[used] = False
-        self._initiate(time, sensor_name, z, free, numbers)
+        noises = (
+            np.broadcast_to(self._noise, (len(z), self._q, self._q))
+            if own_noise is None
+            else own_noise
+        )
+        self._initiate(time, sensor_name, z, noises, free, numbers)
         return self._result(time, sensor_name, numbers)
 
     # ------------------------------------------------------------ checks
@@ -366,6 +392,19 @@ class LocalTracker:
                     f"scan time {time!r} is before the previous scan's time {self.time!r}"
                 )
         return z, own, sensor_name, elapsed
+
+    def _check_range_rates(self, range_rates: ArrayLike | None, count: int) -> FloatArray | None:
+        """Each detection's range-rate (NaN: none), or None; only with a ``range_rate`` model."""
+        if range_rates is None:
+            return None
+        if self.config.range_rate is None:
+            raise TrackingError("range_rates need a tracker configured with a range_rate model")
+        if self._method == CHEAP_JPDA:
+            raise TrackingError("cheap_jpda takes no range-rates")
+        doppler = np.asarray(range_rates, dtype=np.float64).reshape(-1)
+        if doppler.shape != (count,) or np.any(np.isinf(doppler)):
+            raise TrackingError(f"range_rates must be {count} finite numbers (NaN: none)")
+        return doppler
 
     # ---------------------------------------------------------- predict
     def _predict(self, elapsed: float) -> IMMPrediction:
@@ -562,41 +601,61 @@ class LocalTracker:
 
     # -------------------------------------------------------- initiation
     def _initiate(
-        self, time: float, sensor: str, z: FloatArray, free: BoolArray, numbers: IntArray
+        self,
+        time: float,
+        sensor: str,
+        z: FloatArray,
+        noises: FloatArray,
+        free: BoolArray,
+        numbers: IntArray,
     ) -> None:
-        """New tentative tracks from the detections nobody used (config Readings)."""
+        """New tentative tracks from the detections nobody used (config Readings), each
+        started and scored with its detections' own covariances ``noises`` (m, q, q)."""
         detections = np.flatnonzero(free)
         if self.config.initiation == "single_point":
             starts = detections
-            state = single_point_initiation(self.bank, z[starts], self.config.initial_velocity_std)
+            state = single_point_initiation(
+                self.bank, z[starts], self.config.initial_velocity_std, noises=noises[starts]
+            )
             self._append(state, starts, numbers)
             return
         sensor_index = self.config.sensors.index(sensor)
         mine = self._seed_sensors == sensor_index
         older = mine & (self._seed_times < time)
-        seeds, seed_times = self._seeds[older], self._seed_times[older]
+        seeds, seed_noises = self._seeds[older], self._seed_noises[older]
+        seed_times = self._seed_times[older]
         starts = np.zeros(0, dtype=np.int64)
         if len(seeds) and len(detections):
             # The sensor's seeds all come from its latest earlier scan (older ones are dropped below).
             interval = float(time - seed_times.max())
             noise_gate = float(chi2.ppf(SEED_NOISE_GATE, self._q))
-            largest_noise = float(np.linalg.eigvalsh(self._noise)[-1])
-            radius = self.config.max_speed * interval + math.sqrt(noise_gate * 2.0 * largest_noise)
+            # the gate on R₀ + R₁ by its largest eigenvalue, pair by pair
+            seed_largest = np.linalg.eigvalsh(seed_noises)[:, -1]
+            detection_largest = np.linalg.eigvalsh(noises[detections])[:, -1]
+            radius = self.config.max_speed * interval + np.sqrt(
+                noise_gate * (seed_largest[:, None] + detection_largest[None, :])
+            )
             seed_index, detection_index = pair_seeds(seeds, z[detections], radius)
             if len(seed_index):
                 starts = detections[detection_index]
-                first = seeds[seed_index]
+                first, first_noises = seeds[seed_index], seed_noises[seed_index]
                 # [MTT] §4.3: the pair's score has both detections' evidence; a pair
                 # scoring at or below the delete threshold starts no track.
                 spread = self.config.initial_velocity_std**2 * interval**2
-                pair_covariance = 2.0 * self._noise + spread * np.eye(self._q)
+                pair_covariance = first_noises + noises[starts] + spread * np.eye(self._q)
                 start_score = self._score_model.two_point_initial(
                     z[starts] - first, pair_covariance
                 )
                 alive = start_score > self.config.life_cycle.delete_threshold
                 starts, first, start_score = starts[alive], first[alive], start_score[alive]
                 state = two_point_initiation(
-                    self.bank, first, z[starts], interval, velocity=self._conventions
+                    self.bank,
+                    first,
+                    z[starts],
+                    interval,
+                    first_noises=first_noises[alive],
+                    second_noises=noises[starts],
+                    velocity=self._conventions,
                 )
                 order = np.argsort(starts, kind="stable")
                 starts = starts[order]
@@ -605,6 +664,7 @@ class LocalTracker:
         remaining = np.setdiff1d(detections, starts)
         kept = ~older
         self._seeds = np.concatenate([self._seeds[kept], z[remaining]])
+        self._seed_noises = np.concatenate([self._seed_noises[kept], noises[remaining]])
         self._seed_times = np.concatenate([self._seed_times[kept], np.full(len(remaining), time)])
         self._seed_sensors = np.concatenate(
             [self._seed_sensors[kept], np.full(len(remaining), sensor_index, dtype=np.int64)]
@@ -721,6 +781,7 @@ class LocalTracker:
             "time": None if self.time is None else plain_floats(np.float64(self.time)),
             "next_number": self.next_number,
             "seeds": plain_floats(self._seeds),
+            "seed_covariances": plain_floats(self._seed_noises),
             "seed_times": plain_floats(self._seed_times),
             "seed_sensors": self._seed_sensors.tolist(),
             "tracks": tracks,
@@ -729,12 +790,19 @@ class LocalTracker:
     @classmethod
     def restore(cls, config: LocalTrackerConfig, plain: dict[str, Any]) -> LocalTracker:
         """Rebuild a tracker from :meth:`export`'s output and the same configuration."""
-        if plain.get("version") != EXPORT_VERSION:
-            raise TrackingError(f"unknown tracker export version {plain.get('version')!r}")
+        version = plain.get("version")
+        if version not in (1, EXPORT_VERSION):
+            raise TrackingError(f"unknown tracker export version {version!r}")
         tracker = cls(config)
         tracker.time = None if plain["time"] is None else float(float_array(plain["time"]))
         tracker.next_number = int(plain["next_number"])
-        tracker._seeds = float_array(plain["seeds"]).reshape(-1, tracker._q)
+        q = tracker._q
+        tracker._seeds = float_array(plain["seeds"]).reshape(-1, q)
+        tracker._seed_noises = (
+            float_array(plain["seed_covariances"]).reshape(-1, q, q)
+            if version == EXPORT_VERSION
+            else np.broadcast_to(tracker._noise, (len(tracker._seeds), q, q)).copy()
+        )
         tracker._seed_times = float_array(plain["seed_times"]).reshape(-1)
         tracker._seed_sensors = np.array(plain["seed_sensors"], dtype=np.int64).reshape(-1)
         entries = plain["tracks"]

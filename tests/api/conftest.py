@@ -14,7 +14,7 @@ import uvicorn
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
-from app.keepalive import server_options
+from app.http.keepalive import server_options
 from app.main import create_app
 from app.settings import Settings
 

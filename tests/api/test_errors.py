@@ -9,7 +9,7 @@ import pytest
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
-from app.errors import LimitExceeded, StaleReport, install_error_handlers
+from app.http.errors import LimitExceeded, StaleReport, install_error_handlers
 from core.distance.estimates import check_covariances
 from core.errors import CovarianceError, MassError, TotalConflict
 

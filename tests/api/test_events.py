@@ -8,7 +8,7 @@ from fastapi.testclient import TestClient
 
 from api_schemas.events import EventLog
 from api_schemas.reports import DetectionReport, TrackReport
-from app.session_log import event_from_entry, log_input
+from app.sessions.log import event_from_entry, log_input
 from app.stores import Store
 from tests.api.examples import DETECTION_REPORT, SESSION_CONFIG, TRACK_REPORT
 

@@ -13,7 +13,7 @@ import pytest
 from numpy.testing import assert_allclose
 from pyproj import Transformer
 
-from app.geodesy import (
+from app.geo.geodesy import (
     LocalFrame,
     geodetic_to_session,
     heading_rotation,

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.testing import assert_allclose
 
-from app.geodesy import LocalFrame
-from app.geojson import feature_collection, with_geodetic
+from app.geo.geodesy import LocalFrame
+from app.geo.geojson import feature_collection, with_geodetic
 from tests.api.proj_oracle import proj_enu
 
 ORIGIN = (52.0, 4.4, 12.0)

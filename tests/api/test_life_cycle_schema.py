@@ -14,10 +14,12 @@ import pytest
 from pydantic import ValidationError
 
 from api_schemas.config import SensorConfig, SessionConfig, TrackingConfig, TrackThresholds
-from app.translate import fusion_config, life_cycle_config
+from app.sessions.translate import fusion_config, life_cycle_config
 from core.errors import InvalidInput
 from core.lifecycle import LifeCycleConfig
 from core.tracking.config import LocalTrackerConfig
+from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
+from core.tracking.tracker import LocalTracker
 
 CORE_DEFAULTS = {field.name: field.default for field in dataclasses.fields(LifeCycleConfig)}
 PROBES: dict[str, list[object]] = {
@@ -59,10 +61,10 @@ def test_a_session_without_thresholds_runs_the_core_defaults_in_both_layers() ->
         }
     )
     fusion = fusion_config(config)
-    assert fusion.management == LifeCycleConfig()
+    assert fusion.management == LifeCycleConfig().for_dimension(2)
     tracker = fusion.sensor("radar").tracker
-    assert tracker is not None and tracker.life_cycle == LifeCycleConfig()
-    assert life_cycle_config(TrackThresholds(), 1e-6) == LifeCycleConfig()
+    assert tracker is not None and tracker.life_cycle == LifeCycleConfig().for_dimension(2)
+    assert life_cycle_config(TrackThresholds(), None) == LifeCycleConfig()
 
 
 def test_a_3d_session_defaults_to_one_false_alarm_and_one_birth_per_cubic_kilometre() -> None:
@@ -119,10 +121,67 @@ def test_the_densities_and_initiation_reach_the_local_tracker() -> None:
     assert (life.score_margin, life.min_points) == (-6.0, 2)
     assert (radar.tracker.initiation, radar.tracker.initial_velocity_std) == ("single_point", 4.0)
     assert fusion.management.new_target_density == 2e-7
-    assert fusion.management.false_target_density == LifeCycleConfig().false_target_density
+    assert fusion.management.false_target_density == 1e-6  # one per km² (2-D default)
 
 
 def test_a_ceiling_under_the_delete_threshold_is_refused_naming_the_field() -> None:
     with pytest.raises(ValidationError) as refused:
         TrackThresholds.model_validate({"score_margin": -14.0})  # confirm 6.9, delete −6.9
     assert "score_margin" in str(refused.value)
+
+
+BANK_3D = ModelBank(
+    models=(constant_velocity(1.0, 1.0, axes=3, noise="continuous"),),
+    measurement=LinearMeasurementModel.position(1.0, 6),
+    mode_transition=np.ones((1, 1)),
+)
+
+
+@pytest.mark.parametrize(
+    "library",
+    [
+        LocalTrackerConfig(axes=3),
+        LocalTrackerConfig(axes=3, life_cycle=LifeCycleConfig(min_points=3)),
+        LocalTrackerConfig(bank=BANK_3D),
+    ],
+    ids=["preset", "thresholds-only", "bank"],
+)
+def test_the_library_the_service_and_the_wire_default_a_3d_tracker_alike(
+    library: LocalTrackerConfig,
+) -> None:
+    """A LocalTrackerConfig used directly in 3-D gets the 3-D densities (1e-9 m⁻³, one per
+    km³), as the service's tracker of a 3-D session whose wire densities are null."""
+    assert (library.life_cycle.false_target_density, library.life_cycle.new_target_density) == (
+        1e-9,
+        1e-9,
+    )
+    wire = SessionConfig.model_validate(
+        {
+            "state": {"dim": 6, "position": [0, 2, 4], "velocity": [1, 3, 5]},
+            "sensors": [{"id": "radar", "measurement": {"r": np.eye(3).tolist()}}],
+        }
+    )
+    assert wire.sensors[0].clutter_density is None and wire.tracking.birth_density is None
+    service = fusion_config(wire).sensor("radar").tracker
+    assert service is not None
+    assert service.life_cycle.densities == library.life_cycle.densities
+    assert LocalTrackerConfig().life_cycle.densities == (1e-6, 1e-6)  # 2-D: one per km²
+    # an explicit density is kept in any dimension
+    explicit = LocalTrackerConfig(axes=3, life_cycle=LifeCycleConfig(false_target_density=2e-8))
+    assert explicit.life_cycle.densities == (2e-8, 1e-9)
+    with pytest.raises(InvalidInput, match="for_dimension"):
+        LifeCycleConfig().score_model(0.9)
+
+
+def test_a_3d_tracker_with_the_library_defaults_confirms_a_target() -> None:
+    """At the 2-D default read as m⁻³ no 3-D hit raised the score (tests/core/tracking/
+    test_tracker_3d_score.py); with the library's own default the target confirms."""
+    tracker = LocalTracker(
+        LocalTrackerConfig(bank=BANK_3D, measurement_noise=tuple(map(tuple, 900.0 * np.eye(3))))
+    )
+    start, velocity = np.array([20_000.0, 1_000.0, 5_000.0]), np.array([-200.0, 50.0, 10.0])
+    statuses = [
+        [t.status.value for t in tracker.step(float(k), (start + velocity * k)[None]).tracks]
+        for k in range(8)
+    ]
+    assert ["confirmed"] in statuses, statuses

@@ -13,7 +13,7 @@ from stonesoup.models.transition.linear import (
 )
 
 from api_schemas.config import SessionConfig
-from app.translate import fusion_config
+from app.sessions.translate import fusion_config
 
 G = 9.81
 

@@ -18,7 +18,7 @@ from stonesoup.models.measurement.nonlinear import (
 from stonesoup.types.detection import Detection
 from stonesoup.types.state import State
 
-from app.polar import polar_to_cartesian
+from app.geo.polar import polar_to_cartesian
 
 
 def assert_noise_recovered(mapped: np.ndarray, noise: np.ndarray) -> None:

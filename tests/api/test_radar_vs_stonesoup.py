@@ -3,14 +3,16 @@
 One target per Monte Carlo run, 35–50 km from the radar, moving with the
 continuous white-noise-acceleration model the session declares (``motion.q``),
 seen every second with σ_range 20 m and σ_az 0.2°. The service tracks the
-polar detections (converted measurements, :mod:`app.polar`); Stone Soup runs
+polar detections (converted measurements, :mod:`app.geo.polar`); Stone Soup runs
 single-target filters with ``CartesianToBearingRange`` and its extended and
 unscented Kalman updaters on the same measurements, each started from the
 service's first estimate (mean and covariance) at the same scan. The service's
-position RMSE must be within 5 % of the better Stone Soup filter, and its
-average NEES (state x, vx, y, vy) inside the two-sided 95 % χ² interval of
-that many scans × runs (the two Stone Soup filters' NEES is printed beside it;
-on this scene all three agree to 1 %).
+position RMSE and mean GOSPA (Stone Soup's ``GOSPAMetric``, p = 2, c = 500 m,
+α = 2, on x, y, each scan after the start: a missing or extra track costs
+c²/2) must be within 5 % of the better Stone Soup filter, and its average
+NEES (state x, vx, y, vy) inside the two-sided 95 % χ² interval of that many
+scans × runs (the two Stone Soup filters' NEES is printed beside it; on this
+scene all three agree to 1 %).
 """
 
 from __future__ import annotations
@@ -22,6 +24,8 @@ from typing import Any
 import httpx
 import numpy as np
 from scipy.stats import chi2
+from stonesoup.measures import Euclidean
+from stonesoup.metricgenerator.ospametric import GOSPAMetric
 from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.models.transition.linear import (
     CombinedLinearGaussianTransitionModel,
@@ -32,7 +36,7 @@ from stonesoup.types.angle import Bearing
 from stonesoup.types.array import CovarianceMatrix, StateVector
 from stonesoup.types.detection import Detection
 from stonesoup.types.hypothesis import SingleHypothesis
-from stonesoup.types.state import GaussianState
+from stonesoup.types.state import GaussianState, State
 from stonesoup.updater.kalman import ExtendedKalmanUpdater, UnscentedKalmanUpdater
 
 from .conftest import LiveServer
@@ -43,6 +47,20 @@ Q = 1.0  # m²/s³
 SIGMA_RANGE = 20.0
 SIGMA_AZIMUTH_DEG = 0.2
 EPOCH = datetime(2026, 1, 1, tzinfo=UTC)
+GOSPA = GOSPAMetric(p=2, c=500.0, measure=Euclidean(mapping=(0, 2)))  # α = 2 (fixed)
+
+
+def _gospa(estimates: list[np.ndarray], truth: list[np.ndarray], scans: range) -> list[float]:
+    """Stone Soup's GOSPA of each scan: the scan's estimated states against its true one."""
+    distances = []
+    for scan, estimated, true in zip(scans, estimates, truth, strict=True):
+        time = EPOCH + timedelta(seconds=scan)
+        metric, _ = GOSPA.compute_gospa_metric(
+            [State(StateVector(state), timestamp=time) for state in estimated],
+            [State(StateVector(true), timestamp=time)],
+        )
+        distances.append(float(metric.value["distance"]))
+    return distances
 
 
 def _truth(rng: np.random.Generator) -> np.ndarray:
@@ -71,7 +89,9 @@ def _measure(states: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, 
 
 def _service_run(
     client: httpx.Client, ranges: np.ndarray, azimuths: np.ndarray
-) -> list[dict[str, Any] | None]:
+) -> tuple[list[dict[str, Any] | None], list[list[np.ndarray]]]:
+    """The service's track of each scan (None before it has one), and every fused state
+    it reports at each scan (for GOSPA: an extra track would cost)."""
     config = {
         "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
         "motion": {"model": "constant_velocity", "q": Q},
@@ -92,6 +112,7 @@ def _service_run(
     assert created.status_code == 201, created.text
     sid, headers = created.json()["id"], {"Authorization": f"Bearer {created.json()['token']}"}
     estimates: list[dict[str, Any] | None] = []
+    every_track: list[list[np.ndarray]] = []
     for scan, (rho, azimuth) in enumerate(zip(ranges, azimuths, strict=True)):
         body = {
             "sensor": "radar",
@@ -101,9 +122,10 @@ def _service_run(
         answer = client.post(f"/v1/sessions/{sid}/detections", json=body, headers=headers)
         assert answer.status_code == 200, answer.text
         tracks = answer.json()["tracks"]
+        every_track.append([np.asarray(track["state"]) for track in tracks])
         assert len(tracks) <= 1, tracks
         estimates.append(tracks[0] if tracks else None)
-    return estimates
+    return estimates, every_track
 
 
 def _stonesoup_run(
@@ -149,13 +171,14 @@ def test_polar_radar_matches_stonesoup_ekf_and_ukf_and_is_consistent(
 ) -> None:
     rng = np.random.default_rng(17)
     squared: dict[str, list[float]] = {"service": [], "ekf": [], "ukf": []}
+    gospa: dict[str, list[float]] = {"service": [], "ekf": [], "ukf": []}
     nees: list[float] = []
     peer_nees: dict[str, list[float]] = {"ekf": [], "ukf": []}
     with httpx.Client(base_url=live_server.url, timeout=30) as client:
         for _ in range(RUNS):
             truth = _truth(rng)
             ranges, azimuths = _measure(truth, rng)
-            ours = _service_run(client, ranges, azimuths)
+            ours, every_track = _service_run(client, ranges, azimuths)
             start = next(scan for scan, estimate in enumerate(ours) if estimate is not None)
             assert start <= 8, start
             after = ours[start + 1 :]
@@ -164,6 +187,8 @@ def test_polar_radar_matches_stonesoup_ekf_and_ukf_and_is_consistent(
             covariances = [np.asarray(e["covariance"]) for e in after if e is not None]
             errors = states - truth[start + 1 :]
             squared["service"] += (errors[:, 0] ** 2 + errors[:, 2] ** 2).tolist()
+            scans = range(start + 1, SCANS)
+            gospa["service"] += _gospa(every_track[start + 1 :], list(truth[start + 1 :]), scans)
             nees += [
                 float(error @ np.linalg.solve(covariance, error))
                 for error, covariance in zip(errors, covariances, strict=True)
@@ -174,6 +199,9 @@ def test_polar_radar_matches_stonesoup_ekf_and_ukf_and_is_consistent(
                 estimated, spread = _stonesoup_run(kind, start, prior, ranges, azimuths)
                 theirs = estimated - truth[start + 1 :]
                 squared[name] += (theirs[:, 0] ** 2 + theirs[:, 2] ** 2).tolist()
+                gospa[name] += _gospa(
+                    [[state] for state in estimated], list(truth[start + 1 :]), scans
+                )
                 peer_nees[name] += [
                     float(error @ np.linalg.solve(covariance, error))
                     for error, covariance in zip(theirs, spread, strict=True)
@@ -181,7 +209,10 @@ def test_polar_radar_matches_stonesoup_ekf_and_ukf_and_is_consistent(
     rmse = {name: math.sqrt(float(np.mean(values))) for name, values in squared.items()}
     print(f"position RMSE (m): {rmse}")  # the report's numbers (pytest -s)
     print(f"Stone Soup mean NEES: { {n: float(np.mean(v)) for n, v in peer_nees.items()} }")
+    mean_gospa = {name: float(np.mean(values)) for name, values in gospa.items()}
+    print(f"mean GOSPA (m): {mean_gospa}")
     assert rmse["service"] <= 1.05 * min(rmse["ekf"], rmse["ukf"]), rmse
+    assert mean_gospa["service"] <= 1.05 * min(mean_gospa["ekf"], mean_gospa["ukf"]), mean_gospa
     samples = len(nees)
     low, high = chi2.ppf([0.025, 0.975], 4 * samples) / samples
     mean_nees = float(np.mean(nees))

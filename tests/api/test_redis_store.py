@@ -8,7 +8,7 @@ from datetime import UTC, datetime
 
 import pytest
 
-from app.errors import SessionNotFound
+from app.http.errors import SessionNotFound
 from app.stores import RedisStore, SequenceConflict, SessionExists, SessionRecord, Snapshot
 from tests.api.redis_support import REDIS_URL, redis_prefix, redis_store, remaining_keys
 

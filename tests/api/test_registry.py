@@ -8,9 +8,9 @@ from datetime import UTC, datetime, timedelta
 from typing import Any
 
 from api_schemas.reports import TrackReport
-from app.hub import SESSION_ENDED, Hub
 from app.metrics import ServiceMetrics
-from app.sessions import SessionRegistry
+from app.sessions.hub import SESSION_ENDED, Hub
+from app.sessions.registry import SessionRegistry
 from app.stores import MemoryStore, SessionRecord
 from app.stores.base import StoreUsage
 from tests.api.conftest import make_settings

@@ -12,9 +12,9 @@ from typing import Any
 import pytest
 
 from api_schemas.reports import TrackReport
-from app.errors import SessionLeased
+from app.http.errors import SessionLeased
 from app.metrics import ServiceMetrics
-from app.sessions import SessionRegistry
+from app.sessions.registry import SessionRegistry
 from app.stores import RedisStore, SessionRecord
 from tests.api.conftest import make_settings
 from tests.api.redis_support import REDIS_URL, redis_prefix

@@ -17,7 +17,7 @@ from pathlib import Path
 import httpx
 import pytest
 
-from app.errors import SessionNotFound, StoreUnavailable
+from app.http.errors import SessionNotFound, StoreUnavailable
 from app.stores import MemoryStore, Snapshot, SqliteStore, Store
 from app.stores.base import history
 from tests.api.conftest import make_settings, serving

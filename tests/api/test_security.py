@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 from fastapi.testclient import TestClient
 
+from app.http.security import hash_token, is_admin_token, issue_token, token_matches
 from app.main import create_app
-from app.security import hash_token, is_admin_token, issue_token, token_matches
 from tests.api.conftest import ADMIN_TOKEN, make_settings
 from tests.api.examples import SESSION_CONFIG
 
@@ -44,7 +44,7 @@ def test_token_check_uses_constant_time_compare(monkeypatch: pytest.MonkeyPatch)
         calls.append((left, right))
         return real(left, right)
 
-    monkeypatch.setattr("app.security.hmac.compare_digest", spy)
+    monkeypatch.setattr("app.http.security.hmac.compare_digest", spy)
     token = issue_token()
     assert token_matches(token, hash_token(token))
     assert calls and all(token.encode() not in side for pair in calls for side in pair)

@@ -13,6 +13,7 @@ from typing import Any
 
 import httpx
 import numpy as np
+import pymap3d
 import pytest
 
 from .conftest import LiveServer
@@ -244,7 +245,8 @@ def test_geodetic_reads_need_an_origin(live_server: LiveServer) -> None:
 
 
 def test_one_track_read_in_geodetic(live_server: LiveServer) -> None:
-    """``GET …/tracks/{tid}?frame=geodetic``: the track's WGS84 position is PROJ's."""
+    """``GET …/tracks/{tid}?frame=geodetic``: the track's WGS84 position is PROJ's, and so
+    is each history point's (pymap3d's too)."""
     config = {"state": LAYOUT_2D, "origin": ORIGIN, "sensors": [{"id": "s"}]}
     state = [12_000.0, 5.0, -7_000.0, 0.0]
     with httpx.Client(base_url=live_server.url) as client:
@@ -270,8 +272,33 @@ def test_one_track_read_in_geodetic(live_server: LiveServer) -> None:
         geodetic = track["geodetic"]
         np.testing.assert_allclose([geodetic["lat"], geodetic["lon"]], [lat, lon], atol=1e-8)
         assert math.isclose(geodetic["alt"], alt, abs_tol=1e-3)  # ≈ 100 m + 15 m of the curve
+        for time in (2.0, 3.0):
+            moved = [state[0] + 5.0 * (time - 1.0), 5.0, state[2], 0.0]
+            report = {
+                "sensor": "s",
+                "time": time,
+                "tracks": [{"id": "t", "state": moved, "covariance": COVARIANCE_4}],
+            }
+            answer = client.post(f"/v1/sessions/{sid}/tracks", json=report, headers=headers)
+            assert answer.status_code == 200, answer.text
+        detail = client.get(
+            f"/v1/sessions/{sid}/tracks/{fused['id']}?frame=geodetic", headers=headers
+        )
+        history = detail.json()["history"]
+        assert len(history) == 3, history
+        for point in history:
+            east, north = point["state"][0], point["state"][2]
+            lat, lon, alt = oracle.transform(east, north, 0.0, direction="INVERSE")
+            other = pymap3d.enu2geodetic(
+                east, north, 0.0, ORIGIN["lat"], ORIGIN["lon"], ORIGIN["alt"]
+            )
+            geodetic = point["geodetic"]
+            np.testing.assert_allclose([geodetic["lat"], geodetic["lon"]], [lat, lon], atol=1e-8)
+            np.testing.assert_allclose([geodetic["lat"], geodetic["lon"]], other[:2], atol=1e-8)
+            assert math.isclose(geodetic["alt"], alt, abs_tol=1e-3)
         plain = client.get(f"/v1/sessions/{sid}/tracks/{fused['id']}", headers=headers).json()
         assert plain["track"].get("geodetic") is None
+        assert all(point.get("geodetic") is None for point in plain["history"])
 
 
 def test_polar_detections_are_converted_at_the_geodetic_site(live_server: LiveServer) -> None:

@@ -12,8 +12,14 @@ import pytest
 from api_schemas.config import SessionConfig
 from api_schemas.reports import TrackReport
 from api_schemas.results import StepResult as WireStepResult
-from app.responses import dumps
-from app.translate import class_frame, core_track_report, fusion_config, step_json, step_plain
+from app.http.responses import dumps
+from app.sessions.translate import (
+    class_frame,
+    core_track_report,
+    fusion_config,
+    step_json,
+    step_plain,
+)
 from core.fusion.engine import SessionEngine
 from core.fusion.reports import StepResult
 from tests.api.scenario import reports, session_config

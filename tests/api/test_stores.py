@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.errors import SessionNotFound
+from app.http.errors import SessionNotFound
 from app.stores import (
     MemoryStore,
     RedisStore,

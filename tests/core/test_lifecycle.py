@@ -25,7 +25,11 @@ from core.lifecycle import (
 
 def test_thresholds_follow_wald() -> None:
     # α = 0.01, β = 0.1: confirm at ln(0.9 / 0.01) = ln 90, delete at ln(0.1 / 0.99).
-    score = LifeCycleConfig(false_confirmation=0.01, true_deletion=0.1).score_model(0.9)
+    score = (
+        LifeCycleConfig(false_confirmation=0.01, true_deletion=0.1)
+        .for_dimension(2)
+        .score_model(0.9)
+    )
     assert score.confirm_threshold == pytest.approx(4.499809670330265)
     assert score.delete_threshold == pytest.approx(-2.2925347571405443)
     assert score.confirm_threshold > 0.0 > score.delete_threshold

@@ -45,7 +45,7 @@ T, N, C, P, X = (
     TrackStatus.TERMINATED,
 )
 R_ = StatusReason
-CONFIG = LifeCycleConfig(true_deletion=1e-3, min_points=3)
+CONFIG = LifeCycleConfig(true_deletion=1e-3, min_points=3).for_dimension(2)
 CONFIRM = math.log(0.999 / 0.001)
 DELETE = math.log(0.001 / 0.999)
 MISS = math.log(0.1)
@@ -317,7 +317,7 @@ def test_with_phantoms_off_a_hidden_track_is_not_a_phantom() -> None:
 
 def test_termination_probability_zero_turns_gate_emptiness_off() -> None:
     (case,) = [c for c in CASES if c.name == "gate emptiness"]
-    off = LifeCycleConfig(true_deletion=1e-3, termination_probability=0.0)
+    off = LifeCycleConfig(true_deletion=1e-3, termination_probability=0.0).for_dimension(2)
     after, _ = advance(off, state_of([case]), evidence_of([case]))
     assert (after.statuses(), after.reasons()) == ([C], [R_.MISSED])
     assert after.empty_gate[0] == pytest.approx(0.6 * factor(LARGE_GATE))

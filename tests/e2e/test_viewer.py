@@ -283,6 +283,53 @@ def test_the_viewer_labels_a_geodetic_session_in_degrees(
     assert not log.failures, log.failures
 
 
+def test_the_viewer_draws_a_field_of_view_given_relative_to_a_geodetic_site(
+    live_server: LiveServer, browser_page: BrowserPage
+) -> None:
+    """A radar's sector in its own frame (site lat/lon, heading 30°) is drawn where PROJ puts
+    the site, turned by the heading: apex, and the outer corners at ±40° of its axis."""
+    page, log = browser_page.page, browser_page.log
+    origin = {"lat": 48.85, "lon": 2.35, "alt": 100.0}
+    site = {"lat": 48.80, "lon": 2.30, "alt": 120.0, "heading_deg": 30.0}
+    fov = {
+        "kind": "sector",
+        "frame": "sensor",
+        "heading_deg": 90.0,
+        "half_angle_deg": 40.0,
+        "range": [500.0, 20_000.0],
+    }
+    config = {
+        "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+        "origin": origin,
+        "sensors": [{"id": "radar", "site": site, "fov": fov}],
+    }
+    with httpx.Client(base_url=live_server.url, timeout=30) as client:
+        created = client.post("/v1/sessions", json=config)
+        assert created.status_code == 201, created.text
+        sid, token = created.json()["id"], created.json()["token"]
+        page.goto(f"{live_server.url}/#session={sid}&token={token}")
+        page.wait_for_function("() => window.__viewer.state().fields.length === 1")
+        (field,) = viewer_state(page)["fields"]
+    oracle = proj_enu((origin["lat"], origin["lon"], origin["alt"]))
+    east, north, _ = oracle.transform(site["lat"], site["lon"], site["alt"])
+    assert field["apex"] == pytest.approx([east, north], abs=1e-3)
+    heading = math.radians(site["heading_deg"])
+    for corner, sensor_angle in ((field["outline"][0], 50.0), (field["outline"][64], 130.0)):
+        # the sensor-frame point at 20 km, `sensor_angle` ccw from its x axis, in the session
+        x, y = (20_000.0 * f(math.radians(sensor_angle)) for f in (math.cos, math.sin))
+        expected = [
+            east + math.cos(heading) * x + math.sin(heading) * y,
+            north - math.sin(heading) * x + math.cos(heading) * y,
+        ]
+        assert corner == pytest.approx(expected, abs=1e-3)
+    # the sector's axis is the radar's heading: 30° clockwise from north
+    middle = field["outline"][32]
+    bearing = math.degrees(math.atan2(middle[0] - east, middle[1] - north))
+    assert bearing == pytest.approx(site["heading_deg"], abs=1e-6)
+    assert not log.console_errors, log.console_errors
+    assert not log.failures, log.failures
+
+
 def test_the_viewer_login_subscribes_with_the_bearer_subprotocol(live_server: LiveServer) -> None:
     """The page's WebSocket login, ``["bearer", token]`` as subprotocols, is accepted; a wrong token is not."""
     with httpx.Client(base_url=live_server.url, timeout=30) as client:

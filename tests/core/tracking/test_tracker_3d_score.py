@@ -28,7 +28,7 @@ START = np.array([20_000.0, 1_000.0, 5_000.0])
 
 
 def _tracker(density: float, margin: float | None = 0.0) -> LocalTracker:
-    # the bank of app.translate.local_tracker_config for a session without preset
+    # the bank of app.sessions.translate.local_tracker_config for a session without preset
     bank = ModelBank(
         models=(constant_velocity(1.0, Q_DENSITY, axes=3, noise="continuous"),),
         measurement=LinearMeasurementModel.position(1.0, 6),
@@ -62,21 +62,23 @@ def _own_covariance(scan: int) -> np.ndarray:
 def _expected_scores(scans: int, confirm: float) -> list[float]:
     """The score after each scan from scan 1, by hand: two-point start, then KF hits."""
     p_detect, beta = 0.9, default_density(3)
-    bank_r = SIGMA**2 * np.eye(3)
+    r0, r1 = _own_covariance(0), _own_covariance(1)
     z = [START + VELOCITY * k for k in range(scans)]
-    # two-point start: L0 + the hit of z1 − z0 under 2R + σ_v² ΔT² I ([MTT] §4.3)
-    pair = 2.0 * bank_r + 300.0**2 * np.eye(3)
+    # two-point start: L0 + the hit of z1 − z0 under R0 + R1 + σ_v² ΔT² I ([MTT] §4.3),
+    # each detection with its own covariance
+    pair = r0 + r1 + 300.0**2 * np.eye(3)
     score = math.log(p_detect / beta) + multivariate_normal(np.zeros(3), pair).logpdf(z[1] - z[0])
     scores = [min(score, confirm)]
-    # state [x, ẋ, y, ẏ, z, ż]: position z1 (cov R), velocity difference (2R/ΔT², cross R/ΔT)
+    # state [x, ẋ, y, ẏ, z, ż]: position z1 (cov R1), velocity difference
+    # ((R0 + R1)/ΔT², cross R1/ΔT)
     x = np.zeros(6)
     p = np.zeros((6, 6))
     pos, vel = [0, 2, 4], [1, 3, 5]
     x[pos], x[vel] = z[1], z[1] - z[0]
-    p[np.ix_(pos, pos)] = bank_r
-    p[np.ix_(vel, vel)] = 2.0 * bank_r
-    p[np.ix_(pos, vel)] = bank_r
-    p[np.ix_(vel, pos)] = bank_r
+    p[np.ix_(pos, pos)] = r1
+    p[np.ix_(vel, vel)] = r0 + r1
+    p[np.ix_(pos, vel)] = r1
+    p[np.ix_(vel, pos)] = r1
     f_axis = np.array([[1.0, 1.0], [0.0, 1.0]])
     q_axis = Q_DENSITY * np.array([[1.0 / 3.0, 0.5], [0.5, 1.0]])
     f, q = np.kron(np.eye(3), f_axis), np.kron(np.eye(3), q_axis)

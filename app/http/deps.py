@@ -10,11 +10,11 @@ from fastapi.security.base import SecurityBase
 from fastapi.security.utils import get_authorization_scheme_param
 from starlette.requests import HTTPConnection
 
-from app.errors import Forbidden, SessionNotFound, Unauthorized
-from app.live_session import LiveSession
+from app.http.errors import Forbidden, SessionNotFound, Unauthorized
+from app.http.security import Principal, is_admin_token, token_matches
 from app.metrics import ServiceMetrics
-from app.security import Principal, is_admin_token, token_matches
-from app.sessions import SessionRegistry
+from app.sessions.live import LiveSession
+from app.sessions.registry import SessionRegistry
 from app.settings import Settings
 from app.stores import SessionRecord, Store
 
@@ -138,7 +138,7 @@ LiveSessionDep = Annotated[LiveSession, Depends(live_session)]
 
 async def current_session(sid: SessionId, token: BearerToken, request: Request) -> LiveSession:
     """The authorized session at the store's latest state, for reads (no stale ``seq`` when
-    several instances share the store: :meth:`~app.sessions.SessionRegistry.current`)."""
+    several instances share the store: :meth:`~app.sessions.registry.SessionRegistry.current`)."""
     session = await live_session(sid, token, request)
     return await _registry_of(request).current(session)
 

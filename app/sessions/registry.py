@@ -1,7 +1,7 @@
 """The live sessions: one engine per session behind a lock, logged before acknowledged.
 
 Per session (:class:`LiveSession`): the engine, an ``asyncio.Lock`` that
-applies inputs one at a time in arrival order, and a :class:`~app.hub.Hub`
+applies inputs one at a time in arrival order, and a :class:`~app.sessions.hub.Hub`
 for subscribers. One input (:meth:`SessionRegistry.submit_tracks`):
 
 1. checks that need only the config (limits, sensor, dimensions, labels);
@@ -16,7 +16,7 @@ for subscribers. One input (:meth:`SessionRegistry.submit_tracks`):
    log is compacted to the ``log_retention`` inputs behind that snapshot.
 
 Outages: a store that cannot be reached raises
-:class:`~app.errors.StoreUnavailable` (503 with ``Retry-After``); an input
+:class:`~app.http.errors.StoreUnavailable` (503 with ``Retry-After``); an input
 whose append failed is not acknowledged, and its session is evicted (its
 subscribers are closed with 1013 "store unavailable") and rebuilt from the
 store on its next use, once the store answers again.
@@ -69,7 +69,7 @@ from api_schemas.consistency import detection_report_issues, track_report_issues
 from api_schemas.reports import DetectionReport, TrackReport
 from app.cluster.fanout import ResultFanout, open_fanout
 from app.cluster.lease import SessionLeases, new_owner_id, open_leases
-from app.errors import (
+from app.http.errors import (
     LimitExceeded,
     SessionLeased,
     SessionNotFound,
@@ -77,11 +77,19 @@ from app.errors import (
     StoreUnavailable,
     request_validation_error,
 )
-from app.hub import SESSION_ENDED, SESSION_RELOADED, STORE_UNAVAILABLE, Ending, Subscriber
-from app.live_session import LiveSession, new_session, restore_snapshot
+from app.http.responses import dumps
 from app.metrics import ServiceMetrics
-from app.responses import dumps
-from app.session_log import event_from_entry, log_input
+from app.sessions.hub import SESSION_ENDED, SESSION_RELOADED, STORE_UNAVAILABLE, Ending, Subscriber
+from app.sessions.live import LiveSession, new_session, restore_snapshot
+from app.sessions.log import event_from_entry, log_input
+from app.sessions.translate import (
+    PlainObject,
+    core_detection_report,
+    fusion_config,
+    session_frame_report,
+    step_json,
+    tracks_plain,
+)
 from app.settings import Settings
 from app.stores import (
     LogEntry,
@@ -91,14 +99,6 @@ from app.stores import (
     SessionRecord,
     Snapshot,
     Store,
-)
-from app.translate import (
-    PlainObject,
-    core_detection_report,
-    fusion_config,
-    session_frame_report,
-    step_json,
-    tracks_plain,
 )
 from core.errors import StaleReport as CoreStaleReport
 from core.fusion.config import FusionConfig

@@ -12,9 +12,9 @@ from datetime import datetime
 
 from api_schemas.config import SessionConfig
 from api_schemas.limits import CEILINGS, limits_of
-from app.hub import Hub
+from app.sessions.hub import Hub
+from app.sessions.translate import PlainObject, class_frame, fusion_config
 from app.stores import SessionRecord, Snapshot
-from app.translate import PlainObject, class_frame, fusion_config
 from core.belief import Frame
 from core.fusion.config import FusionConfig
 from core.fusion.engine import SessionEngine

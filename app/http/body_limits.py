@@ -17,7 +17,7 @@ Every limit is a setting (``app/settings.py``) checked before the work it bounds
 - ``ws_messages_per_second`` (1 000): per stream connection (an ``error`` beyond);
 - a page of ``GET …/events``: ``limit`` events (≤ 10 000) and at most 4 MiB;
 - ``max_sessions`` (1 000): checked and taken atomically at session creation (429);
-- ``rate_limit``: per verified token or client address (:mod:`app.rate_limit`).
+- ``rate_limit``: per verified token or client address (:mod:`app.http.rate_limit`).
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ import anyio
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from api_schemas.limits import ACTIVE_LIMITS, WireLimits
-from app.errors import problem_response
+from app.http.errors import problem_response
 
 BODY_LIMIT = "max_body_bytes"
 READ_TIMEOUT = "body_read_timeout"

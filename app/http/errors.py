@@ -30,7 +30,7 @@ from api_schemas.issues import FieldIssue
 from api_schemas.keys import allowed_keys
 from api_schemas.limits import LIMIT_EXCEEDED
 from api_schemas.problem import FieldError, Problem
-from app.requests import body_model
+from app.http.requests import body_model
 from core.errors import InvalidInput
 
 PROBLEM_MEDIA_TYPE = "application/problem+json"
@@ -530,7 +530,7 @@ PROBLEM_STATUSES: dict[int, str] = {
 def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
     """OpenAPI ``responses`` entries documenting problem+json answers for ``statuses``.
 
-    Every route may answer 429 (the rate limit, :mod:`app.rate_limit`), so it is always listed.
+    Every route may answer 429 (the rate limit, :mod:`app.http.rate_limit`), so it is always listed.
     """
     return {
         status: {"model": Problem, "description": PROBLEM_STATUSES[status]}

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from app.geodesy import LocalFrame
+from app.geo.geodesy import LocalFrame
 
 GEOJSON_MEDIA_TYPE = "application/geo+json"
 

@@ -36,9 +36,15 @@ from api_schemas.config import (
 )
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import DetectionReport, SensorTrack, TrackReport
-from app.errors import request_validation_error
-from app.geodesy import LocalFrame, geodetic_to_session, rotate_covariances, sensor_to_session
-from app.polar import polar_to_cartesian
+from app.geo.geodesy import (
+    LocalFrame,
+    geodetic_to_session,
+    heading_rotation,
+    rotate_covariances,
+    sensor_to_session,
+)
+from app.geo.polar import polar_to_cartesian
+from app.http.errors import request_validation_error
 from core.association import AssociationResult
 from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, TotalConflict
@@ -57,10 +63,11 @@ from core.fusion.reports import DetectionReport as CoreDetectionReport
 from core.fusion.reports import TrackReport as CoreTrackReport
 from core.fusion.state import StateFusion
 from core.geometry import FieldOfView, PolygonView, Sector
-from core.lifecycle import LifeCycleConfig, default_density
+from core.lifecycle import LifeCycleConfig
 from core.tracking.config import DEFAULT_IMM_DISTANCE, ClassificationOptions, LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
 from core.tracking.presets import MIN_MANOEUVRE_DENSITY, preset
+from core.tracking.range_rate import RangeRateModel
 
 PlainObject = dict[str, Any]
 
@@ -76,23 +83,41 @@ def class_frame(classes: Sequence[str]) -> Frame | None:
     return Frame(list(classes)) if classes else None
 
 
-def field_of_view(fov: SectorFieldOfView | PolygonFieldOfView) -> FieldOfView:
-    """A sensor's field of view as core geometry."""
+def field_of_view(
+    fov: SectorFieldOfView | PolygonFieldOfView,
+    site: np.ndarray | None = None,
+    heading_deg: float = 0.0,
+) -> FieldOfView:
+    """A field of view as core geometry in the session frame.
+
+    One given in the sensor's frame (``frame: "sensor"``) is moved to its
+    ``site`` and turned by its heading (the sensor frame of
+    :func:`~app.geo.geodesy.sensor_to_session`): a point ``p`` goes to
+    ``site + H p``, a sector's axis (counter-clockwise from +x) turns by
+    −heading (the heading is clockwise from north).
+    """
+    relative = fov.frame == "sensor"
+    place = np.zeros(2) if site is None or not relative else np.asarray(site[:2], dtype=float)
+    turn = heading_rotation(heading_deg if relative else 0.0, 2)
     if isinstance(fov, SectorFieldOfView):
+        apex = place + turn @ np.asarray(fov.origin or (0.0, 0.0), dtype=np.float64)
         return Sector(
-            origin=(fov.origin[0], fov.origin[1]),
-            heading_deg=fov.heading_deg,
+            origin=(float(apex[0]), float(apex[1])),
+            heading_deg=fov.heading_deg - (heading_deg if relative else 0.0),
             half_angle_deg=fov.half_angle_deg,
             range_min=fov.range[0],
             range_max=fov.range[1],
         )
-    return PolygonView(vertices=tuple((vertex[0], vertex[1]) for vertex in fov.vertices))
+    vertices = place + np.asarray(fov.vertices, dtype=np.float64)[:, :2] @ turn.T
+    return PolygonView(vertices=tuple((float(x), float(y)) for x, y in vertices.tolist()))
 
 
 def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> SensorSpec:
-    """One sensor; a field of view the core refuses is a validation error at ``sensors/i/fov``."""
+    """One sensor; a field of view the core refuses is a validation error at ``sensors/i/fov``.
+    A field of view in the sensor's frame is placed at its site and heading here, once."""
     try:
-        fov = None if sensor.fov is None else field_of_view(sensor.fov)
+        site, heading = sensor_site(config, sensor)
+        fov = None if sensor.fov is None else field_of_view(sensor.fov, site, heading)
     except InvalidInput as error:
         raise request_validation_error(
             [FieldIssue(("sensors", index, "fov"), str(error), None)]
@@ -133,7 +158,6 @@ def local_tracker_config(
     options = tracking.association.options
     thresholds = tracking.thresholds
     initiation = tracking.initiation
-    default = default_density(axes)
     return LocalTrackerConfig(
         preset=tracking.preset or "aircraft",
         time_interval=interval,
@@ -145,9 +169,7 @@ def local_tracker_config(
         imm_distance=options.imm_distance or DEFAULT_IMM_DISTANCE,
         p_detect=sensor.p_detect,
         life_cycle=life_cycle_config(
-            thresholds,
-            tracking.birth_density or default,
-            clutter_density=sensor.clutter_density or default,
+            thresholds, tracking.birth_density, clutter_density=sensor.clutter_density
         ),
         initiation=initiation.kind,
         max_speed=(
@@ -156,10 +178,23 @@ def local_tracker_config(
             else LocalTrackerConfig.max_speed
         ),
         initial_velocity_std=initiation.velocity_std,
+        range_rate=range_rate_model(config, sensor, axes),
         fields_of_view={sensor.id: fov},
         classification=ClassificationOptions() if config.classes else None,
         id_prefix=f"{sensor.id}:",
     )
+
+
+def range_rate_model(
+    config: SessionConfig, sensor: SensorConfig, axes: int
+) -> RangeRateModel | None:
+    """A polar sensor's range-rate model (its site, ``sigma_range_rate``), or None without σ:
+    the detections' ``range_rate`` then stays unused."""
+    noise = sensor.measurement
+    if noise is None or noise.kind != "polar" or noise.sigma_range_rate is None:
+        return None
+    site, _ = sensor_site(config, sensor)
+    return RangeRateModel(tuple(float(x) for x in site[:axes]), noise.sigma_range_rate)
 
 
 POLAR_REFERENCE_RANGE = 50_000.0
@@ -171,12 +206,15 @@ def polar_reference_noise(
 ) -> tuple[tuple[float, ...], ...]:
     """The R a polar sensor's tracker uses where a detection's own covariance is not passed.
 
-    Every polar detection is updated with its own converted covariance
-    (:mod:`app.polar`); the tracker still uses the bank's R to start tracks
-    (two-point velocity variance, seed radius). That R is the largest converted
-    noise over the sensor's coverage, isotropic: ``max(σ_ρ², (ρ_max σ_a)²)``
-    per axis, ``ρ_max`` the sector's far range or :data:`POLAR_REFERENCE_RANGE`,
-    so new tracks start no more confident than their detections.
+    Every polar detection is gated, scored, updated and starts its tracks
+    with its own converted covariance (:mod:`app.geo.polar`,
+    :mod:`core.tracking.initiator`); the bank's R is left only where a
+    track has no detection: the gate volume of a coasting track and the
+    zero-step prediction of a second scan at the same time. That R is the
+    largest converted noise over the sensor's coverage, isotropic:
+    ``max(σ_ρ², (ρ_max σ_a)²)`` per axis, ``ρ_max`` the sector's far range or
+    :data:`POLAR_REFERENCE_RANGE`, so a coasting track's gate is never
+    smaller than its detections'.
     """
     far = fov.range_max if isinstance(fov, Sector) else POLAR_REFERENCE_RANGE
     sigma_range, sigma_azimuth_deg = noise.polar_sigmas
@@ -191,14 +229,15 @@ def polar_reference_noise(
 
 def life_cycle_config(
     thresholds: TrackThresholds,
-    birth_density: float,
-    clutter_density: float = LifeCycleConfig.false_target_density,
+    birth_density: float | None,
+    clutter_density: float | None = None,
 ) -> LifeCycleConfig:
     """The life cycle of both layers from the wire thresholds and densities.
 
     A local tracker gets its sensor's ``clutter_density``; the fused layer,
-    whose inputs are tracks and not detections, the default of its dimension
-    (:func:`~core.lifecycle.default_density`, as are the wire's ``null``).
+    whose inputs are tracks and not detections, the default of its dimension.
+    A ``null`` density stays None: the core config fills in
+    :func:`~core.lifecycle.default_density` of its dimension (one source).
     """
     return LifeCycleConfig(
         false_confirmation=thresholds.false_confirmation,
@@ -266,11 +305,7 @@ def fusion_config(config: SessionConfig, extra_sensors: Iterable[str] = ()) -> F
         association_options=method_options(association.options),
         distance=association.options.distance or "sum",
         state_fusion=StateFusion(config.fusion.state),
-        management=life_cycle_config(
-            thresholds,
-            config.tracking.birth_density or default_density(len(config.state.position)),
-            clutter_density=default_density(len(config.state.position)),
-        ),
+        management=life_cycle_config(thresholds, config.tracking.birth_density),
     )
 
 
@@ -340,7 +375,7 @@ def session_frame_report(report: TrackReport, config: SessionConfig) -> CoreTrac
 
     ``"sensor"``: turned by the sensor's heading and moved to its site;
     ``"geodetic"``: lat/lon/alt to session ENU, velocities and covariance
-    turned between the tangent planes (:mod:`app.geodesy`). States and
+    turned between the tangent planes (:mod:`app.geo.geodesy`). States and
     covariances of the whole report are converted in one vectorised pass.
     """
     core = core_track_report(report, class_frame(config.classes))
@@ -384,7 +419,7 @@ def polar_detection_report(
 
     Azimuth and elevation are measured in the site's own ENU axes: at a
     geodetic site the converted offsets and covariances are turned into the
-    session's axes (``R_origin R_siteᵀ``, exact: :mod:`app.geodesy`); the
+    session's axes (``R_origin R_siteᵀ``, exact: :mod:`app.geo.geodesy`); the
     tilt between the two planes is 0.009° per km from the origin.
     """
     noise = sensor.measurement
@@ -410,7 +445,15 @@ def polar_detection_report(
     if turn is not None:
         offsets = offsets @ turn.T
         covariances = rotate_covariances(np.broadcast_to(turn, covariances.shape), covariances)
-    return CoreDetectionReport(report.sensor, report.time, offsets + site[:dim], covariances)
+    range_rates = None
+    if noise.sigma_range_rate is not None and any(d.range_rate is not None for d in detections):
+        range_rates = np.array(
+            [math.nan if d.range_rate is None else d.range_rate for d in detections],
+            dtype=np.float64,
+        )
+    return CoreDetectionReport(
+        report.sensor, report.time, offsets + site[:dim], covariances, range_rates
+    )
 
 
 # ------------------------------------------------------------------ outputs

@@ -40,8 +40,8 @@ from starlette.responses import Response
 from starlette.types import ASGIApp, Receive, Scope, Send
 from starlette.websockets import WebSocket
 
-from app.errors import problem_response
-from app.security import hash_token
+from app.http.errors import problem_response
+from app.http.security import hash_token
 
 RATE_LIMIT = "rate_limit"
 UNLIMITED = frozenset({"", "none", "off", "0"})

@@ -1,0 +1,1 @@
+"""The HTTP and WebSocket edge: dependencies, problems, request limits, security, middleware."""

@@ -1,0 +1,1 @@
+"""Live sessions: the registry, one session's engine and subscribers, its log, the translation."""
