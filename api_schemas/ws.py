@@ -7,7 +7,7 @@ Every message is a JSON object with a required ``type`` tag. The client sends
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import Field, StringConstraints, TypeAdapter
 
@@ -25,12 +25,25 @@ class TracksMessage(TrackReport):
     type: Literal["tracks"]
     ref: ClientRef | None = None
 
+    def report(self) -> TrackReport:
+        """The track list alone, every field of it (``frame`` too), without ``type`` and ``ref``."""
+        return TrackReport.model_construct(**_fields_of(self, TrackReport))
+
 
 class DetectionsMessage(DetectionReport):
     """Client → server: a detection batch."""
 
     type: Literal["detections"]
     ref: ClientRef | None = None
+
+    def report(self) -> DetectionReport:
+        """The detection batch alone, without ``type`` and ``ref``."""
+        return DetectionReport.model_construct(**_fields_of(self, DetectionReport))
+
+
+def _fields_of(message: WireModel, report: type[WireModel]) -> dict[str, Any]:
+    """The values of ``report``'s fields in ``message`` (validated already: not again)."""
+    return {name: getattr(message, name) for name in report.model_fields}
 
 
 class ResultMessage(WireModel):

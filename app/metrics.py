@@ -2,7 +2,7 @@
 
 ``requests`` and ``latency`` are labelled by the route *template*
 (``/v1/sessions/{sid}``), never by the raw path, so cardinality stays bounded.
-``sessions``, ``inputs`` and ``fusion_step`` are fed by the session code.
+``sessions``, ``inputs``, ``fusion_step`` and ``engine_cpu`` are fed by the session code.
 """
 
 from __future__ import annotations
@@ -49,6 +49,7 @@ class ServiceMetrics:
     sessions: Gauge
     inputs: Counter
     fusion_step: Histogram
+    engine_cpu: Histogram
     store_bytes: Gauge
     store_inputs: Gauge
     rebuilds: Counter
@@ -93,6 +94,15 @@ class ServiceMetrics:
             fusion_step=Histogram(
                 "credal_fusion_step_seconds",
                 "Time to apply one input to a session engine.",
+                ("kind",),
+                buckets=LATENCY_BUCKETS,
+                registry=registry,
+            ),
+            engine_cpu=Histogram(
+                "credal_fusion_engine_cpu_seconds",
+                "CPU time of the engine step alone (its thread's), a part of the apply step "
+                "timed by credal_fusion_step_seconds: the rest of that is translating, "
+                "serialising the result and waiting for a CPU.",
                 ("kind",),
                 buckets=LATENCY_BUCKETS,
                 registry=registry,

@@ -8,29 +8,14 @@ No timing.
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-from types import ModuleType
-
 import pytest
 
-BENCH = Path(__file__).resolve().parents[1] / "bench"
-
-
-def load_peers() -> ModuleType:
-    sys.path.insert(0, str(BENCH))
-    spec = importlib.util.spec_from_file_location("peers_bench", BENCH / "peers.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
+from tests.bench_scripts import load_bench
 
 
 @pytest.fixture(scope="module")
 def scores() -> tuple[object, object, object, float]:
-    peers = load_peers()
+    peers = load_bench("peers")
     scene = peers.simulated_scene("small", 10, 30, seed=1)  # the bench's ~10 scene, 30 scans
     stone_soup = peers.score(scene, peers.stone_soup_run(scene, "ss-gnn"), with_siap=False)
     ours = peers.score(scene, peers.local_run(scene), with_siap=False)

@@ -44,7 +44,6 @@ from starlette.websockets import WebSocketDisconnect
 
 from api_schemas.issues import FieldIssue
 from api_schemas.problem import Problem
-from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.ws import DetectionsMessage, TracksMessage, client_message_adapter
 from app.geo.geodesy import LocalFrame
 from app.geo.geojson import with_geodetic
@@ -246,15 +245,9 @@ async def _answer(
         if session.closed:  # evicted (store down, or a failed step): the registry reloads it
             session = await registry.get(session.id)
         if isinstance(message, DetectionsMessage):
-            detections = DetectionReport.model_construct(
-                sensor=message.sensor, time=message.time, detections=message.detections
-            )
-            result = await registry.submit_detections(session, detections)
+            result = await registry.submit_detections(session, message.report())
         else:
-            report = TrackReport.model_construct(
-                sensor=message.sensor, time=message.time, tracks=message.tracks
-            )
-            result = await registry.submit_tracks(session, report)
+            result = await registry.submit_tracks(session, message.report())
     except Exception as error:  # every failure is answered; the connection stays open
         return _error(problem_for(error, path), ref)
     if frame is not None:

@@ -63,6 +63,7 @@ from datetime import UTC, datetime, timedelta
 from typing import Any, TypeVar
 
 import anyio
+from prometheus_client import Counter, Histogram
 
 from api_schemas.config import SessionConfig
 from api_schemas.consistency import detection_report_issues, track_report_issues
@@ -117,11 +118,22 @@ T = TypeVar("T")
 
 @dataclass
 class Step:
-    """An applied (not yet logged) input: the engine that holds it and its result as JSON text."""
+    """An applied (not yet logged) input: the engine that holds it, its result as JSON text,
+    and the CPU time of the engine step alone (the thread's)."""
 
     engine: SessionEngine
     fusion: FusionConfig
     result: str
+    engine_cpu_s: float
+
+
+@dataclass(frozen=True)
+class InputSeries:
+    """The metrics of one kind of input (``tracks``, ``detections``)."""
+
+    inputs: Counter
+    fusion_step: Histogram
+    engine_cpu: Histogram
 
 
 class SessionRegistry:
@@ -153,6 +165,7 @@ class SessionRegistry:
         """Token hash → id of the live sessions in memory (the rate limit's verified identities)."""
         self.creating = threading.Lock()
         """Held from counting the sessions to storing a new one: the limit holds under races."""
+        self._input_series: dict[str, InputSeries] = {}
 
     def __len__(self) -> int:
         return len(self._sessions)
@@ -388,6 +401,18 @@ class SessionRegistry:
         await subscribed
 
     # ------------------------------------------------------------ inputs
+    def _series(self, kind: str) -> InputSeries:
+        """The metrics of inputs of ``kind`` (``labels()`` once per kind, not per input)."""
+        series = self._input_series.get(kind)
+        if series is None:
+            metrics = self.metrics
+            series = self._input_series[kind] = InputSeries(
+                inputs=metrics.inputs.labels(kind),
+                fusion_step=metrics.fusion_step.labels(kind),
+                engine_cpu=metrics.engine_cpu.labels(kind),
+            )
+        return series
+
     def check_tracks(self, session: LiveSession, report: TrackReport) -> None:
         """Checks that need only the config: item limit, sensor, dimensions, class labels."""
         issues = track_report_issues(report, session.config)
@@ -422,15 +447,18 @@ class SessionRegistry:
         engine, fusion = self._engine_for(session, report.sensor)
         try:
             if isinstance(report, TrackReport):
-                step = engine.apply(session_frame_report(report, session.config), explain=explain)
+                track_report = session_frame_report(report, session.config)
+                started = time.thread_time()
+                step = engine.apply(track_report, explain=explain)
             else:
-                step = engine.apply_detections(
-                    core_detection_report(report, session.config), explain=explain
-                )
+                detection_report = core_detection_report(report, session.config)
+                started = time.thread_time()
+                step = engine.apply_detections(detection_report, explain=explain)
+            engine_cpu_s = time.thread_time() - started
         except CoreStaleReport as stale:
             raise StaleReport(stale.sensor, stale.time, stale.last_time) from None
         result = step_json(step, session.seq + 1)  # serialised once, here
-        return Step(engine=engine, fusion=fusion, result=result)
+        return Step(engine=engine, fusion=fusion, result=result, engine_cpu_s=engine_cpu_s)
 
     async def submit_tracks(
         self, session: LiveSession, report: TrackReport, *, explain: bool = False
@@ -490,12 +518,11 @@ class SessionRegistry:
                 # overtaken by another instance: rebuild from the store, apply once more
                 await self._refresh(session)
                 step = await self._apply_and_log(session, report, items, kind, explain=explain)
-            self.metrics.inputs.labels(kind).inc()
-            message = result_message(step.result)
+            self._series(kind).inputs.inc()
             if self.shared:
-                await self._publish(session, message)
+                await self._publish(session, result_message(step.result))
             elif len(session.hub):
-                session.hub.publish(message)
+                session.hub.publish(result_message(step.result))
             session.since_snapshot += 1
             if session.since_snapshot >= self.settings.snapshot_every:
                 await self._snapshot(session)
@@ -526,7 +553,9 @@ class SessionRegistry:
                 self.metrics.rebuilds.labels("refused_after_change").inc()
                 self.discard(session.id, SESSION_RELOADED)
             raise
-        self.metrics.fusion_step.labels(kind).observe(time.perf_counter() - started)
+        series = self._series(kind)
+        series.fusion_step.observe(time.perf_counter() - started)
+        series.engine_cpu.observe(step.engine_cpu_s)
         received_at = datetime.now(UTC)
         seq = session.seq + 1
         try:

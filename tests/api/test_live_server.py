@@ -88,3 +88,27 @@ def test_metrics_count_requests_by_route_template(live_server: LiveServer) -> No
     )
     for name in ("credal_inputs_total", "credal_fusion_step_seconds"):
         assert f"# TYPE {name.removesuffix('_total')}" in text
+
+
+def _sample(text: str, series: str) -> float:
+    """The value of one exposed series (its full name with labels)."""
+    (line,) = [line for line in text.splitlines() if line.startswith(series + " ")]
+    return float(line.rsplit(" ", 1)[1])
+
+
+def test_engine_cpu_is_counted_per_applied_input(live_server: LiveServer) -> None:
+    """Each applied input adds one engine-step CPU sample beside its apply step; a refused
+    (stale) input adds none, to either."""
+    with httpx.Client(base_url=live_server.url) as client:
+        created = client.post("/v1/sessions", json=SESSION_CONFIG).json()
+        headers = {"Authorization": f"Bearer {created['token']}"}
+        path = f"/v1/sessions/{created['id']}/tracks"
+        for time in (12.5, 13.5, 14.5):
+            answer = client.post(path, json=TRACK_REPORT | {"time": time}, headers=headers)
+            assert answer.status_code == 200, answer.text
+        assert client.post(path, json=TRACK_REPORT, headers=headers).status_code == 409
+        text = client.get("/metrics").text
+    assert "# TYPE credal_fusion_engine_cpu_seconds histogram" in text
+    for name in ("credal_fusion_engine_cpu_seconds", "credal_fusion_step_seconds"):
+        assert _sample(text, f'{name}_count{{kind="tracks"}}') == 3.0
+        assert _sample(text, f'{name}_sum{{kind="tracks"}}') > 0.0

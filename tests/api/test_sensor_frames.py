@@ -8,6 +8,7 @@ range-azimuth).
 
 from __future__ import annotations
 
+import json
 import math
 from typing import Any
 
@@ -15,6 +16,7 @@ import httpx
 import numpy as np
 import pymap3d
 import pytest
+from websockets.sync.client import connect
 
 from .conftest import LiveServer
 from .proj_oracle import proj_enu
@@ -340,3 +342,38 @@ def test_polar_detections_are_converted_at_the_geodetic_site(live_server: LiveSe
         state = np.asarray(tracks[0]["state"])
         assert np.linalg.norm(state[[0, 2]] - truth) < 60.0
         assert abs(state[1] - 50.0) < 15.0 and abs(state[3]) < 15.0
+
+
+def test_stream_messages_keep_their_frame(live_server: LiveServer) -> None:
+    """On the ``stream`` channel too, a track 300 m ahead of a sensor at (1000, 2000) heading
+    90° (east) is at (1300, 2000); the event log keeps the message's ``frame``."""
+    config = {
+        "state": LAYOUT_3D,
+        "sensors": [
+            {"id": "own", "site": {"position": [1000.0, 2000.0, 0.0], "heading_deg": 90.0}}
+        ],
+    }
+    message = {
+        "type": "tracks",
+        "ref": "ahead",
+        "sensor": "own",
+        "time": 1.0,
+        "frame": "sensor",
+        "tracks": [
+            {"id": "t", "state": [0.0, 0.0, 300.0, 10.0, 50.0, 0.0], "covariance": COVARIANCE_6}
+        ],
+    }
+    with httpx.Client(base_url=live_server.url) as client:
+        sid, headers = _session(client, config)
+        stream_url = live_server.url.replace("http://", "ws://") + f"/v1/sessions/{sid}/stream"
+        with connect(stream_url, additional_headers=headers, open_timeout=10) as stream:
+            assert json.loads(stream.recv(timeout=10))["type"] == "ack"
+            stream.send(json.dumps(message))
+            answer = json.loads(stream.recv(timeout=10))
+        assert answer["type"] == "result" and answer["ref"] == "ahead", answer
+        (track,) = answer["result"]["tracks"]
+        np.testing.assert_allclose(
+            track["state"], [1300.0, 10.0, 2000.0, 0.0, 50.0, 0.0], atol=1e-9
+        )
+        (event,) = client.get(f"/v1/sessions/{sid}/events", headers=headers).json()["events"]
+        assert event["report"]["frame"] == "sensor"
