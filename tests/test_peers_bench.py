@@ -42,7 +42,7 @@ def test_local_tracker_against_stone_soup_gnn(scores) -> None:
 
 
 def test_local_tracker_against_stone_soup_jpda() -> None:
-    peers = load_peers()
+    peers = load_bench("peers")
     scene = peers.simulated_scene("small", 10, 30, seed=1)
     jpda = peers.score(scene, peers.stone_soup_run(scene, "ss-jpda"), with_siap=False)
     ours = peers.score(scene, peers.local_run(scene), with_siap=False)
@@ -64,7 +64,7 @@ def test_the_service_with_one_sensor_is_as_accurate_as_its_local_tracker(scores)
 def test_fused_sensors_are_better_than_each_sensor_alone() -> None:
     """Three Stone Soup detection simulators on one truth (σ 1 / 2 / 1.5 m, P_D 0.9 /
     0.7 / 0.8), through the service: each alone, then all in one session."""
-    peers = load_peers()
+    peers = load_bench("peers")
     sensors = peers.multi_sensor_scenes(10, 30, seed=4)
     first = sensors[0]
     for other in sensors[1:]:  # one truth: the same states at every scan
