@@ -497,6 +497,12 @@ class LocalTracker:
         self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None
     ) -> tuple[IntArray, IntArray, FloatArray]:
         """One association method's pairs of ``sub`` × ``z`` and each track's hit gain."""
+        if len(z) == 0 or len(sub.means) == 0:  # nothing to pair: no method run
+            return (
+                np.zeros(0, dtype=np.int64),
+                np.zeros(0, dtype=np.int64),
+                np.zeros(len(sub.means)),
+            )
         combined_z, combined_s = sub.combined_measurement()
         problem = TrackGatingProblem(
             known=Estimates(combined_z, combined_s, "tracks"),
