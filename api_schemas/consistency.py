@@ -73,7 +73,8 @@ def track_report_issues(report: TrackReport, config: SessionConfig) -> list[Fiel
 
 
 def _frame_issues(report: TrackReport, config: SessionConfig) -> list[FieldIssue]:
-    """A geodetic report needs the origin; a sensor-frame report a configured sensor."""
+    """A geodetic report needs the origin; a sensor-frame report a configured sensor (whose
+    geodetic site has the session's origin: :class:`SessionConfig` refuses one without)."""
     if report.frame == "geodetic":
         if config.origin is None:
             return [
@@ -93,8 +94,6 @@ def _frame_issues(report: TrackReport, config: SessionConfig) -> list[FieldIssue
                     "sensor",
                 )
             ]
-        if sensor.site is not None and sensor.site.geodetic and config.origin is None:
-            return [FieldIssue(("frame",), "the sensor's geodetic site needs an origin", "sensor")]
     return []
 
 

@@ -18,6 +18,15 @@ from pydantic_core import InitErrorDetails, PydanticCustomError
 
 Location = tuple[str | int, ...]
 
+CORE_FIELDS: dict[str, Location] = {
+    "class_mass": ("classification", "mass"),
+    "class_likelihoods": ("classification", "likelihoods"),
+}
+"""Fields of a core track (``core.fusion.reports.ReportedTrack``) and where they are on the wire."""
+DETECTION_ARRAYS = {"measurements": "z", "measurement_covariances": "r", "covariances": "r"}
+"""Arrays of a core detection report (a row per detection) and the wire field of a detection
+that holds the row."""
+
 
 @dataclass(frozen=True)
 class FieldIssue:
@@ -27,6 +36,25 @@ class FieldIssue:
     message: str
     value: object = None
     kind: str = "value_error"
+
+
+def wire_location(loc: Location) -> Location:
+    """Where a value the core refused (``InvalidInput.loc``) is in the request body.
+
+    The core names its own inputs (``("tracks", 3, "class_likelihoods")``,
+    ``("measurements", 2)``); the wire nests class evidence under
+    ``classification`` and gives each detection its ``z`` and ``r``.
+    """
+    if loc and isinstance(loc[0], str) and loc[0] in DETECTION_ARRAYS:
+        if len(loc) == 1:
+            return ("detections",)
+        # a row of the array, then its component (a covariance check adds "covariance")
+        inner = [part for part in loc[2:] if part != "covariance"]
+        return ("detections", loc[1], DETECTION_ARRAYS[loc[0]], *inner)
+    located: list[str | int] = []
+    for part in loc:
+        located.extend(CORE_FIELDS.get(part, (part,)) if isinstance(part, str) else (part,))
+    return tuple(located)
 
 
 def raise_issues(title: str, issues: Sequence[FieldIssue]) -> NoReturn:

@@ -63,10 +63,12 @@ plus `type` and an optional `ref`); the server answers each with exactly one
 `error` that names the problem (field paths in `problem.errors`) and the
 client's `ref`; the connection stays open. That holds for every kind of bad
 message: not JSON, nested too deep, duplicate keys, invalid UTF-8 in a binary
-frame, a message larger than `CREDAL_MAX_BODY_BYTES` (up to 4 times that; a
-larger frame is closed by the protocol with 1009), more than
+frame, a message larger than `CREDAL_MAX_BODY_BYTES`, more than
 `CREDAL_WS_MESSAGES_PER_SECOND` messages in a second (an `error` with status
-429, the message not applied).
+429, the message not applied). The one exception: a message beyond 4 times
+`CREDAL_MAX_BODY_BYTES` is not read to its end; its `error` (422
+`limit-exceeded`, `limit` `max_body_bytes`, `ref` null) is the last message
+before the server closes the connection with 1009.
 
 Backpressure: the server keeps at most 16 answers per `stream` connection;
 when the client does not read them, the server stops reading its messages

@@ -56,8 +56,10 @@ def _serve(args: argparse.Namespace) -> int:
 
 def _check_store(url: str, redis_prefix: str) -> None:
     """Open the store once before serving: a store that cannot be used is one line, not a
-    traceback from the application's start-up."""
-    from app.stores import open_store
+    traceback from the application's start-up. A Redis server that is only unreachable
+    now (not up yet) is a warning: the service starts, ``/readyz`` answers 503 until it is."""
+    from app.http.errors import StoreUnavailable
+    from app.stores import open_store, parse_store_url
 
     try:
         store = open_store(url, redis_prefix=redis_prefix)
@@ -65,11 +67,19 @@ def _check_store(url: str, redis_prefix: str) -> None:
             store.count_sessions()
         finally:
             store.close()
+    except StoreUnavailable as error:
+        if parse_store_url(url).kind != "redis":  # a file that cannot be opened: not an outage
+            raise _unusable(url, error) from error
+        print(f"credal-fusion serve: warning: {error.detail}; serving anyway", flush=True)
     except Exception as error:
-        raise CommandError(
-            f"cannot use the store {url} ({type(error).__name__}: {error}): start it, "
-            "or choose another with --store (memory | sqlite[:PATH] | redis://HOST:PORT/DB)"
-        ) from error
+        raise _unusable(url, error) from error
+
+
+def _unusable(url: str, error: Exception) -> CommandError:
+    return CommandError(
+        f"cannot use the store {url} ({type(error).__name__}: {error}): start it, "
+        "or choose another with --store (memory | sqlite[:PATH] | redis://HOST:PORT/DB)"
+    )
 
 
 def _store_url(text: str) -> str:

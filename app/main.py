@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import logging
 import sys
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
@@ -13,7 +14,7 @@ from fastapi.middleware.cors import CORSMiddleware
 from fastapi.routing import APIRoute
 
 from app.http.body_limits import BodyLimits
-from app.http.errors import install_error_handlers
+from app.http.errors import StoreUnavailable, install_error_handlers
 from app.http.rate_limit import RateLimit, parse_rates
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
@@ -29,6 +30,9 @@ GIL_SWITCH_INTERVAL_S = 0.0005
 Python's default is 5 ms; the event loop needs the GIL at every await of an
 answer, so a step in a worker thread delayed ``/healthz`` by hundreds of ms.
 """
+
+
+logger = logging.getLogger("credal_fusion.main")
 
 
 def operation_id(route: APIRoute) -> str:
@@ -48,15 +52,22 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         app.state.store = store
         registry = SessionRegistry(store, settings, service_metrics)
         app.state.registry = registry
-        await registry.restore_all()
-        service_metrics.sessions.set(store.count_sessions())
-        expiry = asyncio.create_task(registry.run_expiry(), name="session-expiry")
+        # a store that answers is restored before the first request; one that is down is
+        # retried in the background (the process starts and answers /healthz meanwhile)
+        tasks = [asyncio.create_task(registry.run_expiry(), name="session-expiry")]
+        try:
+            await registry.restore_all()
+            service_metrics.sessions.set(store.count_sessions())
+        except StoreUnavailable as error:
+            logger.warning("serving without the store for now: %s", error.detail)
+            tasks.append(asyncio.create_task(registry.restore_when_available(), name="restore"))
         try:
             yield
         finally:
-            expiry.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await expiry
+            for task in tasks:
+                task.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await task
             await registry.aclose()
             store.close()
 

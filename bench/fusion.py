@@ -1,7 +1,9 @@
 """One fusion step of the session engine: 3 sensors, n spread targets, default method.
 
 Prints the median time of ``SessionEngine.apply`` for one sensor's report once
-every target has a fused track fed by all three sensors. Never asserts a time.
+every target has a fused track fed by all three sensors; then a 20-target
+report into sessions of 1 and 8 sensors (CPU time: the machine is shared).
+Never asserts a time.
 """
 
 from __future__ import annotations
@@ -95,5 +97,35 @@ def main() -> None:
     print("floor: 1000 targets <= 100 ms per report (steady)")
 
 
+def service_sized() -> None:
+    """A service-sized report (20 targets) into sessions of 1 and of 8 sensors reporting in
+    turn: median CPU ms per report once every track is fed by every sensor (the step the
+    WebSocket p50 of the service spends in the engine)."""
+    print("\n20-target report, sensors reporting in turn; median CPU ms per report")
+    print(f"{'sensors':>8} {'per report':>11}")
+    for count in (1, 8):
+        names = [f"s{k}" for k in range(count)]
+        config = FusionConfig(
+            motion=MotionModel(StateLayout(4, (0, 2), (1, 3)), q=0.5),
+            sensors=tuple(SensorSpec(name) for name in names),
+        )
+        rng = np.random.default_rng(count)
+        truth = spread_targets(20, rng)
+        engine = SessionEngine(config)
+        reports = [
+            sensor_report(name, step + k / count, truth, rng)
+            for step in range(40)
+            for k, name in enumerate(names)
+        ]
+        samples = []
+        for index, report in enumerate(reports):
+            t0 = time.thread_time()
+            engine.apply(report)
+            if index >= len(reports) // 2:
+                samples.append((time.thread_time() - t0) * 1e3)
+        print(f"{count:>8} {np.median(samples):>11.3f}")
+
+
 if __name__ == "__main__":
     main()
+    service_sized()

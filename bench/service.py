@@ -38,7 +38,7 @@ import statistics
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -135,40 +135,54 @@ def bare_app() -> Any:
 
 
 @contextmanager
-def server(command: list[str], port: int) -> Iterator[str]:
-    """The base URL of ``command``'s server on ``port``, running until the block ends."""
-    with server_process(command, port) as (url, _):
-        yield url
-
-
-@contextmanager
-def server_process(command: list[str], port: int) -> Iterator[tuple[str, int]]:
-    """:func:`server`, and the server's process id."""
+def running(
+    command: list[str],
+    port: int,
+    environment: Mapping[str, str] | None = None,
+    ready: str = "/openapi.json",
+) -> Iterator[subprocess.Popen[bytes]]:
+    """``command`` serving on ``port`` once ``ready`` answers 200; terminated on exit."""
     process = subprocess.Popen(
         command,
         cwd=ROOT,
-        env=os.environ | {"CREDAL_ADMIN_TOKEN": "bench-admin-token-0123456789abcdef"},
+        env=os.environ
+        | {"CREDAL_ADMIN_TOKEN": "bench-admin-token-0123456789abcdef"}
+        | dict(environment or {}),
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
     )
-    url = f"http://127.0.0.1:{port}"
     try:
         deadline = time.monotonic() + START_TIMEOUT_S
         while True:
             try:
-                httpx.get(f"{url}/openapi.json", timeout=1)
-                break
+                if httpx.get(f"http://127.0.0.1:{port}{ready}", timeout=1).status_code == 200:
+                    break
             except httpx.TransportError:
-                if process.poll() is not None or time.monotonic() > deadline:
-                    raise RuntimeError(f"server {command} did not start") from None
-                time.sleep(0.05)
-        yield url, process.pid
+                pass
+            if process.poll() is not None or time.monotonic() > deadline:
+                raise RuntimeError(f"server {command} did not start")
+            time.sleep(0.05)
+        yield process
     finally:
         process.terminate()
         process.wait(timeout=START_TIMEOUT_S)
 
 
-def service_command(port: int) -> list[str]:
+@contextmanager
+def server(command: list[str], port: int) -> Iterator[str]:
+    """The URL of ``command`` serving on ``port`` (see :func:`running`)."""
+    with running(command, port):
+        yield f"http://127.0.0.1:{port}"
+
+
+@contextmanager
+def server_process(command: list[str], port: int) -> Iterator[tuple[str, int]]:
+    """:func:`server`, and the server's process id."""
+    with running(command, port) as process:
+        yield f"http://127.0.0.1:{port}", process.pid
+
+
+def service_command(port: int, store: str = "memory") -> list[str]:
     return [
         sys.executable,
         "-m",
@@ -179,7 +193,7 @@ def service_command(port: int) -> list[str]:
         "--port",
         str(port),
         "--store",
-        "memory",
+        store,
         "--no-access-log",  # as the bare endpoint (log level warning): no line per request
     ]
 

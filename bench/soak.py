@@ -31,7 +31,6 @@ import asyncio
 import os
 import re
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -47,9 +46,8 @@ import redis
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from machine import describe_machine
-from service import config, free_port, track_list
+from service import config, free_port, running, service_command, track_list
 
-ROOT = Path(__file__).resolve().parents[1]
 SOAK_SECONDS = float(os.environ.get("SOAK_SECONDS", "100"))
 REDIS_URL = os.environ.get("CREDAL_SOAK_REDIS_URL", "redis://127.0.0.1:6379/0")
 LONG_SESSIONS = 2
@@ -62,46 +60,20 @@ SNAPSHOT_EVERY = 25
 LOG_RETENTION = 100
 SAMPLE_EVERY_S = 4.0
 MAX_GROWTH = 0.05
-START_TIMEOUT_S = 30.0
 
 
 @contextmanager
 def serving(store: str, environment: dict[str, str]) -> Iterator[tuple[str, int]]:
-    """``credal-fusion serve --store STORE``: its URL and pid, stopped on exit."""
+    """``credal-fusion serve --store STORE``: its URL and pid once ready, stopped on exit."""
     port = free_port()
-    process = subprocess.Popen(
-        [
-            *(sys.executable, "-m", "app.cli", "serve", "--host", "127.0.0.1"),
-            *("--port", str(port), "--store", store, "--no-access-log"),
-        ],
-        cwd=ROOT,
-        env=os.environ
-        | environment
-        | {
-            "CREDAL_ADMIN_TOKEN": "soak-admin-token-0123456789abcdef",
-            "CREDAL_SNAPSHOT_EVERY": str(SNAPSHOT_EVERY),
-            "CREDAL_LOG_RETENTION": str(LOG_RETENTION),
-            "CREDAL_RATE_LIMIT": "none",
-        },
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    url = f"http://127.0.0.1:{port}"
-    try:
-        deadline = time.monotonic() + START_TIMEOUT_S
-        while True:
-            try:
-                if httpx.get(f"{url}/readyz", timeout=1).status_code == 200:
-                    break
-            except httpx.TransportError:
-                pass
-            if process.poll() is not None or time.monotonic() > deadline:
-                raise RuntimeError(f"the server on {store} did not start")
-            time.sleep(0.05)
-        yield url, process.pid
-    finally:
-        process.terminate()
-        process.wait(timeout=START_TIMEOUT_S)
+    settings = {
+        "CREDAL_SNAPSHOT_EVERY": str(SNAPSHOT_EVERY),
+        "CREDAL_LOG_RETENTION": str(LOG_RETENTION),
+        "CREDAL_RATE_LIMIT": "none",
+    }
+    command = service_command(port, store)
+    with running(command, port, environment | settings, ready="/readyz") as process:
+        yield f"http://127.0.0.1:{port}", process.pid
 
 
 @dataclass(frozen=True)

@@ -72,6 +72,9 @@ class StaleReport(CredalError):  # noqa: N818 - a state of the input, named as t
         The time of the sensor's previous accepted report.
     """
 
+    loc: Location = ("time",)
+    """The refused field: the report's time."""
+
     def __init__(self, sensor: str, time: float, last_time: float) -> None:
         self.sensor = sensor
         self.time = time

@@ -423,6 +423,35 @@ class LifeState:
 _LIFE_ARRAYS = ("status", "reason", "score", "hits", "empty_gate", "phantom_since")
 
 
+def initiated(
+    config: LifeCycleConfig,
+    count: int,
+    score: float | FloatArray,
+    hits: int = 1,
+    *,
+    confirmed_below: bool = False,
+) -> LifeState:
+    """The life of ``count`` tracks that start in this step.
+
+    Tentative (``initiated``) with ``score`` (one, or one each) and ``hits``;
+    or, ``confirmed_below``, tracks the layer below has already confirmed (a
+    local tracker's, where no second test could add anything: the session's
+    only sensor): confirmed at once (``local_confirmed``) at the confirm
+    threshold, clamped at the score ceiling.
+    """
+    if not confirmed_below:
+        return LifeState.new(count, score, hits)
+    life = LifeState.new(count, min(config.score_ceiling, config.confirm_threshold), hits)
+    return LifeState(
+        np.full(count, CONFIRMED, dtype=np.int64),
+        np.full(count, reason_code(StatusReason.LOCAL_CONFIRMED), dtype=np.int64),
+        life.score,
+        life.hits,
+        life.empty_gate,
+        life.phantom_since,
+    )
+
+
 @dataclass(frozen=True)
 class Evidence:
     """What one scan or report says about each of n tracks, for :func:`advance`.
@@ -547,6 +576,8 @@ def advance(
     reason = state.reason
 
     def changed(mask: BoolArray, new_status: int, why: StatusReason) -> tuple[IntArray, IntArray]:
+        if not mask.any():  # the arrays are never changed in place: they may be shared
+            return status, reason
         return np.where(mask, new_status, status), np.where(mask, reason_code(why), reason)
 
     status, reason = changed(detected & (status == COASTING), CONFIRMED, StatusReason.REACQUIRED)
@@ -567,8 +598,9 @@ def advance(
     def decide(mask: BoolArray, new_status: int, why: StatusReason) -> None:
         nonlocal status, reason, undecided
         chosen = mask & undecided
-        status, reason = changed(chosen, new_status, why)
-        undecided = undecided & ~chosen
+        if chosen.any():  # most rules match no track in most steps
+            status, reason = changed(chosen, new_status, why)
+            undecided = undecided & ~chosen
 
     decide(evidence.visibility == Visibility.OUT_OF_RANGE, TERMINATED, StatusReason.OUT_OF_RANGE)
     expired = is_phantom & (evidence.time - phantom_since > config.phantom_lifetime)

@@ -63,19 +63,22 @@ def check_magnitudes(
         component = int(np.argmax(np.abs(states[row])))
         raise InvalidInput(
             f"{where}[{row}].{state_name}[{component}]: magnitude "
-            f"{float(states[row, component]):g} is beyond the limit {MAX_MAGNITUDE:g}"
+            f"{float(states[row, component]):g} is beyond the limit {MAX_MAGNITUDE:g}",
+            loc=(where, row, state_name, component),
         )
     entries = np.abs(covariances).reshape(len(covariances), -1).max(axis=1)
     if entries.max() > MAX_VARIANCE:
         row = int(np.argmax(entries > MAX_VARIANCE))
         raise InvalidInput(
             f"{where}[{row}].{covariance_name}: an entry of magnitude {float(entries[row]):g} "
-            f"is beyond the limit {MAX_VARIANCE:g}"
+            f"is beyond the limit {MAX_VARIANCE:g}",
+            loc=(where, row, covariance_name),
         )
     variances = np.diagonal(covariances, axis1=1, axis2=2).min(axis=1)
     if variances.min() < MIN_VARIANCE:
         row = int(np.argmax(variances < MIN_VARIANCE))
         raise InvalidInput(
             f"{where}[{row}].{covariance_name}: a variance of {float(variances[row]):g} is "
-            f"below the limit {MIN_VARIANCE:g}"
+            f"below the limit {MIN_VARIANCE:g}",
+            loc=(where, row, covariance_name),
         )

@@ -16,7 +16,8 @@ Every limit is a setting (``app/settings.py``) checked before the work it bounds
 - ``max_listed_errors`` (50): a 422 lists that many errors and counts them all;
 - ``ws_messages_per_second`` (1 000): per stream connection (an ``error`` beyond);
 - a page of ``GET …/events``: ``limit`` events (≤ 10 000) and at most 4 MiB;
-- ``max_sessions`` (1 000): checked and taken atomically at session creation (429);
+- ``max_sessions`` (1 000): counted and taken in one step of the store at session creation,
+  across every instance sharing it (429);
 - ``rate_limit``: per verified token or client address (:mod:`app.http.rate_limit`).
 """
 

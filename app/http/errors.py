@@ -26,12 +26,14 @@ from pydantic import ValidationError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from api_schemas.issues import FieldIssue
+from api_schemas.issues import FieldIssue, wire_location
 from api_schemas.keys import allowed_keys
 from api_schemas.limits import LIMIT_EXCEEDED
 from api_schemas.problem import FieldError, Problem
 from app.http.requests import body_model
+from app.http.responses import dumps
 from core.errors import InvalidInput
+from core.errors import StaleReport as CoreStaleReport
 
 PROBLEM_MEDIA_TYPE = "application/problem+json"
 PROBLEM_TYPE_PREFIX = "urn:credal-fusion:problem:"
@@ -129,11 +131,23 @@ class StaleReport(Conflict):
             last_time=last_time,
         )
 
+    def field_errors(self) -> list[FieldError] | None:
+        return [_located(CoreStaleReport.loc, self.detail, "stale_report")]
 
-class SessionLeased(ServiceError):  # noqa: N818 - HTTP vocabulary
-    """Another service instance holds the session's lease (it applies the session's inputs)."""
+
+class Unavailable(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """503: the request could not be served now; ``Retry-After`` says when to try again."""
 
     status = HTTPStatus.SERVICE_UNAVAILABLE
+    retry_after_s: int = 2
+
+    def headers(self) -> dict[str, str]:
+        return {"Retry-After": str(self.retry_after_s)}
+
+
+class SessionLeased(Unavailable):
+    """Another service instance holds the session's lease (it applies the session's inputs)."""
+
     slug = "session-leased"
     title = "Session applied by another instance"
 
@@ -146,21 +160,16 @@ class SessionLeased(ServiceError):  # noqa: N818 - HTTP vocabulary
         )
         self.retry_after_s = retry_after_s
 
-    def headers(self) -> dict[str, str]:
-        return {"Retry-After": str(self.retry_after_s)}
 
-
-class StoreUnavailable(ServiceError):  # noqa: N818 - HTTP vocabulary
+class StoreUnavailable(Unavailable):
     """The session store cannot be reached (or cannot write): nothing was stored, retry later.
 
     Raised by the stores for their backend's connection and I/O errors, so an
     outage answers 503 with ``Retry-After`` and is never mistaken for a bug.
     """
 
-    status = HTTPStatus.SERVICE_UNAVAILABLE
     slug = "store-unavailable"
     title = "Session store unavailable"
-    retry_after_s: ClassVar[int] = 2
 
     def __init__(self, store: str, reason: str) -> None:
         super().__init__(
@@ -168,9 +177,6 @@ class StoreUnavailable(ServiceError):  # noqa: N818 - HTTP vocabulary
             store=store,
             retry_after=self.retry_after_s,
         )
-
-    def headers(self) -> dict[str, str]:
-        return {"Retry-After": str(self.retry_after_s)}
 
 
 class TrackNotFound(ServiceError):  # noqa: N818 - HTTP vocabulary
@@ -409,7 +415,7 @@ def problem_for(
             status=HTTPStatus.UNPROCESSABLE_ENTITY,
             detail=str(error),
             instance=instance,
-            errors=[_located(error.loc, str(error), "invalid_input")],
+            errors=[_located(wire_location(error.loc), str(error), "invalid_input")],
         )
     if isinstance(error, StarletteHTTPException):
         status = HTTPStatus(error.status_code)
@@ -429,6 +435,13 @@ def problem_for(
         detail=f"unexpected error; the server log has the details under reference {reference}",
         instance=instance,
         reference=reference,
+    )
+
+
+def error_message(problem: Problem, ref: str | None) -> str:
+    """The WebSocket ``error`` message of ``problem`` (``api_schemas.ws.ErrorMessage``), as text."""
+    return dumps(
+        {"type": "error", "ref": ref, "problem": problem.model_dump(mode="json", exclude_none=True)}
     )
 
 

@@ -1,4 +1,5 @@
-"""WebSocket keepalive that never cuts a client whose results are queued (the backpressure rule).
+"""The service's WebSocket protocol: a keepalive that never cuts a client whose results are
+queued (the backpressure rule), and an ``error`` before the close of an oversize message.
 
 The server pings every ``ws_ping_interval`` seconds and, in uvicorn, closes
 with 1011 a peer whose pong is not back within ``ws_ping_timeout``. But a
@@ -23,6 +24,13 @@ closed with 1011 as before. Backpressure stays bounded: the stream channel
 keeps at most 16 answers per connection, stops reading when they are not
 taken, and TCP pushes back on the client; a peer that is gone for good is
 ended by TCP's own retransmission timeout.
+
+Every bad message is answered with an ``error`` message (the connection
+stays open) — invalid JSON, nesting too deep, a schema violation, more than
+``max_body_bytes``, more than ``ws_messages_per_second`` — except a message
+beyond ``WS_FRAME_FACTOR × max_body_bytes``: uvicorn stops reading it there
+(it is never buffered whole) and closes with 1009; the ``error`` naming
+``max_body_bytes`` is sent just before that close frame.
 """
 
 from __future__ import annotations
@@ -30,7 +38,10 @@ from __future__ import annotations
 from typing import Any
 
 from uvicorn.protocols.websockets.websockets_sansio_impl import WebSocketsSansIOProtocol
+from websockets.exceptions import PayloadTooBig
+from websockets.frames import Frame, Opcode
 
+from app.http.errors import LimitExceeded, error_message, problem_for
 from app.settings import Settings
 
 WS_FRAME_FACTOR = 4
@@ -63,6 +74,15 @@ class PatientWebSocketProtocol(WebSocketsSansIOProtocol):
             self.ever_ponged = True
         super().handle_pong(event)
 
+    def handle_parser_exception(self) -> None:
+        too_big = self.conn.parser_exc
+        if isinstance(too_big, PayloadTooBig) and not self.close_sent:
+            # ahead of the close frame uvicorn is about to write (the connection is closing:
+            # the frame is written as is, not through the connection's state machine)
+            text = oversize_error(self.config.ws_max_size, too_big, self.scope.get("path"))
+            self.transport.write(Frame(Opcode.TEXT, text.encode()).serialize(mask=False))
+        super().handle_parser_exception()
+
     def keepalive_timeout(self) -> None:
         owed = self.sent_since_pong > (0 if self.ever_ponged else 1)
         behind = owed or self.transport.get_write_buffer_size() > 0 or not self.writable.is_set()
@@ -73,6 +93,19 @@ class PatientWebSocketProtocol(WebSocketsSansIOProtocol):
             self.schedule_ping()
             return
         super().keepalive_timeout()
+
+
+def oversize_error(ws_max_size: int, too_big: PayloadTooBig, path: str | None) -> str:
+    """The ``error`` message of a message beyond ``ws_max_size`` (the connection then closes)."""
+    limit = ws_max_size // WS_FRAME_FACTOR
+    size = getattr(too_big, "size", None)  # the declared size of the refused frame
+    refusal = LimitExceeded(
+        "max_body_bytes",
+        limit,
+        size,
+        what=f"message (beyond {WS_FRAME_FACTOR} × the limit: the connection closes with 1009)",
+    )
+    return error_message(problem_for(refusal, path), None)
 
 
 def server_options(settings: Settings) -> dict[str, Any]:

@@ -30,12 +30,15 @@ from __future__ import annotations
 import hmac
 import math
 import time
+import uuid
 from collections.abc import Callable
 from http import HTTPStatus
 
-from limits import RateLimitItem, parse_many
+from limits import RateLimitItem, RateLimitItemPerSecond, parse_many
 from limits.aio.storage import MemoryStorage
 from limits.aio.strategies import SlidingWindowCounterRateLimiter
+from limits.storage import MemoryStorage as ThreadSafeMemoryStorage
+from limits.strategies import MovingWindowRateLimiter
 from starlette.responses import Response
 from starlette.types import ASGIApp, Receive, Scope, Send
 from starlette.websockets import WebSocket
@@ -151,3 +154,20 @@ async def _deny_websocket(scope: Scope, receive: Receive, send: Send, response: 
         await websocket.send_denial_response(response)
     else:
         await websocket.close(code=1008, reason="rate limit exceeded")
+
+
+MESSAGES = MovingWindowRateLimiter(ThreadSafeMemoryStorage())
+"""The message counts of every WebSocket connection of the process (one key each)."""
+
+
+class MessageRate:
+    """At most ``per_second`` messages in any one-second window of one WebSocket connection
+    (``ws_messages_per_second``): the ``limits`` library's moving window, as for HTTP."""
+
+    def __init__(self, per_second: int) -> None:
+        self.item = RateLimitItemPerSecond(per_second)
+        self.key = f"ws-connection:{uuid.uuid4().hex}"
+
+    def admit(self) -> bool:
+        """Count one message; ``False`` if it is beyond the rate (it is then not counted)."""
+        return MESSAGES.hit(self.item, self.key)

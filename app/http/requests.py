@@ -18,9 +18,12 @@ from typing import Any
 
 import anyio
 from fastapi import Request, Response
+from fastapi._compat import ModelField
 from fastapi.exceptions import RequestValidationError
-from fastapi.routing import APIRoute
+from fastapi.routing import APIRoute, _effective_route_context_var
 from pydantic import BaseModel, ValidationError
+
+from app.runtime import without_collection
 
 
 class DuplicateKeyError(ValueError):
@@ -77,9 +80,9 @@ def _validated(model: type[BaseModel], body: bytes) -> BaseModel:
     try:
         document = parse_json(body.decode("utf-8"))
     except UnicodeDecodeError as error:
-        raise _json_error(f"body is not UTF-8 ({error.reason})", error.start) from None
+        raise json_error(f"body is not UTF-8 ({error.reason})", error.start) from None
     except json.JSONDecodeError as error:
-        raise _json_error(error.msg, error.pos) from None
+        raise json_error(error.msg, error.pos) from None
     try:
         return model.model_validate(document)
     except ValidationError as error:
@@ -88,12 +91,16 @@ def _validated(model: type[BaseModel], body: bytes) -> BaseModel:
         ) from None
 
 
-def _json_error(reason: str, position: int) -> RequestValidationError:
+def json_error(
+    reason: str, position: int, within: tuple[str, ...] = ("body",)
+) -> RequestValidationError:
+    """The validation error of a document that is not JSON (a request body, or a WebSocket
+    message: ``within=()``), at character ``position``."""
     return RequestValidationError(
         [
             {
                 "type": "json_invalid",
-                "loc": ("body", position),
+                "loc": (*within, position),
                 "msg": "JSON decode error",
                 "input": {},
                 "ctx": {"error": reason},
@@ -114,16 +121,42 @@ class WireRoute(APIRoute):
     def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:
         handler = super().get_route_handler()
         model = body_model(self.endpoint)
+        if model is not None:
+            # an included route runs with its own dependant (fastapi 0.165, pinned)
+            included = _effective_route_context_var.get()
+            owner = included if included is not None and included.original_route is self else self
+            for field in owner.dependant.body_params:
+                _accept_validated(field, model)
 
         async def handle(request: Request) -> Response:
             wire = WireRequest(request.scope, request.receive)
             if model is not None and _is_json(wire):
                 body = await wire.body()
                 if len(body) > OFFLOAD_BYTES:
-                    wire._json = await anyio.to_thread.run_sync(_validated, model, body)
+                    validate = functools.partial(_validated, model, body)
+                    wire._json = await anyio.to_thread.run_sync(without_collection(validate))
             return await handler(wire)
 
         return handle
+
+
+def _accept_validated(field: ModelField, model: type[BaseModel]) -> None:
+    """Let ``field`` take a ``model`` validated in the worker thread as it is.
+
+    pydantic runs a model's ``after`` validators again on an instance of the
+    model (the covariance batch of a track list, the geometry of a session
+    config), which would put that work back on the event loop.
+    """
+    validate = field.validate
+
+    def validate_once(
+        value: Any, values: dict[str, Any] | None = None, *, loc: tuple[int | str, ...] = ()
+    ) -> tuple[Any, list[dict[str, Any]]]:
+        if type(value) is model:
+            return value, []
+        return validate(value, values or {}, loc=loc)
+
+    field.validate = validate_once  # type: ignore[method-assign]
 
 
 def _is_json(request: Request) -> bool:

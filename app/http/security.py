@@ -20,8 +20,11 @@ HASH_PREFIX = "sha256:"
 
 
 def issue_token() -> str:
-    """A new random bearer token."""
-    return secrets.token_urlsafe(TOKEN_BYTES)
+    """A new random bearer token; never one that starts with ``-`` (a command line would take
+    ``--token -x…`` for two options: one token in 64 did)."""
+    while (token := secrets.token_urlsafe(TOKEN_BYTES)).startswith("-"):
+        pass
+    return token
 
 
 def hash_token(token: str) -> str:

@@ -12,6 +12,7 @@ from app.http.deps import SettingsDep
 from app.http.errors import LimitExceeded, problem_responses
 from app.http.requests import WireRoute
 from app.http.responses import JSONTextResponse, dumps
+from app.runtime import without_collection
 from app.sessions.translate import (
     PlainObject,
     associate_plain,
@@ -65,7 +66,9 @@ async def associate_tracks(request: AssociateRequest, settings: SettingsDep) -> 
     work = functools.partial(run_association, request)
     if len(request.known) * len(request.incoming) <= TINY_PROBLEM:
         return JSONTextResponse(dumps(work()))
-    return JSONTextResponse(await anyio.to_thread.run_sync(lambda: dumps(work())))
+    return JSONTextResponse(
+        await anyio.to_thread.run_sync(without_collection(lambda: dumps(work())))
+    )
 
 
 def check_pairs(request: AssociateRequest, settings: Settings) -> None:

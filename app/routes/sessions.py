@@ -28,7 +28,7 @@ from app.http.deps import (
     SettingsDep,
     StoreDep,
 )
-from app.http.errors import LimitExceeded, problem_responses
+from app.http.errors import problem_responses
 from app.http.requests import WireRoute
 from app.http.responses import JSONTextResponse, dumps
 from app.http.security import hash_token, issue_token
@@ -65,18 +65,9 @@ def create_session(
         token_hash=hash_token(token),
         created_at=datetime.now(UTC),
     )
-    with registry.creating:  # count and create as one step (this instance's requests)
-        live = store.count_sessions()
-        if live >= settings.max_sessions:
-            raise LimitExceeded(
-                "max_sessions",
-                settings.max_sessions,
-                live,
-                what="sessions",
-                status=HTTPStatus.TOO_MANY_REQUESTS,
-            )
-        store.create_session(record)
-        registry.add(record)
+    # counted and created in one step of the store: instances sharing it keep the limit
+    store.create_session(record, max_sessions=settings.max_sessions)
+    registry.add(record)
     metrics.sessions.set(store.count_sessions())
     return SessionCreated(id=record.id, token=token, config=config, created_at=record.created_at)
 

@@ -30,10 +30,8 @@ fused track of every ``result`` sent on that connection (the session needs an
 
 from __future__ import annotations
 
-import collections
 import json
 import logging
-import time
 
 import anyio
 import orjson
@@ -54,10 +52,12 @@ from app.http.errors import (
     ServiceError,
     StoreUnavailable,
     Unauthorized,
+    error_message,
     problem_for,
     request_validation_error,
 )
-from app.http.requests import WireRoute, parse_json
+from app.http.rate_limit import MessageRate
+from app.http.requests import WireRoute, json_error, parse_json
 from app.http.responses import dumps
 from app.routes.fusion import geodetic_result, origin_of
 from app.sessions.hub import STORE_UNAVAILABLE, Ending
@@ -154,12 +154,6 @@ def _ack(session: LiveSession) -> str:
     return dumps({"type": "ack", "ref": None, "seq": session.seq})
 
 
-def _error(problem: Problem, ref: str | None) -> str:
-    return dumps(
-        {"type": "error", "ref": ref, "problem": problem.model_dump(mode="json", exclude_none=True)}
-    )
-
-
 def _ref_of(document: object) -> str | None:
     """The ``ref`` of a message that failed validation, if it has a usable one."""
     ref = document.get("ref") if isinstance(document, dict) else None
@@ -189,35 +183,8 @@ def _message_problem(error: ValidationError, path: str, document: object, listed
     return problem_for(RequestValidationError(errors), path, listed=listed, root=root)
 
 
-def _json_problem(error: json.JSONDecodeError, path: str) -> Problem:
-    entry = {
-        "loc": (),
-        "msg": "JSON decode error",
-        "type": "json_invalid",
-        "ctx": {"error": error.msg},
-    }
-    return problem_for(RequestValidationError([entry]), path)
-
-
-class MessageRate:
-    """At most ``per_second`` messages in any one-second window of a connection."""
-
-    def __init__(self, per_second: int) -> None:
-        self.per_second = per_second
-        self.window: collections.deque[float] = collections.deque()
-
-    def admit(self) -> bool:
-        now = time.monotonic()
-        while self.window and now - self.window[0] >= 1.0:
-            self.window.popleft()
-        if len(self.window) >= self.per_second:
-            return False
-        self.window.append(now)
-        return True
-
-
 def _refusal(error: ServiceError, path: str) -> str:
-    return _error(problem_for(error, path), None)
+    return error_message(problem_for(error, path), None)
 
 
 async def _answer(
@@ -234,12 +201,12 @@ async def _answer(
     try:
         document = parse_json(text)
     except json.JSONDecodeError as error:
-        return _error(_json_problem(error, path), None)
+        return error_message(problem_for(json_error(error.msg, error.pos, ()), path), None)
     try:
         message = client_message_adapter.validate_python(document)
     except ValidationError as error:
         problem = _message_problem(error, path, document, settings.max_listed_errors)
-        return _error(problem, _ref_of(document))
+        return error_message(problem, _ref_of(document))
     ref = message.ref
     try:
         if session.closed:  # evicted (store down, or a failed step): the registry reloads it
@@ -249,7 +216,7 @@ async def _answer(
         else:
             result = await registry.submit_tracks(session, message.report())
     except Exception as error:  # every failure is answered; the connection stays open
-        return _error(problem_for(error, path), ref)
+        return error_message(problem_for(error, path), ref)
     if frame is not None:
         result = geodetic_result(result, frame, session.config)
     return result_message(result, ref)

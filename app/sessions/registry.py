@@ -55,7 +55,6 @@ import contextlib
 import functools
 import logging
 import math
-import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -80,6 +79,7 @@ from app.http.errors import (
 )
 from app.http.responses import dumps
 from app.metrics import ServiceMetrics
+from app.runtime import without_collection
 from app.sessions.hub import SESSION_ENDED, SESSION_RELOADED, STORE_UNAVAILABLE, Ending, Subscriber
 from app.sessions.live import LiveSession, new_session, restore_snapshot
 from app.sessions.log import event_from_entry, log_input
@@ -119,11 +119,13 @@ T = TypeVar("T")
 @dataclass
 class Step:
     """An applied (not yet logged) input: the engine that holds it, its result as JSON text,
-    and the CPU time of the engine step alone (the thread's)."""
+    the input as it is logged (both built beside the step, off the event loop) and the CPU
+    time of the engine step alone (the thread's)."""
 
     engine: SessionEngine
     fusion: FusionConfig
     result: str
+    logged: PlainObject
     engine_cpu_s: float
 
 
@@ -163,8 +165,6 @@ class SessionRegistry:
         self._forwarders: dict[str, asyncio.Task[None]] = {}
         self._tokens: dict[str, str] = {}
         """Token hash → id of the live sessions in memory (the rate limit's verified identities)."""
-        self.creating = threading.Lock()
-        """Held from counting the sessions to storing a new one: the limit holds under races."""
         self._input_series: dict[str, InputSeries] = {}
 
     def __len__(self) -> int:
@@ -174,18 +174,22 @@ class SessionRegistry:
         return iter(list(self._sessions.values()))
 
     # ------------------------------------------------------------ running work
-    async def _io(self, function: Callable[..., T], *args: Any) -> T:
-        """A store call: inline for the memory store, in a worker thread otherwise."""
-        if self._store_inline:
-            return function(*args)
-        return await anyio.to_thread.run_sync(functools.partial(function, *args))
+    async def _io(self, function: Callable[..., T], *args: Any, size: int = 0) -> T:
+        """A store call: inline for the memory store (unless it encodes more than
+        :data:`TINY_WORK` items), in a worker thread otherwise (without garbage
+        collection for a big one, :func:`app.runtime.collection_paused`)."""
+        call = functools.partial(function, *args)
+        if size <= TINY_WORK:
+            return call() if self._store_inline else await anyio.to_thread.run_sync(call)
+        return await anyio.to_thread.run_sync(without_collection(call))
 
     @staticmethod
     async def _compute(size: int, function: Callable[[], T]) -> T:
-        """Numeric work: inline when tiny, in a worker thread otherwise."""
+        """Numeric work: inline when tiny, in a worker thread otherwise (without garbage
+        collection: :func:`app.runtime.collection_paused`)."""
         if size <= TINY_WORK:
             return function()
-        return await anyio.to_thread.run_sync(function)
+        return await anyio.to_thread.run_sync(without_collection(function))
 
     # ------------------------------------------------------------ lifecycle
     def check_config(self, config: SessionConfig) -> None:
@@ -254,6 +258,19 @@ class SessionRegistry:
             session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
             session.seq = entry.seq
             session.last_input_at = entry.received_at
+
+    async def restore_when_available(self, retry_s: float = 1.0) -> None:
+        """:meth:`restore_all` as soon as the store answers (started while it is down: the
+        service serves meanwhile, ``/readyz`` says 503 and inputs get 503 with ``Retry-After``)."""
+        while True:
+            await anyio.sleep(retry_s)
+            try:
+                restored = await self.restore_all()
+            except StoreUnavailable:
+                continue
+            self.metrics.sessions.set(await self._io(self.store.count_sessions))
+            logger.info("store available: %d sessions restored", restored)
+            return
 
     async def restore_all(self) -> int:
         """Load every stored session (on start); returns how many."""
@@ -458,7 +475,13 @@ class SessionRegistry:
         except CoreStaleReport as stale:
             raise StaleReport(stale.sensor, stale.time, stale.last_time) from None
         result = step_json(step, session.seq + 1)  # serialised once, here
-        return Step(engine=engine, fusion=fusion, result=result, engine_cpu_s=engine_cpu_s)
+        return Step(
+            engine=engine,
+            fusion=fusion,
+            result=result,
+            logged=log_input(report),
+            engine_cpu_s=engine_cpu_s,
+        )
 
     async def submit_tracks(
         self, session: LiveSession, report: TrackReport, *, explain: bool = False
@@ -559,7 +582,7 @@ class SessionRegistry:
         received_at = datetime.now(UTC)
         seq = session.seq + 1
         try:
-            await self._io(self.store.append, session.id, seq, log_input(report), received_at)
+            await self._io(self.store.append, session.id, seq, step.logged, received_at, size=size)
         except SequenceConflict:
             if not self.shared:
                 self.metrics.rebuilds.labels("unlogged").inc()
@@ -645,11 +668,11 @@ class SessionRegistry:
 
     async def _snapshot(self, session: LiveSession) -> None:
         """Snapshot the engine, then compact the log to ``log_retention`` inputs behind it."""
-        snapshot = Snapshot(
-            seq=session.seq, taken_at=datetime.now(UTC), state=session.snapshot_state()
-        )
+        size = len(session.tracks)
+        state = await self._compute(size, session.snapshot_state)
+        snapshot = Snapshot(seq=session.seq, taken_at=datetime.now(UTC), state=state)
         try:
-            await self._io(self.store.save_snapshot, session.id, snapshot)
+            await self._io(self.store.save_snapshot, session.id, snapshot, size=size)
             session.since_snapshot = 0
             through = snapshot.seq - self.settings.log_retention
             if through > 0:

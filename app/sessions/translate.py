@@ -116,7 +116,7 @@ def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> Sens
     """One sensor; a field of view the core refuses is a validation error at ``sensors/i/fov``.
     A field of view in the sensor's frame is placed at its site and heading here, once."""
     try:
-        site, heading = sensor_site(config, sensor)
+        site, heading = sensor_site(sensor, session_origin(config))
         fov = None if sensor.fov is None else field_of_view(sensor.fov, site, heading)
     except InvalidInput as error:
         raise request_validation_error(
@@ -193,7 +193,7 @@ def range_rate_model(
     noise = sensor.measurement
     if noise is None or noise.kind != "polar" or noise.sigma_range_rate is None:
         return None
-    site, _ = sensor_site(config, sensor)
+    site, _ = sensor_site(sensor, session_origin(config))
     return RangeRateModel(tuple(float(x) for x in site[:axes]), noise.sigma_range_rate)
 
 
@@ -355,8 +355,9 @@ def session_origin(config: SessionConfig) -> LocalFrame | None:
     return None if origin is None else LocalFrame(origin.lat, origin.lon, origin.alt)
 
 
-def sensor_site(config: SessionConfig, sensor: SensorConfig | None) -> tuple[np.ndarray, float]:
-    """A sensor's site in the session frame (3 coordinates; default the origin) and heading."""
+def sensor_site(sensor: SensorConfig | None, origin: LocalFrame | None) -> tuple[np.ndarray, float]:
+    """A sensor's site in the session frame (3 coordinates; default the origin) and heading;
+    ``origin`` is the session's (:func:`session_origin`: a geodetic site needs it)."""
     site = None if sensor is None else sensor.site
     if site is None:
         return np.zeros(3), 0.0
@@ -364,10 +365,9 @@ def sensor_site(config: SessionConfig, sensor: SensorConfig | None) -> tuple[np.
         position = np.zeros(3)
         position[: len(site.position)] = site.position
         return position, site.heading_deg
-    frame = session_origin(config)
-    assert frame is not None and site.lat is not None and site.lon is not None  # config-checked
-    altitude = frame.alt if site.alt is None else site.alt
-    return frame.from_geodetic(site.lat, site.lon, altitude)[0], site.heading_deg
+    assert origin is not None and site.lat is not None and site.lon is not None  # config-checked
+    altitude = origin.alt if site.alt is None else site.alt
+    return origin.from_geodetic(site.lat, site.lon, altitude)[0], site.heading_deg
 
 
 def session_frame_report(report: TrackReport, config: SessionConfig) -> CoreTrackReport:
@@ -386,7 +386,7 @@ def session_frame_report(report: TrackReport, config: SessionConfig) -> CoreTrac
     covariances = np.array([track.covariance for track in core.tracks]).reshape(-1, dim, dim)
     position, velocity = tuple(config.state.position), tuple(config.state.velocity)
     if report.frame == "sensor":
-        site, heading = sensor_site(config, config.sensor(report.sensor))
+        site, heading = sensor_site(config.sensor(report.sensor), session_origin(config))
         states, covariances = sensor_to_session(
             states, covariances, position, velocity, site, heading
         )
@@ -401,14 +401,13 @@ def session_frame_report(report: TrackReport, config: SessionConfig) -> CoreTrac
     return dataclasses.replace(core, tracks=tracks)
 
 
-def site_axes(config: SessionConfig, sensor: SensorConfig, dimension: int) -> np.ndarray | None:
-    """Rotation (d × d) from the ENU axes at a geodetic site to the session's (``None`` at a
-    session-frame ``position``: the sensor measures in the session's axes)."""
+def site_axes(sensor: SensorConfig, origin: LocalFrame | None, dimension: int) -> np.ndarray | None:
+    """Rotation (d × d) from the ENU axes at a geodetic site to the session's at ``origin``
+    (``None`` at a session-frame ``position``: the sensor measures in the session's axes)."""
     site = sensor.site
-    frame = session_origin(config)
-    if site is None or site.lat is None or site.lon is None or frame is None:
+    if site is None or site.lat is None or site.lon is None or origin is None:
         return None
-    rotation: np.ndarray = frame.rotation_from(site.lat, site.lon)[0][:dimension, :dimension]
+    rotation: np.ndarray = origin.rotation_from(site.lat, site.lon)[0][:dimension, :dimension]
     return rotation
 
 
@@ -425,7 +424,8 @@ def polar_detection_report(
     noise = sensor.measurement
     assert noise is not None
     dim = len(config.state.position)
-    site, _ = sensor_site(config, sensor)
+    origin = session_origin(config)  # once, for the site and its axes
+    site, _ = sensor_site(sensor, origin)
     detections = report.detections
     ranges = np.array([d.range for d in detections], dtype=np.float64)
     azimuths = np.array([d.azimuth_deg for d in detections], dtype=np.float64)
@@ -441,7 +441,7 @@ def polar_detection_report(
         noise.sigma_elevation_deg,
     )
     offsets, covariances = offsets.reshape(-1, dim), covariances.reshape(-1, dim, dim)
-    turn = site_axes(config, sensor, dim)
+    turn = site_axes(sensor, origin, dim)
     if turn is not None:
         offsets = offsets @ turn.T
         covariances = rotate_covariances(np.broadcast_to(turn, covariances.shape), covariances)

@@ -30,16 +30,24 @@ from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime
+from http import HTTPStatus
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 import orjson
 
-from app.http.errors import Conflict, SessionNotFound, StoreUnavailable
+from app.http.errors import Conflict, LimitExceeded, SessionNotFound, StoreUnavailable
 
 JsonObject = dict[str, Any]
 _PLAIN_KINDS = frozenset("biuf")
 """numpy dtype kinds whose ``tolist()`` is plain data (bool, signed/unsigned int, float)."""
+
+
+def session_limit(max_sessions: int, live: int) -> LimitExceeded:
+    """The refusal of a session beyond ``max_sessions`` (429, the setting named)."""
+    return LimitExceeded(
+        "max_sessions", max_sessions, live, what="sessions", status=HTTPStatus.TOO_MANY_REQUESTS
+    )
 
 
 class SequenceConflict(Conflict):
@@ -146,8 +154,13 @@ class Store(Protocol):
     """Whether several service instances may share the store: then the registry takes
     leases, fans results out through it and checks reads against it."""
 
-    def create_session(self, record: SessionRecord) -> None:
-        """Store a new session; :class:`SessionExists` if the id is taken."""
+    def create_session(self, record: SessionRecord, max_sessions: int | None = None) -> None:
+        """Store a new session; :class:`SessionExists` if the id is taken,
+        :func:`session_limit` (429) if ``max_sessions`` live sessions exist already.
+
+        Counting and storing are one atomic step of the store (one lock, one
+        transaction, one Lua script), so instances sharing it never exceed the limit.
+        """
         ...
 
     def get_session(self, session_id: str) -> SessionRecord | None:

@@ -26,6 +26,7 @@ from app.stores.base import (
     encode,
     loads,
     require,
+    session_limit,
 )
 
 
@@ -70,10 +71,12 @@ class MemoryStore:
     def _live(self, session_id: str) -> _SessionData | None:
         return self._sessions.get(session_id)
 
-    def create_session(self, record: SessionRecord) -> None:
+    def create_session(self, record: SessionRecord, max_sessions: int | None = None) -> None:
         with self._lock:
             if record.id in self._sessions:
                 raise SessionExists(record.id)
+            if max_sessions is not None and len(self._sessions) >= max_sessions:
+                raise session_limit(max_sessions, len(self._sessions))
             if not record.deleted:
                 self._sessions[record.id] = _SessionData(
                     replace(record, config=loads(dumps(record.config)))

@@ -57,6 +57,7 @@ from app.stores.base import (
     StoreUsage,
     dumps,
     loads,
+    session_limit,
     unavailable_on,
 )
 from app.stores.redis_keys import DEFAULT_PREFIX, RedisKeys
@@ -70,9 +71,15 @@ SOCKET_TIMEOUT_S = 5.0
 UNREACHABLE = (redis.ConnectionError, redis.TimeoutError)
 """redis-py's errors of a server that does not answer (after its retries)."""
 
-# KEYS: session, index. ARGV: id, config, token_hash, created_at, deleted, score.
+# KEYS: session, index. ARGV: id, config, token_hash, created_at, deleted, score, the
+# session limit ('' for none). Replies 1 (created), 0 (the id exists) or -1 - live (the
+# index holds `limit` live sessions already): counting and creating are one step.
 _CREATE = """
 if redis.call('EXISTS', KEYS[1]) == 1 then return 0 end
+if ARGV[7] ~= '' then
+  local live = redis.call('ZCARD', KEYS[2])
+  if live >= tonumber(ARGV[7]) then return -1 - live end
+end
 redis.call('HSET', KEYS[1], 'id', ARGV[1], 'config', ARGV[2], 'token_hash', ARGV[3],
            'created_at', ARGV[4], 'deleted', ARGV[5], 'last_seq', '0')
 if ARGV[5] == '0' then redis.call('ZADD', KEYS[2], ARGV[6], ARGV[1]) end
@@ -201,9 +208,10 @@ class RedisStore:
     prefix
         Start of every key name (``CREDAL_REDIS_PREFIX``).
 
-    The client is redis-py's thread-safe one with a connection pool; the
-    constructor pings the server so a wrong URL fails at start, not at the
-    first request.
+    The client is redis-py's thread-safe one with a connection pool. The
+    constructor does not connect: a server that is down at start (or later)
+    makes every call raise :class:`StoreUnavailable` until it answers again
+    (``/readyz`` says so; ``credal-fusion serve`` starts anyway).
     """
 
     kind = "redis"
@@ -226,7 +234,6 @@ class RedisStore:
         self._snapshot = self.client.register_script(_SNAPSHOT)
         self._load = self.client.register_script(_LOAD)
         self._compact = self.client.register_script(_COMPACT)
-        self.ping()
 
     @property
     def prefix(self) -> str:
@@ -242,7 +249,7 @@ class RedisStore:
     def _reachable() -> contextlib.AbstractContextManager[None]:
         return unavailable_on(UNREACHABLE, "redis")
 
-    def create_session(self, record: SessionRecord) -> None:
+    def create_session(self, record: SessionRecord, max_sessions: int | None = None) -> None:
         with self._reachable():
             created = self._create(
                 keys=[self.keys.session(record.id), self.keys.sessions()],
@@ -253,9 +260,13 @@ class RedisStore:
                     record.created_at.isoformat(),
                     "1" if record.deleted else "0",
                     creation_score(record.created_at),
+                    "" if max_sessions is None else str(max_sessions),
                 ],
                 client=self._redis(),
             )
+        if created < 0:
+            assert max_sessions is not None
+            raise session_limit(max_sessions, -1 - int(created))
         if not created:
             raise SessionExists(record.id)
 

@@ -42,6 +42,7 @@ from app.stores.base import (
     dumps,
     loads,
     require,
+    session_limit,
     unavailable_on,
 )
 
@@ -183,13 +184,19 @@ class SqliteStore:
         ).fetchone()
         return int(row[0]) if row[0] is not None else 0
 
-    def create_session(self, record: SessionRecord) -> None:
-        with self._write() as connection:
+    def create_session(self, record: SessionRecord, max_sessions: int | None = None) -> None:
+        with self._write() as connection:  # one IMMEDIATE transaction: count, then insert
             exists = connection.execute(
                 "SELECT 1 FROM sessions WHERE id = ?", (record.id,)
             ).fetchone()
             if exists is not None:
                 raise SessionExists(record.id)
+            if max_sessions is not None:
+                (live,) = connection.execute(
+                    "SELECT COUNT(*) FROM sessions WHERE deleted = 0"
+                ).fetchone()
+                if live >= max_sessions:
+                    raise session_limit(max_sessions, int(live))
             connection.execute(
                 "INSERT INTO sessions (id, config, token_hash, created_at, deleted) VALUES (?, ?, ?, ?, ?)",
                 (

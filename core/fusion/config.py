@@ -67,7 +67,7 @@ class FusionConfig:
         ``distance=None`` takes the method's own (``core.association.DEFAULT_DISTANCE``).
     track_continuity : a report track that keeps the id under which its sensor
         last reported a live fused track stays with it while it passes a loose χ²
-        gate (``sum`` distance, see ``engine.CONTINUITY_GATE_PROBABILITY``); only the rest
+        gate (``sum`` distance, see ``core.fusion.associate.CONTINUITY_GATE_PROBABILITY``); only the rest
         goes to the association method. Off, every report is associated afresh.
     state_fusion : how the sensors' latest estimates are combined.
     management : the track life cycle (shared with the local trackers); its densities
@@ -137,7 +137,8 @@ class FusionConfig:
             if sensor.id == sensor_id:
                 return sensor
         raise InvalidInput(
-            f"unknown sensor {sensor_id!r}; the session has {[s.id for s in self.sensors]}"
+            f"unknown sensor {sensor_id!r}; the session has {[s.id for s in self.sensors]}",
+            loc=("sensor",),
         )
 
     @property

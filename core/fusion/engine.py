@@ -6,7 +6,11 @@ engine"; docs/algorithms.md §6). Same configuration + same inputs in the same
 order → bit-identical outputs. Its whole state exports to plain data
 (:meth:`SessionEngine.export`) and restores exactly (:meth:`SessionEngine.restore`).
 
-One track-list step ([T2T] Fig 1-2, generalised to N sensors and to time):
+One track-list step ([T2T] Fig 1-2, generalised to N sensors and to time) is
+an assembly of the pipeline parts of :mod:`core.pipeline` (docs/algorithms.md
+§7.5; the local tracker is the other), over the engine's rows: the estimate
+table (kinematics, report times) and, row for row, the tracks' numbers and
+lives (:class:`~core.fusion.track.FusedRows`):
 
 1. check the report (sensor known, newer than that sensor's previous report,
    numbers finite and within the bounds of ``core.numerics``, shapes right,
@@ -14,7 +18,7 @@ One track-list step ([T2T] Fig 1-2, generalised to N sensors and to time):
 2. predict the live fused tracks to the report time: each track's state is
    the fusion of every sensor's latest estimate predicted to that time;
 3. associate the report's tracks with them by the session's method, with
-   class information when both sides carry it (§3.6);
+   class information when both sides carry it (§3.6; :mod:`core.fusion.associate`);
 4. each associated report track becomes its sensor's latest estimate of the
    fused track; unassociated ones start tentative tracks;
 5. life cycle, shared with the local tracker (:func:`core.lifecycle.advance`):
@@ -28,8 +32,8 @@ One track-list step ([T2T] Fig 1-2, generalised to N sensors and to time):
 6. class fusion per track from the sensors' latest class evidence.
 
 **Transactions.** A step checkpoints the tracks' fields (their containers
-are replaced, never changed in place), the estimate table and the sensor's
-local tracker; when anything in it
+are replaced, never changed in place), the rows (never changed in place), the
+estimate table and the sensor's local tracker; when anything in it
 raises — a refused input or an internal error — they come back and the
 export is bit-identical to before. There is no check-before-change: the
 step itself is the check.
@@ -48,17 +52,15 @@ import math
 from collections import Counter
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from core.arrays import FloatArray, IntArray
-from core.association import ScoreMatrix, associate
+from core.arrays import BoolArray, FloatArray, IntArray
 from core.belief import MassFunction
-from core.distance import Estimates, chi2_quantile
-from core.distance.cholesky import quadratic_form_and_log_det
+from core.distance import Estimates
 from core.errors import InvalidInput, StaleReport, TotalConflict
+from core.fusion.associate import Decision, associate_report
 from core.fusion.classes import ClassAssessment, accumulate_likelihoods, fuse_sensor_classes
 from core.fusion.config import FusionConfig, SensorSpec
 from core.fusion.detections import local_track_report
@@ -71,50 +73,33 @@ from core.fusion.reports import (
     TrackReport,
 )
 from core.fusion.table import EstimateTable
-from core.fusion.track import FusedTrack, SensorEstimate
+from core.fusion.track import FusedRows, FusedTrack, Kinematics, SensorEstimate
 from core.lifecycle import (
+    COASTING,
+    CONFIRMED,
+    PHANTOM,
     REASON_CODES,
     STATUS_CODES,
+    TENTATIVE,
     TERMINATED,
     Evidence,
     LifeState,
     StatusReason,
     TrackStatus,
     advance,
-    established,
-    everywhere,
     hand_over,
-    sensor_view,
+    initiated,
 )
 from core.numerics import MAX_TIME, check_magnitudes
+from core.pipeline.evidence import coasting_misses, coverage_codes, hits, seen_by
+from core.pipeline.gate import position_distances
+from core.pipeline.handover import hand_over_pairs
+from core.pipeline.rows import TrackRows, ended
 from core.tracking.tracker import LocalTracker
 
 EXPORT_VERSION = 1
 LIVE = (TrackStatus.TENTATIVE, TrackStatus.CONFIRMED, TrackStatus.COASTING)
-CONTINUITY_GATE_PROBABILITY = 1.0 - 1e-9
-"""Gate of track continuity: a sensor's own track id is strong evidence, so the
-gate only catches a sensor that reuses an id for another object (not the
-1-in-1000 noise excursion a 0.999 gate rejects at every thousandth report)."""
-
-
-@dataclass(frozen=True)
-class Decision:
-    """One step's association by row (live fused track) and column (report track) index.
-
-    ``pairs`` holds (row, col, score, basis): basis ``"continuity"`` (the sensor
-    kept its track id; no method score) or ``"association"`` (the method's
-    score). ``scores`` is the method's (sparse) matrix over ``matrix_rows ×
-    matrix_cols``, made dense only when a step is explained; ``None`` when
-    one side was empty after continuity and the method did not run.
-    """
-
-    method: str
-    pairs: list[tuple[int, int, float | None, str]]
-    new: list[int]
-    missed: list[int]
-    matrix_rows: IntArray
-    matrix_cols: IntArray
-    scores: ScoreMatrix | None
+_LIVE_CODES = tuple(STATUS_CODES[status] for status in LIVE)
 
 
 class SessionEngine:
@@ -127,6 +112,7 @@ class SessionEngine:
         self.next_number = 1
         self.last_report: dict[str, float] = {}
         self.tracks: list[FusedTrack] = []
+        """The fused tracks, ``tracks[k].row == k`` (their estimates and lives: ``_rows``)."""
         self.local_trackers: dict[str, LocalTracker] = {
             sensor.id: LocalTracker(sensor.tracker)
             for sensor in config.sensors
@@ -139,6 +125,7 @@ class SessionEngine:
         self._table = EstimateTable(
             [sensor.id for sensor in config.sensors], config.motion, config.state_fusion
         )
+        self._rows = FusedRows(self._table)
 
     # ------------------------------------------------------------ the step
     def apply(self, report: TrackReport, *, explain: bool = False) -> StepResult:
@@ -178,7 +165,8 @@ class SessionEngine:
         if tracker is None:
             raise InvalidInput(
                 f"sensor {sensor.id!r} sends track lists: it has no local tracker for detections "
-                "(configure its measurement model)"
+                "(configure its measurement model)",
+                loc=("sensor",),
             )
         check_time(report.time)
         last = self.last_report.get(sensor.id)
@@ -199,13 +187,13 @@ class SessionEngine:
         """A step either succeeds whole or changes nothing (docs/design.md "The session engine").
 
         Each track's fields are checkpointed (:meth:`FusedTrack.checkpoint`: its
-        containers are only ever replaced), as are the counters, the table's
-        estimates and the local tracker; on any exception they come back, so the
-        export is bit-identical to before.
+        containers are only ever replaced), as are the counters, the rows (never
+        changed in place), the table's estimates and the local tracker; on any
+        exception they come back, so the export is bit-identical to before.
         """
         seq, time, next_number = self.seq, self.time, self.next_number
         last_report, tracks = dict(self.last_report), self.tracks
-        checkpoint = self._table.checkpoint()
+        checkpoint, rows = self._table.checkpoint(), self._rows.rows
         saved = None if tracker is None else tracker.checkpoint()
         fields = [track.checkpoint() for track in tracks]
         self.tracks = list(tracks)
@@ -213,7 +201,7 @@ class SessionEngine:
             yield
         except BaseException:
             self.seq, self.time, self.next_number = seq, time, next_number
-            self.last_report, self.tracks = last_report, tracks
+            self.last_report, self.tracks, self._rows.rows = last_report, tracks, rows
             for track, kept in zip(tracks, fields, strict=True):
                 track.rollback(kept)
             self._table.rollback(checkpoint)
@@ -222,19 +210,27 @@ class SessionEngine:
             raise
 
     def _apply(self, report: TrackReport, explain: bool) -> StepResult:
-        """The step of :meth:`apply`, inside its transaction."""
+        """The step of :meth:`apply`, inside its transaction: the pipeline of
+        ``core.pipeline`` over the table's rows."""
         sensor, incoming = self._check(report)
         t = float(report.time)
-        live = [track for track in self.tracks if track.status in LIVE]
-        states, covariances = self._fused_at(live, t)
-        decision = self._associate(live, states, covariances, report, incoming)
+        live = np.flatnonzero(_is_live(self._rows.rows.life.status))
+        states, covariances = self._table.fused_at(live, t)  # predict
+        decision = associate_report(
+            self.config,
+            [self.tracks[row] for row in live.tolist()],
+            states,
+            covariances,
+            report,
+            incoming,
+            self._classify,
+        )
 
         rows = np.array([pair[0] for pair in decision.pairs], dtype=np.int64)
         cols = np.array([pair[1] for pair in decision.pairs], dtype=np.int64)
         increments = self._hit_increments(states[rows], covariances[rows], incoming, cols, sensor)
-        self._record([live[row] for row in rows.tolist()], cols, report, incoming)
+        self._record(live[rows], cols, report, incoming)  # update
         created = self._start(np.asarray(decision.new, dtype=np.int64), report, incoming)
-        self.tracks.extend(created)
 
         self.time = t if self.time is None else max(self.time, t)
         self.last_report[report.sensor] = t
@@ -242,10 +238,11 @@ class SessionEngine:
         terminated, confirmed = self._life_cycle(
             sensor, live, states, covariances, rows, increments
         )
-        fresh = confirmed + [track for track in created if track.status is TrackStatus.CONFIRMED]
-        self._hand_over_to_phantoms(fresh, terminated)
-        self._absorb_duplicates(terminated, created)
-        return self._result(report, decision, live, terminated, explain)
+        status = self._rows.rows.life.status
+        fresh = np.concatenate([confirmed, created[status[created] == CONFIRMED]])
+        terminated = self._hand_over_to_phantoms(fresh, terminated)  # hand-over
+        terminated = self._absorb_duplicates(terminated, created)
+        return self._result(report, decision, live, terminated, explain)  # and keep the rows
 
     # ------------------------------------------------------------ checks
     def _check(self, report: TrackReport) -> tuple[SensorSpec, Estimates]:
@@ -258,18 +255,21 @@ class SessionEngine:
         ids = [track.id for track in report.tracks]
         if len(set(ids)) != len(ids):
             repeated = sorted(track_id for track_id, n in Counter(ids).items() if n > 1)
-            raise InvalidInput(f"tracks: ids repeat: {repeated}")
+            first = {track_id: index for index, track_id in reversed(list(enumerate(ids)))}
+            second = next(index for index, track_id in enumerate(ids) if first[track_id] != index)
+            raise InvalidInput(f"tracks: ids repeat: {repeated}", loc=("tracks", second, "id"))
         dim = self.config.dim
         for index, track in enumerate(report.tracks):
             if track.state.shape != (dim,) or track.covariance.shape != (dim, dim):
                 raise InvalidInput(
                     f"tracks[{index}] (id {track.id!r}): state must have {dim} components and "
-                    f"covariance {dim}×{dim}, got {track.state.shape} and {track.covariance.shape}"
+                    f"covariance {dim}×{dim}, got {track.state.shape} and {track.covariance.shape}",
+                    loc=("tracks", index, "state" if track.state.shape != (dim,) else "covariance"),
                 )
             if self.config.classes is not None or (
                 track.class_mass is not None or track.class_likelihoods is not None
             ):
-                self._check_classes(track, f"tracks[{index}] (id {track.id!r})")
+                self._check_classes(track, index)
         estimates = Estimates.of(
             np.array([track.state for track in report.tracks]).reshape(-1, dim),
             np.array([track.covariance for track in report.tracks]).reshape(-1, dim, dim),
@@ -280,170 +280,45 @@ class SessionEngine:
         check_magnitudes(estimates.states, estimates.covariances, "tracks")
         return sensor, estimates
 
-    def _check_classes(self, track: ReportedTrack, where: str) -> None:
+    def _check_classes(self, track: ReportedTrack, index: int) -> None:
         frame = self.config.classes
+        where = f"tracks[{index}] (id {track.id!r})"
+        evidence = "class_mass" if track.class_mass is not None else "class_likelihoods"
         if track.class_mass is not None and track.class_likelihoods is not None:
-            raise InvalidInput(f"{where}: give a class mass or class likelihoods, not both")
+            raise InvalidInput(
+                f"{where}: give a class mass or class likelihoods, not both",
+                loc=("tracks", index, "class_likelihoods"),
+            )
         if frame is None:
             if track.class_mass is not None or track.class_likelihoods is not None:
                 raise InvalidInput(
-                    f"{where}: the session has no classes, but the track carries class evidence"
+                    f"{where}: the session has no classes, but the track carries class evidence",
+                    loc=("tracks", index, evidence),
                 )
             return
         if track.class_mass is not None and track.class_mass.frame != frame:
             raise InvalidInput(
-                f"{where}: class mass is not on the session's classes {list(frame.labels)}"
+                f"{where}: class mass is not on the session's classes {list(frame.labels)}",
+                loc=("tracks", index, "class_mass"),
             )
         if track.class_likelihoods is not None:
             likelihoods = track.class_likelihoods
+            at = ("tracks", index, "class_likelihoods")
             if likelihoods.shape != (len(frame),):
-                raise InvalidInput(f"{where}: need one likelihood per class ({len(frame)})")
+                raise InvalidInput(f"{where}: need one likelihood per class ({len(frame)})", loc=at)
             if (
                 not np.all(np.isfinite(likelihoods))
                 or likelihoods.min() < 0.0
                 or likelihoods.max() > 1.0
             ):
-                raise InvalidInput(f"{where}: class likelihoods must lie in [0, 1]")
+                raise InvalidInput(f"{where}: class likelihoods must lie in [0, 1]", loc=at)
             if likelihoods.max() == 0.0:
                 raise InvalidInput(
-                    f"{where}: class likelihoods are all zero: the evidence rules out every class"
+                    f"{where}: class likelihoods are all zero: the evidence rules out every class",
+                    loc=at,
                 )
 
-    # ------------------------------------------------------- prediction
-    def _fused_at(self, tracks: list[FusedTrack], time: float) -> tuple[FloatArray, FloatArray]:
-        """The fused state of every track at ``time``: its sensors' estimates predicted and fused.
-
-        The table keeps what it computed at the latest times until an estimate
-        changes (:class:`~core.fusion.table.EstimateTable`), so the several
-        looks of one step at the same time cost one computation per track.
-        """
-        rows = np.fromiter((track.row for track in tracks), dtype=np.int64, count=len(tracks))
-        return self._table.fused_at(rows, time)
-
     # ------------------------------------------------------- association
-    def _associate(
-        self,
-        live: list[FusedTrack],
-        states: FloatArray,
-        covariances: FloatArray,
-        report: TrackReport,
-        incoming: Estimates,
-    ) -> Decision:
-        """Continuity first (when on), then the session's method on what is left."""
-        incoming_states, incoming_covariances = incoming.states, incoming.covariances
-        assert incoming_covariances is not None
-        kept = self._continuity(live, states, covariances, report, incoming)
-        kept_rows = set(kept.values())
-        rows = np.array([row for row in range(len(live)) if row not in kept_rows], dtype=np.int64)
-        cols = np.array(
-            [col for col in range(len(report.tracks)) if col not in kept], dtype=np.int64
-        )
-        pairs: list[tuple[int, int, float | None, str]] = sorted(
-            (row, col, None, "continuity") for col, row in kept.items()
-        )
-        if len(rows) == 0 or len(cols) == 0:  # nothing left to decide: no method run
-            return Decision(
-                method=self.config.association_method,
-                pairs=pairs,
-                new=cols.tolist(),
-                missed=rows.tolist(),
-                matrix_rows=rows,
-                matrix_cols=cols,
-                scores=None,
-            )
-        known_classes, incoming_classes = self._association_classes(live, report)
-        result = (
-            associate(  # not checked again: the report by _check, the fused side by construction
-                Estimates(states[rows], covariances[rows], "known"),
-                Estimates(incoming_states[cols], incoming_covariances[cols], "incoming"),
-                self.config.association_method,
-                self.config.association_options,
-                self.config.distance or "sum",
-                None if known_classes is None else [known_classes[row] for row in rows],
-                None if incoming_classes is None else [incoming_classes[col] for col in cols],
-            )
-        )
-        pairs += [
-            (int(rows[k]), int(cols[i]), float(score), "association")
-            for k, i, score in zip(
-                result.pair_known, result.pair_incoming, result.pair_score, strict=True
-            )
-        ]
-        pairs.sort(key=lambda pair: (pair[0], pair[1]))
-        return Decision(
-            method=result.method,
-            pairs=pairs,
-            new=[int(cols[i]) for i in result.new],
-            missed=[int(rows[k]) for k in result.missed],
-            matrix_rows=rows,
-            matrix_cols=cols,
-            scores=result.scores,
-        )
-
-    def _continuity(
-        self,
-        live: list[FusedTrack],
-        states: FloatArray,
-        covariances: FloatArray,
-        report: TrackReport,
-        incoming: Estimates,
-    ) -> dict[int, int]:
-        """Report tracks the sensor keeps reporting under the id it gave a fused track.
-
-        ``{report column: fused row}`` for every report track whose (sensor, id)
-        is the latest estimate of a live fused track and still passes the χ²
-        gate (:data:`CONTINUITY_GATE_PROBABILITY`) on the ``sum`` distance;
-        empty when continuity is off.
-        """
-        if not self.config.track_continuity:
-            return {}
-        bound = {
-            fused.estimates[report.sensor].track: row
-            for row, fused in enumerate(live)
-            if report.sensor in fused.estimates
-        }
-        pairs = [(col, bound[t.id]) for col, t in enumerate(report.tracks) if t.id in bound]
-        if not pairs:
-            return {}
-        cols = np.array([col for col, _ in pairs], dtype=np.int64)
-        rows = np.array([row for _, row in pairs], dtype=np.int64)
-        assert incoming.covariances is not None
-        distance, _ = _mahalanobis(
-            incoming.states[cols] - states[rows], incoming.covariances[cols] + covariances[rows]
-        )
-        gate = chi2_quantile(CONTINUITY_GATE_PROBABILITY, self.config.dim)
-        passed = distance <= gate
-        return dict(zip(cols[passed].tolist(), rows[passed].tolist(), strict=True))
-
-    def _association_classes(
-        self, live: list[FusedTrack], report: TrackReport
-    ) -> tuple[list[MassFunction] | None, list[MassFunction] | None]:
-        """Class masses of both sides when the report carries class evidence (§3.6)."""
-        frame = self.config.classes
-        if frame is None or not any(
-            t.class_mass is not None or t.class_likelihoods is not None for t in report.tracks
-        ):
-            return None, None
-        vacuous = MassFunction.vacuous(frame)
-        incoming = []
-        for track in report.tracks:
-            if track.class_mass is not None:
-                incoming.append(_normalised_or_vacuous(track.class_mass))
-            elif track.class_likelihoods is not None:
-                try:
-                    incoming.append(accumulate_likelihoods(None, frame, track.class_likelihoods)[0])
-                except TotalConflict:
-                    incoming.append(vacuous)
-            else:
-                incoming.append(vacuous)
-        known = []
-        for fused in live:
-            assessment = self._classify(fused)
-            known.append(
-                vacuous if assessment is None or assessment.mass is None else assessment.mass
-            )
-        return known, incoming
-
     # ------------------------------------------------------- life cycle
     def _hit_increments(
         self,
@@ -453,37 +328,35 @@ class SessionEngine:
         cols: IntArray,
         sensor: SensorSpec,
     ) -> FloatArray:
-        """Score increments ΔL of every associated pair, on the position components."""
+        """Score increments ΔL of every associated pair, on the position components
+        ([MTT] §4.3, eq 16; docs/algorithms.md §6.5)."""
         if len(cols) == 0:
             return np.zeros(0)
         assert incoming.covariances is not None
-        position = self._position
-        combined = (covariances + incoming.covariances[cols])[:, position][:, :, position]
-        innovation = incoming.states[cols][:, position] - states[:, position]
-        distance, log_det = _mahalanobis(innovation, combined)
+        distance, log_det = position_distances(
+            states, covariances, incoming.states[cols], incoming.covariances[cols], self._position
+        )
         score = self.config.management.score_model(sensor.p_detect)
         return score.hit_increment(distance, log_det, len(self._position))
 
     def _record(
-        self, tracks: list[FusedTrack], cols: IntArray, report: TrackReport, incoming: Estimates
+        self, rows: IntArray, cols: IntArray, report: TrackReport, incoming: Estimates
     ) -> None:
-        """Report tracks ``cols`` become their sensor's latest estimates of ``tracks``."""
-        if not tracks:
+        """Report tracks ``cols`` become their sensor's latest estimates of the tracks ``rows``."""
+        if len(rows) == 0:
             return
         states, covariances = incoming.states, incoming.covariances
         assert covariances is not None
         sensor = report.sensor
-        rows = np.fromiter((fused.row for fused in tracks), dtype=np.int64, count=len(tracks))
         self._table.write(rows, sensor, states[cols], covariances[cols], report.time)
-        for fused, col in zip(tracks, cols.tolist(), strict=True):
+        for row, col in zip(rows.tolist(), cols.tolist(), strict=True):
+            fused = self.tracks[row]
             reported = report.tracks[col]
             previous = fused.estimates.get(sensor)
             fused.set_estimate(
                 sensor,
                 SensorEstimate(
-                    track=reported.id,
-                    time=report.time,
-                    class_mass=self._class_evidence(reported, previous),
+                    track=reported.id, class_mass=self._class_evidence(reported, previous)
                 ),
             )
 
@@ -509,61 +382,45 @@ class SessionEngine:
     def _life_cycle(
         self,
         sensor: SensorSpec,
-        live: list[FusedTrack],
+        live: IntArray,
         states: FloatArray,
         covariances: FloatArray,
         hit_rows: IntArray,
         increments: FloatArray,
-    ) -> tuple[list[FusedTrack], list[FusedTrack]]:
+    ) -> tuple[IntArray, IntArray]:
         """:func:`core.lifecycle.advance` over every track that is not terminated.
 
-        Hits and misses are the step's (``live`` at the report time: ``states``,
-        ``covariances`` as predicted before the update); coverage is looked at
-        at the fusion time. Returns the tracks terminated and confirmed by it.
+        Hits and misses are the step's (the ``live`` rows at the report time:
+        ``states``, ``covariances`` as predicted before the update); coverage is
+        looked at at the fusion time. Returns the rows terminated and confirmed by it.
         """
         assert self.time is not None
         management = self.config.management
-        candidates = [track for track in self.tracks if track.status is not TrackStatus.TERMINATED]
+        before = self._rows.rows.life
+        candidates = np.flatnonzero(before.status != TERMINATED)
         count = len(candidates)
         if count == 0:
-            return [], []
-        index = {id(track): k for k, track in enumerate(candidates)}
-        live_index = np.fromiter((index[id(track)] for track in live), np.int64, len(live))
-        before = _read_life(candidates)
-        detected = np.zeros(count, dtype=bool)
-        hit_increment = np.zeros(count)
-        detected[live_index[hit_rows]] = True
-        hit_increment[live_index[hit_rows]] = increments
-        seen = np.zeros(count, dtype=bool)
-        hidden = np.zeros(count, dtype=bool)
+            return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+        every = count == len(before)
+        life = before if every else before.select(candidates)
+        # where each live row sits among the candidates (all rows, unless a restore had others)
+        at = live if every else np.searchsorted(candidates, live)
+        detected, hit_increment = hits(count, at[hit_rows], increments)
+        seen, hidden = np.zeros(count, dtype=bool), np.zeros(count, dtype=bool)
         gate_log_det = np.zeros(count)
         position = self._position
-        if live:
-            live_status = before.status[live_index]
-            established_rows = established(live_status)
-            if len(position) >= 2:
-                plane = states[:, position[:2]]
-                live_seen, live_hidden = sensor_view(
-                    sensor.fov, plane, plane[established_rows], management.occlusion_radius
-                )
-            else:
-                _, live_seen, live_hidden = everywhere(len(live))
-            seen[live_index], hidden[live_index] = live_seen, live_hidden
-            established_miss = np.flatnonzero(live_seen & ~detected[live_index] & established_rows)
-            if len(established_miss):
-                gate_log_det[live_index[established_miss]] = self._gate_log_dets(
-                    [live[row] for row in established_miss.tolist()],
-                    covariances[established_miss],
-                )
-        fused_states, _ = self._fused_at(candidates, self.time)
-        codes = (
-            self._coverage.visibility(fused_states[:, position[:2]])
-            if len(position) >= 2
-            else everywhere(count)[0]
-        )
+        if len(live):
+            live_status = life.status[at]
+            seen[at], hidden[at] = seen_by(
+                sensor.fov, states[:, position], live_status, management.occlusion_radius
+            )
+            missed = np.flatnonzero(coasting_misses(live_status, seen[at], detected[at]))
+            if len(missed):
+                gate_log_det[at[missed]] = self._gate_log_dets(live[missed], covariances[missed])
+        fused_states, _ = self._table.fused_at(candidates, self.time)
         after, confirmed = advance(
             management,
-            before,
+            life,
             Evidence(
                 time=self.time,
                 detected=detected,
@@ -572,67 +429,66 @@ class SessionEngine:
                 miss_increment=management.score_model(sensor.p_detect).miss_increment,
                 gate_log_det=gate_log_det,
                 gate_dim=len(position),
-                visibility=codes,
+                visibility=coverage_codes(self._coverage, fused_states[:, position]),
                 occluded=hidden,
-                sensors=np.array([len(t.estimates) for t in candidates], dtype=np.int64),
+                sensors=self._table.present[candidates].sum(axis=1),
             ),
         )
-        _write_life(candidates, after, before)
-        ended = (after.status == TERMINATED) & (before.status != TERMINATED)
-        return (
-            [candidates[k] for k in np.flatnonzero(ended).tolist()],
-            [candidates[k] for k in np.flatnonzero(confirmed).tolist()],
+        self._rows.rows = self._rows.rows.living(
+            after if every else _replaced_life(before, candidates, after)
         )
+        return candidates[ended(life, after)], candidates[confirmed]
 
-    def _gate_log_dets(self, tracks: list[FusedTrack], predicted: FloatArray) -> FloatArray:
-        """log|S| of each track's gate: its predicted covariance plus its newest estimate's,
+    def _gate_log_dets(self, rows: IntArray, predicted: FloatArray) -> FloatArray:
+        """log|S| of each row's gate: its predicted covariance plus its newest estimate's,
         on the position components ([HZ] §4.2)."""
-        position = self._position
-        gates = []
-        for fused, predicted_covariance in zip(tracks, predicted, strict=True):
-            # ties by sensor id: not by dict order, which a restore through a store may change
-            newest = max(sorted(fused.estimates), key=lambda sensor: fused.estimates[sensor].time)
-            _, covariance = self._table.estimate(fused.row, newest)
-            gates.append(
-                predicted_covariance[np.ix_(position, position)]
-                + covariance[np.ix_(position, position)]
-            )
-        return np.asarray(np.linalg.slogdet(np.array(gates))[1], dtype=np.float64)
+        table, position = self._table, self._position
+        # the newest estimate; ties by sensor id (not by dict order, which a restore
+        # through a store may change)
+        by_id = np.array([slot for _, slot in self._rows.sorted_slots], dtype=np.int64)
+        times = np.where(table.present[rows][:, by_id], table.times[rows][:, by_id], -np.inf)
+        newest = by_id[np.argmax(times, axis=1)]
+        gates = (
+            predicted[:, position][:, :, position]
+            + table.covariances[rows, newest][:, position][:, :, position]
+        )
+        return np.asarray(np.linalg.slogdet(gates)[1], dtype=np.float64)
 
-    def _start(self, cols: IntArray, report: TrackReport, incoming: Estimates) -> list[FusedTrack]:
-        """A fused track for each of the report tracks ``cols``: tentative, or confirmed at
-        once when the session's only sensor is tracked here (its local tracker reports only
-        the tracks it has confirmed, and with no other sensor a second test could only
-        delay them), at the score ceiling. With several sensors the fused layer tests
-        again: it absorbs a sensor's duplicates and waits for corroboration."""
+    def _start(self, cols: IntArray, report: TrackReport, incoming: Estimates) -> IntArray:
+        """A fused track for each of the report tracks ``cols``; returns their rows.
+
+        Tentative; or confirmed at once (:func:`core.lifecycle.initiated`) when the
+        session's only sensor is tracked here (its local tracker reports only the
+        tracks it has confirmed, and with no other sensor a second test could only
+        delay them). With several sensors the fused layer tests again: it absorbs a
+        sensor's duplicates and waits for corroboration."""
+        if len(cols) == 0:
+            return np.zeros(0, dtype=np.int64)
         management = self.config.management
         sensor = self.config.sensor(report.sensor)
-        initial = management.score_model(sensor.p_detect)
-        status, reason, score = TrackStatus.TENTATIVE, StatusReason.INITIATED, initial.initial
-        if sensor.tracker is not None and len(self.config.sensors) == 1:
-            status, reason = TrackStatus.CONFIRMED, StatusReason.LOCAL_CONFIRMED
-            score = min(management.score_ceiling, management.confirm_threshold)
-        created = []
-        for row in self._table.add_rows(len(cols)).tolist():
-            created.append(
-                FusedTrack(
-                    id=f"F{self.next_number}",
-                    status=status,
-                    reason=reason,
-                    score=score,
-                    row=row,
-                )
-            )
-            self.next_number += 1
-        self._record(created, cols, report, incoming)
-        return created
+        life = initiated(
+            management,
+            len(cols),
+            management.score_model(sensor.p_detect).initial,
+            confirmed_below=sensor.tracker is not None and len(self.config.sensors) == 1,
+        )
+        rows = self._table.add_rows(len(cols))
+        self._rows.rows = self._rows.rows.started(self.next_number, life)
+        self.tracks = self.tracks + [
+            FusedTrack(id=f"F{self.next_number + k}", rows=self._rows, row=row)
+            for k, row in enumerate(rows.tolist())
+        ]
+        self.next_number += len(cols)
+        self._record(rows, cols, report, incoming)
+        return rows
 
-    def _hand_over_to_phantoms(self, fresh: list[FusedTrack], terminated: list[FusedTrack]) -> None:
-        """A track confirmed in this step that matches a phantom gives it its estimates ([HZ] §5.1)."""
-        phantoms = [track for track in self.tracks if track.status is TrackStatus.PHANTOM]
-        self._merge(phantoms, fresh, StatusReason.MERGED_INTO_PHANTOM, terminated)
+    def _hand_over_to_phantoms(self, fresh: IntArray, terminated: IntArray) -> IntArray:
+        """A track confirmed in this step that matches a phantom gives it its estimates
+        ([HZ] §5.1); returns ``terminated`` and the newcomers it terminated."""
+        phantoms = np.flatnonzero(self._rows.rows.life.status == PHANTOM)
+        return self._merge(phantoms, fresh, StatusReason.MERGED_INTO_PHANTOM, terminated)
 
-    def _absorb_duplicates(self, terminated: list[FusedTrack], created: list[FusedTrack]) -> None:
+    def _absorb_duplicates(self, terminated: IntArray, created: IntArray) -> IntArray:
         """A tentative track that duplicates an established track of other sensors joins it.
 
         A sensor's first report of an object is associated by the method's gate;
@@ -641,69 +497,53 @@ class SessionEngine:
         tentative track, gated against a confirmed or coasting track that has
         no estimate from its sensors, is merged into it.
         """
+        status = self._rows.rows.life.status
         # a track created confirmed (a local tracker's) this step is a newcomer as well
-        fresh = {id(track) for track in created if track.status is TrackStatus.CONFIRMED}
-        tentative = [
-            track
-            for track in self.tracks
-            if track.status is TrackStatus.TENTATIVE
-            or (id(track) in fresh and track.status is TrackStatus.CONFIRMED)
-        ]
-        established_tracks = [
-            track
-            for track in self.tracks
-            if track.status in (TrackStatus.CONFIRMED, TrackStatus.COASTING)
-            and id(track) not in fresh
-        ]
-        self._merge(established_tracks, tentative, StatusReason.DUPLICATE, terminated)
+        fresh = np.zeros(len(status), dtype=bool)
+        fresh[created] = status[created] == CONFIRMED
+        tentative = np.flatnonzero((status == TENTATIVE) | fresh)
+        established_rows = np.flatnonzero(((status == CONFIRMED) | (status == COASTING)) & ~fresh)
+        return self._merge(established_rows, tentative, StatusReason.DUPLICATE, terminated)
 
     def _merge(
         self,
-        keepers: list[FusedTrack],
-        newcomers: list[FusedTrack],
+        keepers: IntArray,
+        newcomers: IntArray,
         reason: StatusReason,
-        terminated: list[FusedTrack],
-    ) -> None:
+        terminated: IntArray,
+    ) -> IntArray:
         """Gate ``newcomers`` against ``keepers`` (GNN, ``sum`` distance); merge disjoint pairs.
 
         The keeper keeps its id, takes the newcomer's estimates and becomes
         (or stays) confirmed; the newcomer is terminated with ``reason``.
+        Returns ``terminated`` and the newcomers merged.
         """
-        if not keepers or not newcomers or self.time is None:
-            return
-        keeper_states, keeper_covariances = self._fused_at(keepers, self.time)
-        newcomer_states, newcomer_covariances = self._fused_at(newcomers, self.time)
-        decision = associate(
-            (keeper_states, keeper_covariances),
-            (newcomer_states, newcomer_covariances),
-            "gnn",
-            {"gate_probability": self.config.management.gate_probability},
-            "sum",
+        if len(keepers) == 0 or len(newcomers) == 0 or self.time is None:
+            return terminated
+        table = self._table
+        known, incoming = hand_over_pairs(
+            table.fused_at(keepers, self.time),
+            table.fused_at(newcomers, self.time),
+            self.config.management.gate_probability,
         )
-        pairs = [
-            (keepers[row], newcomers[col])
-            for row, col in zip(decision.pair_known, decision.pair_incoming, strict=True)
-            # a sensor that reports both as distinct objects knows better
-            if not set(keepers[row].estimates) & set(newcomers[col].estimates)
-        ]
-        if not pairs:
-            return
-        for keeper, newcomer in pairs:
+        # a sensor that reports both as distinct objects knows better
+        disjoint = ~np.any(
+            table.present[keepers[known]] & table.present[newcomers[incoming]], axis=1
+        )
+        keeper_rows, newcomer_rows = keepers[known[disjoint]], newcomers[incoming[disjoint]]
+        if len(keeper_rows) == 0:
+            return terminated
+        for keeper_row, newcomer_row in zip(
+            keeper_rows.tolist(), newcomer_rows.tolist(), strict=True
+        ):
+            keeper, newcomer = self.tracks[keeper_row], self.tracks[newcomer_row]
             for sensor_id, estimate in newcomer.estimates.items():
                 keeper.set_estimate(sensor_id, estimate)
-                self._table.move(newcomer.row, keeper.row, sensor_id)
-        merged = [keeper for keeper, _ in pairs] + [newcomer for _, newcomer in pairs]
-        count = len(pairs)
-        _write_life(
-            merged,
-            hand_over(
-                _read_life(merged),
-                np.arange(count, dtype=np.int64),
-                np.arange(count, 2 * count, dtype=np.int64),
-                reason,
-            ),
+                table.move(newcomer_row, keeper_row, sensor_id)
+        self._rows.rows = self._rows.rows.living(
+            hand_over(self._rows.rows.life, keeper_rows, newcomer_rows, reason)
         )
-        terminated.extend(newcomer for _, newcomer in pairs)
+        return np.concatenate([terminated, newcomer_rows])
 
     # ------------------------------------------------------------ output
     def _classify(self, fused: FusedTrack) -> ClassAssessment | None:
@@ -716,78 +556,95 @@ class SessionEngine:
         self,
         report: TrackReport,
         decision: Decision,
-        live: list[FusedTrack],
-        terminated: list[FusedTrack],
+        live: IntArray,
+        terminated: IntArray,
         explain: bool,
     ) -> StepResult:
+        """The step's views (every track, those terminated in it included), then only the
+        tracks still alive are kept."""
         assert self.time is not None
-        ending = {id(track) for track in terminated}
-        shown = sorted(
-            (
-                track
-                for track in self.tracks
-                if track.status is not TrackStatus.TERMINATED or id(track) in ending
-            ),
-            key=lambda track: track.number,
-        )
-        states, covariances = self._fused_at(shown, self.time)
-        views = []
-        for track, state, plain, covariance in zip(
-            shown, states, states.tolist(), covariances, strict=True
+        live_ids = [self.tracks[row].id for row in live.tolist()]  # before the keep renumbers
+        rows = self._rows.rows
+        status = rows.life.status
+        ending = np.zeros(len(status), dtype=bool)
+        ending[terminated] = True
+        shown = np.flatnonzero((status != TERMINATED) | ending)
+        shown = shown[np.argsort(rows.numbers[shown], kind="stable")]
+        states, covariances = self._table.fused_at(shown, self.time)
+        views = self._views(shown, states, covariances)
+        for row, plain in zip(
+            shown[status[shown] != TERMINATED].tolist(),
+            states[status[shown] != TERMINATED].tolist(),
+            strict=True,
         ):
-            if track.status is not TrackStatus.TERMINATED:
-                track.remember(self.time, plain)
-            views.append(self._view(track, state, covariance))
-        if terminated:
-            self._keep(
-                [track for track in self.tracks if track.status is not TrackStatus.TERMINATED]
-            )
+            self.tracks[row].remember(self.time, plain)
+        if len(terminated):
+            self._keep(rows.alive)
         association = AssociationView(
             method=decision.method,
             pairs=tuple(
-                (live[row].id, report.tracks[col].id, score, basis)
+                (live_ids[row], report.tracks[col].id, score, basis)
                 for row, col, score, basis in decision.pairs
             ),
             new=tuple(report.tracks[col].id for col in decision.new),
-            missed=tuple(live[row].id for row in decision.missed),
-            matrix=self._explained(report, decision, live) if explain else None,
+            missed=tuple(live_ids[row] for row in decision.missed),
+            matrix=self._explained(report, decision, live_ids) if explain else None,
         )
         return StepResult(
             seq=self.seq,
             time=self.time,
             sensor=report.sensor,
-            tracks=tuple(views),
+            tracks=views,
             association=association,
         )
 
     @staticmethod
     def _explained(
-        report: TrackReport, decision: Decision, live: list[FusedTrack]
+        report: TrackReport, decision: Decision, live_ids: list[str]
     ) -> tuple[tuple[str, ...], tuple[str, ...], FloatArray]:
         """The decision matrix: [T2T] Table 1 with a ``*:<track id>`` row per report track."""
-        known = [live[row].id for row in decision.matrix_rows]
+        known = [live_ids[row] for row in decision.matrix_rows]
         incoming = [report.tracks[col].id for col in decision.matrix_cols]
         if decision.scores is None:
             return tuple(known), tuple(incoming), np.zeros((len(known), len(incoming)))
         return decision.scores.table(known, incoming)
 
-    def _keep(self, tracks: list[FusedTrack]) -> None:
-        """``tracks`` become the engine's tracks, rows 0, 1, … of the table in that order."""
-        self._table.keep(np.fromiter((track.row for track in tracks), np.int64, len(tracks)))
+    def _keep(self, rows: IntArray) -> None:
+        """Only ``rows`` are kept, renumbered 0, 1, … in that order (tracks, table, lives)."""
+        self._table.keep(rows)
+        self._rows.rows = self._rows.rows.select(rows)
+        tracks = [self.tracks[row] for row in rows.tolist()]
         for row, track in enumerate(tracks):
             track.row = row
         self.tracks = tracks
 
-    def _view(self, track: FusedTrack, state: FloatArray, covariance: FloatArray) -> FusedTrackView:
-        return FusedTrackView(
-            id=track.id,
-            status=track.status,
-            reason=track.reason,
-            state=state,
-            covariance=covariance,
-            sources=track.sources(),
-            classification=self._classify(track),
-            score=track.score,
+    def _views(
+        self, rows: IntArray, states: FloatArray, covariances: FloatArray
+    ) -> tuple[FusedTrackView, ...]:
+        """The tracks ``rows`` as a step shows them, with their fused states at a time."""
+        life = self._rows.rows.life.select(rows)
+        times = self._table.times[rows].tolist()
+        return tuple(
+            FusedTrackView(
+                id=track.id,
+                status=status,
+                reason=reason,
+                state=state,
+                covariance=covariance,
+                sources=track.sources(report_times),
+                classification=self._classify(track),
+                score=score,
+            )
+            for track, status, reason, score, report_times, state, covariance in zip(
+                [self.tracks[row] for row in rows.tolist()],
+                life.statuses(),
+                life.reasons(),
+                life.score.tolist(),
+                times,
+                states,
+                covariances,
+                strict=True,
+            )
         )
 
     def picture(self, time: float | None = None) -> tuple[FusedTrackView, ...]:
@@ -801,12 +658,8 @@ class SessionEngine:
             return ()
         if not math.isfinite(at):
             raise InvalidInput(f"time must be finite, got {at!r}")
-        shown = sorted(self.tracks, key=lambda track: track.number)
-        states, covariances = self._fused_at(shown, at)
-        return tuple(
-            self._view(track, state, covariance)
-            for track, state, covariance in zip(shown, states, covariances, strict=True)
-        )
+        shown = np.argsort(self._rows.rows.numbers, kind="stable")
+        return self._views(shown, *self._table.fused_at(shown, at))
 
     # ------------------------------------------------------ persistence
     def export(self) -> dict[str, Any]:
@@ -817,20 +670,28 @@ class SessionEngine:
             "time": self.time,
             "next_number": self.next_number,
             "last_report": dict(sorted(self.last_report.items())),
-            "tracks": [
-                track.to_plain(
-                    {sensor: self._table.estimate(track.row, sensor) for sensor in track.estimates}
-                )
-                for track in self.tracks
-            ],
+            "tracks": [track.to_plain(self._kinematics(track)) for track in self.tracks],
             "local_trackers": {
                 sensor: tracker.export() for sensor, tracker in sorted(self.local_trackers.items())
             },
         }
 
+    def _kinematics(self, track: FusedTrack) -> Kinematics:
+        table = self._table
+        return {
+            sensor: (
+                float(table.times[track.row, table.slot(sensor)]),
+                *table.estimate(track.row, sensor),
+            )
+            for sensor in track.estimates
+        }
+
     @classmethod
     def restore(cls, config: FusionConfig, state: dict[str, Any]) -> SessionEngine:
-        """Rebuild an engine from :meth:`export`'s output and the same configuration."""
+        """Rebuild an engine from :meth:`export`'s output and the same configuration.
+
+        Every export so far (version 1) has this layout; an unknown version is refused.
+        """
         if state.get("version") != EXPORT_VERSION:
             raise InvalidInput(f"unknown engine export version {state.get('version')!r}")
         engine = cls(config)
@@ -838,25 +699,39 @@ class SessionEngine:
         engine.time = None if state["time"] is None else float(state["time"])
         engine.next_number = int(state["next_number"])
         engine.last_report = {str(k): float(v) for k, v in state["last_report"].items()}
-        restored = [FusedTrack.from_plain(plain, config.classes) for plain in state["tracks"]]
-        tracks = [track for track, _ in restored]
-        empty = [track.id for track in tracks if not track.estimates]
+        plain_tracks = state["tracks"]
+        empty = [plain["id"] for plain in plain_tracks if not plain["estimates"]]
         if empty:
             raise InvalidInput(f"exported tracks without any sensor estimate: {empty}")
-        rows = engine._table.add_rows(len(tracks)).tolist()
-        for (track, kinematics), row in zip(restored, rows, strict=True):
-            track.row = row
-            for sensor, estimate in track.estimates.items():
-                if sensor not in engine._table.slots:
+        table = engine._table
+        rows = table.add_rows(len(plain_tracks)).tolist()
+        tracks = []
+        for plain, row in zip(plain_tracks, rows, strict=True):
+            track = FusedTrack(
+                id=str(plain["id"]),
+                rows=engine._rows,
+                row=row,
+                history=[
+                    (float(time), [float(x) for x in fused]) for time, fused in plain["history"]
+                ],
+            )
+            for sensor, entry in plain["estimates"].items():
+                if sensor not in table.slots:
                     raise InvalidInput(
                         f"exported track {track.id} has an estimate of sensor {sensor!r}, "
                         "which the config does not name"
                     )
-                state_, covariance = kinematics[sensor]
-                engine._table.write(
-                    np.array([row]), sensor, state_[None], covariance[None], estimate.time
+                estimate, time, state_, covariance = SensorEstimate.from_plain(
+                    entry, config.classes
                 )
+                track.set_estimate(str(sensor), estimate)
+                table.write(np.array([row]), sensor, state_[None], covariance[None], time)
+            tracks.append(track)
         engine.tracks = tracks
+        engine._rows.rows = TrackRows(
+            np.array([track.number for track in tracks], dtype=np.int64),
+            _plain_lives(plain_tracks),
+        )
         for sensor, plain in state["local_trackers"].items():
             tracker_config = config.sensor(sensor).tracker
             if tracker_config is None:
@@ -870,9 +745,11 @@ class SessionEngine:
 def check_time(time: float) -> None:
     """A report time must be finite and of magnitude at most :data:`core.numerics.MAX_TIME`."""
     if not math.isfinite(time):
-        raise InvalidInput(f"time must be finite, got {time!r}")
+        raise InvalidInput(f"time must be finite, got {time!r}", loc=("time",))
     if abs(time) > MAX_TIME:
-        raise InvalidInput(f"time: magnitude {time!r} is beyond the limit {MAX_TIME:g} s")
+        raise InvalidInput(
+            f"time: magnitude {time!r} is beyond the limit {MAX_TIME:g} s", loc=("time",)
+        )
 
 
 def check_detection_magnitudes(report: DetectionReport) -> None:
@@ -889,61 +766,44 @@ def check_detection_magnitudes(report: DetectionReport) -> None:
     check_magnitudes(measurements, covariances, "detections", ("z", "r"))
 
 
-def _read_life(tracks: list[FusedTrack]) -> LifeState:
-    """The life of ``tracks`` as arrays (:class:`core.lifecycle.LifeState`)."""
+def _is_live(status: IntArray) -> BoolArray:
+    """Tentative, confirmed or coasting: the tracks a report is associated with."""
+    live = np.zeros(len(status), dtype=bool)
+    for code in _LIVE_CODES:
+        live |= status == code
+    return live
+
+
+def _replaced_life(life: LifeState, rows: IntArray, by: LifeState) -> LifeState:
+    """``life`` with ``rows`` replaced by ``by`` (new arrays)."""
+    arrays = []
+    for name in ("status", "reason", "score", "hits", "empty_gate", "phantom_since"):
+        values = getattr(life, name).copy()
+        values[rows] = getattr(by, name)
+        arrays.append(values)
+    return LifeState(*arrays)
+
+
+def _plain_lives(plain_tracks: list[dict[str, Any]]) -> LifeState:
+    """The lives of exported tracks as arrays (:class:`core.lifecycle.LifeState`)."""
     return LifeState(
-        status=np.array([STATUS_CODES[t.status] for t in tracks], dtype=np.int64),
-        reason=np.array([REASON_CODES[t.reason] for t in tracks], dtype=np.int64),
-        score=np.array([t.score for t in tracks], dtype=np.float64),
-        hits=np.array([t.hits for t in tracks], dtype=np.int64),
-        empty_gate=np.array([t.empty_gate_probability for t in tracks], dtype=np.float64),
+        status=np.array(
+            [STATUS_CODES[TrackStatus(plain["status"])] for plain in plain_tracks], dtype=np.int64
+        ),
+        reason=np.array(
+            [REASON_CODES[StatusReason(plain["reason"])] for plain in plain_tracks],
+            dtype=np.int64,
+        ),
+        score=np.array([float(plain["score"]) for plain in plain_tracks], dtype=np.float64),
+        hits=np.array([int(plain["hits"]) for plain in plain_tracks], dtype=np.int64),
+        empty_gate=np.array(
+            [float(plain["empty_gate_probability"]) for plain in plain_tracks], dtype=np.float64
+        ),
         phantom_since=np.array(
-            [math.nan if t.phantom_since is None else t.phantom_since for t in tracks],
+            [
+                math.nan if plain["phantom_since"] is None else float(plain["phantom_since"])
+                for plain in plain_tracks
+            ],
             dtype=np.float64,
         ),
     )
-
-
-def _write_life(tracks: list[FusedTrack], life: LifeState, before: LifeState | None = None) -> None:
-    """Each track's status, reason, score, hits, empty-gate probability and phantom time
-    (only of the tracks whose life differs from ``before``, when given)."""
-    rows = np.arange(len(tracks))
-    if before is not None:
-        since, since_before = life.phantom_since, before.phantom_since
-        same_since = (since == since_before) | (np.isnan(since) & np.isnan(since_before))
-        changed = (
-            (life.status != before.status)
-            | (life.reason != before.reason)
-            | (life.score != before.score)
-            | (life.hits != before.hits)
-            | (life.empty_gate != before.empty_gate)
-            | ~same_since
-        )
-        rows = np.flatnonzero(changed)
-    chosen = life.select(rows)
-    for row, status, reason, score, hits, empty_gate, entered in zip(
-        rows.tolist(),
-        chosen.statuses(),
-        chosen.reasons(),
-        chosen.score.tolist(),
-        chosen.hits.tolist(),
-        chosen.empty_gate.tolist(),
-        chosen.phantom_since.tolist(),
-        strict=True,
-    ):
-        track = tracks[row]
-        track.status, track.reason, track.score, track.hits = status, reason, score, int(hits)
-        track.empty_gate_probability = empty_gate
-        track.phantom_since = None if math.isnan(entered) else entered
-
-
-def _mahalanobis(differences: FloatArray, covariances: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """D = Δᵀ C⁻¹ Δ and log|C| of every row (batched Cholesky of ``core.distance``)."""
-    return quadratic_form_and_log_det(differences.T, np.moveaxis(covariances, 0, -1))
-
-
-def _normalised_or_vacuous(mass: MassFunction) -> MassFunction:
-    try:
-        return mass.normalized()
-    except TotalConflict:
-        return MassFunction.vacuous(mass.frame)

@@ -30,6 +30,7 @@ from core.arrays import BoolArray, FloatArray, IntArray
 from core.errors import InvalidInput
 from core.fusion.motion import MotionModel
 from core.fusion.state import StateFusion, fuse_information, fusion_weights
+from core.pipeline.predict import predict_estimates
 
 KEPT_TIMES = 2
 """Times whose predictions and fused states are kept (the fusion time and one other)."""
@@ -223,26 +224,15 @@ class EstimateTable:
         stale_row, stale_slot = np.nonzero(present & ~kept.predicted_ok[rows])
         stale = rows[stale_row]
         if len(stale):
-            dt = time - self.times[stale, stale_slot]
-            now = dt == 0.0  # estimates of this very time (a step's own report): taken as they are
-            if now.any():
-                rows_now, slots_now = stale[now], stale_slot[now]
-                covariance = self.covariances[rows_now, slots_now]
-                kept.predicted[rows_now, slots_now] = self.states[rows_now, slots_now]
-                kept.predicted_cov[rows_now, slots_now] = (
-                    covariance + np.swapaxes(covariance, -1, -2)
-                ) / 2.0
-            if not now.all():
-                later = ~now
-                rows_later, slots_later = stale[later], stale_slot[later]
-                (
-                    kept.predicted[rows_later, slots_later],
-                    kept.predicted_cov[rows_later, slots_later],
-                ) = self.motion.predict(
-                    self.states[rows_later, slots_later],
-                    self.covariances[rows_later, slots_later],
-                    dt[later],
+            # a step's own report (Δt = 0) is taken as it is
+            kept.predicted[stale, stale_slot], kept.predicted_cov[stale, stale_slot] = (
+                predict_estimates(
+                    self.motion,
+                    self.states[stale, stale_slot],
+                    self.covariances[stale, stale_slot],
+                    time - self.times[stale, stale_slot],
                 )
+            )
             kept.predicted_ok[stale, stale_slot] = True
         weights = fusion_weights(kept.predicted_cov[rows], present, self.times[rows], self.rule)
         weighted = weights > 0.0

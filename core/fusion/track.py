@@ -1,7 +1,17 @@
-"""A fused track's state: the latest estimate of every sensor that reports it."""
+"""A fused track: its id, which sensor track each sensor reports it as, its history.
+
+Each fact of a track lives in one place. The engine keeps its tracks as rows
+(:class:`FusedRows`): the sensors' latest kinematic estimates and their
+report times in the :class:`~core.fusion.table.EstimateTable`, the numbers
+and the lives (status, reason, score, hits, empty-gate probability, phantom
+time) in a :class:`~core.pipeline.rows.TrackRows`, both at the track's
+``row``. A :class:`FusedTrack` holds the rest — each sensor's track id and
+class evidence, the fused history — and reads its life from its rows.
+"""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -10,30 +20,45 @@ import numpy as np
 from core.arrays import FloatArray
 from core.belief import Frame, MassFunction
 from core.fusion.reports import Source
-from core.lifecycle import StatusReason, TrackStatus
+from core.fusion.table import EstimateTable
+from core.lifecycle import REASONS, STATUSES, StatusReason, TrackStatus
+from core.pipeline.rows import TrackRows
 
 HISTORY_LENGTH = 100
 """Fused states kept per track for ``GET /tracks/{id}``."""
 
 
-Kinematics = dict[str, tuple[FloatArray, FloatArray]]
-"""Each sensor's latest state and covariance of one track (what the export carries)."""
+Kinematics = dict[str, tuple[float, FloatArray, FloatArray]]
+"""Each sensor's latest report time, state and covariance of one track (what the export carries)."""
+
+
+class FusedRows:
+    """Where a session's fused tracks live, row for row: the estimate table and the rows.
+
+    ``rows`` is replaced, never changed in place (a step's transaction keeps
+    the reference); the table has its own checkpoint.
+    """
+
+    def __init__(self, table: EstimateTable) -> None:
+        self.table = table
+        self.rows = TrackRows.empty()
+        self.sorted_slots = sorted(table.slots.items())
+        """(sensor, slot) by sensor id: the order a track shows its sources in."""
 
 
 @dataclass(frozen=True)
 class SensorEstimate:
-    """A sensor's latest estimate of a fused track: which sensor track, its time, its class
-    evidence. Its state and covariance live in one place only: the engine's
+    """A sensor's latest estimate of a fused track: which sensor track, its class evidence.
+    Its time, state and covariance live in the engine's
     :class:`~core.fusion.table.EstimateTable` (the track's row, the sensor's slot)."""
 
     track: str
-    time: float
     class_mass: MassFunction | None = None
 
-    def to_plain(self, state: FloatArray, covariance: FloatArray) -> dict[str, Any]:
+    def to_plain(self, time: float, state: FloatArray, covariance: FloatArray) -> dict[str, Any]:
         return {
             "track": self.track,
-            "time": self.time,
+            "time": time,
             "state": state.tolist(),
             "covariance": covariance.tolist(),
             "class_mass": None if self.class_mass is None else mass_to_plain(self.class_mass),
@@ -42,17 +67,16 @@ class SensorEstimate:
     @classmethod
     def from_plain(
         cls, plain: dict[str, Any], frame: Frame | None
-    ) -> tuple[SensorEstimate, FloatArray, FloatArray]:
-        """The estimate, its state and its covariance."""
+    ) -> tuple[SensorEstimate, float, FloatArray, FloatArray]:
+        """The estimate, its time, its state and its covariance."""
         mass = plain["class_mass"]
         estimate = cls(
             track=str(plain["track"]),
-            time=float(plain["time"]),
             class_mass=None if mass is None or frame is None else mass_from_plain(mass, frame),
         )
         state = np.asarray(plain["state"], dtype=np.float64)
         covariance = np.asarray(plain["covariance"], dtype=np.float64)
-        return estimate, state, covariance
+        return estimate, float(plain["time"]), state, covariance
 
 
 @dataclass
@@ -62,43 +86,61 @@ class FusedTrack:
     Attributes
     ----------
     id : stable fused id ("F1", "F2", ...).
-    status, reason : where the track is in its life and why it got there.
-    score : SPRT log-likelihood ratio (``core.lifecycle``).
-    hits : reports associated with it.
     estimates : the latest estimate of each contributing sensor, by sensor id (its
-        state and covariance: in the engine's table, at ``row``).
-    empty_gate_probability : [HZ] §4.2 product while coasting (1 otherwise).
-    phantom_since : when it entered a blind zone or occlusion (None otherwise).
+        time, state and covariance: in the engine's table, at ``row``).
     history : recent (time, fused state) pairs, oldest first.
-    row : its row in the engine's :class:`~core.fusion.table.EstimateTable`
-        (not exported: the engine numbers the rows).
+    row : its row in the engine's :class:`FusedRows` (not exported: the engine
+        numbers the rows).
     number : the integer part of the id, for a stable order.
+
+    ``status``, ``reason``, ``score`` (SPRT log-likelihood ratio), ``hits``,
+    ``empty_gate_probability`` ([HZ] §4.2 product while coasting) and
+    ``phantom_since`` (None unless a phantom) are read from the rows.
     """
 
     id: str
-    status: TrackStatus
-    reason: StatusReason
-    score: float
-    hits: int = 1
-    estimates: dict[str, SensorEstimate] = field(default_factory=dict)
-    empty_gate_probability: float = 1.0
-    phantom_since: float | None = None
-    history: list[tuple[float, list[float]]] = field(default_factory=list)
+    rows: FusedRows = field(compare=False, repr=False)
     row: int = field(default=-1, compare=False, repr=False)
+    estimates: dict[str, SensorEstimate] = field(default_factory=dict)
+    history: list[tuple[float, list[float]]] = field(default_factory=list)
     number: int = field(default=0, init=False, compare=False, repr=False)
     _sources: dict[str, Source] = field(default_factory=dict, init=False, compare=False, repr=False)
-    """Each estimate as a source of the track, in sensor order (what every step shows)."""
+    """A memo of :meth:`sources` by sensor, made from the table's times (a sensor's entry
+    is dropped when its estimate changes)."""
 
     def __post_init__(self) -> None:
-        self._sources = {
-            sensor: Source(sensor, estimate.track, estimate.time)
-            for sensor, estimate in sorted(self.estimates.items())
-        }
         self.number = int(self.id[1:])
 
+    # ------------------------------------------------------------ its life
+    @property
+    def status(self) -> TrackStatus:
+        return STATUSES[int(self.rows.rows.life.status[self.row])]
+
+    @property
+    def reason(self) -> StatusReason:
+        return REASONS[int(self.rows.rows.life.reason[self.row])]
+
+    @property
+    def score(self) -> float:
+        return float(self.rows.rows.life.score[self.row])
+
+    @property
+    def hits(self) -> int:
+        return int(self.rows.rows.life.hits[self.row])
+
+    @property
+    def empty_gate_probability(self) -> float:
+        return float(self.rows.rows.life.empty_gate[self.row])
+
+    @property
+    def phantom_since(self) -> float | None:
+        entered = float(self.rows.rows.life.phantom_since[self.row])
+        return None if math.isnan(entered) else entered
+
+    # ------------------------------------------------------------ its estimates
     def checkpoint(self) -> dict[str, Any]:
         """The track's fields as they are, for :meth:`rollback`. Its containers (estimates,
-        sources, history) are never changed in place, only replaced: a shallow copy is exact."""
+        history) are never changed in place, only replaced: a shallow copy is exact."""
         return self.__dict__.copy()
 
     def rollback(self, checkpoint: dict[str, Any]) -> None:
@@ -106,19 +148,27 @@ class FusedTrack:
         self.__dict__ = checkpoint
 
     def set_estimate(self, sensor: str, estimate: SensorEstimate) -> None:
-        """Record ``sensor``'s latest estimate of this track (new containers, see checkpoint)."""
-        known = sensor in self.estimates
+        """Record ``sensor``'s latest estimate of this track (new dicts, see checkpoint)."""
         self.estimates = {**self.estimates, sensor: estimate}
-        sources = {**self._sources, sensor: Source(sensor, estimate.track, estimate.time)}
-        self._sources = sources if known else dict(sorted(sources.items()))
+        if sensor in self._sources:
+            self._sources = {**self._sources}
+            del self._sources[sensor]
 
-    def sources(self) -> tuple[Source, ...]:
-        """The contributing sensor tracks, by sensor id."""
-        return tuple(self._sources.values())
-
-    @property
-    def last_time(self) -> float:
-        return max(estimate.time for estimate in self.estimates.values())
+    def sources(self, report_times: list[float] | None = None) -> tuple[Source, ...]:
+        """The contributing sensor tracks, by sensor id, with their report times
+        (``report_times``: the table's times of this row by slot, when at hand)."""
+        memo, estimates = self._sources, self.estimates
+        if len(memo) != len(estimates):
+            times = (
+                self.rows.table.times[self.row].tolist() if report_times is None else report_times
+            )
+            slots = self.rows.table.slots
+            memo = {**memo}
+            for sensor in estimates.keys() - memo.keys():  # the sensors that reported since
+                memo[sensor] = Source(sensor, estimates[sensor].track, times[slots[sensor]])
+            memo = dict(sorted(memo.items()))
+            self._sources = memo
+        return tuple(memo.values())
 
     def remember(self, time: float, state: list[float]) -> None:
         """Append a fused state to the bounded history (replacing one at the same time);
@@ -126,8 +176,9 @@ class FusedTrack:
         kept = self.history[:-1] if self.history and self.history[-1][0] == time else self.history
         self.history = [*kept[len(kept) - HISTORY_LENGTH + 1 :], (time, state)]
 
+    # ------------------------------------------------------------ plain data
     def to_plain(self, kinematics: Kinematics) -> dict[str, Any]:
-        """Plain data, each estimate with its state and covariance from ``kinematics``."""
+        """Plain data, each estimate with its time, state and covariance from ``kinematics``."""
         return {
             "id": self.id,
             "status": self.status.value,
@@ -142,29 +193,6 @@ class FusedTrack:
             "phantom_since": self.phantom_since,
             "history": [[time, state] for time, state in self.history],
         }
-
-    @classmethod
-    def from_plain(
-        cls, plain: dict[str, Any], frame: Frame | None
-    ) -> tuple[FusedTrack, Kinematics]:
-        """The track and each of its estimates' state and covariance."""
-        estimates, kinematics = {}, {}
-        for sensor, entry in plain["estimates"].items():
-            estimate, state, covariance = SensorEstimate.from_plain(entry, frame)
-            estimates[str(sensor)] = estimate
-            kinematics[str(sensor)] = (state, covariance)
-        track = cls(
-            id=str(plain["id"]),
-            status=TrackStatus(plain["status"]),
-            reason=StatusReason(plain["reason"]),
-            score=float(plain["score"]),
-            hits=int(plain["hits"]),
-            estimates=estimates,
-            empty_gate_probability=float(plain["empty_gate_probability"]),
-            phantom_since=None if plain["phantom_since"] is None else float(plain["phantom_since"]),
-            history=[(float(time), [float(x) for x in state]) for time, state in plain["history"]],
-        )
-        return track, kinematics
 
 
 def mass_to_plain(mass: MassFunction) -> dict[str, list[Any]]:

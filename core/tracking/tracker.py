@@ -1,16 +1,21 @@
 """One sensor system's multi-target tracker: detections in, local tracks out ([MTT] Fig 6).
 
-:class:`LocalTracker` runs, for each scan of one of its sensors, with every
-array batched over tracks (and over the models of the IMM):
+:class:`LocalTracker` is one assembly of the pipeline parts of
+:mod:`core.pipeline` (docs/algorithms.md §7.5; the fusion engine is the
+other). It runs, for each scan of one of its sensors, with every array
+batched over tracks (and over the models of the IMM):
 
-1. **predict** every live track to the scan time (:class:`IMMPredictor`):
+1. **predict** every live track to the scan time
+   (:func:`core.pipeline.predict.predict_bank`, :class:`IMMPredictor`):
    one closed-form step over the time since the previous scan, whatever it
    is (scans need not lie on a grid; a gap costs what one scan costs), none
    for a second sensor at the same time;
-2. **visibility** of each predicted position ([HZ] §2.1): inside the scan
+2. **visibility** of each predicted position ([HZ] §2.1,
+   :mod:`core.pipeline.evidence`): inside the scan
    sensor's field of view and not occluded by a known track (then a missing
    detection is a miss), in a blind zone, or out of range of every sensor;
-3. **association** of detections with the non-phantom tracks by any method
+3. **association** (:mod:`core.tracking.associate`) of detections with the
+   non-phantom tracks by any method
    of :mod:`core.association` on the closest-model or combined distance, plain
    or modified (:mod:`core.tracking.gating`), or the ``cheap_jpda`` baseline
    (:mod:`core.tracking.jpda`);
@@ -22,7 +27,8 @@ array batched over tracks (and over the models of the IMM):
    coasting, empty-gate probability ([HZ] §4.2, A_G from the combined S) and
    the table of [HZ] §5.1 (out of range, phantom expiry, blind zone or
    occlusion → phantom, score deletion, gate emptiness, confirmation);
-6. **hand-over** ([HZ] §5.1, :func:`core.lifecycle.hand_over`): a track
+6. **hand-over** ([HZ] §5.1, :mod:`core.pipeline.handover`,
+   :func:`core.lifecycle.hand_over`): a track
    confirmed in this scan is compared with the phantoms (GNN, ``sum``
    distance on the full state, the life cycle's gate probability); a
    matching phantom takes its estimate and keeps its identity, and the
@@ -41,6 +47,7 @@ the tracker as it was.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -48,12 +55,9 @@ from numpy.typing import ArrayLike
 from scipy.stats import chi2
 
 from core.arrays import BoolArray, FloatArray, IntArray
-from core.association import associate
-from core.association.associate import METHODS
 from core.belief import MassFunction
 from core.classification import CredalClassification
 from core.classification.batched import BatchedCredalClassifier, CredalBatch, dense_to_mass
-from core.distance import DistanceModel, Estimates, ModifiedScale, steady_state_covariance
 from core.distance.estimates import check_covariances
 from core.errors import TrackingError
 from core.lifecycle import (
@@ -62,22 +66,23 @@ from core.lifecycle import (
     REASONS,
     STATUS_CODES,
     STATUSES,
-    TERMINATED,
     Evidence,
     LifeState,
     StatusReason,
     TrackStatus,
     advance,
     established,
-    everywhere,
     hand_over,
-    visibility,
+    initiated,
 )
+from core.pipeline.evidence import coasting_misses, coverage_codes, hits, seen_by
+from core.pipeline.handover import hand_over_pairs
+from core.pipeline.predict import predict_bank
+from core.pipeline.rows import TrackRows
+from core.tracking.associate import Association, DetectionAssociator
 from core.tracking.config import CHEAP_JPDA, LocalTrackerConfig
-from core.tracking.gating import TrackGatingProblem, gate_pairs
-from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState, IMMUpdate, IMMUpdater
+from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState
 from core.tracking.initiator import pair_seeds, single_point_initiation, two_point_initiation
-from core.tracking.jpda import cheap_jpda_weights, clutter_bias, pda_update
 from core.tracking.presets import VELOCITY, TrackingPreset, VelocityConvention
 from core.tracking.range_rate import range_rate_update
 from core.tracking.track import LocalTrack, TrackerStep, float_array, mass_to_plain, plain_floats
@@ -87,18 +92,6 @@ EXPORT_VERSION = 2
 restores its seeds with the bank's R, the R they were started with then."""
 SEED_NOISE_GATE = 0.999
 """Gate probability of the measurement-noise part of the seed distance bound."""
-
-
-def _as_prediction(bank_h: FloatArray, noise: FloatArray, state: IMMState) -> IMMPrediction:
-    """A zero-step prediction: the posterior itself (a second sensor at the same time)."""
-    h_t = bank_h.T
-    return IMMPrediction(
-        means=state.means,
-        covariances=state.covariances,
-        log_mode_probabilities=state.log_mode_probabilities,
-        measurement_means=state.means @ h_t,
-        innovation_covariances=bank_h @ state.covariances @ h_t + noise,
-    )
 
 
 def _select_prediction(prediction: IMMPrediction, rows: IntArray) -> IMMPrediction:
@@ -119,6 +112,18 @@ def _concatenate(first: IMMState, second: IMMState) -> IMMState:
     )
 
 
+def _replaced(state: IMMState, rows: IntArray, by: IMMState) -> IMMState:
+    """``state`` with ``rows`` replaced by the rows of ``by`` (new arrays)."""
+    means, covariances = state.means.copy(), state.covariances.copy()
+    log_mu = state.log_mode_probabilities.copy()
+    means[rows], covariances[rows], log_mu[rows] = (
+        by.means,
+        by.covariances,
+        by.log_mode_probabilities,
+    )
+    return IMMState(means, covariances, log_mu)
+
+
 class LocalTracker:
     """Multi-target tracker of one sensor system (module docstring).
 
@@ -133,8 +138,6 @@ class LocalTracker:
         found: TrackingPreset | None = config.tracking_preset()
         self.bank = config.model_bank()
         self.predictor = IMMPredictor(self.bank)
-        self.updater = IMMUpdater(self.bank)
-        self._h = self.bank.measurement.matrix
         self._noise = self.bank.measurement.noise_covariance
         self._q = self.bank.measurement.dim
         self._conventions: tuple[VelocityConvention, ...] = (
@@ -142,6 +145,7 @@ class LocalTracker:
         )
         if config.range_rate is not None and set(self._conventions) != {VELOCITY}:
             raise TrackingError("a range-rate needs velocities in the state, not headings")
+        self._associator = DetectionAssociator(config, self.bank, self._score_model)
         self.classifier: BatchedCredalClassifier | None = None
         if found is not None and config.classification is not None:
             chosen = config.classification
@@ -153,54 +157,13 @@ class LocalTracker:
                 reliability=chosen.reliability,
                 accumulation=chosen.accumulation,
             )
-        self._method = config.association_method
-        options = dict(config.association_options)
-        if self._method == CHEAP_JPDA:
-            unknown = sorted(set(options) - {"bias", "gate_probability"})
-            if unknown:
-                raise TrackingError(f"cheap_jpda: unknown option(s) {unknown}")
-            probability = float(options.get("gate_probability", 0.999))  # type: ignore[arg-type]
-            if not 0.0 < probability < 1.0:
-                raise TrackingError("cheap_jpda: gate_probability must be in (0, 1)")
-            self._bias = float(
-                options.get(  # type: ignore[arg-type]
-                    "bias",
-                    clutter_bias(
-                        self._score_model.false_target_density, config.p_detect, probability
-                    ),
-                )
-            )
-            self._jpda_gate = float(chi2.ppf(probability, self._q))
-            self._parsed_options: Any = None
-        elif self._method in METHODS:
-            self._parsed_options = METHODS[self._method][0](options)
-        else:
-            raise TrackingError(
-                f"unknown association method {self._method!r}; "
-                f"choose one of {[*METHODS, CHEAP_JPDA]}"
-            )
-        self._modified: ModifiedScale | None = None
-        self._modified_sum: ModifiedScale | None = None
-        if config.distance == "modified":
-            first = self.bank.models[0]
-            steady = steady_state_covariance(
-                first.transition, first.process_noise, self._h, self._noise
-            )
-            kwargs = {
-                "beta": config.modified_beta,
-                "k": config.modified_k,
-                "alpha": config.modified_alpha,
-            }
-            self._modified = ModifiedScale.of(steady.innovation, **kwargs)
-            self._modified_sum = ModifiedScale.of(steady.innovation - self._noise, **kwargs)
         self._coverage = config.coverage
         self._views = dict(config.fields_of_view)
         # The state: one row per live track.
         self.time: float | None = None
         self.next_number = 1
         n, r = self.bank.state_dim, self.bank.n_models
-        self._numbers: IntArray = np.zeros(0, dtype=np.int64)
-        self._life = LifeState.empty()
+        self._rows = TrackRows.empty()
         self._state = IMMState(np.zeros((0, r, n)), np.zeros((0, r, n, n)), np.zeros((0, r)))
         self._classes: CredalBatch | None = (
             None if self.classifier is None else self.classifier.initial(0)
@@ -214,7 +177,7 @@ class LocalTracker:
     @property
     def n_tracks(self) -> int:
         """Live tracks (terminated ones are dropped after the step that ends them)."""
-        return len(self._numbers)
+        return len(self._rows)
 
     def step(
         self,
@@ -269,58 +232,44 @@ class LocalTracker:
         sensor: str | None,
         range_rates: ArrayLike | None = None,
     ) -> TrackerStep:
+        """The pipeline (``core.pipeline``): predict, look, associate, update, life cycle,
+        hand-over, initiate, keep the rows."""
         z, own_noise, sensor_name, elapsed = self._check(
             time, measurements, measurement_covariances, sensor
         )
         doppler = self._check_range_rates(range_rates, len(z))
-        prediction = self._predict(elapsed)
-        tracks = len(self._numbers)
-        combined_z, combined_s = prediction.combined_measurement()
-        codes, seen, hidden = self._visibility(combined_z, sensor_name)
-
-        candidates = np.flatnonzero((self._life.status != PHANTOM) & self._can_be_hit(prediction))
-        sub = _select_prediction(prediction, candidates)
-        if self._method == CHEAP_JPDA:  # soft: every track shares every gated detection
-            update, pair_rows, pair_cols, hit_gain, used = self._jpda(sub, z, own_noise)
-        else:
-            update, pair_rows, pair_cols, hit_gain, used = self._associate(
-                sub, z, own_noise, established(self._life.status[candidates])
+        prediction = predict_bank(self.predictor, self._state, elapsed)
+        positions, gates = prediction.combined_measurement()
+        status = self._rows.life.status
+        codes = coverage_codes(self._coverage, positions)
+        seen, hidden = seen_by(
+            self._views[sensor_name], positions, status, self.config.life_cycle.occlusion_radius
+        )
+        candidates = np.flatnonzero((status != PHANTOM) & self._can_be_hit(prediction))
+        association = self._associator.associate(
+            _select_prediction(prediction, candidates),
+            z,
+            own_noise,
+            established(status[candidates]),
+        )
+        if doppler is not None and self.config.range_rate is not None and len(association.rows):
+            measured = np.isfinite(doppler[association.cols])
+            association = replace(
+                association,
+                update=range_rate_update(
+                    association.update,
+                    association.rows[measured],
+                    doppler[association.cols[measured]],
+                    self.config.range_rate,
+                    self.bank.axes,
+                ),
             )
-        if doppler is not None and self.config.range_rate is not None and len(pair_rows):
-            measured = np.isfinite(doppler[pair_cols])
-            update = range_rate_update(
-                update,
-                pair_rows[measured],
-                doppler[pair_cols[measured]],
-                self.config.range_rate,
-                self.bank.axes,
-            )
-        detected = np.zeros(tracks, dtype=bool)
-        detected[candidates] = update.detected
-        means = prediction.means.copy()
-        covariances = prediction.covariances.copy()
-        log_mu = prediction.log_mode_probabilities.copy()
-        means[candidates] = update.state.means
-        covariances[candidates] = update.state.covariances
-        log_mu[candidates] = update.state.log_mode_probabilities
-        self._state = IMMState(means, covariances, log_mu)
-        if self.classifier is not None and self._classes is not None and len(candidates):
-            every = len(candidates) == tracks
-            classified = self.classifier.update(
-                self._classes if every else self._classes.select(candidates),
-                update.log_mode_probabilities,
-                update.log_likelihoods,
-                update.detected,
-            )
-            self._classes = classified if every else self._classes.replace(candidates, classified)
-
-        gain = np.zeros(tracks)
-        gain[candidates] = hit_gain
-        status = self._life.status
-        established_miss = seen & ~detected & established(status)
-        self._life, newly_confirmed = advance(
+        self._update(prediction, candidates, association)
+        hit = association.update.detected
+        detected, gain = hits(len(status), candidates[hit], association.hit_gain[hit])
+        life, newly_confirmed = advance(
             self.config.life_cycle,
-            self._life,
+            self._rows.life,
             Evidence(
                 time=time,
                 detected=detected,
@@ -329,22 +278,22 @@ class LocalTracker:
                 miss_increment=self._score_model.miss_increment,
                 # log|S|: A_G of the tracks that coast through a miss
                 gate_log_det=(
-                    np.linalg.slogdet(combined_s)[1]
-                    if np.any(established_miss)
-                    else np.zeros(tracks)
+                    np.linalg.slogdet(gates)[1]
+                    if np.any(coasting_misses(status, seen, detected))
+                    else np.zeros(len(status))
                 ),
                 gate_dim=self._q,
                 visibility=codes,
                 occluded=hidden,
             ),
         )
-
+        self._rows = self._rows.living(life)
         # Per-detection assignment (by track number for now).
         numbers = np.full(len(z), -1, dtype=np.int64)
-        numbers[pair_cols] = self._numbers[candidates[pair_rows]]
+        numbers[association.cols] = self._rows.numbers[candidates[association.rows]]
         self._hand_over(newly_confirmed, numbers)
         free = np.ones(len(z), dtype=bool)
-        free[used] = False
+        free[association.used] = False
         noises = (
             np.broadcast_to(self._noise, (len(z), self._q, self._q))
             if own_noise is None
@@ -363,16 +312,22 @@ class LocalTracker:
     ) -> tuple[FloatArray, FloatArray | None, str, float]:
         sensor_name = self.config.sensors[0] if sensor is None else sensor
         if sensor_name not in self._views:
-            raise TrackingError(f"unknown sensor {sensor_name!r}; known: {list(self._views)}")
+            raise TrackingError(
+                f"unknown sensor {sensor_name!r}; known: {list(self._views)}", loc=("sensor",)
+            )
         if not math.isfinite(time):
-            raise TrackingError(f"time must be finite, got {time!r}")
+            raise TrackingError(f"time must be finite, got {time!r}", loc=("time",))
         z = np.asarray(measurements, dtype=np.float64)
         if z.size == 0:
             z = z.reshape(0, self._q)
         if z.ndim != 2 or z.shape[1] != self._q:
-            raise TrackingError(f"measurements must have shape (m, {self._q}), got {z.shape}")
+            raise TrackingError(
+                f"measurements must have shape (m, {self._q}), got {z.shape}",
+                loc=("measurements",),
+            )
         if not np.all(np.isfinite(z)):
-            raise TrackingError("measurements must be finite")
+            row = int(np.argmax(~np.isfinite(z).all(axis=1)))
+            raise TrackingError("measurements must be finite", loc=("measurements", row))
         own: FloatArray | None = None
         if measurement_covariances is not None:
             own = np.asarray(measurement_covariances, dtype=np.float64)
@@ -380,7 +335,8 @@ class LocalTracker:
                 own = own.reshape(0, self._q, self._q)
             if own.shape != (len(z), self._q, self._q):
                 raise TrackingError(
-                    f"measurement_covariances must have shape ({len(z)}, {self._q}, {self._q})"
+                    f"measurement_covariances must have shape ({len(z)}, {self._q}, {self._q})",
+                    loc=("measurement_covariances",),
                 )
             if len(own):
                 check_covariances(own, "measurement_covariances")
@@ -389,7 +345,8 @@ class LocalTracker:
             elapsed = time - self.time
             if elapsed < 0.0:
                 raise TrackingError(
-                    f"scan time {time!r} is before the previous scan's time {self.time!r}"
+                    f"scan time {time!r} is before the previous scan's time {self.time!r}",
+                    loc=("time",),
                 )
         return z, own, sensor_name, elapsed
 
@@ -399,7 +356,7 @@ class LocalTracker:
             return None
         if self.config.range_rate is None:
             raise TrackingError("range_rates need a tracker configured with a range_rate model")
-        if self._method == CHEAP_JPDA:
+        if self.config.association_method == CHEAP_JPDA:
             raise TrackingError("cheap_jpda takes no range-rates")
         doppler = np.asarray(range_rates, dtype=np.float64).reshape(-1)
         if doppler.shape != (count,) or np.any(np.isinf(doppler)):
@@ -407,14 +364,6 @@ class LocalTracker:
         return doppler
 
     # ---------------------------------------------------------- predict
-    def _predict(self, elapsed: float) -> IMMPrediction:
-        """Every track over the time since the previous scan, in one closed-form step
-        (:meth:`IMMPredictor.predict`); none for a second scan at the same time."""
-        state = self._state
-        if elapsed == 0.0:
-            return _as_prediction(self._h, self._noise, state)
-        return self.predictor.predict(state, elapsed)
-
     def _can_be_hit(self, prediction: IMMPrediction) -> BoolArray:
         """Tracks a detection could keep alive: the largest hit increment they could get
         (distance 0, their most certain model, no measurement noise: ``log |H P_j Hᵀ|``)
@@ -425,7 +374,7 @@ class LocalTracker:
         it is terminated, and the scan costs what any scan costs instead of
         gating every detection with every track.
         """
-        score = self._life.score
+        score = self._rows.life.score
         if len(score) == 0:
             return np.zeros(0, dtype=bool)
         sign, log_det = np.linalg.slogdet(prediction.innovation_covariances - self._noise)
@@ -433,177 +382,54 @@ class LocalTracker:
         best = self._score_model.hit_increment(np.zeros_like(log_det), log_det, self._q)
         return np.asarray(score + best > self._score_model.delete_threshold, dtype=np.bool_)
 
-    def _visibility(
-        self, positions: FloatArray, sensor: str
-    ) -> tuple[IntArray, BoolArray, BoolArray]:
-        """Coverage codes of every track, seen by the scan's sensor, occluded (by the
-        confirmed and coasting tracks; :func:`core.lifecycle.visibility`)."""
-        if self._q < 2:
-            return everywhere(len(positions))
-        positions = positions[:, :2]  # fields of view are planar: x, y of a 3-D track
-        status = self._life.status
-        occluders = positions[established(status)]
-        return visibility(
-            self._coverage,
-            self._views[sensor],
-            positions,
-            occluders,
-            self.config.life_cycle.occlusion_radius,
-        )
-
-    # ------------------------------------------------------- association
-    def _hit_gain(self, distance: FloatArray, log_det: FloatArray) -> FloatArray:
-        return self._score_model.hit_increment(distance, log_det, self._q)
-
-    def _associate(
-        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None, first: BoolArray
-    ) -> tuple[IMMUpdate, IntArray, IntArray, FloatArray, IntArray]:
-        """Assignment by an association method, the ``first`` tracks (the established ones)
-        before the others, which share the detections left (docs/algorithms.md §4,
-        "Assignment"); returns the update, pairs, hit gains, used detections.
-
-        A tentative track's first gate is wide (its velocity is a prior), so in one
-        assignment on D it takes a target's detection from that target's own track;
-        with min_points confirmation it is confirmed on it, and the target changes id.
-        """
-        leading, trailing = np.flatnonzero(first), np.flatnonzero(~first)
-        if len(leading) == 0 or len(trailing) == 0:
-            rows, cols, hit_gain = self._assign(sub, z, own_noise)
-        else:
-            rows, cols, gain = self._assign(_select_prediction(sub, leading), z, own_noise)
-            left = np.setdiff1d(np.arange(len(z)), cols)
-            later_rows, later_cols, later_gain = self._assign(
-                _select_prediction(sub, trailing),
-                z[left],
-                None if own_noise is None else own_noise[left],
+    # ------------------------------------------------------------ update
+    def _update(
+        self, prediction: IMMPrediction, candidates: IntArray, association: Association
+    ) -> None:
+        """The state: the prediction, with the associated tracks' update; their classes
+        ([MTT] §5.2, all at once)."""
+        update = association.update
+        self._state = _replaced(prediction.as_state(), candidates, update.state)
+        if self.classifier is not None and self._classes is not None and len(candidates):
+            every = len(candidates) == len(self._rows)
+            classified = self.classifier.update(
+                self._classes if every else self._classes.select(candidates),
+                update.log_mode_probabilities,
+                update.log_likelihoods,
+                update.detected,
             )
-            hit_gain = np.zeros(len(first))
-            hit_gain[leading], hit_gain[trailing] = gain, later_gain
-            rows = np.concatenate([leading[rows], trailing[later_rows]])
-            cols = np.concatenate([cols, left[later_cols]])
-        tracks = len(first)
-        assigned = np.zeros((tracks, self._q))
-        assigned[rows] = z[cols]
-        detected = np.zeros(tracks, dtype=bool)
-        detected[rows] = True
-        noises = None
-        if own_noise is not None:
-            noises = np.broadcast_to(self._noise, (tracks, self._q, self._q)).copy()
-            noises[rows] = own_noise[cols]
-        update = self.updater.update(sub, assigned, detected, noises)
-        return update, rows, cols, hit_gain, cols
-
-    def _assign(
-        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None
-    ) -> tuple[IntArray, IntArray, FloatArray]:
-        """One association method's pairs of ``sub`` × ``z`` and each track's hit gain."""
-        if len(z) == 0 or len(sub.means) == 0:  # nothing to pair: no method run
-            return (
-                np.zeros(0, dtype=np.int64),
-                np.zeros(0, dtype=np.int64),
-                np.zeros(len(sub.means)),
-            )
-        combined_z, combined_s = sub.combined_measurement()
-        problem = TrackGatingProblem(
-            known=Estimates(combined_z, combined_s, "tracks"),
-            incoming=Estimates(z, own_noise, "detections"),
-            distance=DistanceModel(covariance="innovation" if own_noise is None else "sum"),
-            prediction=sub,
-            measurement_covariances=own_noise,
-            noise=self._noise,
-            imm_distance=self.config.imm_distance,
-            modified=self._modified if own_noise is None else self._modified_sum,
-        )
-        result = METHODS[self._method][1](problem, self._parsed_options)
-        rows, cols = result.pair_known, result.pair_incoming
-        hit_gain = np.zeros(len(combined_z))
-        if len(rows):
-            gated = problem.last["pairs"]
-            keys = gated.pairs.rows * len(z) + gated.pairs.cols
-            position = np.searchsorted(keys, rows * len(z) + cols)
-            hit_gain[rows] = self._hit_gain(
-                gated.plain_distance[position], gated.pairs.log_det[position]
-            )
-        return rows, cols, hit_gain
-
-    def _jpda(
-        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None
-    ) -> tuple[IMMUpdate, IntArray, IntArray, FloatArray, IntArray]:
-        """The cheap JPDA baseline: soft weights over gated pairs, PDA update."""
-        if own_noise is not None:
-            raise TrackingError(
-                "cheap_jpda uses the bank's R: detections must not carry covariances"
-            )
-        tracks = len(sub.means)
-        gated = gate_pairs(
-            sub, z, None, self._noise, self._jpda_gate, self.config.imm_distance, self._modified
-        )
-        rows, cols = gated.pairs.rows, gated.pairs.cols
-        log_g = -0.5 * (
-            gated.plain_distance + gated.pairs.log_det + self._q * math.log(2 * math.pi)
-        )
-        likelihoods = np.zeros((tracks, len(z)))
-        likelihoods[rows, cols] = np.exp(log_g)
-        weights, _ = cheap_jpda_weights(likelihoods, self._bias)
-        pair_weights = weights[rows, cols]
-        keep = pair_weights > 0.0
-        update = pda_update(self.bank, sub, z, rows[keep], cols[keep], pair_weights[keep])
-        hit_gain = np.zeros(tracks)
-        best_rows = np.zeros(0, dtype=np.int64)
-        best_cols = np.zeros(0, dtype=np.int64)
-        if np.any(keep):
-            # The most probable detection of each track scores it; each detection goes to its most probable track.
-            best_col = np.argmax(weights, axis=1)
-            has = weights.max(axis=1) > 0.0
-            chosen = np.flatnonzero(has)
-            keys = rows * len(z) + cols
-            position = np.searchsorted(keys, chosen * len(z) + best_col[chosen])
-            hit_gain[chosen] = self._hit_gain(
-                gated.plain_distance[position], gated.pairs.log_det[position]
-            )
-            best_cols = np.flatnonzero(weights.max(axis=0) > 0.0)
-            best_rows = np.argmax(weights[:, best_cols], axis=0).astype(np.int64)
-        used = np.unique(cols)
-        return update, best_rows, best_cols, hit_gain, used
+            self._classes = classified if every else self._classes.replace(candidates, classified)
 
     # -------------------------------------------------------- hand-over
     def _hand_over(self, newly_confirmed: BoolArray, numbers: IntArray) -> None:
         """Newly confirmed tracks that match a phantom give it their estimate ([HZ] §5.1)."""
-        phantoms = np.flatnonzero(self._life.status == PHANTOM)
+        life = self._rows.life
+        phantoms = np.flatnonzero(life.status == PHANTOM)
         fresh = np.flatnonzero(newly_confirmed)
         if len(phantoms) == 0 or len(fresh) == 0:
             return
         means, covariances = self._state.combined()
-        decision = associate(
+        known, incoming = hand_over_pairs(
             (means[phantoms], covariances[phantoms]),
             (means[fresh], covariances[fresh]),
-            "gnn",
-            {"gate_probability": self.config.life_cycle.gate_probability},
-            "sum",
+            self.config.life_cycle.gate_probability,
         )
-        if len(decision.pair_known) == 0:
+        if len(known) == 0:
             return
-        keepers = phantoms[decision.pair_known]
-        newcomers = fresh[decision.pair_incoming]
-        state = self._state
-        means_all, covs_all, log_mu = (
-            state.means.copy(),
-            state.covariances.copy(),
-            state.log_mode_probabilities.copy(),
+        keepers, newcomers = phantoms[known], fresh[incoming]
+        self._state = _replaced(self._state, keepers, self._state.select(newcomers))
+        self._rows = self._rows.living(
+            hand_over(life, keepers, newcomers, StatusReason.MERGED_INTO_PHANTOM)
         )
-        means_all[keepers] = state.means[newcomers]
-        covs_all[keepers] = state.covariances[newcomers]
-        log_mu[keepers] = state.log_mode_probabilities[newcomers]
-        self._state = IMMState(means_all, covs_all, log_mu)
-        self._life = hand_over(self._life, keepers, newcomers, StatusReason.MERGED_INTO_PHANTOM)
         if self.classifier is not None and self._classes is not None:
             # The newcomer's cumulative mass is one more piece of evidence for the keeper.
             merged = self.classifier.combine(
                 self._classes.select(keepers), self._classes.masses[newcomers]
             )
             self._classes = self._classes.replace(keepers, merged)
+        own = self._rows.numbers
         for keeper, newcomer in zip(keepers.tolist(), newcomers.tolist(), strict=True):
-            numbers[numbers == self._numbers[newcomer]] = self._numbers[keeper]
+            numbers[numbers == own[newcomer]] = own[keeper]
 
     # -------------------------------------------------------- initiation
     def _initiate(
@@ -687,12 +513,12 @@ class LocalTracker:
         count = len(detections)
         if count == 0:
             return
-        new_numbers = np.arange(self.next_number, self.next_number + count, dtype=np.int64)
-        self.next_number += count
-        numbers[detections] = new_numbers
-        self._numbers = np.concatenate([self._numbers, new_numbers])
         start = self._score_model.initial if score is None else score
-        self._life = self._life.concatenate(LifeState.new(count, start, hits))
+        self._rows = self._rows.started(
+            self.next_number, initiated(self.config.life_cycle, count, start, hits)
+        )
+        numbers[detections] = self._rows.numbers[-count:]
+        self.next_number += count
         self._state = _concatenate(self._state, state)
         if self.classifier is not None and self._classes is not None:
             self._classes = self._classes.concatenate(self.classifier.initial(count))
@@ -704,7 +530,8 @@ class LocalTracker:
     def _result(self, time: float, sensor: str, numbers: IntArray) -> TrackerStep:
         means, covariances = self._state.combined()
         mu = self._state.mode_probabilities
-        order = np.argsort(self._numbers, kind="stable")
+        own = self._rows.numbers
+        order = np.argsort(own, kind="stable")
         classes = self._classes
         class_masses: list[MassFunction | None] = [None] * len(order)
         pignistic: list[FloatArray | None] = [None] * len(order)
@@ -717,37 +544,29 @@ class LocalTracker:
                 )
             ]
         tracks = []
-        life = self._life
-        track_numbers, status, reason = (
-            self._numbers.tolist(),
-            life.status.tolist(),
-            life.reason.tolist(),
-        )
-        score, hits = life.score.tolist(), life.hits.tolist()
+        life = self._rows.life
         for row in order.tolist():
             tracks.append(
                 LocalTrack(
-                    id=self._track_id(track_numbers[row]),
-                    status=STATUSES[status[row]],
-                    reason=REASONS[reason[row]],
+                    id=self._track_id(int(own[row])),
+                    status=STATUSES[int(life.status[row])],
+                    reason=REASONS[int(life.reason[row])],
                     state=means[row],
                     covariance=covariances[row],
                     mode_probabilities=mu[row],
-                    score=score[row],
-                    hits=hits[row],
+                    score=float(life.score[row]),
+                    hits=int(life.hits[row]),
                     class_mass=class_masses[row],
                     pignistic=pignistic[row],
                 )
             )
-        live = life.status != TERMINATED
-        self._keep(np.flatnonzero(live))
+        self._keep(self._rows.alive)
         self.time = time
         assignment = tuple(None if n < 0 else self._track_id(int(n)) for n in numbers.tolist())
         return TrackerStep(time=time, sensor=sensor, tracks=tuple(tracks), assignment=assignment)
 
     def _keep(self, rows: IntArray) -> None:
-        self._numbers = self._numbers[rows]
-        self._life = self._life.select(rows)
+        self._rows = self._rows.select(rows)
         self._state = self._state.select(rows)
         if self._classes is not None:
             self._classes = self._classes.select(rows)
@@ -756,10 +575,10 @@ class LocalTracker:
     def export(self) -> dict[str, Any]:
         """The whole state as plain data (lists, floats, ints, str, None; see :mod:`core.tracking.track`)."""
         tracks = []
-        life = self._life
-        for row in range(len(self._numbers)):
+        numbers, life = self._rows.numbers, self._rows.life
+        for row in range(len(numbers)):
             entry: dict[str, Any] = {
-                "number": int(self._numbers[row]),
+                "number": int(numbers[row]),
                 "status": STATUSES[int(life.status[row])].value,
                 "reason": REASONS[int(life.reason[row])].value,
                 "score": plain_floats(life.score[row]),
@@ -813,8 +632,7 @@ class LocalTracker:
         tracker._seed_sensors = np.array(plain["seed_sensors"], dtype=np.int64).reshape(-1)
         entries = plain["tracks"]
         n, r = tracker.bank.state_dim, tracker.bank.n_models
-        tracker._numbers = np.array([e["number"] for e in entries], dtype=np.int64)
-        tracker._life = LifeState(
+        life = LifeState(
             status=np.array(
                 [STATUS_CODES[TrackStatus(e["status"])] for e in entries], dtype=np.int64
             ),
@@ -826,6 +644,7 @@ class LocalTracker:
             empty_gate=float_array([e["empty_gate_probability"] for e in entries]).reshape(-1),
             phantom_since=float_array([e["phantom_since"] for e in entries]).reshape(-1),
         )
+        tracker._rows = TrackRows(np.array([e["number"] for e in entries], dtype=np.int64), life)
         tracker._state = IMMState(
             float_array([e["means"] for e in entries]).reshape(-1, r, n),
             float_array([e["covariances"] for e in entries]).reshape(-1, r, n, n),

@@ -29,6 +29,7 @@ from typing import Any
 
 import httpx
 import pytest
+from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
 
 from tests.api.conftest import ADMIN_TOKEN, LiveServer, make_settings, serving
@@ -190,6 +191,24 @@ def ws_error(ws: ClientConnection) -> Answer:
     assert message["type"] == "error", message
     problem = message["problem"]
     return Answer(int(problem["status"]), "application/problem+json", json.dumps(problem).encode())
+
+
+def ws_oversize(frame: str) -> Callable[[Scene], list[Answer]]:
+    """A frame beyond 4 × ``max_body_bytes``: an ``error`` message, then the close (1009)."""
+
+    def send(scene: Scene) -> list[Answer]:
+        with connect(
+            scene.ws_url, additional_headers=scene.headers, max_size=None, open_timeout=10
+        ) as ws:
+            assert json.loads(ws.recv(timeout=10))["type"] == "ack"
+            ws.send(frame)
+            answer = ws_error(ws)
+            with pytest.raises(ConnectionClosed) as closed:
+                ws.recv(timeout=10)
+        assert closed.value.rcvd is not None and closed.value.rcvd.code == 1009
+        return [answer]
+
+    return send
 
 
 def ws_flood(count: int) -> Callable[[Scene], list[Answer]]:
@@ -395,6 +414,9 @@ CASES: dict[str, Callable[[Scene], list[Answer]]] = {
     "ws: nested 30 000 deep": ws_messages(nested(30_000)),
     "ws: message over max_body_bytes": ws_messages(
         json.dumps({"type": "tracks", "pad": "x" * MAX_BODY})
+    ),
+    "ws: message over 4 × max_body_bytes": ws_oversize(
+        json.dumps({"type": "tracks", "pad": "x" * (4 * MAX_BODY)})
     ),
     "ws: binary frame of invalid UTF-8": ws_messages(b"\xff\xfe\x00"),
     "ws: duplicate keys": ws_messages('{"type": "tracks", "type": "detections"}'),

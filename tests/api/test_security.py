@@ -148,3 +148,8 @@ def test_session_count_limit() -> None:
         response = client.post("/v1/sessions", json=SESSION_CONFIG)
         assert response.status_code == 429
         assert response.json()["limit"] == "max_sessions"
+
+
+def test_no_token_starts_with_a_dash_that_a_command_line_would_read_as_an_option() -> None:
+    # one url-safe token in 64 would (2 000 tokens: all but certain to meet one)
+    assert not any(issue_token().startswith("-") for _ in range(2000))

@@ -75,10 +75,12 @@ def test_a_server_that_is_not_running_is_named_with_what_to_do() -> None:
     assert done.stdout == ""
 
 
-def test_serve_with_a_store_it_cannot_open_says_so_before_serving() -> None:
-    done = cli("serve", "--store", "redis://127.0.0.1:1/0", "--port", "1")
+def test_serve_with_a_store_it_cannot_open_says_so_before_serving(tmp_path: Path) -> None:
+    # a directory is no sqlite file (an unreachable Redis is an outage: the service starts,
+    # tests/e2e/test_store_outage.py)
+    done = cli("serve", "--store", f"sqlite:{tmp_path}", "--port", "1")
     line = one_line_failure(done)
-    assert line.startswith("credal-fusion serve: cannot use the store redis://127.0.0.1:1/0")
+    assert line.startswith(f"credal-fusion serve: cannot use the store sqlite:{tmp_path}")
     assert "--store" in line
 
 

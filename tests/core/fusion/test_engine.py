@@ -229,7 +229,7 @@ def test_late_report_is_used_and_stale_report_is_refused_without_change() -> Non
         report("s1", 1.5, ("a", moving(0.0, 1.5)))
     )  # older than 2.0, newer than 1.0
     assert late.time == 2.0  # results are at the fusion time
-    assert engine.tracks[0].estimates["s1"].time == 1.5
+    assert {source.sensor: source.time for source in engine.tracks[0].sources()}["s1"] == 1.5
     assert [(f, t) for f, t, _, _ in late.association.pairs] == [("F1", "a")]
     before = json.dumps(engine.export())
     with pytest.raises(StaleReport) as refused:

@@ -36,6 +36,7 @@ from core.fusion.state import StateFusion
 from core.fusion.table import EstimateTable
 from core.fusion.track import FusedTrack
 from core.simulation import aircraft_scenario
+from core.tracking.associate import DetectionAssociator
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.tracker import LocalTracker
 
@@ -46,8 +47,6 @@ ENGINE_PARTS: list[tuple[Any, str]] = [
     (SessionEngine, name)
     for name in (
         "_check",
-        "_fused_at",
-        "_associate",
         "_record",
         "_start",
         "_life_cycle",
@@ -62,7 +61,10 @@ ENGINE_PARTS: list[tuple[Any, str]] = [
 ] + [
     (engine_module, "advance"),
     (engine_module, "hand_over"),
-    (engine_module, "_write_life"),
+    (engine_module, "associate_report"),
+    (engine_module, "initiated"),
+    (engine_module, "hand_over_pairs"),
+    (EstimateTable, "fused_at"),
     (EstimateTable, "write"),
     (EstimateTable, "add_rows"),
     (EstimateTable, "keep"),
@@ -70,10 +72,14 @@ ENGINE_PARTS: list[tuple[Any, str]] = [
     (FusedTrack, "remember"),
 ]
 """Where a failure may be injected: every part a step runs, in the engine and its state."""
-TRACKER_PARTS: list[tuple[Any, str]] = [
-    (LocalTracker, name)
-    for name in ("_predict", "_visibility", "_associate", "_hand_over", "_initiate", "_result")
-] + [(tracker_module, "advance"), (engine_module, "local_track_report")]
+TRACKER_PARTS: list[tuple[Any, str]] = (
+    [(LocalTracker, name) for name in ("_update", "_hand_over", "_initiate", "_result")]
+    + [
+        (tracker_module, name)
+        for name in ("predict_bank", "coverage_codes", "seen_by", "advance", "hand_over_pairs")
+    ]
+    + [(DetectionAssociator, "associate"), (engine_module, "local_track_report")]
+)
 REFUSALS = ("shape", "stale", "zero_likelihoods", "overflow_state", "far_time", "unknown_sensor")
 CONFIG = session_config(StateFusion.COVARIANCE_INTERSECTION, VARIANTS["classes"])
 REPORTS = scenario(3, VARIANTS["classes"])[:45]

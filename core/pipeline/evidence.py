@@ -1,0 +1,59 @@
+"""What one step says about every row, for the life cycle (docs/algorithms.md §4, §6.5, §7.3).
+
+A step's assembly hands :func:`core.lifecycle.advance` an
+:class:`~core.lifecycle.Evidence`: which rows were hit and the ΔL of each
+hit ([MTT] §4.3, eq 16), which ones the step's sensor should have seen (in
+its field of view, not occluded: [HZ] §2.1), the coverage code of each
+([HZ] §5.1), and log|S| of the established rows that miss (their gate
+volume A_G, [HZ] §4.2). Both layers build it with these functions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from core.arrays import BoolArray, FloatArray, IntArray
+from core.geometry import Coverage, FieldOfView, Visibility
+from core.lifecycle import established, everywhere, sensor_view
+
+
+def hits(count: int, rows: IntArray, increments: FloatArray) -> tuple[BoolArray, FloatArray]:
+    """``detected`` and ``hit_increment`` of ``count`` rows, hit at ``rows`` by ΔL ``increments``."""
+    detected = np.zeros(count, dtype=bool)
+    detected[rows] = True
+    hit_increment = np.zeros(count)
+    hit_increment[rows] = increments
+    return detected, hit_increment
+
+
+def coasting_misses(status: IntArray, seen: BoolArray, detected: BoolArray) -> BoolArray:
+    """Established rows the sensor should have seen and did not detect: whose gate
+    volume A_G the life cycle reads ([HZ] §4.2)."""
+    return np.asarray(seen & ~detected & established(status), dtype=np.bool_)
+
+
+def seen_by(
+    view: FieldOfView | None, positions: FloatArray, status: IntArray, radius: float
+) -> tuple[BoolArray, BoolArray]:
+    """Seen by the step's sensor, and occluded, of each row ([HZ] §2.1).
+
+    ``positions`` (n, q) are the position components; fields of view are
+    planar (x, y of a 3-D track); with fewer than two there is no plane and
+    every row is seen. The occluders are the established rows (``status``).
+    """
+    count = len(positions)
+    if positions.shape[1] < 2:
+        _, seen, hidden = everywhere(count)
+        return seen, hidden
+    if count == 0:
+        return np.zeros(0, dtype=bool), np.zeros(0, dtype=bool)
+    plane = positions[:, :2]
+    return sensor_view(view, plane, plane[established(status)], radius)
+
+
+def coverage_codes(coverage: Coverage, positions: FloatArray) -> IntArray:
+    """:class:`~core.geometry.Visibility` code of each row's position (n, q) ([HZ] §5.1)."""
+    count = len(positions)
+    if positions.shape[1] < 2 or count == 0:
+        return np.full(count, int(Visibility.VISIBLE), dtype=np.int64)
+    return np.asarray(coverage.visibility(positions[:, :2]), dtype=np.int64)
