@@ -34,8 +34,11 @@ openapi: $(STAMP)
 	$(BIN)/python -m app.openapi openapi.json
 	$(BIN)/python -m app.asyncapi docs/asyncapi.yaml
 
+# Every figure of docs/RESULTS.md and its numbers (docs/figures/NAME.png, NAME.txt); one BLAS
+# thread, as bench/peers.py times its trackers (the peers figure reruns that bench).
 figures: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m evaluation.figures --out docs/figures
+	MPLBACKEND=Agg OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
+		$(BIN)/python -m evaluation.figures --out docs/figures
 
 bench: $(STAMP)
 	@for b in $(filter-out bench/soak.py,$(wildcard bench/*.py)); do echo "== $$b"; $(BIN)/python $$b || exit 1; done

@@ -3,7 +3,8 @@
 Target 2 of the ``aircraft`` scenario flies straight, makes a 2g manoeuvre
 (steps 50–54), a sharp 4g one (70–75) and disappears at step 100. It is
 tracked by the 13-model IMM on its own detections and classified by the
-credal chain and the Bayesian baseline
+credal chain and the Bayesian baseline (whose behaviour posteriors are
+Fig 13)
 (:func:`core.simulation.replay.replay_single_target`); the paper's Fig 12–13
 are "averages of 20 Monte Carlo simulations", and so are these curves.
 
@@ -21,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.arrays import FloatArray, IntArray
+from core.classification.bayesian import class_given_behaviour
 from core.metrics import time_to_decision
 from core.simulation import aircraft_scenario
 from core.simulation.replay import replay_single_target
@@ -45,6 +47,10 @@ class AircraftClassification:
         BetP of the credal classifier.
     bayesian : ndarray, shape (runs, k, 3)
         Class probabilities of the Bayesian baseline.
+    bayesian_behaviours : ndarray, shape (runs, k, 3)
+        Its behaviour posteriors P(b | Z_k) (Fig 13): ``P(C) = M P(B)`` ([MTT]
+        eq 21) solved for P(B) — M is square and triangular for the aircraft
+        (1/3, 1/2, 1 on its diagonal), so the class probabilities determine them.
     behaviours : ndarray, shape (runs, k, 3)
         Scaled behaviour plausibilities (Fig 12); NaN once the target is gone.
     manoeuvres : tuple of (int, int, str)
@@ -56,6 +62,7 @@ class AircraftClassification:
     steps: IntArray
     credal: FloatArray
     bayesian: FloatArray
+    bayesian_behaviours: FloatArray
     behaviours: FloatArray
     manoeuvres: tuple[tuple[int, int, str], ...]
 
@@ -99,12 +106,18 @@ def aircraft_classification(seeds: Sequence[int] = tuple(range(20))) -> Aircraft
     preset = aircraft()
     replays = [replay_single_target(aircraft_scenario(seed=seed), TARGET, preset) for seed in seeds]
     scenario = aircraft_scenario(seed=seeds[0])
+    bayesian = np.stack([replay.bayesian for replay in replays])
+    matrix = class_given_behaviour(preset.relation)  # (|C|, |B|)
+    behaviour_posteriors = np.asarray(
+        np.linalg.solve(matrix, bayesian.reshape(-1, 3).T).T, dtype=np.float64
+    )
     return AircraftClassification(
         seeds=tuple(seeds),
         classes=preset.classes.labels,
         steps=replays[0].steps,
         credal=np.stack([replay.pignistic() for replay in replays]),
-        bayesian=np.stack([replay.bayesian for replay in replays]),
+        bayesian=bayesian,
+        bayesian_behaviours=behaviour_posteriors.reshape(bayesian.shape),
         behaviours=np.stack([replay.behaviour_plausibilities for replay in replays]),
         manoeuvres=tuple(
             (m.first_step, m.last_step, m.label)

@@ -44,7 +44,7 @@ CATALOGUE: dict[str, FigureEntry] = {
         ),
         FigureEntry(
             "aircraft",
-            "[MTT] Fig 12, 14–15",
+            "[MTT] Fig 12–15",
             "target 2: behaviours, Bayesian vs credal classification",
         ),
         FigureEntry(
@@ -86,6 +86,11 @@ CATALOGUE: dict[str, FigureEntry] = {
             "mtt-scenes",
             "[MTT] Fig 4–5, 10–11, 19",
             "the four aircraft tracked, the track scores over time, the pedestrians",
+        ),
+        FigureEntry(
+            "peers",
+            "issue 13 (bench/peers.py)",
+            "GOSPA, SIAP, id switches and per-scan time vs Stone Soup GNN and JPDA",
         ),
         FigureEntry(
             "hz-scale",

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import math
 import textwrap
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,6 +24,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 from numpy.typing import ArrayLike
 
 from core.arrays import FloatArray
@@ -39,11 +41,20 @@ from evaluation.catalogue import CATALOGUE, FigureEntry
 from evaluation.close_pair import ClosePairStudy, close_pair_study
 from evaluation.crossing import OSPA_CUTOFF, CrossingRun, CrossingStudy, crossing_study
 from evaluation.four_targets import ThresholdSweep, threshold_sweep
-from evaluation.intervals import mean_interval, rate_interval, wilson
+from evaluation.intervals import Interval, mean_interval, paired_difference, rate_interval, wilson
 from evaluation.overtaking import CASES as OVERTAKING_CASES
 from evaluation.overtaking import OvertakingStudy, overtaking_study
-from evaluation.pedestrian import PedestrianClassification, pedestrian_classification
-from evaluation.road_four import RoadFourStudy, road_four_study
+from evaluation.pedestrian import (
+    PedestrianClassification,
+    StopOutcomes,
+    pedestrian_classification,
+    stop_outcomes,
+)
+from evaluation.peers import SCENES as PEER_SCENES
+from evaluation.peers import SEEDS as PEER_SEEDS
+from evaluation.peers import PeerScene, first_seed, peer_study
+from evaluation.peers import machine as peers_machine
+from evaluation.road_four import PAPER_TIME_MEANS, RoadFourStudy, road_four_study
 from evaluation.scenes import SCORE_GAPS, pedestrian_truths, tracked_aircraft
 from evaluation.two_class import ClassComparison, class_comparison
 from evaluation.units import NoiseStudy, UnitSweep, noise_study, unit_sweep
@@ -80,6 +91,11 @@ class FigureSpec:
 
 def _seeds(count: int, reduced: bool, small: int = 2) -> tuple[int, ...]:
     return tuple(range(small if reduced else count))
+
+
+def _extent(intervals: Sequence[Interval]) -> FloatArray:
+    """``yerr`` of matplotlib for estimates with 95 % intervals: (2, n) distances below, above."""
+    return np.array([[i.estimate - i.low, i.high - i.estimate] for i in intervals]).T.reshape(2, -1)
 
 
 def _titled(figure: Figure, name: str, heading: str, reduced: bool) -> Figure:
@@ -144,6 +160,7 @@ def draw_t2t_four(reduced: bool, echo: Echo) -> Figure:
         f"Fig 3: four targets, σ = {sweep.position_sigma} m, {n_steps} steps (seed {seeds[0]})",
     )
     _plot_sweep(right, sweep)
+    echo(_sweep_summary(sweep))
     return _titled(
         figure,
         "t2t-four",
@@ -158,10 +175,50 @@ def _reciprocal_ln2(value: ArrayLike) -> FloatArray:
     return np.asarray(math.log(2.0) / np.maximum(magnitude, 1e-300), dtype=np.float64)
 
 
-def _intervals(per_run: FloatArray, decisions: ArrayLike) -> tuple[FloatArray, FloatArray]:
-    """Low and high ends of the 95 % interval of each column of per-run rates."""
-    ends = [rate_interval(per_run[:, col], decisions) for col in range(per_run.shape[1])]
-    return np.array([end.low for end in ends]), np.array([end.high for end in ends])
+def _rate_band(
+    axes: Axes, x: FloatArray, per_run: FloatArray, decisions: ArrayLike, style: str, label: str
+) -> Line2D:
+    """A rate curve over ``x`` (the decision-weighted mean of the runs) and its 95 % band.
+
+    ``per_run``: (runs, len(x)) rates; each column's interval is
+    :func:`evaluation.intervals.rate_interval`'s.
+    """
+    intervals = [rate_interval(per_run[:, col], decisions) for col in range(per_run.shape[1])]
+    (line,) = axes.plot(x, [i.estimate for i in intervals], style, marker=".", ms=3, label=label)
+    axes.fill_between(
+        x,
+        [i.low for i in intervals],
+        [i.high for i in intervals],
+        color=line.get_color(),
+        alpha=0.15,
+        lw=0,
+    )
+    return line
+
+
+def _sweep_summary(sweep: ThresholdSweep) -> str:
+    lines = [f"t2t-four: decisions per run {sweep.decisions.tolist()}"]
+    best = {}
+    for method, rates in (("gnn", sweep.gnn), ("denoeux", sweep.denoeux)):
+        cells = [
+            f"λ {t:.3g}: {rate_interval(rates[:, col], sweep.decisions)}"
+            for col, t in enumerate(sweep.thresholds)
+        ]
+        best[method] = int(np.argmin(rates.mean(axis=0)))
+        lines.append(f"  {method}: " + "; ".join(cells))
+        lines.append(f"  {method} ties max {sweep.ties[method].max():.3f}")
+    for label, rates in sweep.hachour.items():
+        lines.append(
+            f"  hachour {label}: {rate_interval(rates, sweep.decisions)}, "
+            f"ties {sweep.ties[label].mean():.2f}"
+        )
+    gnn, denoeux = sweep.gnn[:, best["gnn"]], sweep.denoeux[:, best["denoeux"]]
+    lines.append(
+        f"  best λ gnn {sweep.thresholds[best['gnn']]:.3g}, denoeux "
+        f"{sweep.thresholds[best['denoeux']]:.3g}; denoeux − gnn at their best: "
+        f"{paired_difference(denoeux, gnn)}"
+    )
+    return "\n".join(lines)
 
 
 def _plot_sweep(axes: Axes, sweep: ThresholdSweep) -> None:
@@ -169,9 +226,7 @@ def _plot_sweep(axes: Axes, sweep: ThresholdSweep) -> None:
         (sweep.gnn, "-", "gnn (λ = ln 2 / γ)"),
         (sweep.denoeux, "--", "denoeux (γ), α = 1"),
     ):
-        (line,) = axes.plot(sweep.gammas, rates.mean(axis=0), style, label=label)
-        low, high = _intervals(rates, sweep.decisions)
-        axes.fill_between(sweep.gammas, low, high, color=line.get_color(), alpha=0.15, lw=0)
+        _rate_band(axes, sweep.gammas, rates, sweep.decisions, style, label)
     styles = {"density": ":", "relative": "-.", "density, km": (0, (5, 1, 1, 1))}
     for label, rates in sweep.hachour.items():
         interval = rate_interval(rates, sweep.decisions)
@@ -213,12 +268,35 @@ def draw_t2t_two_class(reduced: bool, echo: Echo) -> Figure:
         f"Fig 5: c1 at y = 0, c2 at y = {comparison.separation} m, {n_steps} steps (seed {seeds[0]})",
     )
     _plot_classes(right, comparison)
+    echo(_classes_summary(comparison))
     return _titled(
         figure,
         "t2t-two-class",
         f"[T2T] Fig 5–6: distance only vs distance + class, {len(seeds)} realisations",
         reduced,
     )
+
+
+def _classes_summary(comparison: ClassComparison) -> str:
+    decisions = comparison.decisions
+    lines = [
+        f"t2t-two-class: decisions per run {decisions.tolist()}; tuned λ {comparison.thresholds}"
+    ]
+    for label in comparison.labels:
+        mono = comparison.mono[label]
+        line = (
+            f"  {label}: mono {rate_interval(mono, decisions)} "
+            f"(ties {comparison.mono_ties[label].mean():.2f})"
+        )
+        if label in comparison.multi:
+            multi = comparison.multi[label]
+            line += (
+                f" → multi {rate_interval(multi, decisions)} "
+                f"(ties {comparison.multi_ties[label].mean():.2f}); multi − mono "
+                f"{paired_difference(multi, mono)}"
+            )
+        lines.append(line)
+    return "\n".join(lines)
 
 
 def _plot_classes(axes: Axes, comparison: ClassComparison) -> None:
@@ -270,14 +348,20 @@ def draw_aircraft(reduced: bool, echo: Echo) -> Figure:
     seeds = _seeds(20, reduced)
     echo(f"aircraft: seeds {list(seeds)} (target 2)")
     result = aircraft_classification(seeds)
-    figure = Figure(figsize=(11, 7.5), layout="constrained")
-    top, middle, bottom = figure.subplots(3, 1, sharex=True)
+    figure = Figure(figsize=(11, 9.5), layout="constrained")
+    top, behaviours, middle, bottom = figure.subplots(4, 1, sharex=True)
     _plot_behaviours(top, result)
-    for axes, probabilities, title in (
-        (middle, result.bayesian, "Fig 14: Bayesian class probabilities"),
-        (bottom, result.credal, "Fig 15: credal BetP"),
+    for axes, probabilities, labels, title in (
+        (
+            behaviours,
+            result.bayesian_behaviours,
+            BEHAVIOUR_LABELS,
+            "Fig 13: Bayesian behaviour probabilities P(b | Z) ([MTT]: b1 grows before 50)",
+        ),
+        (middle, result.bayesian, result.classes, "Fig 14: Bayesian class probabilities"),
+        (bottom, result.credal, result.classes, "Fig 15: credal BetP"),
     ):
-        for index, label in enumerate(result.classes):
+        for index, label in enumerate(labels):
             axes.plot(result.steps, probabilities[:, :, index].mean(axis=0), label=label)
         axes.set_ylim(-0.02, 1.02)
         axes.set_ylabel("probability")
@@ -286,19 +370,45 @@ def draw_aircraft(reduced: bool, echo: Echo) -> Figure:
         _shade(axes, result.manoeuvres)
     bottom.axvline(99.5, color="0.5", lw=0.8)
     bottom.set_xlabel("step (target 2 disappears at 100)")
+    echo(_aircraft_summary(result))
     return _titled(
         figure,
         "aircraft",
-        f"[MTT] Fig 12, 14, 15: target 2, mean of {len(seeds)} runs (seeds differ; largest "
+        f"[MTT] Fig 12–15: target 2, mean of {len(seeds)} runs (seeds differ; largest "
         f"range over the runs: credal {result.run_spread('credal'):.0e}, "
         f"Bayesian {result.run_spread('bayesian'):.0e})",
         reduced,
     )
 
 
+BEHAVIOUR_LABELS = ("b1 (CV)", "b2 (≤ 2g)", "b3 (≤ 4g)")
+
+
+def _aircraft_summary(result: AircraftClassification) -> str:
+    def at(probabilities: FloatArray, first: int, last: int) -> str:
+        rows = (result.steps >= first) & (result.steps <= last)
+        spans = probabilities[:, rows].reshape(-1, probabilities.shape[2])
+        ends = zip(np.nanmin(spans, axis=0), np.nanmax(spans, axis=0), strict=True)
+        return ", ".join(f"{low:.3f}–{high:.3f}" for low, high in ends)
+
+    lines = [f"aircraft: {len(result.seeds)} runs; ranges over runs and steps (min–max)"]
+    for first, last, window in ((0, 49, "before 50"), (55, 69, "55–69"), (76, 99, "76–99")):
+        lines.append(
+            f"  {window}: P(b) {at(result.bayesian_behaviours, first, last)}; "
+            f"Bayes P(c) {at(result.bayesian, first, last)}; BetP {at(result.credal, first, last)}"
+        )
+    lines.append(
+        f"  doubt gap |P(bomber) − P(fighter)| 55–69: credal {result.doubt_gap('credal'):.3f}, "
+        f"Bayesian {result.doubt_gap('bayesian'):.3f}; fighter ≥ 0.9 from step: credal "
+        f"{sorted(set(result.decision_steps('credal').tolist()))}, Bayesian "
+        f"{sorted(set(result.decision_steps('bayesian').tolist()))}"
+    )
+    return "\n".join(lines)
+
+
 def _plot_behaviours(axes: Axes, result: AircraftClassification) -> None:
     seen = ~np.isnan(result.behaviours).any(axis=(0, 2))
-    for index, label in enumerate(("b1 (CV)", "b2 (≤ 2g)", "b3 (≤ 4g)")):
+    for index, label in enumerate(BEHAVIOUR_LABELS):
         axes.plot(result.steps[seen], result.behaviours[:, seen, index].mean(axis=0), label=label)
     axes.set_ylim(-0.02, 1.02)
     axes.set_ylabel("plausibility")
@@ -313,8 +423,13 @@ def _plot_behaviours(axes: Axes, result: AircraftClassification) -> None:
 def draw_pedestrian(reduced: bool, echo: Echo) -> Figure:
     """[MTT] Fig 20–23: pedestrian 1 with standard and discounted classifiers."""
     seed = 0
-    echo(f"pedestrian: seed {seed} (pedestrian 1; one realisation as in the paper)")
+    seeds = _seeds(20, reduced)
+    echo(
+        f"pedestrian: seed {seed} drawn (pedestrian 1; one realisation as in the paper); "
+        f"the stop's claims over seeds {seeds[0]}..{seeds[-1]}"
+    )
     result = pedestrian_classification(seed)
+    echo(_pedestrian_summary(result, stop_outcomes(seeds)))
     return _titled(
         _pedestrian_panels(result),
         "pedestrian",
@@ -330,6 +445,31 @@ PEDESTRIAN_PANELS = (
     ("cumulative 0.9, walks again", "Fig 22: cumulative discounting λ = 0.9"),
     ("instantaneous 0.9, walks again", "Fig 23: instantaneous discounting λ = 0.9"),
 )
+
+
+def _pedestrian_summary(result: PedestrianClassification, outcomes: StopOutcomes) -> str:
+    rambler, sportsman = result.classes.index("rambler"), result.classes.index("sportsman")
+    runs = len(outcomes.seeds)
+    lines = [f"pedestrian, seed {result.seed}:"]
+    for key, trace in result.traces.items():
+        undefined = trace.steps[np.isnan(trace.probabilities).any(axis=1)]
+        lines.append(
+            f"  {key}: sportsman > 0.9 from {trace.first_step_above(sportsman, 1, 0.9):g}; "
+            f"rambler > 0.5 after the stop from {trace.first_step_above(rambler, 120):g}; "
+            f"BetP undefined from {undefined[0] if len(undefined) else 'never'}; "
+            f"last row {np.round(trace.probabilities[-1], 3).tolist()} at {trace.steps[-1]}"
+        )
+    follows = _share_interval(outcomes.follows)
+    total = _share_interval(outcomes.undefined)
+    lines.append(
+        f"over {runs} realisations: standard follows the stop in {int(outcomes.follows.sum())}"
+        f"/{runs}, share {follows}; BetP undefined (total conflict) in "
+        f"{int(outcomes.undefined.sum())}/{runs}, share {total}; "
+        f"smallest 1 − K after the stop ≤ {outcomes.closest_to_total.max():.1e} in every run; "
+        f"instantaneous 0.3: rambler from step {mean_interval(outcomes.rambler_from)} "
+        f"(range {np.nanmin(outcomes.rambler_from):g}–{np.nanmax(outcomes.rambler_from):g})"
+    )
+    return "\n".join(lines)
 
 
 def _pedestrian_panels(result: PedestrianClassification) -> Figure:
@@ -353,8 +493,10 @@ def _pedestrian_panels(result: PedestrianClassification) -> Figure:
     conflicts = panels[5]
     for key in ("standard", "instantaneous 0.3"):
         trace = result.traces[key]
-        conflicts.semilogy(trace.steps, np.maximum(trace.step_conflicts, 1e-16), label=key)
-    conflicts.set_title("step conflict K (Fig 20–21 runs)", fontsize=9, loc="left")
+        conflicts.semilogy(trace.steps, np.maximum(1.0 - trace.step_conflicts, 1e-17), label=key)
+    conflicts.set_title(
+        "1 − K of each step's combination (0: total conflict, no BetP)", fontsize=9, loc="left"
+    )
     conflicts.legend(fontsize=7)
     conflicts.set_xlabel("step")
     panels[4].set_xlabel("step")
@@ -378,6 +520,7 @@ def draw_unit_study(reduced: bool, echo: Echo) -> Figure:
     left, right = figure.subplots(1, 2)
     _plot_unit_sweep(left, sweep)
     _plot_noise_study(right, study)
+    echo(_unit_summary(sweep, study))
     return _titled(
         figure,
         "unit-study",
@@ -387,11 +530,52 @@ def draw_unit_study(reduced: bool, echo: Echo) -> Figure:
     )
 
 
+def _unit_summary(sweep: UnitSweep, study: NoiseStudy) -> str:
+    """Both tables of the unit study: every rate with its 95 % interval, and the ties."""
+    lines = [f"unit-study: decisions per run {sweep.decisions.tolist()}"]
+    lines.append("  left (lengths × s): " + " | ".join(f"{s:.3g}" for s in sweep.scales))
+    for label in sweep.rates:
+        cells = [
+            str(rate_interval(sweep.run_rates[label][:, col], sweep.decisions))
+            for col in range(len(sweep.scales))
+        ]
+        lines.append(f"  {label}: " + " | ".join(cells))
+        lines.append(
+            f"  {label} ties: " + " | ".join(f"{t:.2f}" for t in sweep.ties[label].mean(axis=0))
+        )
+    lines.append("  implicit gate: " + " | ".join(f"{g:.1f}" for g in sweep.implicit_gates))
+    lines.append("  right (position σ, m): " + " | ".join(f"{s:g}" for s in study.sigmas))
+    for (label, unit), per_run in study.run_rates.items():
+        cells = [
+            str(rate_interval(per_run[:, col], study.decisions[:, col]))
+            for col in range(len(study.sigmas))
+        ]
+        ties = study.ties[(label, unit)]
+        lines.append(
+            f"  {label} ({unit}): "
+            + " | ".join(cells)
+            + ("" if not ties.any() else "; ties " + " | ".join(f"{t:.2f}" for t in ties))
+        )
+    lines.append(
+        "  tuned λ: "
+        + "; ".join(
+            f"{m} " + ", ".join(f"{t:.1f}" for t in values)
+            for m, values in study.best_thresholds.items()
+        )
+    )
+    best = int(np.argmin(sweep.rates["hachour density"]))
+    lines.append(
+        f"  hachour density at its best unit (s = {sweep.scales[best]:.3g}) − gnn default: "
+        f"{paired_difference(sweep.run_rates['hachour density'][:, best], sweep.run_rates['gnn default'][:, best])}"
+        f"; − denoeux default: "
+        f"{paired_difference(sweep.run_rates['hachour density'][:, best], sweep.run_rates['denoeux default'][:, best])}"
+    )
+    return "\n".join(lines)
+
+
 def _plot_unit_sweep(axes: Axes, sweep: UnitSweep) -> None:
-    for label, rates in sweep.rates.items():
-        (line,) = axes.plot(sweep.scales, rates, marker=".", label=label)
-        low, high = _intervals(sweep.run_rates[label], sweep.decisions)
-        axes.fill_between(sweep.scales, low, high, color=line.get_color(), alpha=0.15, lw=0)
+    for label in sweep.rates:
+        line = _rate_band(axes, sweep.scales, sweep.run_rates[label], sweep.decisions, "-", label)
         tied = sweep.ties[label].mean(axis=0)
         if tied.max() > 0.05:  # where ties decide, say so on the curve
             axes.plot(sweep.scales, tied, ":", color=line.get_color(), lw=1, label=f"{label}: ties")
@@ -431,20 +615,47 @@ def _plot_noise_study(axes: Axes, study: NoiseStudy) -> None:
 
 
 # ---------------------------------------------------------------- close-pair
+CLOSE_PAIR_VARIANT_RUNS = 50
+"""Runs of the ``closest_model`` variant: its rates (≈ 0.4 from σ = 10 % of the
+separation on) differ from ``combined``'s by far more than the ± 0.02 of 50 runs."""
+
+
 def draw_close_pair(reduced: bool, echo: Echo) -> Figure:
     """[MTT] Fig 16: false assignment rate vs noise, closest-model vs combined IMM distance."""
     seeds = _seeds(100, reduced)
-    ratios = (0.0, 0.5, 2.0) if reduced else (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0)
+    ratios = (0.0, 0.5, 2.0) if reduced else (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 2.0)
     n_steps = 20 if reduced else 60
-    echo(f"close-pair: seeds {seeds[0]}..{seeds[-1]}, {n_steps} steps, σ/d in {list(ratios)}")
-    study = close_pair_study(seeds, ratios, n_steps=n_steps)
+    runs = {"closest_model": 1 if reduced else CLOSE_PAIR_VARIANT_RUNS}
+    echo(
+        f"close-pair: seeds {seeds[0]}..{seeds[-1]} (combined, [MTT]'s 100 runs), "
+        f"{seeds[0]}..{runs['closest_model'] - 1} (closest_model, our default), "
+        f"{n_steps} steps, σ/d in {list(ratios)}"
+    )
+    study = close_pair_study(seeds, ratios, n_steps=n_steps, runs=runs)
     figure = Figure(figsize=(8, 4.8), layout="constrained")
     axes = figure.subplots()
     _plot_close_pair(axes, study)
+    for kind in study.rates:
+        echo(
+            f"close-pair {kind}: "
+            + "; ".join(
+                f"{100 * r:g} %: {mean_interval(row)}"
+                for r, row in zip(study.noise_ratios, study.rates[kind], strict=True)
+            )
+        )
+    echo(
+        "close-pair swap floor: "
+        + "; ".join(
+            f"{100 * r:g} %: {f:.3f}"
+            for r, f in zip(study.noise_ratios, study.swap_floor, strict=True)
+        )
+    )
     return _titled(
         figure,
         "close-pair",
-        f"[MTT] Fig 16: two aircraft {study.separation:g} m apart, {len(seeds)} runs per point",
+        f"[MTT] Fig 16: two aircraft {study.separation:g} m apart, "
+        + ", ".join(f"{kind} {rates.shape[1]}" for kind, rates in study.rates.items())
+        + " runs per point",
         reduced,
     )
 
@@ -452,15 +663,18 @@ def draw_close_pair(reduced: bool, echo: Echo) -> Figure:
 def _plot_close_pair(axes: Axes, study: ClosePairStudy) -> None:
     percent = 100.0 * study.noise_ratios
     for kind, marker in (("closest_model", "o"), ("combined", "s")):
-        mean = study.mean(kind)
-        spread = study.rates[kind].std(axis=1) / math.sqrt(len(study.seeds))
-        axes.errorbar(percent, mean, yerr=spread, marker=marker, capsize=3, label=f"GNN, {kind}")
+        intervals = [mean_interval(row) for row in study.rates[kind]]
+        mean = np.array([i.estimate for i in intervals])
+        spread = np.array([[m - i.low, i.high - m] for m, i in zip(mean, intervals, strict=True)])
+        axes.errorbar(percent, mean, yerr=spread.T, marker=marker, capsize=3, label=f"GNN, {kind}")
     axes.plot(percent, study.swap_floor, "k:", label="swap floor Φ̄(d / √2σ) (perfect prediction)")
     axes.axhline(0.5, color="0.6", lw=0.8)
     axes.set_xlabel("measurement noise σ per axis, % of the separation")
     axes.set_ylabel("false assignment rate")
     axes.set_ylim(-0.02, 0.62)
-    axes.set_title("13-model aircraft IMM, R = simulated noise; ± 1 standard error", fontsize=9)
+    axes.set_title(
+        "13-model aircraft IMM, R = simulated noise; 95 % t intervals over the runs", fontsize=9
+    )
     axes.legend(fontsize=8, loc="center right")
 
 
@@ -503,12 +717,39 @@ def draw_crossing(reduced: bool, echo: Echo) -> Figure:
             _shade(axes, study.manoeuvres)
     _plot_crossing_swaps(grid[3][0], study)
     _plot_crossing_scores(grid[3][1], study)
+    echo(_crossing_summary(study))
     return _titled(
         figure,
         "crossing",
         f"[MTT] Fig 17–18: a fighter crosses an unknown aircraft, {len(seeds)} runs per noise",
         reduced,
     )
+
+
+def _crossing_summary(study: CrossingStudy) -> str:
+    runs = len(study.seeds)
+    lines = [f"crossing: {runs} runs per variance"]
+    for kind in study.first_false:
+        for index, variance in enumerate(study.variances):
+            swapped = int(np.sum(~np.isnan(study.first_false[kind][index])))
+            low, high = wilson(swapped, runs)
+            first = study.first_false[kind][index]
+            delay = study.fighter_delay[kind][index]
+            final = study.final_betp(kind, 2)[index]
+            before = np.nanmean(study.betp[kind][index, :, 1, 33], axis=0)
+            lines.append(
+                f"  {kind} {variance:g} m²: false assignment in {swapped}/{runs} "
+                f"[{low:.2f}, {high:.2f}], first at median "
+                f"{np.nanmedian(first) if swapped else float('nan'):g} (example seed: "
+                f"{first[0]:g}); fighter decided in {int(np.sum(~np.isnan(delay)))}/{runs}, "
+                f"delay {np.nanmean(delay) if np.any(~np.isnan(delay)) else float('nan'):.2f}; "
+                f"target 1 alive at end {study.alive_at_end(kind, 1)[index]:.2f}; "
+                f"OSPA {mean_interval(study.ospa[kind][index])}; GOSPA "
+                f"{mean_interval(study.gospa[kind][index])}; id switches "
+                f"{mean_interval(study.switches[kind][index])}; target 2 final BetP "
+                f"{np.round(final, 2).tolist()}, at step 33 {np.round(before, 2).tolist()}"
+            )
+    return "\n".join(lines)
 
 
 def _plot_crossing_scores(axes: Axes, study: CrossingStudy) -> None:
@@ -522,7 +763,7 @@ def _plot_crossing_scores(axes: Axes, study: CrossingStudy) -> None:
             axes.errorbar(
                 study.variances,
                 [i.estimate for i in intervals],
-                yerr=np.array([[i.estimate - i.low, i.high - i.estimate] for i in intervals]).T,
+                yerr=_extent(intervals),
                 marker=marker,
                 ls=style,
                 capsize=2,
@@ -657,6 +898,20 @@ def draw_mtt_scenes(reduced: bool, echo: Echo) -> Figure:
     plain = tracked_aircraft(seed, n_steps=n_steps)
     gapped = tracked_aircraft(seed, gaps=True, n_steps=n_steps)
     clamped = tracked_aircraft(seed, gaps=True, raw_score=False, n_steps=n_steps)
+    for label, scene in (
+        ("Fig 10–11, plain SPRT", plain),
+        ("Fig 4–5 events, plain SPRT", gapped),
+        ("Fig 4–5 events, our default life cycle", clamped),
+    ):
+        echo(
+            f"mtt-scenes {label}: "
+            + "; ".join(
+                f"{track} {int(np.flatnonzero(~np.isnan(score))[0])}–{scene.last_step[track]}, "
+                f"score max {np.nanmax(score):.0f}, last {score[~np.isnan(score)][-1]:.0f}"
+                for track, score in scene.scores.items()
+            )
+            + f" (T1 {scene.delete_threshold:.1f}, T2 {scene.confirm_threshold:.1f})"
+        )
     figure = Figure(figsize=(11, 11), layout="constrained")
     grid = figure.subplots(3, 2)
     plan, over_time = grid[0]
@@ -738,33 +993,85 @@ def draw_hz_scale(reduced: bool, echo: Echo) -> Figure:
 
 
 # ---------------------------------------------------------------- road-four
+ROAD_PANELS = (
+    ("dang_han [DH]", "[DH]'s method (our reading of eq 23–27)", ("Fig 2", "Fig 4")),
+    ("cheap JPDA", "cheap JPDA ([DH] eq 16)", ("Fig 3", "Fig 5")),
+    ("gnn", "our variant: gnn", ("not in [DH]", "not in [DH]")),
+)
+"""Columns of the per-vehicle panels: [DH] Fig 2/4 (its method), Fig 3/5 (cheap JPDA), ours."""
+
+
 def draw_road_four(reduced: bool, echo: Echo) -> Figure:
-    """[DH] Fig 1–5: RMS position and velocity errors of four vehicles, per method."""
+    """[DH] Fig 1–5: RMS position and velocity error of each vehicle over time, per method."""
     seeds = _seeds(50, reduced)
     n_steps = 30 if reduced else 100
     echo(f"road-four: seeds {list(seeds) if reduced else f'0..{seeds[-1]}'}, {n_steps} steps")
     study = road_four_study(seeds, n_steps=n_steps)
-    figure = Figure(figsize=(11, 8), layout="constrained")
-    grid = figure.subplots(2, 2)
-    _plot_road_scene(grid[0][0], seeds[0], n_steps)
-    time = np.arange(study.n_steps) * study.time_interval
-    for label, style in zip(study.labels, ("-", "--", "-.", ":"), strict=False):
-        grid[0][1].plot(time, study.rms(label).mean(axis=0), style, label=label)
-        grid[1][0].plot(time, study.rms(label, "velocity").mean(axis=0), style, label=label)
-    for axes, what in ((grid[0][1], "position (m)"), (grid[1][0], "velocity (m/s)")):
-        axes.set_xlabel("time (s)")
-        axes.set_ylabel(f"RMS {what}, mean of the 4 vehicles")
-        axes.set_yscale("log")
-        axes.legend(fontsize=7)
-    grid[0][1].set_title("Fig 2–3: RMS position error ([DH] eq 28)", fontsize=9, loc="left")
-    grid[1][0].set_title("Fig 4–5: RMS velocity error", fontsize=9, loc="left")
-    _plot_road_table(grid[1][1], study)
+    figure = Figure(figsize=(13, 12), layout="constrained")
+    layout = figure.add_gridspec(3, 3, height_ratios=(1.1, 1, 1))
+    _plot_road_scene(figure.add_subplot(layout[0, 0]), seeds[0], n_steps)
+    _plot_road_table(figure.add_subplot(layout[0, 1:]), study)
+    grid = {row: [figure.add_subplot(layout[row, column]) for column in range(3)] for row in (1, 2)}
+    seconds = np.arange(study.n_steps) * study.time_interval
+    for column, (label, title, numbers) in enumerate(ROAD_PANELS):
+        for row, (kind, unit, figures) in enumerate(
+            zip(("position", "velocity"), ("m", "m/s"), numbers, strict=True), start=1
+        ):
+            axes = grid[row][column]
+            means, low, high = study.time_mean_interval(label, kind)
+            for vehicle, curve in enumerate(study.rms(label, kind), start=1):
+                paper = PAPER_TIME_MEANS.get((label, kind, vehicle))
+                printed = "" if paper is None else f"; [DH] {paper:g}"
+                axes.plot(
+                    seconds,
+                    curve,
+                    lw=1,
+                    label=f"T{vehicle} = {means[vehicle - 1]:.2f} "
+                    f"[{low[vehicle - 1]:.2f}, {high[vehicle - 1]:.2f}]{printed}",
+                )
+            axes.set_yscale("log")
+            axes.set_xlabel("time (s)")
+            axes.set_ylabel(f"RMS {kind} error ({unit})")
+            axes.set_title(f"{figures}: {title}", fontsize=9, loc="left")
+            axes.legend(
+                fontsize=6, loc="upper right", title="time mean (eq 29), 95 %", title_fontsize=6
+            )
+    echo(_road_summary(study))
     return _titled(
         figure,
         "road-four",
-        f"[DH] Fig 1–5: four vehicles in clutter, {len(seeds)} Monte Carlo runs",
+        f"[DH] Fig 1–5: four vehicles in clutter, per vehicle, {len(seeds)} Monte Carlo runs",
         reduced,
     )
+
+
+def _road_summary(study: RoadFourStudy) -> str:
+    """The time-mean table ([DH] eq 29) per vehicle with intervals, and the tracking metrics."""
+    lines = ["road-four: time-mean RMS error per vehicle (eq 29), 95 % bootstrap over runs"]
+    for kind in ("position", "velocity"):
+        for label in study.labels:
+            means, low, high = study.time_mean_interval(label, kind)
+            cells = [
+                f"{m:.3f} [{lo:.3f}, {hi:.3f}]" for m, lo, hi in zip(means, low, high, strict=True)
+            ]
+            lines.append(f"  {kind:8} {label:18} T1..T4: {' | '.join(cells[:4])} | mean {cells[4]}")
+    reference = "gnn"
+    for label in study.labels:
+        lines.append(
+            f"  {label:18} per-run mean position error {mean_interval(study.run_mean_error(label))}"
+            f"; no track {study.missing(label):.3f}; OSPA {mean_interval(study.ospa[label])}"
+            f"; GOSPA {mean_interval(study.gospa[label])}; id switches "
+            f"{mean_interval(study.switches[label])}; false tracks "
+            f"{mean_interval(study.false_track_counts[label])}; losses "
+            f"{mean_interval(study.losses[label])}"
+        )
+        if label != reference:
+            lines.append(
+                f"    {reference} − {label}: position "
+                f"{paired_difference(study.run_mean_error(reference), study.run_mean_error(label))}"
+                f"; OSPA {paired_difference(study.ospa[reference], study.ospa[label])}"
+            )
+    return "\n".join(lines)
 
 
 def _plot_road_scene(axes: Axes, seed: int, n_steps: int) -> None:
@@ -791,36 +1098,40 @@ def _plot_road_table(axes: Axes, study: RoadFourStudy) -> None:
     axes.axis("off")
     header = [
         "method",
-        "TM pos\n(m)",
-        "TM vel\n(m/s)",
-        "no\ntrack",
-        "false\nassign.",
-        "losses\n/ run",
-        "false tracks\n/ run",
-        "OSPA (m)\n± 95 %",
-        "id switches\n/ run ± 95 %",
+        *(f"T{v} pos (m)" for v in range(1, 5)),
+        "mean pos (m)",
+        "mean vel (m/s)",
+        "no track",
+        "OSPA (m)",
+        "id switches\n/ run",
     ]
-    rows = [
-        [
-            textwrap.fill(label, 12),
-            f"{study.time_mean(label).mean():.3f}",
-            f"{study.time_mean(label, 'velocity').mean():.3f}",
-            f"{study.missing(label):.3f}",
-            f"{study.false_assignments[label].mean():.3f}",
-            f"{study.losses[label].mean():.2f}",
-            f"{study.false_track_counts[label].mean():.2f}",
-            f"{study.ospa[label].mean():.3f} ± {mean_interval(study.ospa[label]).half_width:.3f}",
-            f"{study.switches[label].mean():.2f} ± "
-            f"{mean_interval(study.switches[label]).half_width:.2f}",
-        ]
-        for label in study.labels
-    ]
-    table = axes.table(cellText=rows, colLabels=header, loc="center", cellLoc="center")
+
+    def cell(estimate: float, low: float, high: float, digits: int = 2) -> str:
+        return f"{estimate:.{digits}f}\n[{low:.{digits}f}, {high:.{digits}f}]"
+
+    rows = []
+    for label in study.labels:
+        position = study.time_mean_interval(label)
+        velocity = study.time_mean_interval(label, "velocity")
+        ospa, switches = mean_interval(study.ospa[label]), mean_interval(study.switches[label])
+        rows.append(
+            [
+                textwrap.fill(label, 12),
+                *(cell(*(end[v] for end in position)) for v in range(5)),
+                cell(*(end[4] for end in velocity)),
+                f"{study.missing(label):.2f}",
+                cell(ospa.estimate, ospa.low, ospa.high),
+                cell(switches.estimate, switches.low, switches.high),
+            ]
+        )
+    paper = ["[DH] printed", "", "0.21 (Fig 2,\nits method)", "", "", "", "", "", "", ""]
+    table = axes.table(cellText=[*rows, paper], colLabels=header, loc="center", cellLoc="center")
     table.auto_set_font_size(False)
-    table.set_fontsize(7)
-    table.scale(1.0, 2.4)
+    table.set_fontsize(6.5)
+    table.scale(1.0, 2.6)
     axes.set_title(
-        "time-mean errors ([DH] eq 29, mean of the 4 vehicles) and track keeping",
+        "time-mean RMS errors ([DH] eq 29) per vehicle, 95 % bootstrap over the runs; "
+        "OSPA c = 3 m, 95 % t",
         fontsize=9,
         loc="left",
     )
@@ -841,6 +1152,15 @@ def draw_accelerating(reduced: bool, echo: Echo) -> Figure:
     for index, scene in enumerate(ACCELERATING_SCENES):
         axes = figure.add_subplot(grid[1, index * count : (index + 1) * count])
         _plot_accelerating_bars(axes, study, scene)
+        for case in ACCELERATING_CASES:
+            fields = ("stolen", "false_alarms", "ospa", "identity_switches")
+            terminated = _share_interval(study.values(scene, case, "terminated"))
+            reinitiated = _share_interval(study.values(scene, case, "reinitiated"))
+            echo(
+                f"accelerating {scene} {case}: "
+                + "; ".join(f"{f} {mean_interval(study.values(scene, case, f))}" for f in fields)
+                + f"; terminated {terminated}; re-initiated {reinitiated}"
+            )
     return _titled(
         figure,
         "accelerating",
@@ -869,27 +1189,61 @@ def _plot_accelerating_bars(axes: Axes, study: AcceleratingStudy, scene: str) ->
         ("false_alarms", "false alarms taken / run"),
         ("terminated", "share of runs: lost track terminated"),
     )
-    positions = np.arange(len(ACCELERATING_CASES))
-    width = 0.27
-    runs = len(study.seeds)
-    for offset, (field, label) in enumerate(fields):
-        values = [
-            study.share(scene, case, field)
-            if field == "terminated"
-            else study.total(scene, case, field) / runs
-            for case in ACCELERATING_CASES
-        ]
-        bars = axes.bar(positions + (offset - 1) * width, values, width, label=label)
-        axes.bar_label(bars, fmt="%.2g", fontsize=6)
-    axes.set_xticks(positions, [textwrap.fill(case, 14) for case in ACCELERATING_CASES])
-    axes.tick_params(axis="x", labelsize=7)
+    _grouped_bars(
+        axes,
+        list(ACCELERATING_CASES),
+        [
+            (
+                label,
+                [study.values(scene, case, field) for case in ACCELERATING_CASES],
+                field == "terminated",
+            )
+            for field, label in fields
+        ],
+    )
     detail = (
         "clutter 3/frame, 8 s"
         if scene == "accelerating"
         else "vehicle 1 two lanes away, no clutter, 16 s"
     )
-    axes.set_title(f"scene '{scene}' ({detail})", fontsize=9, loc="left")
+    axes.set_title(f"scene '{scene}' ({detail}); 95 % intervals", fontsize=9, loc="left")
     axes.legend(fontsize=6, loc="upper right")
+
+
+def _grouped_bars(
+    axes: Axes,
+    groups: Sequence[str],
+    series: Sequence[tuple[str, Sequence[FloatArray], bool]],
+    width: float = 0.27,
+) -> None:
+    """One bar per (group, series): the mean of its per-run values with a 95 % interval.
+
+    ``series``: (label, per-run values of each group, is a share of runs): a
+    share gets the Wilson interval of its runs, a count per run the t interval.
+    """
+    positions = np.arange(len(groups))
+    for offset, (label, per_group, share) in enumerate(series):
+        intervals = [
+            _share_interval(values) if share else mean_interval(values) for values in per_group
+        ]
+        bars = axes.bar(
+            positions + (offset - (len(series) - 1) / 2) * width,
+            [interval.estimate for interval in intervals],
+            width,
+            yerr=np.maximum(_extent(intervals), 0.0),
+            capsize=2,
+            label=label,
+        )
+        axes.bar_label(bars, fmt="%.2g", fontsize=6)
+    axes.set_xticks(positions, [textwrap.fill(group, 14) for group in groups])
+    axes.tick_params(axis="x", labelsize=7)
+
+
+def _share_interval(values: np.ndarray) -> Interval:
+    """Share of runs where ``values`` is non-zero, with its Wilson 95 % interval."""
+    hits = float(np.count_nonzero(values))
+    low, high = wilson(hits, len(values))
+    return Interval(hits / len(values), low, high)
 
 
 # ---------------------------------------------------------------- overtaking
@@ -902,6 +1256,12 @@ def draw_overtaking(reduced: bool, echo: Echo) -> Figure:
     left, right = figure.subplots(1, 2, width_ratios=(1, 1.3))
     _plot_overtaking_example(left, study)
     _plot_overtaking_bars(right, study)
+    for case in OVERTAKING_CASES:
+        fields = ("stolen", "false_alarms", "ospa", "identity_switches", "phantom_steps")
+        echo(
+            f"overtaking {case}: identity kept {_share_interval(study.values(case, 'kept'))}; "
+            + "; ".join(f"{f} {mean_interval(study.values(case, f))}" for f in fields)
+        )
     return _titled(
         figure,
         "overtaking",
@@ -928,25 +1288,157 @@ def _plot_overtaking_example(axes: Axes, study: OvertakingStudy) -> None:
 
 def _plot_overtaking_bars(axes: Axes, study: OvertakingStudy) -> None:
     cases = list(OVERTAKING_CASES)
-    positions = np.arange(len(cases))
-    runs = len(study.seeds)
-    width = 0.27
-    series = (
-        ("identity kept (share of runs)", [study.kept_share(case) for case in cases]),
-        (
-            "vehicle 2 detections stolen / run",
-            [study.total(case, "stolen") / runs for case in cases],
-        ),
-        ("false alarms taken / run", [study.total(case, "false_alarms") / runs for case in cases]),
+    _grouped_bars(
+        axes,
+        cases,
+        [
+            ("identity kept (share of runs)", [study.values(case, "kept") for case in cases], True),
+            (
+                "vehicle 2 detections stolen / run",
+                [study.values(case, "stolen") for case in cases],
+                False,
+            ),
+            (
+                "false alarms taken / run",
+                [study.values(case, "false_alarms") for case in cases],
+                False,
+            ),
+        ],
     )
-    for offset, (label, values) in enumerate(series):
-        bars = axes.bar(positions + (offset - 1) * width, values, width, label=label)
-        axes.bar_label(bars, fmt="%.2g", fontsize=6)
-    axes.set_xticks(positions, [textwrap.fill(case, 14) for case in cases])
-    axes.tick_params(axis="x", labelsize=7)
     axes.set_ylim(0, 1.15)
-    axes.set_title("per case", fontsize=9, loc="left")
+    axes.set_title("per case; 95 % intervals", fontsize=9, loc="left")
     axes.legend(fontsize=7, loc="upper center")
+
+
+# --------------------------------------------------------------------- peers
+def draw_peers(reduced: bool, echo: Echo) -> Figure:
+    """issue 13: GOSPA (parts), SIAP, id switches and per-scan time against Stone Soup."""
+    names = ("~10",) if reduced else PEER_SCENES
+    seeds = {"~10": 2} if reduced else PEER_SEEDS
+    scans = 8 if reduced else None
+    echo(f"peers: {peers_machine()}")
+    echo(
+        "peers: seeds per scene from the bench's own "
+        + ", ".join(f"{n}: {seeds[n]} from {first_seed(n)}" for n in names)
+        + (f"; first {scans} scans" if scans else "")
+    )
+    studies = peer_study(names, seeds, scans, progress=echo)
+    figure = Figure(figsize=(3.2 * len(studies) + 1, 7.5), layout="constrained")
+    grid = figure.subplots(2, len(studies), squeeze=False)
+    for column, study in enumerate(studies):
+        _plot_peer_gospa(grid[0][column], study)
+        _plot_peer_speed(grid[1][column], study)
+        echo(_peer_table(study))
+    return _titled(
+        figure,
+        "peers",
+        "issue 13: our tracker and service vs Stone Soup 1.9.1, "
+        + ", ".join(f"{n} {seeds[n]}" for n in names)
+        + " seeds "
+        "(bench/peers.py's scenes, trackers and metrics)",
+        reduced,
+    )
+
+
+def _plot_peer_gospa(axes: Axes, study: PeerScene) -> None:
+    trackers = [t for t in study.trackers if t not in study.timing_only]
+    positions = np.arange(len(trackers))
+    bottom = np.zeros(len(trackers))
+    for part, colour in (("localisation", "C0"), ("missed", "C1"), ("false", "C3")):
+        heights = np.array([study.scores[t][part].mean() for t in trackers])
+        axes.bar(positions, heights, 0.6, bottom=bottom, color=colour, label=part)
+        bottom += heights
+    totals = [mean_interval(study.scores[t]["gospa"]) for t in trackers]
+    axes.errorbar(positions, bottom, yerr=_extent(totals), fmt="none", ecolor="k", capsize=3)
+    axes.set_xticks(positions, trackers, rotation=30, fontsize=7)
+    axes.set_ylabel("GOSPA (c = 10σ, p = 1, α = 2), scan mean")
+    axes.set_title(
+        f"{study.name}: {study.targets.mean():.0f} targets, {len(study.seeds)} seeds; 95 % t",
+        fontsize=9,
+        loc="left",
+    )
+    axes.legend(fontsize=6, loc="lower right")
+
+
+def _plot_peer_speed(axes: Axes, study: PeerScene) -> None:
+    trackers = [t for t in study.trackers if t != "ss-gnn"]
+    intervals = [mean_interval(study.speed_up(t)) for t in trackers]
+    positions = np.arange(len(trackers))
+    bars = axes.bar(
+        positions,
+        [i.estimate for i in intervals],
+        0.6,
+        yerr=np.minimum(
+            _extent(intervals), [[i.estimate * 0.999 for i in intervals], [np.inf] * len(intervals)]
+        ),
+        capsize=3,
+        color="0.6",
+    )
+    axes.bar_label(bars, fmt="%.2g×", fontsize=7)
+    axes.set_yscale("log")
+    axes.set_xticks(positions, trackers, rotation=30, fontsize=7)
+    axes.set_ylabel("Stone Soup GNN's per-scan time / tracker's")
+    axes.set_title("speed-up, same process, same run", fontsize=9, loc="left")
+
+
+def _peer_table(study: PeerScene) -> str:
+    """The scene's rows as a Markdown table (estimates [95 % t interval over the seeds])."""
+
+    def cell(values: FloatArray, digits: int = 1) -> str:
+        if np.all(np.isnan(values)):
+            return "–"
+        if len(values) < 2:  # one draw: no interval
+            return f"{float(values[0]):.{digits}f}"
+        interval = mean_interval(values)
+        return f"{interval.estimate:.{digits}f} [{interval.low:.{digits}f}, {interval.high:.{digits}f}]"
+
+    lines = [
+        f"peers {study.name}: {study.targets.mean():.1f} targets on average, seeds "
+        f"{list(study.seeds)}; GOSPA reference {study.reference}"
+        + (f"; {', '.join(study.timing_only)}: timing only" if study.timing_only else ""),
+        "",
+        "| tracker | GOSPA | localisation | missed | false | id switches | late (scans) "
+        "| SIAP C | SIAP S | SIAP PA | ms / scan | speed-up vs ss-gnn | GOSPA / reference |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for tracker, scores in study.scores.items():
+        scored = tracker not in study.timing_only
+        accuracy = [
+            cell(scores[f]) if scored else "–" for f in ("gospa", "localisation", "missed", "false")
+        ]
+        rest = [cell(scores[f]) if scored else "–" for f in ("switches", "late")]
+        siap = [
+            cell(scores[f], 2) if scored else "–"
+            for f in ("completeness", "spuriousness", "position")
+        ]
+        lines.append(
+            f"| {tracker} | "
+            + " | ".join(
+                [
+                    *accuracy,
+                    *rest,
+                    *siap,
+                    cell(scores["scan_ms"], 2),
+                    cell(study.speed_up(tracker)),
+                    cell(study.ratio(tracker), 2) if scored else "–",
+                ]
+            )
+            + " |"
+        )
+    if len(study.seeds) < 2:  # one draw: no paired test
+        return "\n".join(lines)
+    for tracker in ("ours", "ours-rest"):
+        if tracker in study.scores:
+            difference = paired_difference(
+                study.scores[tracker]["gospa"], study.scores[study.reference]["gospa"]
+            )
+            lines.append(f"\n{tracker} − {study.reference}, GOSPA: {difference}")
+    if "ss-jpda" in study.scores:
+        difference = paired_difference(
+            study.scores["ours"]["gospa"], study.scores["ss-jpda"]["gospa"]
+        )
+        lines.append(f"ours − ss-jpda, GOSPA: {difference}")
+    return "\n".join(lines)
 
 
 DRAWINGS: dict[str, Callable[[bool, Echo], Figure]] = {
@@ -962,6 +1454,7 @@ DRAWINGS: dict[str, Callable[[bool, Echo], Figure]] = {
     "overtaking": draw_overtaking,
     "mtt-scenes": draw_mtt_scenes,
     "hz-scale": draw_hz_scale,
+    "peers": draw_peers,
 }
 """Figure name → its drawing: one per entry of :data:`~evaluation.catalogue.CATALOGUE`."""
 
@@ -972,7 +1465,12 @@ FIGURES: dict[str, FigureSpec] = {
 
 
 def reproduce(name: str, out_dir: str | Path, reduced: bool = False, echo: Echo = print) -> Path:
-    """Regenerate one figure as ``out_dir/NAME.png`` and return its path.
+    """Regenerate one figure as ``out_dir/NAME.png`` (and its numbers as ``NAME.txt``).
+
+    Every line the experiment echoes — its seeds and the numbers
+    docs/RESULTS.md quotes, with their intervals — is also written to
+    ``out_dir/NAME.txt``, so that each quoted number can be traced to the run
+    that made the figure.
 
     Parameters
     ----------
@@ -983,7 +1481,7 @@ def reproduce(name: str, out_dir: str | Path, reduced: bool = False, echo: Echo 
     reduced : bool
         A few seeds and steps (seconds, for the tests) instead of the papers' sizes.
     echo : callable
-        Receives progress lines (the seeds used, the file written).
+        Receives progress lines (the seeds used, the numbers, the file written).
 
     Raises
     ------
@@ -994,10 +1492,20 @@ def reproduce(name: str, out_dir: str | Path, reduced: bool = False, echo: Echo 
         raise InvalidInput(f"unknown figure {name!r}; choose one of {sorted(FIGURES)}")
     directory = Path(out_dir)
     directory.mkdir(parents=True, exist_ok=True)
-    figure = FIGURES[name].draw(reduced, echo)
+    lines: list[str] = []
+
+    def record(line: str) -> None:
+        lines.append(line)
+        echo(line)
+
+    started = time.perf_counter()
+    figure = FIGURES[name].draw(reduced, record)
     FigureCanvasAgg(figure)
     path = directory / f"{name}.png"
     figure.savefig(path, dpi=110)
+    command = f"{COMMAND} {name}" + (" --reduced" if reduced else "")
+    (directory / f"{name}.txt").write_text(f"$ {command}\n" + "\n".join(lines) + "\n")
+    echo(f"{name}: {time.perf_counter() - started:.0f} s")
     echo(f"wrote {path}")
     return path
 

@@ -6,9 +6,9 @@ because [MTT] puts the class change there ("suddenly at time step 120 the
 likelihoods are associated to another class"; the standard algorithm
 "cannot even compute the pignistic probabilities after time step 120"), and
 the scene continues to 300 with walking from 240 for Fig 22–23 — the paper's
-own timing (:func:`paper_scenario`). **Reading:** the start of the run (step
-40) and the speeds are those of :func:`core.simulation.pedestrian_scenario`,
-whose stop at step 60 is our earlier, shorter variant. It is tracked by the
+own timing, which is :func:`core.simulation.pedestrian_scenario`'s default
+(one definition of the scene for this figure, Fig 19 and the tests;
+**Reading:** the start of the run, step 40, and the speeds). It is tracked by the
 pedestrian IMM on its own detections
 (:func:`core.simulation.replay.replay_single_target`) and classified
 
@@ -30,63 +30,24 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.arrays import FloatArray, IntArray
-from core.simulation.pedestrian import RUN, STOP, WALK
+from core.simulation import pedestrian_scenario
+from core.simulation.pedestrian import STOP_AT
 from core.simulation.replay import SingleTargetReplay, replay_single_target
-from core.simulation.scenario import Manoeuvre, Scenario, TargetTruth, observe
+from core.simulation.scenario import Scenario
 from core.tracking.presets import pedestrian
 
 TARGET = 1
-RUN_AT = 40
-STOP_AT = 120
-"""[MTT] §6.3.3: the class change (sportsman → rambler) at time step 120."""
 WALK_AGAIN_AT = 240
 """[MTT] Fig 22–23: "a walking mode appears near time step 240"."""
-SCENE_STEPS = (240, 300)
-"""Steps of the scene without and with the second walk."""
-MEASUREMENT_VARIANCE = 0.05
-"""R of the ``pedestrian`` preset (m² per axis)."""
 
 
-def paper_scenario(seed: int = 0, *, walk_again: bool = False) -> Scenario:
-    """The pedestrians of [MTT] Fig 19 with the paper's timing (module docstring).
+def paper_scene(seed: int = 0, *, walk_again: bool = False) -> Scenario:
+    """The pedestrians of [MTT] Fig 19: :func:`core.simulation.pedestrian_scenario` as it stands.
 
-    Pedestrian 1: walk (2, 2) m/s to step 39, run (6, 6) to 119, stop (0, 0)
-    from 120 (to 239, then walk again with ``walk_again``); pedestrian 2 walks
-    (2, 0) throughout, 50 m away; no process noise, R = 0.05 I, P_D = 1 —
-    :func:`core.simulation.pedestrian_scenario`'s construction with the stop moved.
+    Its default timing is the paper's (stop at 120, 240 steps); ``walk_again``
+    continues to step 300 with walking from 240 (Fig 22–23).
     """
-    steps = SCENE_STEPS[walk_again]
-    rng = np.random.default_rng(seed)
-    windows = [
-        Manoeuvre(1, 1, RUN_AT - 1, "walk", WALK),
-        Manoeuvre(1, RUN_AT, STOP_AT - 1, "run", RUN),
-        Manoeuvre(1, STOP_AT, (WALK_AGAIN_AT if walk_again else steps) - 1, "stop", STOP),
-    ]
-    if walk_again:
-        windows.append(Manoeuvre(1, WALK_AGAIN_AT, steps - 1, "walk", WALK))
-    windows.append(Manoeuvre(2, 1, steps - 1, "walk", (2.0, 0.0)))
-    truths = []
-    for target_id, y0 in ((1, 0.0), (2, 50.0)):
-        speeds = np.zeros((steps, 2))
-        for window in windows:
-            if window.target_id == target_id:
-                speeds[window.first_step : window.last_step + 1] = window.value
-        states = np.zeros((steps, 4))
-        states[:, 1] = states[:, 3] = 1.0  # headings h = +1 ([MTT] eq 26)
-        states[:, 0] = np.cumsum(speeds[:, 0])
-        states[:, 2] = y0 + np.cumsum(speeds[:, 1])
-        truths.append(TargetTruth(target_id, 0, states))
-    noise = MEASUREMENT_VARIANCE * np.eye(2)
-    return Scenario(
-        name="pedestrian",
-        seed=seed,
-        time_interval=1.0,
-        n_steps=steps,
-        truths=tuple(truths),
-        manoeuvres=tuple(windows),
-        scans=tuple(observe(truths, steps, 1.0, noise, rng, sensor="camera")),
-        measurement_noise=noise,
-    )
+    return pedestrian_scenario(seed, walk_again_at=WALK_AGAIN_AT if walk_again else None)
 
 
 RUNS: dict[str, tuple[bool, dict[str, object]]] = {
@@ -150,7 +111,7 @@ def _credal_trace(replay: SingleTargetReplay) -> ClassTrace:
 def pedestrian_classification(seed: int = 0) -> PedestrianClassification:
     """Replay pedestrian 1 with each classifier of :data:`RUNS` (one realisation, ``seed``)."""
     preset = pedestrian()
-    scenes = {False: paper_scenario(seed), True: paper_scenario(seed, walk_again=True)}
+    scenes = {False: paper_scene(seed), True: paper_scene(seed, walk_again=True)}
     traces: dict[str, ClassTrace] = {}
     for label, (continued, options) in RUNS.items():
         replay = replay_single_target(scenes[continued], TARGET, preset, options)
@@ -168,4 +129,56 @@ def pedestrian_classification(seed: int = 0) -> PedestrianClassification:
             for m in scenes[True].manoeuvres
             if m.target_id == TARGET
         ),
+    )
+
+
+@dataclass(frozen=True)
+class StopOutcomes:
+    """What the standard and the instantaneous-0.3 classifiers do at the stop, per realisation.
+
+    The paper shows one realisation; these are the claims of Fig 20–21 over
+    several (seeded) noise realisations of the same scene.
+
+    Attributes
+    ----------
+    seeds : tuple of int
+    closest_to_total : ndarray, shape (runs,)
+        Standard: the smallest 1 − K of a step's combination from the stop on
+        (0: total conflict; BetP undefined from then on).
+    undefined : ndarray of bool, shape (runs,)
+        Standard: BetP undefined at some step from the stop on (total conflict).
+    follows : ndarray of bool, shape (runs,)
+        Standard: BetP(rambler) > 0.5 at some step from the stop on.
+    rambler_from : ndarray, shape (runs,)
+        Instantaneous λ = 0.3: first step ≥ the stop with BetP(rambler) > 0.5
+        (NaN: never).
+    """
+
+    seeds: tuple[int, ...]
+    closest_to_total: FloatArray
+    undefined: np.ndarray
+    follows: np.ndarray
+    rambler_from: FloatArray
+
+
+def stop_outcomes(seeds: tuple[int, ...] = tuple(range(20))) -> StopOutcomes:
+    """Fig 20–21's claims over ``seeds`` (class change at :data:`core.simulation.pedestrian.STOP_AT`)."""
+    preset = pedestrian()
+    rambler = preset.classes.labels.index("rambler")
+    closest, undefined, follows, rambler_from = [], [], [], []
+    for seed in seeds:
+        scene = paper_scene(seed)
+        standard = _credal_trace(replay_single_target(scene, TARGET, preset, RUNS["standard"][1]))
+        after = standard.steps >= STOP_AT
+        closest.append(max(0.0, float(np.min(1.0 - standard.step_conflicts[after]))))
+        undefined.append(bool(np.isnan(standard.probabilities[after]).any()))
+        follows.append(not np.isnan(standard.first_step_above(rambler, STOP_AT)))
+        discounted = replay_single_target(scene, TARGET, preset, RUNS["instantaneous 0.3"][1])
+        rambler_from.append(_credal_trace(discounted).first_step_above(rambler, STOP_AT))
+    return StopOutcomes(
+        seeds=tuple(seeds),
+        closest_to_total=np.array(closest),
+        undefined=np.array(undefined),
+        follows=np.array(follows),
+        rambler_from=np.array(rambler_from),
     )

@@ -12,7 +12,7 @@
   target 3 reappears at 69). **Reading:** we impose those detection gaps on
   the Fig 10 scene (:data:`SCORE_GAPS`: the detections of a target in its
   gaps are removed); its appearances stay at 30 and 70.
-- Fig 19: the pedestrians' y over time (:func:`evaluation.pedestrian.paper_scenario`).
+- Fig 19: the pedestrians' y over time (:func:`evaluation.pedestrian.paper_scene`).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from core.arrays import FloatArray, IntArray
 from core.simulation import aircraft_scenario
 from core.simulation.scenario import Scenario
 from core.tracking.config import LocalTrackerConfig
-from evaluation.pedestrian import paper_scenario
+from evaluation.pedestrian import paper_scene
 from evaluation.tracking import NO_TERMINATION, life_cycle, track_scenario
 
 SCORE_GAPS: dict[int, tuple[int, int]] = {2: (35, 120), 3: (55, 68), 4: (90, 120)}
@@ -117,5 +117,5 @@ def tracked_aircraft(
 
 def pedestrian_truths(seed: int = 0) -> FloatArray:
     """Fig 19: the two pedestrians' y over time on the continued scene, shape (2, steps)."""
-    scenario = paper_scenario(seed, walk_again=True)
+    scenario = paper_scene(seed, walk_again=True)
     return np.stack([truth.states[:, 2] for truth in scenario.truths])

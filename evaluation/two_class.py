@@ -125,7 +125,7 @@ def _best_threshold(
         np.mean(
             [
                 decision_outcome(
-                    pairs, method, _tuned_options(method, t), seed=seed, order=order
+                    pairs, method, _tuned_options(method, t), seed=seed, order=order, tie_probes=0
                 ).rate
                 for seed, pairs in realisations
             ]

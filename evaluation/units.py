@@ -36,7 +36,14 @@ import numpy as np
 
 from core.arrays import FloatArray, IntArray
 from core.simulation.tracklists import t2t_four
-from evaluation.pairing import ListPair, Outcome, decision_outcome, list_pairs, partially_observed
+from evaluation.pairing import (
+    TIE_PROBES,
+    ListPair,
+    Outcome,
+    decision_outcome,
+    list_pairs,
+    partially_observed,
+)
 
 METHODS: dict[str, tuple[str, dict[str, object], str]] = {
     "hachour density": ("hachour", {"likelihood": "density"}, "mean"),
@@ -84,6 +91,7 @@ def _outcomes(
     distance: str,
     scale: float = 1.0,
     order: int = 0,
+    tie_probes: int = TIE_PROBES,
 ) -> list[Outcome]:
     """One outcome per realisation, the lists in a random order (:mod:`evaluation.pairing`)."""
     return [
@@ -94,6 +102,7 @@ def _outcomes(
             distance,
             seed=seed,
             order=order,
+            tie_probes=tie_probes,
         )
         for seed, pairs in realisations
     ]
@@ -245,8 +254,15 @@ def noise_study(
         realisations = scene(seeds, n_steps, float(sigma), separation, unseen)
         for method in TUNED:
             on_grid = [
-                _mean_rate(
-                    _outcomes(realisations, method, _tuned_options(method, t), "mean", order=order)
+                _mean_rate(  # rates only: no tie probes (pairing.decision_outcome)
+                    _outcomes(
+                        realisations,
+                        method,
+                        _tuned_options(method, t),
+                        "mean",
+                        order=order,
+                        tie_probes=0,
+                    )
                 )
                 for t in grid
             ]

@@ -8,7 +8,7 @@ import pytest
 from core.simulation import aircraft_scenario
 from evaluation.aircraft import aircraft_classification
 from evaluation.four_targets import threshold_sweep
-from evaluation.pedestrian import pedestrian_classification
+from evaluation.pedestrian import pedestrian_classification, stop_outcomes
 from evaluation.two_class import class_comparison
 from evaluation.units import noise_study, unit_sweep
 
@@ -82,6 +82,15 @@ def test_aircraft_credal_doubts_where_bayes_picks_a_side() -> None:
     assert np.mean((behaviours < 1e-9) | (behaviours > 1 - 1e-9)) > 0.99
     assert result.run_spread("credal") < 1e-6
     np.testing.assert_array_equal(result.decision_steps("credal"), [70.0, 70.0])
+    # Fig 13, independently: Bayes' posterior is the normalised product of the steps'
+    # behaviour likelihoods, and the scaled plausibilities are those likelihoods over a
+    # per-step constant (coasting steps: no update).
+    seen = np.where(np.isnan(result.behaviours), 1.0, result.behaviours)
+    with np.errstate(divide="ignore"):
+        log_product = np.cumsum(np.log(seen), axis=1)
+    product = np.exp(log_product - log_product.max(axis=2, keepdims=True))
+    expected = product / product.sum(axis=2, keepdims=True)
+    np.testing.assert_allclose(result.bayesian_behaviours, expected, atol=1e-6)
 
 
 def test_pedestrian_discounting_follows_the_class_changes() -> None:
@@ -89,9 +98,12 @@ def test_pedestrian_discounting_follows_the_class_changes() -> None:
     result = pedestrian_classification(seed=0)
     standard = result.traces["standard"]
     assert np.isnan(standard.first_step_above(RAMBLER, after=120))  # Fig 20: never follows the stop
-    undefined = standard.steps[np.isnan(standard.probabilities).any(axis=1)]
-    assert 120 <= undefined[0] <= 130  # "cannot even compute the pignistic probabilities after 120"
-    assert np.all(np.isnan(standard.probabilities[standard.steps >= undefined[0]]))
+    # "cannot even compute the pignistic probabilities after 120": the stop's evidence is in
+    # (all but) total conflict with the run's — 1 − K below 1e-9 (0: BetP undefined).
+    after = standard.steps >= 120
+    assert np.min(1.0 - standard.step_conflicts[after]) < 1e-9
+    sportsman = standard.probabilities[after, SPORTSMAN]
+    assert np.all(np.isnan(sportsman) | (sportsman > 0.99))  # stuck on the run's class
     instantaneous = result.traces["instantaneous 0.3"]
     assert instantaneous.first_step_above(SPORTSMAN, after=40) < 50  # Fig 21: the run
     assert 120 < instantaneous.first_step_above(RAMBLER, after=120) < 239  # … and the stop
@@ -107,3 +119,10 @@ def test_pedestrian_discounting_follows_the_class_changes() -> None:
         (240, 299),
     ]
     assert [phase[2] for phase in result.phases] == ["walk", "run", "stop", "walk"]
+
+
+def test_the_stop_is_never_followed_without_discounting_over_realisations() -> None:
+    outcomes = stop_outcomes(seeds=(0, 1))
+    assert not outcomes.follows.any()
+    assert np.all(outcomes.closest_to_total < 1e-9)
+    assert np.all((outcomes.rambler_from > 120) & (outcomes.rambler_from < 239))

@@ -23,6 +23,9 @@ def test_reproduce_writes_a_png(name: str, tmp_path: Path) -> None:
     assert len(content) > 20_000
     assert any("seed" in line for line in lines)  # every run says its seeds
     assert lines[-1] == f"wrote {path}"
+    numbers = (tmp_path / "figures" / f"{name}.txt").read_text()
+    echoed = "\n".join(lines[:-2])  # all but the time taken and the file written
+    assert numbers == f"$ credal-fusion reproduce {name} --reduced\n{echoed}\n"
 
 
 def test_the_registry_names_the_papers_figures() -> None:
@@ -39,6 +42,7 @@ def test_the_registry_names_the_papers_figures() -> None:
         "overtaking",
         "mtt-scenes",
         "hz-scale",
+        "peers",
     }
     assert all(spec.name == name and spec.paper for name, spec in FIGURES.items())
     assert set(DRAWINGS) == set(CATALOGUE) == set(FIGURES)  # a drawing for every name

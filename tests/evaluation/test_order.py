@@ -15,7 +15,13 @@ import pytest
 
 from core.simulation.tracklists import t2t_four
 from evaluation.four_targets import threshold_sweep
-from evaluation.intervals import mean_interval, paired_difference, rate_interval, wilson
+from evaluation.intervals import (
+    bootstrap_interval,
+    mean_interval,
+    paired_difference,
+    rate_interval,
+    wilson,
+)
 from evaluation.pairing import ListPair, decision_error_rate, decision_outcome, list_pairs
 
 
@@ -91,3 +97,13 @@ def test_paired_difference_by_hand() -> None:
     p_by_hand = 1.0 - t / math.sqrt(2.0 + t * t)
     assert result.p_value == pytest.approx(p_by_hand, rel=1e-9)
     assert paired_difference([1.0, 1.0], [1.0, 1.0]).p_value == 1.0
+
+
+def test_the_bootstrap_of_a_mean_is_the_normal_interval() -> None:
+    # For a plain mean the percentile bootstrap approaches x̄ ± z s/√n (hand formula).
+    values = np.random.default_rng(3).normal(2.0, 1.0, size=400)
+    estimate, low, high = bootstrap_interval(lambda rows: np.array([values[rows].mean()]), 400)
+    half = 1.959964 * values.std(ddof=1) / np.sqrt(400)
+    assert estimate[0] == pytest.approx(values.mean())
+    assert low[0] == pytest.approx(values.mean() - half, abs=0.15 * half)
+    assert high[0] == pytest.approx(values.mean() + half, abs=0.15 * half)

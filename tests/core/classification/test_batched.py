@@ -199,7 +199,12 @@ def test_pedestrian_replay_matches_the_reference(
     """Includes the near-total conflict at the stop ([MTT] Fig 20, K > 1 − 1e-6)."""
     preset = pedestrian()
     reference, batched = _pair(preset, scale, discount, accumulation)
-    assert _replay_both(pedestrian_scenario(seed=0), 1, preset, reference, batched) > 130
+    assert (
+        _replay_both(
+            pedestrian_scenario(seed=0, stop_at=60, n_steps=140), 1, preset, reference, batched
+        )
+        > 130
+    )
 
 
 def test_batch_rows_are_independent_of_the_batch() -> None:

@@ -63,7 +63,7 @@ def test_fig_14_bayesian_baseline_fails_in_doubt(aircraft_two: SingleTargetRepla
 
 @pytest.fixture(scope="module")
 def walk_run_stop() -> dict[str, SingleTargetReplay]:
-    scenario = pedestrian_scenario(seed=0)
+    scenario = pedestrian_scenario(seed=0, stop_at=60, n_steps=140)
     preset = pedestrian()
     return {
         discount: replay_single_target(scenario, 1, preset, {"discount": discount})
@@ -102,7 +102,9 @@ def test_fig_22_cumulative_discounting_forgets_within_a_few_steps(
 def test_fig_20_literal_total_conflict_on_another_noise_realisation() -> None:
     # With seed 13 the stop's evidence against running becomes total (1 − K < 1e-12) at
     # step 62: as in the paper, BetP cannot be computed any more, to the end.
-    replay = replay_single_target(pedestrian_scenario(seed=13), 1, pedestrian())
+    replay = replay_single_target(
+        pedestrian_scenario(seed=13, stop_at=60, n_steps=140), 1, pedestrian()
+    )
     statuses = [c.status for c in replay.credal]
     first = statuses.index("total_conflict")
     assert int(replay.steps[first]) == 62
@@ -114,7 +116,7 @@ def test_fig_20_literal_total_conflict_on_another_noise_realisation() -> None:
 def test_fig_22_23_walking_again_after_the_stop() -> None:
     # λ = 0.9 both ways. Walking is a shared behaviour: cumulative discounting forgets the
     # rambler evidence and drifts back to doubt (Fig 22); instantaneous keeps it (Fig 23).
-    scenario = pedestrian_scenario(seed=0, walk_again_at=240)
+    scenario = pedestrian_scenario(seed=0, stop_at=60, walk_again_at=240)
     preset = pedestrian()
     cumulative, instantaneous = (
         replay_single_target(scenario, 1, preset, {"discount": discount, "reliability": 0.9})

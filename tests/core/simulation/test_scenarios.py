@@ -60,7 +60,7 @@ def test_aircraft_is_seeded() -> None:
 
 
 def test_pedestrian_phases() -> None:
-    scenario = pedestrian_scenario(seed=0)
+    scenario = pedestrian_scenario(seed=0, stop_at=60, n_steps=140)
     assert scenario.n_steps == 140
     displacement = _speed(scenario.truth(1).states)  # row k - 1 is the move into step k
     np.testing.assert_allclose(displacement[0:39], 2.0)  # steps 1..39 walk
@@ -73,8 +73,19 @@ def test_pedestrian_phases() -> None:
     assert all(len(scan.measurements) == 2 for scan in scenario.scans)
 
 
+def test_pedestrian_default_is_the_papers_timing() -> None:
+    # [MTT] §6.3.3: the class change at step 120; as long stopped as moving by default.
+    scenario = pedestrian_scenario(seed=0)
+    assert scenario.n_steps == 240
+    displacement = _speed(scenario.truth(1).states)
+    np.testing.assert_allclose(displacement[39:119], 6.0)  # steps 40..119 run
+    np.testing.assert_allclose(displacement[119:], 0.0)  # steps 120..239 stop
+    with pytest.raises(ScenarioError):
+        pedestrian_scenario(stop_at=30)
+
+
 def test_pedestrian_walks_again() -> None:
-    scenario = pedestrian_scenario(seed=0, walk_again_at=240)
+    scenario = pedestrian_scenario(seed=0, stop_at=60, walk_again_at=240)
     assert scenario.n_steps == 300
     displacement = _speed(scenario.truth(1).states)
     np.testing.assert_allclose(displacement[59:239], 0.0)
