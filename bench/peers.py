@@ -117,6 +117,8 @@ P_DETECT = 0.9
 CUTOFF = 10.0 * SIGMA
 SIAP_MAX_TARGETS = 15
 LIVE_STATUSES = ("confirmed", "coasting")
+JPDA_MAX_TARGETS = 250
+"""Stone Soup JPDA runs on every scene up to this size (all of the bench's)."""
 GNN_FULL_MAX_TARGETS = 80
 """Above it the tutorial GNN (all track × detection hypotheses, in Python) runs only
 ``GNN_TIMING_SCANS`` scans, for its time; its tracks are the kd-tree form's (the
@@ -683,7 +685,8 @@ def scene_runs(built: Scene | list[Scene], url: str) -> tuple[Scene, Scene, list
     full_gnn = scene.mean_targets() <= GNN_FULL_MAX_TARGETS
     gnn_scene = scene if full_gnn else scene.head(GNN_TIMING_SCANS)
     runs = [stone_soup_run(gnn_scene, "ss-gnn"), stone_soup_run(scene, "ss-kdgnn")]
-    runs.append(stone_soup_run(scene, "ss-jpda"))
+    if scene.mean_targets() <= JPDA_MAX_TARGETS:
+        runs.append(stone_soup_run(scene, "ss-jpda"))
     return scene, gnn_scene, [*runs, local_run(scene), rest_run(scene, url)]
 
 
