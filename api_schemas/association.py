@@ -12,6 +12,7 @@ from typing import Literal
 
 from api_schemas.base import OpenUnitFloat, PositiveFloat, UnitFloat, WireModel
 from api_schemas.issues import FieldIssue, Location, raise_issues
+from core.tracking.config import DEFAULT_IMM_DISTANCE
 
 AssociationMethod = Literal["gnn", "denoeux", "hachour", "mercier", "dang_han"]
 """Track-to-track association methods."""
@@ -22,7 +23,7 @@ LocalAssociationMethod = Literal["gnn", "denoeux", "hachour", "mercier", "dang_h
 DistanceKind = Literal["mean", "sum", "modified"]
 LikelihoodKind = Literal["density", "relative"]
 MaximiseKind = Literal["betp", "plausibility"]
-ImmDistanceKind = Literal["closest_model", "combined"]
+ImmDistanceKind = Literal["closest_model", "combined", "gated_combined"]
 
 
 class AssociationOptions(WireModel):
@@ -120,5 +121,5 @@ def resolve_options(
             continue
         filled[name] = value
     if local and "imm_distance" in allowed:
-        filled.setdefault("imm_distance", "closest_model")
+        filled.setdefault("imm_distance", DEFAULT_IMM_DISTANCE)
     return AssociationOptions.model_validate(filled)

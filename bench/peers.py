@@ -15,7 +15,7 @@ Trackers, every one given the true q, R, P_D and densities where it takes them:
   ``UpdateTimeStepsDeleter`` (3 steps);
 - ``ss-kdgnn``: the same with ``DetectionKDTreeGNN2D``;
 - ``ss-jpda``: ``PDAHypothesiser`` (true clutter density and P_D) + ``JPDAwithLBP``,
-  Gaussian-mixture reduction (10- and crossing scenes only: see ``JPDA_MAX_TARGETS``);
+  Gaussian-mixture reduction (every scene but ``multi``: issue 13's goal is ≤ its GOSPA);
 - ``ours``: :class:`core.tracking.tracker.LocalTracker` with the true CV model
   (Stone Soup's Q), R, P_D, clutter and birth densities, GNN;
 - ``ours-rest``: the service over REST: one session on a live uvicorn server,
@@ -37,8 +37,9 @@ GOSPA over Stone Soup GNN's (above ``GNN_FULL_MAX_TARGETS`` targets the tutorial
 GNN runs a few scans, for its time only, and the kd-tree form — the same
 tracks — is the GOSPA reference).
 
-Run: ``.venv/bin/python bench/peers.py [SCENE ...]`` (or ``make bench``); about 3
-minutes on a quiet 2-core machine (scenes: ``~10 ~50 ~200 crossing``).
+Run: ``.venv/bin/python bench/peers.py [SCENE ...]`` (or ``make bench``); about 6
+minutes on a quiet 2-core machine, most of it Stone Soup's JPDA on ~50 and ~200
+(scenes: ``~10 ~50 ~200 crossing multi``).
 """
 
 from __future__ import annotations
@@ -50,6 +51,7 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import dataclasses  # noqa: E402
 import datetime  # noqa: E402
+import math  # noqa: E402
 import socket  # noqa: E402
 import sys  # noqa: E402
 import threading  # noqa: E402
@@ -114,8 +116,9 @@ SERVER_START_TIMEOUT_S = 20.0
 P_DETECT = 0.9
 CUTOFF = 10.0 * SIGMA
 SIAP_MAX_TARGETS = 15
-JPDA_MAX_TARGETS = 15
 LIVE_STATUSES = ("confirmed", "coasting")
+JPDA_MAX_TARGETS = 250
+"""Stone Soup JPDA runs on every scene up to this size (all of the bench's)."""
 GNN_FULL_MAX_TARGETS = 80
 """Above it the tutorial GNN (all track × detection hypotheses, in Python) runs only
 ``GNN_TIMING_SCANS`` scans, for its time; its tracks are the kd-tree form's (the
@@ -145,6 +148,12 @@ class Scene:
     transition: CombinedLinearGaussianTransitionModel
     measurement: LinearGaussian
     velocity_std: float
+    p_detect: float = P_DETECT
+
+    @property
+    def noise(self) -> np.ndarray:
+        """The sensor's R (its measurement model's)."""
+        return np.asarray(self.measurement.noise_covar, dtype=float)
 
     @property
     def clutter_density(self) -> float:
@@ -173,28 +182,40 @@ class Scene:
             self.transition,
             self.measurement,
             self.velocity_std,
+            self.p_detect,
         )
 
     def mean_targets(self) -> float:
         return float(np.mean([len(self.truth_states(when)) for when, _ in self.scans]))
 
 
-def models(seed: int) -> tuple[CombinedLinearGaussianTransitionModel, LinearGaussian]:
+def models(
+    seed: int, sigma: float = SIGMA, offset: int = 0
+) -> tuple[CombinedLinearGaussianTransitionModel, LinearGaussian]:
     """The truth's models, seeded: their noise draws are the scene's (not the global RNG's)."""
     transition = CombinedLinearGaussianTransitionModel(
         [ConstantVelocity(Q), ConstantVelocity(Q)], seed=seed + 100
     )
     measurement = LinearGaussian(
-        ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2) * SIGMA**2, seed=seed + 200
+        ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2) * sigma**2, seed=seed + 200 + offset
     )
     return transition, measurement
 
 
 def simulated_scene(
-    name: str, targets: int, steps: int, seed: int, clutter_per_target: float = 0.5
+    name: str,
+    targets: int,
+    steps: int,
+    seed: int,
+    clutter_per_target: float = 0.5,
+    sensor: tuple[float, float, int] = (SIGMA, P_DETECT, 0),
 ) -> Scene:
-    """Stone Soup's simulators: ``targets`` at start, births = deaths in the mean."""
-    transition, measurement = models(seed)
+    """Stone Soup's simulators: ``targets`` at start, births = deaths in the mean.
+
+    ``sensor`` is (σ, P_D, seed offset) of the detection simulator; the truth
+    depends on ``seed`` only, so scenes of one seed share it."""
+    sigma, p_detect, offset = sensor
+    transition, measurement = models(seed, sigma, offset)
     side = 400.0 * np.sqrt(targets / 10.0)  # the same target density at every size
     velocity_std = 2.0
     death = 0.02
@@ -222,7 +243,8 @@ def simulated_scene(
         targets * clutter_per_target,
         targets * death,
         velocity_std,
-        seed,
+        seed + offset,
+        p_detect,
     )
 
 
@@ -261,12 +283,13 @@ def _detected(
     birth_rate: float,
     velocity_std: float,
     seed: int,
+    p_detect: float = P_DETECT,
 ) -> Scene:
     detector = SimpleDetectionSimulator(
         groundtruth=truth,
         measurement_model=measurement,
         meas_range=np.array([[-side / 2, side / 2], [-side / 2, side / 2]]),
-        detection_probability=P_DETECT,
+        detection_probability=p_detect,
         clutter_rate=clutter_rate,
         seed=seed + 1,
     )
@@ -276,7 +299,16 @@ def _detected(
         paths |= set(detector.groundtruth.groundtruth_paths)
     truths = sorted(paths, key=lambda path: (path[0].timestamp, str(path.id)))
     return Scene(
-        name, truths, scans, side, clutter_rate, birth_rate, transition, measurement, velocity_std
+        name,
+        truths,
+        scans,
+        side,
+        clutter_rate,
+        birth_rate,
+        transition,
+        measurement,
+        velocity_std,
+        p_detect,
     )
 
 
@@ -302,14 +334,16 @@ def stone_soup_run(scene: Scene, kind: str) -> Run:
             predictor=predictor,
             updater=updater,
             clutter_spatial_density=scene.clutter_density,
-            prob_detect=P_DETECT,
+            prob_detect=scene.p_detect,
         )
         hypothesiser = DistanceGater(hypothesiser, measure=Mahalanobis(), gate_threshold=16)
         associator: Any = JPDAwithLBP(hypothesiser=hypothesiser)
     else:
         hypothesiser = DistanceHypothesiser(predictor, updater, Mahalanobis(), missed_distance=3)
         associator = (
-            DetectionKDTreeGNN2D(hypothesiser, predictor, updater, max_distance=6 * SIGMA * 4)
+            DetectionKDTreeGNN2D(
+                hypothesiser, predictor, updater, max_distance=24 * math.sqrt(scene.noise[0, 0])
+            )
             if kind == "ss-kdgnn"
             else GNNWith2DAssignment(hypothesiser)
         )
@@ -383,7 +417,7 @@ def local_tracker_config(scene: Scene) -> LocalTrackerConfig:
     """Our tracker with the truths: Stone Soup's CV matrices, R, P_D, both densities."""
     bank = ModelBank(
         (constant_velocity(DT, Q, noise="continuous"),),
-        LinearMeasurementModel(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]), np.eye(2) * SIGMA**2),
+        LinearMeasurementModel(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]), scene.noise),
         np.ones((1, 1)),
     )
     life = LifeCycleConfig(
@@ -395,7 +429,7 @@ def local_tracker_config(scene: Scene) -> LocalTrackerConfig:
     return LocalTrackerConfig(
         bank=bank,
         time_interval=DT,
-        p_detect=P_DETECT,
+        p_detect=scene.p_detect,
         life_cycle=dataclasses.replace(life, score_margin=-life.confirm_threshold),
         initiation=INITIATION,
         max_speed=max_speed(scene),
@@ -471,44 +505,52 @@ def live_service() -> Iterator[str]:
         listener.close()
 
 
-def rest_run(scene: Scene, url: str) -> Run:
-    """One session, one detecting sensor with the true R and P_D; scans posted in order."""
+def rest_run(scene: Scene | list[Scene], url: str, label: str = "ours-rest") -> Run:
+    """One session, a detecting sensor per scene (their true R, P_D and clutter), the
+    sensors' scans posted in order; the fused tracks after each scan's last post."""
+    scenes = [scene] if isinstance(scene, Scene) else scene
+    names = ["radar"] if len(scenes) == 1 else [f"radar-{k}" for k in range(len(scenes))]
+    first = scenes[0]
     config = {
-        "name": f"peers {scene.name}",
+        "name": f"peers {first.name}",
         "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
         "motion": {"model": "constant_velocity", "q": Q},
         "sensors": [
             {
-                "id": "radar",
-                "p_detect": P_DETECT,
-                "measurement": {"r": (np.eye(2) * SIGMA**2).tolist()},
-                "clutter_density": scene.clutter_density,
+                "id": name,
+                "p_detect": sensor.p_detect,
+                "measurement": {"r": sensor.noise.tolist()},
+                "clutter_density": sensor.clutter_density,
             }
+            for name, sensor in zip(names, scenes, strict=True)
         ],
         "tracking": {
             "time_interval": DT,
-            "birth_density": scene.birth_density,
-            "initiation": {"kind": INITIATION, "velocity_std": scene.velocity_std}
-            | ({"max_speed": max_speed(scene)} if INITIATION == "two_point" else {}),
+            "birth_density": first.birth_density,
+            "initiation": {"kind": INITIATION, "velocity_std": first.velocity_std}
+            | ({"max_speed": max_speed(first)} if INITIATION == "two_point" else {}),
             "thresholds": {"min_points": MIN_POINTS, "score_margin": -CONFIRM_THRESHOLD},
         },
     }
-    run = Run("ours-rest")
+    run = Run(label)
     with httpx.Client(base_url=url, timeout=60) as client:
         created = client.post("/v1/sessions", json=config)
         created.raise_for_status()
         sid = created.json()["id"]
         headers = {"Authorization": f"Bearer {created.json()['token']}"}
-        for when, detections in scene.scans:
-            body = {
-                "sensor": "radar",
-                "time": (when - START).total_seconds(),
-                "detections": [{"z": z.tolist()} for z in _positions(detections)],
-            }
-            started = time.perf_counter()
-            answer = client.post(f"/v1/sessions/{sid}/detections", json=body, headers=headers)
-            run.scan_seconds.append(time.perf_counter() - started)
-            answer.raise_for_status()
+        for scans in zip(*(sensor.scans for sensor in scenes), strict=True):
+            elapsed = 0.0
+            for name, (when, detections) in zip(names, scans, strict=True):
+                body = {
+                    "sensor": name,
+                    "time": (when - START).total_seconds(),
+                    "detections": [{"z": z.tolist()} for z in _positions(detections)],
+                }
+                started = time.perf_counter()
+                answer = client.post(f"/v1/sessions/{sid}/detections", json=body, headers=headers)
+                elapsed += time.perf_counter() - started
+                answer.raise_for_status()
+            run.scan_seconds.append(elapsed)
             run.estimates.append(
                 [
                     (t["id"], np.array(t["state"]))
@@ -605,19 +647,55 @@ def siap_metrics(scene: Scene, run: Run) -> dict[str, float]:
 
 
 # --------------------------------------------------------------------- main
-SCENES: list[tuple[str, Callable[[], Scene]]] = [
+MULTI_SENSORS: tuple[tuple[float, float, int], ...] = (
+    (1.0, 0.9, 0),
+    (2.0, 0.7, 1000),
+    (1.5, 0.8, 2000),
+)
+"""The ``multi`` scene's detection simulators on one truth: (σ m, P_D, seed offset)."""
+
+
+def multi_sensor_scenes(targets: int = 10, steps: int = 60, seed: int = 4) -> list[Scene]:
+    """One truth (``seed``), one scene per sensor of :data:`MULTI_SENSORS`."""
+    return [
+        simulated_scene("multi", targets, steps, seed, sensor=sensor) for sensor in MULTI_SENSORS
+    ]
+
+
+SCENES: list[tuple[str, Callable[[], Scene | list[Scene]]]] = [
     ("~10", lambda: simulated_scene("~10", 10, 60, seed=1)),
     ("~50", lambda: simulated_scene("~50", 50, 40, seed=2)),
     ("~200", lambda: simulated_scene("~200", 200, 15, seed=3)),
     ("crossing", crossing_scene),
+    ("multi", multi_sensor_scenes),
 ]
+
+
+def scene_runs(built: Scene | list[Scene], url: str) -> tuple[Scene, Scene, list[Run]]:
+    """The scene scored, the one Stone Soup GNN is timed on, and every tracker's run.
+
+    A multi-sensor scene (a list) runs Stone Soup GNN on its first sensor, the
+    service with each sensor alone (``rest-k``) and with all (``rest-fused``)."""
+    if isinstance(built, list):
+        first = built[0]
+        runs = [stone_soup_run(first, "ss-gnn")]
+        runs += [rest_run(sensor, url, f"rest-{k}") for k, sensor in enumerate(built)]
+        return first, first, [*runs, rest_run(built, url, "rest-fused")]
+    scene = built
+    full_gnn = scene.mean_targets() <= GNN_FULL_MAX_TARGETS
+    gnn_scene = scene if full_gnn else scene.head(GNN_TIMING_SCANS)
+    runs = [stone_soup_run(gnn_scene, "ss-gnn"), stone_soup_run(scene, "ss-kdgnn")]
+    if scene.mean_targets() <= JPDA_MAX_TARGETS:
+        runs.append(stone_soup_run(scene, "ss-jpda"))
+    return scene, gnn_scene, [*runs, local_run(scene), rest_run(scene, url)]
 
 
 def main() -> int:
     print(describe_machine())
     print(
         f"GOSPA c = {CUTOFF:g} m (10σ), p = 1, α = 2, meaned over scans; σ = {SIGMA:g} m, "
-        f"q = {Q:g} m²/s³, P_D = {P_DETECT:g}; per-scan time: median ms, one BLAS thread"
+        f"q = {Q:g} m²/s³, P_D = {P_DETECT:g} (multi: σ, P_D = {MULTI_SENSORS}); "
+        "per-scan time: median ms, one BLAS thread"
     )
     header = (
         f"{'scene':>8} {'targets':>7} {'tracker':>10} {'GOSPA':>7} {'loc':>6} {'miss':>6} "
@@ -630,14 +708,9 @@ def main() -> int:
         for name, build in SCENES:
             if name not in chosen:
                 continue
-            scene = build()
+            scene, gnn_scene, runs = scene_runs(build(), url)
             small = scene.mean_targets() <= SIAP_MAX_TARGETS
-            full_gnn = scene.mean_targets() <= GNN_FULL_MAX_TARGETS
-            gnn_scene = scene if full_gnn else scene.head(GNN_TIMING_SCANS)
-            runs = [stone_soup_run(gnn_scene, "ss-gnn"), stone_soup_run(scene, "ss-kdgnn")]
-            if scene.mean_targets() <= JPDA_MAX_TARGETS:
-                runs.append(stone_soup_run(scene, "ss-jpda"))
-            runs += [local_run(scene), rest_run(scene, url)]
+            full_gnn = gnn_scene is scene
             scores = [
                 score(gnn_scene if run.label == "ss-gnn" else scene, run, small) for run in runs
             ]

@@ -227,7 +227,8 @@ class LifeCycleConfig:
     termination_probability : gate-emptiness threshold ([HZ] §4.2) in [0, 1); 0 turns it off.
     gate_probability : γ of the gate volume A_G (as a χ² probability) and of the
         hand-over to phantoms, in (0, 1).
-    min_points : confirm a tentative track after this many hits, 1 to
+    min_points : confirm a tentative track after this many hits while its score is
+        not below 0 (P(target) ≥ ½: docs/algorithms.md §7.2), 1 to
         :data:`MAX_MIN_POINTS` (None: score only).
     score_margin : the score is clamped at ``confirm threshold + score_margin``, so a
         long-lived track is still deleted after a few misses where it should have been
@@ -551,7 +552,7 @@ def advance(
        score ≤ delete threshold                terminated     score_deleted
        coasting, empty gate < termination p.   terminated     gate_emptiness
        tentative, reported by ≥ 2 sensors      confirmed      second_sensor
-       tentative, hits ≥ ``min_points``        confirmed      min_points
+       tentative, min_points hits and L ≥ 0    confirmed      min_points
        tentative, score ≥ confirm threshold    confirmed      score_confirmed
        ======================================  =============  ==================
 
@@ -626,10 +627,18 @@ def advance(
     if evidence.sensors is not None:
         decide(tentative & (evidence.sensors >= 2), CONFIRMED, StatusReason.SECOND_SENSOR)
     if config.min_points is not None:
-        decide(tentative & (hits >= config.min_points), CONFIRMED, StatusReason.MIN_POINTS)
+        # by its hits only while it is more likely a target than a false one (L ≥ 0)
+        decide(
+            tentative & (hits >= config.min_points) & (score >= 0.0),
+            CONFIRMED,
+            StatusReason.MIN_POINTS,
+        )
     decide(tentative & (score >= config.confirm_threshold), CONFIRMED, StatusReason.SCORE_CONFIRMED)
+    confirmed = tentative & (status == CONFIRMED)
+    # an established track is under the ceiling from the scan that confirms it
+    score = np.where(confirmed, np.minimum(score, config.score_ceiling), score)
     new = LifeState(status, reason, score, hits, empty_gate, phantom_since)
-    return new, np.asarray(tentative & (status == CONFIRMED), dtype=bool)
+    return new, np.asarray(confirmed, dtype=bool)
 
 
 def hand_over(

@@ -33,18 +33,51 @@ def test_the_scene_is_what_the_bench_says(scores) -> None:
 
 def test_local_tracker_against_stone_soup_gnn(scores) -> None:
     stone_soup, ours, _, _ = scores
-    # Seen: 19.05 against 19.51. Confirmed at the second hit like Stone Soup's
-    # (late 1.1 scans against 1.05), ours is more accurate where it tracks.
-    assert ours.gospa < stone_soup.gospa
-    assert ours.late < stone_soup.late + 0.25
+    # Seen: 17.6 against 19.5. Ours is more accurate where it tracks and starts
+    # fewer false tracks (confirmed at L ≥ 0, late 1.2 scans against 1.05).
+    assert ours.gospa < 0.95 * stone_soup.gospa
+    assert ours.late < stone_soup.late + 0.5
     assert ours.localisation < stone_soup.localisation
+    assert ours.false < stone_soup.false
+
+
+def test_local_tracker_against_stone_soup_jpda() -> None:
+    peers = load_bench("peers")
+    scene = peers.simulated_scene("small", 10, 30, seed=1)
+    jpda = peers.score(scene, peers.stone_soup_run(scene, "ss-jpda"), with_siap=False)
+    ours = peers.score(scene, peers.local_run(scene), with_siap=False)
+    # Seen: 17.6 against 24.7.
+    assert ours.gospa < jpda.gospa
 
 
 def test_the_service_with_one_sensor_is_as_accurate_as_its_local_tracker(scores) -> None:
-    """The fused layer adds no delay: a local track is confirmed when it enters."""
+    """With one detecting sensor the fused tracks are its local tracks (issue 13: within 2 %)."""
     _, ours, service, _ = scores
-    # Seen: 18.58 against 19.05, the same late and missed terms; the fused layer's
-    # false term is lower (4.67 against 5.17), so it is never worse, not yet equal.
+    # Seen: equal (17.63 both). Before, the service was 2.5 % better: a tentative
+    # track stole a confirmed track's detection, the local tracker then held two
+    # tracks on one target and the fused layer joined them into one.
     assert service.late == pytest.approx(ours.late)
     assert service.missed == pytest.approx(ours.missed)
-    assert service.gospa <= ours.gospa * 1.02
+    assert service.gospa == pytest.approx(ours.gospa, rel=0.02)
+
+
+def test_fused_sensors_are_better_than_each_sensor_alone() -> None:
+    """Three Stone Soup detection simulators on one truth (σ 1 / 2 / 1.5 m, P_D 0.9 /
+    0.7 / 0.8), through the service: each alone, then all in one session."""
+    peers = load_bench("peers")
+    sensors = peers.multi_sensor_scenes(10, 30, seed=4)
+    first = sensors[0]
+    for other in sensors[1:]:  # one truth: the same states at every scan
+        for (when, _), (also, _) in zip(first.scans, other.scans, strict=True):
+            assert when == also
+            assert sorted(s.state_vector.ravel().tolist() for _, s in first.truth_states(when)) == (
+                sorted(s.state_vector.ravel().tolist() for _, s in other.truth_states(also))
+            )
+    with peers.live_service() as url:
+        alone = [
+            peers.score(first, peers.rest_run(sensor, url), with_siap=False) for sensor in sensors
+        ]
+        fused = peers.score(first, peers.rest_run(sensors, url, "rest-fused"), with_siap=False)
+    # Seen: alone 19.7 / 35.2 / 26.1, fused 15.4.
+    assert fused.gospa < min(result.gospa for result in alone)
+    assert fused.localisation < min(result.localisation for result in alone)

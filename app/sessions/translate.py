@@ -63,7 +63,7 @@ from core.fusion.reports import TrackReport as CoreTrackReport
 from core.fusion.state import StateFusion
 from core.geometry import FieldOfView, PolygonView, Sector
 from core.lifecycle import LifeCycleConfig
-from core.tracking.config import ClassificationOptions, LocalTrackerConfig
+from core.tracking.config import DEFAULT_IMM_DISTANCE, ClassificationOptions, LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
 from core.tracking.presets import MIN_MANOEUVRE_DENSITY, preset
 from core.tracking.range_rate import RangeRateModel
@@ -163,7 +163,7 @@ def local_tracker_config(
         measurement_noise=r,
         association_method=tracking.association.method,
         association_options=method_options(options),
-        imm_distance=options.imm_distance or "closest_model",
+        imm_distance=options.imm_distance or DEFAULT_IMM_DISTANCE,
         p_detect=sensor.p_detect,
         life_cycle=life_cycle_config(
             thresholds, tracking.birth_density, clutter_density=sensor.clutter_density

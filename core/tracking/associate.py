@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from scipy.stats import chi2
 
-from core.arrays import FloatArray, IntArray
+from core.arrays import BoolArray, FloatArray, IntArray
 from core.association.associate import METHODS
 from core.distance import DistanceModel, Estimates, ModifiedScale, steady_state_covariance
 from core.errors import TrackingError
@@ -29,7 +29,7 @@ from core.pipeline.gate import pair_positions
 from core.tracking.config import CHEAP_JPDA, LocalTrackerConfig
 from core.tracking.gating import TrackGatingProblem, gate_pairs
 from core.tracking.imm import IMMPrediction, IMMUpdate, IMMUpdater
-from core.tracking.jpda import cheap_jpda_weights, pda_update
+from core.tracking.jpda import cheap_jpda_weights, clutter_bias, pda_update
 from core.tracking.models import ModelBank
 
 
@@ -69,10 +69,14 @@ class DetectionAssociator:
             unknown = sorted(set(options) - {"bias", "gate_probability"})
             if unknown:
                 raise TrackingError(f"cheap_jpda: unknown option(s) {unknown}")
-            self._bias = float(options.get("bias", 0.0))  # type: ignore[arg-type]
             probability = float(options.get("gate_probability", 0.999))  # type: ignore[arg-type]
             if not 0.0 < probability < 1.0:
                 raise TrackingError("cheap_jpda: gate_probability must be in (0, 1)")
+            self._bias = float(
+                options.get(  # type: ignore[arg-type]
+                    "bias", clutter_bias(score.false_target_density, config.p_detect, probability)
+                )
+            )
             self._jpda_gate = float(chi2.ppf(probability, self._q))
             self._parsed_options: Any = None
         elif self._method in METHODS:
@@ -98,20 +102,64 @@ class DetectionAssociator:
             self._modified_sum = ModifiedScale.of(steady.innovation - self._noise, **kwargs)
 
     def associate(
-        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None
+        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None, first: BoolArray
     ) -> Association:
-        """Associate and update the tracks of ``sub`` with the detections ``z`` (own R or None)."""
+        """Associate and update the tracks of ``sub`` with the detections ``z`` (own R or None),
+        the ``first`` tracks (the established ones) before the others (cheap JPDA: soft
+        over all)."""
         if self._method == CHEAP_JPDA:
             return self._jpda(sub, z, own_noise)
-        return self._method_and_update(sub, z, own_noise)
+        return self._method_and_update(sub, z, own_noise, first)
 
     def _hit_gain(self, distance: FloatArray, log_det: FloatArray) -> FloatArray:
         return self._score.hit_increment(distance, log_det, self._q)
 
     def _method_and_update(
-        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None
+        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None, first: BoolArray
     ) -> Association:
-        """Assignment by an association method, then the IMM update of the assigned pairs."""
+        """Assignment by an association method, the ``first`` tracks before the others,
+        which share the detections left (docs/algorithms.md §4, "Assignment"); then the
+        IMM update of the assigned pairs.
+
+        A tentative track's first gate is wide (its velocity is a prior), so in one
+        assignment on D it takes a target's detection from that target's own track;
+        with min_points confirmation it is confirmed on it, and the target changes id.
+        """
+        leading, trailing = np.flatnonzero(first), np.flatnonzero(~first)
+        if len(leading) == 0 or len(trailing) == 0:
+            rows, cols, hit_gain = self._assign(sub, z, own_noise)
+        else:
+            rows, cols, gain = self._assign(_select(sub, leading), z, own_noise)
+            left = np.setdiff1d(np.arange(len(z)), cols)
+            later_rows, later_cols, later_gain = self._assign(
+                _select(sub, trailing), z[left], None if own_noise is None else own_noise[left]
+            )
+            hit_gain = np.zeros(len(first))
+            hit_gain[leading], hit_gain[trailing] = gain, later_gain
+            rows = np.concatenate([leading[rows], trailing[later_rows]])
+            cols = np.concatenate([cols, left[later_cols]])
+        tracks = len(first)
+        assigned = np.zeros((tracks, self._q))
+        assigned[rows] = z[cols]
+        detected = np.zeros(tracks, dtype=bool)
+        detected[rows] = True
+        noises = None
+        if own_noise is not None:
+            noises = np.broadcast_to(self._noise, (tracks, self._q, self._q)).copy()
+            noises[rows] = own_noise[cols]
+        update = self.updater.update(sub, assigned, detected, noises)
+        return Association(update, rows, cols, hit_gain, cols)
+
+    def _assign(
+        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None
+    ) -> tuple[IntArray, IntArray, FloatArray]:
+        """One association method's pairs of ``sub`` × ``z`` and each track's hit gain."""
+        if len(z) == 0 or len(sub.means) == 0:  # nothing to pair: no method run
+            return (
+                np.zeros(0, dtype=np.int64),
+                np.zeros(0, dtype=np.int64),
+                np.zeros(len(sub.means)),
+            )
         combined_z, combined_s = sub.combined_measurement()
         problem = TrackGatingProblem(
             known=Estimates(combined_z, combined_s, "tracks"),
@@ -125,24 +173,14 @@ class DetectionAssociator:
         )
         result = METHODS[self._method][1](problem, self._parsed_options)
         rows, cols = result.pair_known, result.pair_incoming
-        tracks = len(combined_z)
-        hit_gain = np.zeros(tracks)
+        hit_gain = np.zeros(len(combined_z))
         if len(rows):
             gated = problem.last["pairs"]
             position = pair_positions(gated.pairs.rows, gated.pairs.cols, len(z), rows, cols)
             hit_gain[rows] = self._hit_gain(
                 gated.plain_distance[position], gated.pairs.log_det[position]
             )
-        assigned = np.zeros((tracks, self._q))
-        assigned[rows] = z[cols]
-        detected = np.zeros(tracks, dtype=bool)
-        detected[rows] = True
-        noises = None
-        if own_noise is not None:
-            noises = np.broadcast_to(self._noise, (tracks, self._q, self._q)).copy()
-            noises[rows] = own_noise[cols]
-        update = self.updater.update(sub, assigned, detected, noises)
-        return Association(update, rows, cols, hit_gain, cols)
+        return rows, cols, hit_gain
 
     def _jpda(self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None) -> Association:
         """The cheap JPDA baseline ([DH] §2): soft weights over gated pairs, PDA update."""
@@ -180,3 +218,13 @@ class DetectionAssociator:
             best_cols = np.flatnonzero(weights.max(axis=0) > 0.0)
             best_rows = np.argmax(weights[:, best_cols], axis=0).astype(np.int64)
         return Association(update, best_rows, best_cols, hit_gain, np.unique(cols))
+
+
+def _select(prediction: IMMPrediction, rows: IntArray) -> IMMPrediction:
+    return IMMPrediction(
+        prediction.means[rows],
+        prediction.covariances[rows],
+        prediction.log_mode_probabilities[rows],
+        prediction.measurement_means[rows],
+        prediction.innovation_covariances[rows],
+    )

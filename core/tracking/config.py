@@ -23,10 +23,17 @@ Readings
     ``initial_velocity_std²``); the large velocity variance makes the first
     gate wide and the first hit increment small, and the SPRT does the rest.
 ``imm_distance``
-    ``"closest_model"`` (default): each (track, detection) pair is gated and
-    scored with the model j of the track's bank that gives the smallest
-    ``D_j = (z − ẑ_j)ᵀ S_j⁻¹ (z − ẑ_j)`` (and its S_j in the score);
-    ``"combined"``: the model-combined ẑ, S of [MTT] §4.
+    ``"gated_combined"`` (default): a (track, detection) pair is gated with the
+    model j of the track's bank that gives the smallest
+    ``D_j = (z − ẑ_j)ᵀ S_j⁻¹ (z − ẑ_j)``, and the association decides on the
+    model-combined D of [MTT] §4, capped just under the gate (a gated pair
+    stays possible); the track score takes the closest model's D_j and S_j.
+    ``"closest_model"``: gated and associated on the closest model's D_j;
+    ``"combined"``: gated and associated on the model-combined ẑ, S. On
+    ``close-pair`` ``closest_model`` confuses two aircraft 10 m apart (the
+    neighbour is where a ±2g model predicts), on ``crossing`` ``combined``
+    loses the fighter at its 4g step (the detection leaves the combined
+    gate); ``gated_combined`` does neither (docs/algorithms.md §4).
 ``distance``
     ``"plain"`` ([MTT] eq 15) or ``"modified"`` ([HZ] §4.1 with the Reading of
     :mod:`core.distance.modified`), S_ss the steady state of the bank's first
@@ -76,11 +83,13 @@ from core.tracking.models import LinearMeasurementModel, ModelBank
 from core.tracking.presets import TrackingPreset, preset
 from core.tracking.range_rate import RangeRateModel
 
-ImmDistance = Literal["closest_model", "combined"]
+ImmDistance = Literal["closest_model", "combined", "gated_combined"]
 DistanceKind = Literal["plain", "modified"]
 Initiation = Literal["two_point", "single_point"]
 
-IMM_DISTANCES: tuple[ImmDistance, ...] = ("closest_model", "combined")
+IMM_DISTANCES: tuple[ImmDistance, ...] = ("closest_model", "combined", "gated_combined")
+DEFAULT_IMM_DISTANCE: ImmDistance = "gated_combined"
+"""docs/algorithms.md §4 "Assignment": neither confuses close targets nor loses a 4g turn."""
 DISTANCE_KINDS: tuple[DistanceKind, ...] = ("plain", "modified")
 INITIATIONS: tuple[Initiation, ...] = ("two_point", "single_point")
 
@@ -135,7 +144,9 @@ class LocalTrackerConfig:
     association_method : ``gnn`` (default), ``denoeux``, ``hachour``,
         ``mercier``, ``dang_han`` or ``cheap_jpda``.
     association_options : the method's options; ``cheap_jpda`` takes
-        ``bias`` (B of [DH] eq 16, default 0) and ``gate_probability``.
+        ``bias`` (B of [DH] eq 16; default the PDA's clutter term from the life
+        cycle's ``false_target_density``, :func:`core.tracking.jpda.clutter_bias`)
+        and ``gate_probability``.
     imm_distance, distance : see the module Readings.
     modified_beta, modified_k, modified_alpha : β, k, α of the modified distance.
     p_detect : P_D of the system's sensors (the track score).
@@ -163,7 +174,7 @@ class LocalTrackerConfig:
     association_options: Mapping[str, object] = field(
         default_factory=lambda: MappingProxyType({"gate_probability": 0.999})
     )
-    imm_distance: ImmDistance = "closest_model"
+    imm_distance: ImmDistance = DEFAULT_IMM_DISTANCE
     distance: DistanceKind = "plain"
     modified_beta: float = 10.0
     modified_k: float = 1.0

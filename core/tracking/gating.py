@@ -6,7 +6,10 @@ detection i) is gated and scored ([MTT] eq 15) with
 - ``"closest_model"`` (default): the model with the smallest
   ``D_j = (z_i − ẑ_j)ᵀ S_j⁻¹ (z_i − ẑ_j)``, so that a manoeuvre the bank
   contains never falls outside the gate of the combined prediction;
-- ``"combined"``: the model-combined ẑ, S of [MTT] §4.
+- ``"combined"``: the model-combined ẑ, S of [MTT] §4;
+- ``"gated_combined"``: gated by the closest model, ranked (the distance the
+  association decides on) by the model-combined D, capped just under the gate
+  so that every gated pair stays possible.
 
 :class:`TrackGatingProblem` is an :class:`~core.association.AssociationProblem`
 whose candidate pairs are computed that way (on the T × r model rows, with the
@@ -104,10 +107,22 @@ def gate_pairs(
         first[1:] = (track[1:] != track[:-1]) | (cols_sorted[1:] != cols_sorted[:-1])
         keep = order[first]
         chosen_models = (rows[keep] % per_row).astype(np.int64)
+        distance = found.distance[keep]
+        if imm_distance == "gated_combined":
+            distance = _combined_distance(
+                prediction,
+                measurements,
+                measurement_covariances,
+                noise,
+                track[first],
+                cols_sorted[first],
+                modified,
+                gate,
+            )
         reduced = CandidatePairs(
             track[first].astype(np.int64),
             cols_sorted[first].astype(np.int64),
-            found.distance[keep],
+            distance,
             found.log_det[keep],
             tracks,
             len(measurements),
@@ -119,6 +134,38 @@ def gate_pairs(
         rows // per_row, cols, found.distance, found.log_det, tracks, len(measurements), q
     )
     return GatedPairs(reduced, plain, chosen.astype(np.int64))
+
+
+RANK_CAP = 1.0 - 1e-6
+"""``"gated_combined"``: a gated pair's combined distance is at most this share of the gate."""
+
+
+def _combined_distance(
+    prediction: IMMPrediction,
+    measurements: FloatArray,
+    measurement_covariances: FloatArray | None,
+    noise: FloatArray,
+    tracks: IntArray,
+    cols: IntArray,
+    modified: ModifiedScale | None,
+    gate: float,
+) -> FloatArray:
+    """The model-combined D of the pairs (``tracks``, ``cols``) that the closest model gated,
+    capped at :data:`RANK_CAP` × gate: the closest model decides that a pair is possible
+    (a manoeuvre the bank contains stays in the gate), the combined ẑ, S rank the possible
+    pairs (a neighbour that one unlikely model predicts ranks far behind the target's own
+    detection)."""
+    centres, spreads = prediction.combined_measurement()
+    known = spreads if measurement_covariances is None else spreads - noise
+    covariances = known[tracks]
+    if measurement_covariances is not None:
+        covariances = covariances + measurement_covariances[cols]
+    innovations = measurements[cols] - centres[tracks]
+    solved = np.linalg.solve(covariances, innovations[..., None])[..., 0]
+    distance = np.einsum("pi,pi->p", innovations, solved)
+    if modified is not None:
+        distance = distance * modified.ratio(known)[tracks]
+    return np.asarray(np.minimum(distance, RANK_CAP * gate), dtype=np.float64)
 
 
 @dataclass(frozen=True, eq=False)

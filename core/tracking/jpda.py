@@ -9,6 +9,16 @@ with G_tj the Gaussian likelihood of detection j for track t inside the gate
 The probability that none of the detections is the track's is
 ``β_t0 = 1 − Σ_j β_tj`` (clipped at 0).
 
+**Clutter term.** [DH] leaves B open. By default it is the PDA's
+(:func:`clutter_bias`): ``B = λ (1 − P_D P_G) / P_D`` with λ the sensor's
+clutter density (false detections per unit of measurement space per scan,
+the life cycle's β_FT), P_D its detection probability and P_G the gate
+probability. With one track (S_j = G_tj) the weights are then exactly the
+PDA's ``β_j = L_j / (1 − P_D P_G + Σ_l L_l)``, ``L_j = P_D G_j / λ``
+(Bar-Shalom & Tse 1975; Stone Soup's ``PDAHypothesiser``): a track
+surrounded by clutter trusts each detection less, and a missed detection
+keeps the weight ``1 − P_D P_G`` it has in the PDA.
+
 Each model m of the track is updated with the combined innovation
 ([DH] eq 5–11, the PDA update)::
 
@@ -38,6 +48,16 @@ from core.tracking.imm import IMMPrediction, IMMState, IMMUpdate, posterior_log_
 from core.tracking.models import ModelBank
 
 _LOG_2PI = math.log(2.0 * math.pi)
+
+
+def clutter_bias(clutter_density: float, p_detect: float, gate_probability: float) -> float:
+    """B = λ (1 − P_D P_G) / P_D: the PDA's clutter term in [DH] eq 16 (module docstring)."""
+    for name, value in (("p_detect", p_detect), ("gate_probability", gate_probability)):
+        if not (math.isfinite(value) and 0.0 < value < 1.0):
+            raise TrackingError(f"{name} must be in (0, 1), got {value!r}")
+    if not (math.isfinite(clutter_density) and clutter_density > 0.0):
+        raise TrackingError(f"clutter_density must be positive, got {clutter_density!r}")
+    return clutter_density * (1.0 - p_detect * gate_probability) / p_detect
 
 
 def cheap_jpda_weights(likelihoods: FloatArray, bias: float) -> tuple[FloatArray, FloatArray]:

@@ -71,6 +71,7 @@ from core.lifecycle import (
     StatusReason,
     TrackStatus,
     advance,
+    established,
     hand_over,
     initiated,
 )
@@ -246,7 +247,10 @@ class LocalTracker:
         )
         candidates = np.flatnonzero((status != PHANTOM) & self._can_be_hit(prediction))
         association = self._associator.associate(
-            _select_prediction(prediction, candidates), z, own_noise
+            _select_prediction(prediction, candidates),
+            z,
+            own_noise,
+            established(status[candidates]),
         )
         if doppler is not None and self.config.range_rate is not None and len(association.rows):
             measured = np.isfinite(doppler[association.cols])

@@ -100,12 +100,13 @@ def test_a_two_point_start_scores_both_detections() -> None:
 
 
 def test_a_negative_margin_restarts_the_test_of_established_tracks_only() -> None:
-    """Ceiling 0 (margin −confirm): a tentative track still reaches the confirm threshold."""
+    """Ceiling 0 (margin −confirm): a tentative track is scored above it up to the confirm
+    threshold; the scan that confirms it puts it under the ceiling, as every established track."""
     config = LifeCycleConfig(score_margin=-LifeCycleConfig().confirm_threshold)
     assert config.score_ceiling == pytest.approx(0.0)
-    state = LifeState.new(2, 5.0, hits=2)
+    state = LifeState.new(3, 5.0, hits=2)
     state = LifeState(
-        np.array([TENTATIVE, CONFIRMED]),
+        np.array([TENTATIVE, TENTATIVE, CONFIRMED]),
         state.reason,
         state.score,
         state.hits,
@@ -114,17 +115,18 @@ def test_a_negative_margin_restarts_the_test_of_established_tracks_only() -> Non
     )
     evidence = Evidence(
         time=1.0,
-        detected=np.array([True, True]),
-        hit_increment=np.array([3.0, 3.0]),
-        seen=np.ones(2, dtype=bool),
+        detected=np.array([True, True, True]),
+        hit_increment=np.array([1.0, 3.0, 3.0]),
+        seen=np.ones(3, dtype=bool),
         miss_increment=math.log(0.1),
-        gate_log_det=np.zeros(2),
+        gate_log_det=np.zeros(3),
         gate_dim=2,
-        visibility=np.zeros(2, dtype=np.int64),
-        occluded=np.zeros(2, dtype=bool),
+        visibility=np.zeros(3, dtype=np.int64),
+        occluded=np.zeros(3, dtype=bool),
     )
     after, confirmed = advance(config, state, evidence)
-    np.testing.assert_allclose(after.score, [config.confirm_threshold, 0.0])
-    assert confirmed.tolist() == [True, False]
+    # 5 + 1 = 6 stays tentative above the ceiling; 5 + 3 ≥ 6.9 confirms, then 0
+    np.testing.assert_allclose(after.score, [6.0, 0.0, 0.0])
+    assert confirmed.tolist() == [False, True, False]
     with pytest.raises(InvalidInput):
         LifeCycleConfig(score_margin=-20.0)  # the ceiling would be under the delete threshold

@@ -121,6 +121,18 @@ CASES = [
         increment=1.0,
         seen=True,
     ),
+    Case(
+        "min_points hits, score below 0: still tentative (more likely false)",
+        T,
+        R_.INITIATED,
+        -3.0,
+        (T, R_.INITIATED),
+        -2.0,
+        hits=2,
+        detected=True,
+        increment=1.0,
+        seen=True,
+    ),
     Case("a second sensor confirms", T, R_.INITIATED, 0.0, (N, R_.SECOND_SENSOR), 0.0, sensors=2),
     Case(
         "unseen: nothing happens", N, R_.SCORE_CONFIRMED, CONFIRM, (N, R_.SCORE_CONFIRMED), CONFIRM

@@ -125,3 +125,23 @@ def test_overtaking_identity_through_the_blind_zone() -> None:
     assert study.total("(c) modified + phantoms", "stolen") == 0
     # The blind zone outside the surveillance region is "out of range": a new identity.
     assert study.kept_share("(e) region = sensor ranges") == 0.0
+
+
+def test_gated_combined_neither_confuses_the_close_pair_nor_loses_the_4g_turn() -> None:
+    # The default imm_distance: gated by the closest model (the 4g detection stays in
+    # the gate), ranked by the combined D (the neighbour a ±2g model predicts ranks last).
+    pair = close_pair_study(
+        seeds=(0, 1, 2),
+        noise_ratios=(0.1, 0.25),
+        n_steps=30,
+        imm_distances=("closest_model", "gated_combined"),
+    )
+    assert np.all(pair.mean("gated_combined") < 0.02)
+    assert np.all(pair.mean("closest_model") > 0.2)  # the same runs confuse the pair
+    crossing = crossing_study(
+        seeds=(0,), variances=(0.2,), imm_distances=("combined", "gated_combined"), examples=()
+    )
+    assert crossing.alive_at_end("gated_combined", 1)[0] == 1.0
+    assert crossing.fighter_delay["gated_combined"][0, 0] == 0
+    assert crossing.switches["gated_combined"][0, 0] == 0
+    assert crossing.alive_at_end("combined", 1)[0] == 0.0  # the same run loses it ungated

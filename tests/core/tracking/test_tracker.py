@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy.stats import norm
+from scipy.stats import chi2, multivariate_normal, norm
 
 from core.distance.modified import scale_factor
 from core.errors import TrackingError
@@ -21,7 +21,9 @@ from core.simulation import (
 from core.simulation.scenario import Scenario
 from core.tracking import IMMPredictor, IMMUpdater, ModelBank, two_point_initiation
 from core.tracking.config import LocalTrackerConfig
-from core.tracking.jpda import cheap_jpda_weights, pda_update
+from core.tracking.imm import IMMState
+from core.tracking.jpda import cheap_jpda_weights, clutter_bias, pda_update
+from core.tracking.models import LinearMeasurementModel, constant_velocity
 from core.tracking.tracker import LocalTracker
 from evaluation.tracking import life_cycle
 
@@ -320,6 +322,97 @@ def test_pda_update_with_one_certain_detection_is_the_kalman_update() -> None:
     )
 
 
+def test_cheap_jpda_with_its_clutter_term_is_stone_soups_pda_for_one_track() -> None:
+    """One track, four detections (one outside the gate): the weights with the default
+    B = λ(1 − P_D P_G)/P_D, and the PDA update, against Stone Soup's ``PDAHypothesiser``
+    (same λ, P_D, P_G) and its Gaussian-mixture reduction of the hypotheses' posteriors."""
+    import datetime
+
+    from stonesoup.functions import gm_reduce_single
+    from stonesoup.hypothesiser.probability import PDAHypothesiser
+    from stonesoup.models.measurement.linear import LinearGaussian
+    from stonesoup.models.transition.linear import (
+        CombinedLinearGaussianTransitionModel,
+        ConstantVelocity,
+    )
+    from stonesoup.predictor.kalman import KalmanPredictor
+    from stonesoup.types.array import StateVectors
+    from stonesoup.types.detection import Detection
+    from stonesoup.types.state import GaussianState
+    from stonesoup.types.track import Track
+    from stonesoup.updater.kalman import KalmanUpdater
+
+    clutter, p_detect, p_gate, q = 2e-3, 0.8, 0.99, 0.05
+    bank = ModelBank(
+        (constant_velocity(1.0, q, noise="continuous"),),
+        LinearMeasurementModel(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]), np.eye(2)),
+        np.ones((1, 1)),
+    )
+    mean = np.array([0.0, 1.0, 0.0, -0.5])
+    covariance = np.diag([1.0, 0.3, 1.5, 0.2])
+    z = np.array([[1.2, -0.1], [0.1, -1.4], [2.5, 0.9], [9.0, 9.0]])
+    prediction = IMMPredictor(bank).predict(
+        IMMState.from_gaussian(mean[None], covariance[None], np.ones(1)), 1.0
+    )
+    s = prediction.innovation_covariances[0, 0]
+    innovations = z - prediction.measurement_means[0, 0]
+    distances = np.einsum("ji,ik,jk->j", innovations, np.linalg.inv(s), innovations)
+    inside = distances <= chi2.ppf(p_gate, 2)
+    assert inside.tolist() == [True, True, True, False]
+    g = np.where(inside, multivariate_normal(np.zeros(2), s).pdf(innovations), 0.0)
+    weights, missed = cheap_jpda_weights(g[None], clutter_bias(clutter, p_detect, p_gate))
+    update = pda_update(
+        bank, prediction, z, np.zeros(3, dtype=np.int64), np.arange(3), weights[0, :3]
+    )
+
+    start = datetime.datetime(2026, 1, 1)
+    measurement = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2))
+    predictor = KalmanPredictor(
+        CombinedLinearGaussianTransitionModel([ConstantVelocity(q), ConstantVelocity(q)])
+    )
+    updater = KalmanUpdater(measurement)
+    hypotheses = PDAHypothesiser(
+        predictor=predictor,
+        updater=updater,
+        clutter_spatial_density=clutter,
+        prob_detect=p_detect,
+        prob_gate=p_gate,
+    ).hypothesise(
+        Track([GaussianState(mean[:, None], covariance, timestamp=start)]),
+        {
+            Detection(
+                row[:, None],
+                timestamp=start + datetime.timedelta(seconds=1),
+                measurement_model=measurement,
+            )
+            for row in z
+        },
+        start + datetime.timedelta(seconds=1),
+    )
+    by_detection = {
+        tuple(np.asarray(h.measurement.state_vector, dtype=float).ravel()): float(h.probability)
+        for h in hypotheses
+        if h
+    }
+    assert len(by_detection) == 3  # Stone Soup gates the fourth out too
+    expected = [by_detection[tuple(row)] for row in z[:3]]
+    np.testing.assert_allclose(weights[0, :3], expected, rtol=1e-9)
+    missed_hypothesis = next(h for h in hypotheses if not h)
+    np.testing.assert_allclose(missed[0], float(missed_hypothesis.probability), rtol=1e-9)
+    posteriors = [h.prediction if not h else updater.update(h) for h in hypotheses]
+    reduced_mean, reduced_covariance = gm_reduce_single(
+        StateVectors([p.state_vector for p in posteriors]),
+        np.stack([p.covar for p in posteriors], axis=2),
+        np.array([float(h.probability) for h in hypotheses]),
+    )
+    np.testing.assert_allclose(
+        update.state.means[0, 0], np.asarray(reduced_mean, dtype=float).ravel(), rtol=1e-9
+    )
+    np.testing.assert_allclose(
+        update.state.covariances[0, 0], reduced_covariance, rtol=1e-9, atol=1e-12
+    )
+
+
 def test_cheap_jpda_tracker_follows_the_aircraft() -> None:
     """The baseline as a whole tracker: every aircraft keeps one confirmed track."""
     scenario = aircraft_scenario(seed=0)
@@ -370,3 +463,53 @@ def test_closest_model_confuses_targets_closer_than_a_manoeuvre() -> None:
     sits on one of the track's models: ``closest_model`` gating cannot tell them apart
     (measured 46 % false assignments where ``combined`` has 1 %)."""
     assert _close_pair_rate(0.25, "closest_model", runs=5) > 0.2
+
+
+def test_established_tracks_take_their_detections_before_tentative_ones() -> None:
+    """A confirmed track keeps its target's detection that a fresh tentative track
+    (wide gate: its velocity is a prior) is closer to in D.
+
+    D by hand from the scan-2 posteriors: F, Q of the continuous white-noise
+    acceleration model (q = 0.05, Δt = 1), S = H(F P Fᵀ + Q)Hᵀ + R. One assignment
+    on D would give the detection to the tentative track (D 1.50 against 2.14).
+    """
+    bank = ModelBank(
+        (constant_velocity(1.0, 0.05, noise="continuous"),),
+        LinearMeasurementModel(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]), np.eye(2)),
+        np.ones((1, 1)),
+    )
+    life = LifeCycleConfig(
+        false_target_density=1e-4, new_target_density=1e-5, min_points=2, phantoms=False
+    )
+    tracker = LocalTracker(
+        LocalTrackerConfig(
+            bank=bank,
+            life_cycle=life,
+            initiation="single_point",
+            initial_velocity_std=2.0,
+            classification=None,
+        )
+    )
+    tracker.step(0.0, [[0.0, 0.0]])
+    tracker.step(1.0, [[1.0, 0.0]])
+    before = tracker.step(2.0, [[2.0, 0.0], [3.0, 5.6]])  # the target, and clutter
+    assert [(t.id, t.status.value) for t in before.tracks] == [
+        ("L1", "confirmed"),
+        ("L2", "tentative"),
+    ]
+    f = np.kron(np.eye(2), np.array([[1.0, 1.0], [0.0, 1.0]]))
+    q = np.kron(np.eye(2), 0.05 * np.array([[1 / 3, 1 / 2], [1 / 2, 1.0]]))
+    h = np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]])
+    z = np.array([3.0, 2.6])
+    distances = []
+    for track in before.tracks:
+        s = h @ (f @ track.covariance @ f.T + q) @ h.T + np.eye(2)
+        innovation = z - h @ f @ track.state
+        distances.append(float(innovation @ np.linalg.solve(s, innovation)))
+    assert distances[1] < distances[0] < 13.8  # both gated, the tentative track closer
+    after = tracker.step(3.0, [z])
+    assert after.assignment == ("L1",)
+    assert [(t.id, t.status.value) for t in after.tracks] == [
+        ("L1", "confirmed"),
+        ("L2", "tentative"),
+    ]
