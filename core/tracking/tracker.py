@@ -247,7 +247,9 @@ class LocalTracker:
         )
         candidates = np.flatnonzero((status != PHANTOM) & self._can_be_hit(prediction))
         association = self._associator.associate(
-            _select_prediction(prediction, candidates),
+            prediction
+            if len(candidates) == len(status)  # every track, in order: no copy
+            else _select_prediction(prediction, candidates),
             z,
             own_noise,
             established(status[candidates]),
