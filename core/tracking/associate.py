@@ -132,7 +132,6 @@ class DetectionAssociator:
             self._noise,
             self.config.imm_distance,
             self._modified if own_noise is None else self._modified_sum,
-            sub.combined_measurement(),
         )
         rows, cols, gain = self._assign(gating, np.flatnonzero(first), np.arange(len(z)))
         left = np.ones(len(z), dtype=bool)

@@ -213,8 +213,11 @@ class ScanGating:
     noise: FloatArray
     imm_distance: ImmDistance
     modified: ModifiedScale | None
-    combined: tuple[FloatArray, FloatArray]
-    _gated: dict[float, GatedPairs] = field(default_factory=dict)
+    combined: tuple[FloatArray, FloatArray] = field(init=False)
+    _gated: dict[float, GatedPairs] = field(default_factory=dict, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "combined", self.prediction.combined_measurement())
 
     def pairs(self, gate: float, tracks: IntArray, detections: IntArray) -> GatedPairs:
         """The pairs of ``tracks`` × ``detections`` (ascending) with D ≤ gate."""
