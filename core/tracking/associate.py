@@ -22,12 +22,12 @@ from scipy.stats import chi2
 
 from core.arrays import BoolArray, FloatArray, IntArray
 from core.association.associate import METHODS
-from core.distance import DistanceModel, Estimates, ModifiedScale, steady_state_covariance
+from core.distance import ModifiedScale, steady_state_covariance
 from core.errors import TrackingError
 from core.lifecycle import ScoreModel
 from core.pipeline.gate import pair_positions
 from core.tracking.config import CHEAP_JPDA, LocalTrackerConfig
-from core.tracking.gating import TrackGatingProblem, gate_pairs
+from core.tracking.gating import ScanGating, TrackGatingProblem, gate_pairs
 from core.tracking.imm import IMMPrediction, IMMUpdate, IMMUpdater
 from core.tracking.jpda import cheap_jpda_weights, clutter_bias, pda_update
 from core.tracking.models import ModelBank
@@ -125,19 +125,23 @@ class DetectionAssociator:
         assignment on D it takes a target's detection from that target's own track;
         with min_points confirmation it is confirmed on it, and the target changes id.
         """
-        leading, trailing = np.flatnonzero(first), np.flatnonzero(~first)
-        if len(leading) == 0 or len(trailing) == 0:
-            rows, cols, hit_gain = self._assign(sub, z, own_noise)
-        else:
-            rows, cols, gain = self._assign(_select(sub, leading), z, own_noise)
-            left = np.setdiff1d(np.arange(len(z)), cols)
-            later_rows, later_cols, later_gain = self._assign(
-                _select(sub, trailing), z[left], None if own_noise is None else own_noise[left]
-            )
-            hit_gain = np.zeros(len(first))
-            hit_gain[leading], hit_gain[trailing] = gain, later_gain
-            rows = np.concatenate([leading[rows], trailing[later_rows]])
-            cols = np.concatenate([cols, left[later_cols]])
+        gating = ScanGating(
+            sub,
+            z,
+            own_noise,
+            self._noise,
+            self.config.imm_distance,
+            self._modified if own_noise is None else self._modified_sum,
+        )
+        rows, cols, gain = self._assign(gating, np.flatnonzero(first), np.arange(len(z)))
+        left = np.ones(len(z), dtype=bool)
+        left[cols] = False
+        later_rows, later_cols, later_gain = self._assign(
+            gating, np.flatnonzero(~first), np.flatnonzero(left)
+        )
+        rows, cols = np.concatenate([rows, later_rows]), np.concatenate([cols, later_cols])
+        hit_gain = np.zeros(len(first))
+        hit_gain[rows] = np.concatenate([gain, later_gain])
         tracks = len(first)
         assigned = np.zeros((tracks, self._q))
         assigned[rows] = z[cols]
@@ -151,36 +155,23 @@ class DetectionAssociator:
         return Association(update, rows, cols, hit_gain, cols)
 
     def _assign(
-        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None
+        self, gating: ScanGating, tracks: IntArray, detections: IntArray
     ) -> tuple[IntArray, IntArray, FloatArray]:
-        """One association method's pairs of ``sub`` × ``z`` and each track's hit gain."""
-        if len(z) == 0 or len(sub.means) == 0:  # nothing to pair: no method run
-            return (
-                np.zeros(0, dtype=np.int64),
-                np.zeros(0, dtype=np.int64),
-                np.zeros(len(sub.means)),
-            )
-        combined_z, combined_s = sub.combined_measurement()
-        problem = TrackGatingProblem(
-            known=Estimates(combined_z, combined_s, "tracks"),
-            incoming=Estimates(z, own_noise, "detections"),
-            distance=DistanceModel(covariance="innovation" if own_noise is None else "sum"),
-            prediction=sub,
-            measurement_covariances=own_noise,
-            noise=self._noise,
-            imm_distance=self.config.imm_distance,
-            modified=self._modified if own_noise is None else self._modified_sum,
-        )
+        """One association method's pairs of ``tracks`` × ``detections`` (ascending indices
+        of the scan's ``gating``, which the pairs are given in) and each pair's hit gain."""
+        if len(tracks) == 0 or len(detections) == 0:  # nothing to pair: no method run
+            return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0)
+        problem = TrackGatingProblem.of(gating, tracks, detections)
         result = METHODS[self._method][1](problem, self._parsed_options)
         rows, cols = result.pair_known, result.pair_incoming
-        hit_gain = np.zeros(len(combined_z))
+        gain = np.zeros(0)
         if len(rows):
             gated = problem.last["pairs"]
-            position = pair_positions(gated.pairs.rows, gated.pairs.cols, len(z), rows, cols)
-            hit_gain[rows] = self._hit_gain(
-                gated.plain_distance[position], gated.pairs.log_det[position]
+            position = pair_positions(
+                gated.pairs.rows, gated.pairs.cols, len(detections), rows, cols
             )
-        return rows, cols, hit_gain
+            gain = self._hit_gain(gated.plain_distance[position], gated.pairs.log_det[position])
+        return tracks[rows], detections[cols], gain
 
     def _jpda(self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None) -> Association:
         """The cheap JPDA baseline ([DH] §2): soft weights over gated pairs, PDA update."""
@@ -218,13 +209,3 @@ class DetectionAssociator:
             best_cols = np.flatnonzero(weights.max(axis=0) > 0.0)
             best_rows = np.argmax(weights[:, best_cols], axis=0).astype(np.int64)
         return Association(update, best_rows, best_cols, hit_gain, np.unique(cols))
-
-
-def _select(prediction: IMMPrediction, rows: IntArray) -> IMMPrediction:
-    return IMMPrediction(
-        prediction.means[rows],
-        prediction.covariances[rows],
-        prediction.log_mode_probabilities[rows],
-        prediction.measurement_means[rows],
-        prediction.innovation_covariances[rows],
-    )

@@ -14,7 +14,11 @@ detection i) is gated and scored ([MTT] eq 15) with
 :class:`TrackGatingProblem` is an :class:`~core.association.AssociationProblem`
 whose candidate pairs are computed that way (on the T × r model rows, with the
 KD-tree gate of :func:`core.distance.gated_pairs`, then reduced to the closest
-model per pair), so every association method of §3 runs on it unchanged.
+model per pair), so every association method of §3 runs on it unchanged. Its
+pairs are part of one :class:`ScanGating` of the scan: the two assignment
+passes (established tracks, then tentative ones on the detections left;
+docs/algorithms.md §4 "Assignment") share one gating of every track with every
+detection.
 
 Detections that carry their own covariance R_i use ``C = H P_j Hᵀ + R_i``
 (the ``sum`` covariance of :mod:`core.distance.pairwise` with the known side
@@ -56,6 +60,30 @@ class GatedPairs:
     pairs: CandidatePairs
     plain_distance: FloatArray
     models: IntArray
+
+    def restricted(self, tracks: IntArray, detections: IntArray) -> GatedPairs:
+        """The pairs of ``tracks`` × ``detections`` (ascending indices), renumbered by their
+        positions there: what gating those tracks and detections alone gives (every number
+        is a pair's own), in the same (track, detection) order."""
+        pairs = self.pairs
+        if len(tracks) == pairs.n_known and len(detections) == pairs.n_incoming:
+            return self  # all of them, ascending: the identity
+        track_at = np.full(pairs.n_known, -1, dtype=np.int64)
+        track_at[tracks] = np.arange(len(tracks))
+        detection_at = np.full(pairs.n_incoming, -1, dtype=np.int64)
+        detection_at[detections] = np.arange(len(detections))
+        rows, cols = track_at[pairs.rows], detection_at[pairs.cols]
+        keep = (rows >= 0) & (cols >= 0)
+        reduced = CandidatePairs(
+            rows[keep],
+            cols[keep],
+            pairs.distance[keep],
+            pairs.log_det[keep],
+            len(tracks),
+            len(detections),
+            pairs.dimension,
+        )
+        return GatedPairs(reduced, self.plain_distance[keep], self.models[keep])
 
 
 def gate_pairs(
@@ -169,42 +197,90 @@ def _combined_distance(
 
 
 @dataclass(frozen=True, eq=False)
-class TrackGatingProblem(AssociationProblem):
-    """An association problem whose pairs come from :func:`gate_pairs`.
+class ScanGating:
+    """One scan's gating of the candidate tracks with the detections, shared by the
+    assignment passes of the scan (module docstring).
 
-    ``known`` holds the model-combined ẑ, S of each track (for the methods
-    that only need sizes); :meth:`pairs` gates against the configured model
-    rows and remembers its last answer in :attr:`last`.
+    Each gate a method asks for is computed once, over every track × every detection
+    (:func:`gate_pairs`); a pass reads the part of its tracks and detections
+    (:meth:`GatedPairs.restricted`). ``combined`` is the model-combined ẑ, S of every
+    track ([MTT] §4).
     """
 
-    prediction: IMMPrediction | None = None
-    measurement_covariances: FloatArray | None = None
-    noise: FloatArray | None = None
-    imm_distance: ImmDistance = "closest_model"
-    modified: ModifiedScale | None = None
+    prediction: IMMPrediction
+    measurements: FloatArray
+    measurement_covariances: FloatArray | None
+    noise: FloatArray
+    imm_distance: ImmDistance
+    modified: ModifiedScale | None
+    combined: tuple[FloatArray, FloatArray] = field(init=False)
+    _gated: dict[float, GatedPairs] = field(default_factory=dict, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "combined", self.prediction.combined_measurement())
+
+    def pairs(self, gate: float, tracks: IntArray, detections: IntArray) -> GatedPairs:
+        """The pairs of ``tracks`` × ``detections`` (ascending) with D ≤ gate."""
+        found = self._gated.get(gate)
+        if found is None:
+            found = gate_pairs(
+                self.prediction,
+                self.measurements,
+                self.measurement_covariances,
+                self.noise,
+                gate,
+                self.imm_distance,
+                self.modified,
+            )
+            self._gated[gate] = found
+        return found.restricted(tracks, detections)
+
+
+@dataclass(frozen=True, eq=False)
+class TrackGatingProblem(AssociationProblem):
+    """An association problem of some ``tracks`` × ``detections`` of a :class:`ScanGating`.
+
+    ``known`` holds the model-combined ẑ, S of each of the tracks (for the methods
+    that only need sizes); :meth:`pairs` reads the scan's gating and remembers its
+    last answer in :attr:`last`.
+    """
+
+    gating: ScanGating | None = None
+    tracks: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    detections: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     last: dict[str, GatedPairs] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, gating: ScanGating, tracks: IntArray, detections: IntArray) -> TrackGatingProblem:
+        """The problem of ``tracks`` × ``detections`` (ascending indices) of ``gating``."""
+        own_noise = gating.measurement_covariances
+        centres, spreads = gating.combined
+        return cls(
+            known=Estimates(centres[tracks], spreads[tracks], "tracks"),
+            incoming=Estimates(
+                gating.measurements[detections],
+                None if own_noise is None else own_noise[detections],
+                "detections",
+            ),
+            distance=DistanceModel(covariance="innovation" if own_noise is None else "sum"),
+            gating=gating,
+            tracks=tracks,
+            detections=detections,
+        )
 
     def pairs(self, gate: float) -> CandidatePairs:
         """Candidate pairs with D ≤ gate (closest model or combined)."""
-        assert self.prediction is not None and self.noise is not None
-        found = gate_pairs(
-            self.prediction,
-            self.incoming.states,
-            self.measurement_covariances,
-            self.noise,
-            gate,
-            self.imm_distance,
-            self.modified,
-        )
+        assert self.gating is not None
+        found = self.gating.pairs(gate, self.tracks, self.detections)
         self.last["pairs"] = found
         return found.pairs
 
     def smallest_log_det(self) -> float:
         """A lower bound of log|C| over every model row."""
-        assert self.prediction is not None and self.noise is not None
+        assert self.gating is not None
         if self.n_known == 0:
             return -np.inf
-        spreads = self.prediction.innovation_covariances
-        if self.measurement_covariances is not None:
-            spreads = spreads - self.noise  # |H P Hᵀ + R_i| ≥ |H P Hᵀ|
+        spreads = self.gating.prediction.innovation_covariances[self.tracks]
+        if self.gating.measurement_covariances is not None:
+            spreads = spreads - self.gating.noise  # |H P Hᵀ + R_i| ≥ |H P Hᵀ|
         return float(np.linalg.slogdet(spreads)[1].min())

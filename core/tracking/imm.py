@@ -242,6 +242,8 @@ class IMMPredictor:
             ``log c̄_j = log Σ_i Π_ij μ_i``.
         """
         self._check(state)
+        if self.bank.n_models == 1:  # ω = Π = 1: each track's one model is its own mix
+            return state.means, state.covariances, state.log_mode_probabilities
         step = self.bank.time_interval if dt is None else dt
         log_transition = safe_log(self.bank.mode_transition_at(step))
         joint = state.log_mode_probabilities[:, :, None] + log_transition[None, :, :]

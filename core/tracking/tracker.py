@@ -247,7 +247,9 @@ class LocalTracker:
         )
         candidates = np.flatnonzero((status != PHANTOM) & self._can_be_hit(prediction))
         association = self._associator.associate(
-            _select_prediction(prediction, candidates),
+            prediction
+            if len(candidates) == len(status)  # every track, in order: no copy
+            else _select_prediction(prediction, candidates),
             z,
             own_noise,
             established(status[candidates]),
@@ -543,23 +545,25 @@ class LocalTracker:
                     classes.pignistic, classes.defined.tolist(), strict=True
                 )
             ]
-        tracks = []
         life = self._rows.life
-        for row in order.tolist():
-            tracks.append(
-                LocalTrack(
-                    id=self._track_id(int(own[row])),
-                    status=STATUSES[int(life.status[row])],
-                    reason=REASONS[int(life.reason[row])],
-                    state=means[row],
-                    covariance=covariances[row],
-                    mode_probabilities=mu[row],
-                    score=float(life.score[row]),
-                    hits=int(life.hits[row]),
-                    class_mass=class_masses[row],
-                    pignistic=pignistic[row],
-                )
+        # plain ints and floats once for every track, not one numpy scalar per field and track
+        track_numbers, statuses, reasons = own.tolist(), life.status.tolist(), life.reason.tolist()
+        scores, hits = life.score.tolist(), life.hits.tolist()
+        tracks = [
+            LocalTrack(
+                id=self._track_id(track_numbers[row]),
+                status=STATUSES[statuses[row]],
+                reason=REASONS[reasons[row]],
+                state=means[row],
+                covariance=covariances[row],
+                mode_probabilities=mu[row],
+                score=scores[row],
+                hits=hits[row],
+                class_mass=class_masses[row],
+                pignistic=pignistic[row],
             )
+            for row in order.tolist()
+        ]
         self._keep(self._rows.alive)
         self.time = time
         assignment = tuple(None if n < 0 else self._track_id(int(n)) for n in numbers.tolist())
