@@ -85,12 +85,12 @@ from app.sessions.live import LiveSession, new_session, restore_snapshot
 from app.sessions.log import event_from_entry, log_input
 from app.sessions.translate import (
     PlainObject,
+    chunked_json,
     core_detection_report,
     fusion_config,
     session_frame_report,
     step_json,
     track_fields,
-    wire_json,
 )
 from app.settings import Settings
 from app.stores import (
@@ -704,9 +704,8 @@ class SessionRegistry:
             time_of = engine.time if at is None else at
 
             def build() -> str:
-                # one track at a time: no single C call holds the GIL for the whole answer
-                tracks = ",".join(wire_json(track) for track in track_fields(engine.picture(at)))
-                return f'{{"seq":{seq},"time":{dumps(time_of)},"tracks":[{tracks}]}}'
+                tracks = track_fields(engine.picture(at))
+                return f'{{"seq":{seq},"time":{dumps(time_of)},"tracks":{chunked_json(tracks)}}}'
 
             return await self._compute(len(engine.tracks), build)
 
