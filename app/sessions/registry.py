@@ -77,7 +77,7 @@ from app.http.errors import (
     StoreUnavailable,
     request_validation_error,
 )
-from app.http.responses import dumps
+from app.http.responses import dumps, itemwise
 from app.metrics import ServiceMetrics
 from app.runtime import without_collection
 from app.sessions.hub import SESSION_ENDED, SESSION_RELOADED, STORE_UNAVAILABLE, Ending, Subscriber
@@ -85,12 +85,12 @@ from app.sessions.live import LiveSession, new_session, restore_snapshot
 from app.sessions.log import event_from_entry, log_input
 from app.sessions.translate import (
     PlainObject,
-    chunked_json,
     core_detection_report,
     fusion_config,
     session_frame_report,
     step_json,
     track_fields,
+    wire_json,
 )
 from app.settings import Settings
 from app.stores import (
@@ -705,7 +705,7 @@ class SessionRegistry:
 
             def build() -> str:
                 tracks = track_fields(engine.picture(at))
-                return f'{{"seq":{seq},"time":{dumps(time_of)},"tracks":{chunked_json(tracks)}}}'
+                return f'{{"seq":{seq},"time":{dumps(time_of)},"tracks":{itemwise(tracks, wire_json)}}}'
 
             return await self._compute(len(engine.tracks), build)
 

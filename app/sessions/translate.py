@@ -46,6 +46,7 @@ from app.geo.geodesy import (
 )
 from app.geo.polar import polar_to_cartesian
 from app.http.errors import request_validation_error
+from app.http.responses import itemwise
 from core.association import AssociationResult
 from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, TotalConflict
@@ -586,7 +587,7 @@ def step_json(step: StepResult, seq: int) -> str:
         "tracks": track_fields(step.tracks),
         "association": _association_plain(step.association),
     }
-    return chunked_json(document)
+    return itemwise(document, wire_json)  # no single C call for a 10 MB answer
 
 
 def track_fields(views: Sequence[FusedTrackView]) -> list[PlainObject]:
@@ -600,19 +601,6 @@ def track_fields(views: Sequence[FusedTrackView]) -> list[PlainObject]:
 def wire_json(document: object) -> str:
     """Compact JSON text of a document holding :func:`track_fields` output."""
     return orjson.dumps(document, option=orjson.OPT_SERIALIZE_NUMPY).decode()
-
-
-def chunked_json(document: object) -> str:
-    """:func:`wire_json`'s text of ``document``, byte for byte, written one list item at a
-    time (dicts are entered, each list's items written whole): a step result's tracks,
-    pairs and matrix rows. Each orjson call stays small, so no single C call holds the GIL
-    (stalling the event loop) for the whole of a 10 MB answer."""
-    if isinstance(document, dict):
-        members = (f"{wire_json(key)}:{chunked_json(value)}" for key, value in document.items())
-        return "{" + ",".join(members) + "}"
-    if isinstance(document, list):
-        return "[" + ",".join(wire_json(item) for item in document) + "]"
-    return wire_json(document)
 
 
 # ------------------------------------------------------- stateless associate

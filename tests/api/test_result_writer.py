@@ -30,9 +30,9 @@ from websockets.sync.client import connect
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
+from app.http.responses import dumps, itemwise
 from app.routes.fusion import geodetic_result
 from app.sessions.translate import (
-    chunked_json,
     core_detection_report,
     fusion_config,
     session_frame_report,
@@ -271,7 +271,7 @@ def test_every_written_result_is_the_response_models() -> None:
     assert seen.kinds("geodetic") == {True, False}
 
 
-def test_chunked_json_is_one_orjson_call_byte_for_byte() -> None:
+def test_itemwise_is_one_call_of_its_writer_byte_for_byte() -> None:
     document = {
         "seq": 3,
         "time": 1e-7,
@@ -281,7 +281,10 @@ def test_chunked_json_is_one_orjson_call_byte_for_byte() -> None:
         "states": np.eye(2),
     }
     whole = orjson.dumps(document, option=orjson.OPT_SERIALIZE_NUMPY).decode()
-    assert chunked_json(document) == whole
+    assert itemwise(document, wire_json) == whole
+    plain = {**document, "tracks": [{"id": "é\u2028", "z": [1e-7, 2.0]}], "states": [[1, 2]]}
+    assert itemwise(plain) == json.dumps(plain, allow_nan=False, separators=(",", ":"))
+    assert itemwise(plain, dumps) != itemwise(plain, wire_json)  # the writers differ (1e-07)
 
 
 def test_the_wire_answers_are_the_response_models(live_server: LiveServer) -> None:
