@@ -23,7 +23,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.routing import APIRoute, _effective_route_context_var
 from pydantic import BaseModel, ValidationError
 
-from app.runtime import without_collection
+from app.runtime import collection_paused
 
 
 class DuplicateKeyError(ValueError):
@@ -116,6 +116,11 @@ class WireRoute(APIRoute):
     route's body model in a worker thread (the configured limits apply there
     too); FastAPI then receives the validated model, which it passes through
     without validating it again. Smaller bodies cost less than the thread hop.
+    Garbage collection stays paused (:func:`app.runtime.collection_paused`) until
+    such a request is answered: resumed between its worker-thread jobs, a
+    collection walked the validated model and the step's objects (177 000
+    containers of a 2 000-track list: 65 ms holding the GIL) while they were
+    still alive, though reference counting frees them once the request ends.
     """
 
     def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:
@@ -133,8 +138,13 @@ class WireRoute(APIRoute):
             if model is not None and _is_json(wire):
                 body = await wire.body()
                 if len(body) > OFFLOAD_BYTES:
-                    validate = functools.partial(_validated, model, body)
-                    wire._json = await anyio.to_thread.run_sync(without_collection(validate))
+                    with collection_paused():
+                        validate = functools.partial(_validated, model, body)
+                        wire._json = await anyio.to_thread.run_sync(validate)
+                        del body, validate
+                        response = await handler(wire)
+                        del wire  # the validated model, freed before collection resumes
+                    return response
             return await handler(wire)
 
         return handle

@@ -30,11 +30,12 @@ from app.http.deps import (
 )
 from app.http.errors import problem_responses
 from app.http.requests import WireRoute
-from app.http.responses import JSONTextResponse, dumps
+from app.http.responses import JSONTextResponse, dumps, itemwise
 from app.http.security import hash_token, issue_token
+from app.runtime import collection_paused
 from app.sessions.live import LiveSession
 from app.sessions.log import event_json
-from app.stores import SessionRecord
+from app.stores import SessionRecord, Store
 from app.stores.base import history
 
 router = APIRouter(prefix="/v1/sessions", tags=["sessions"], route_class=WireRoute)
@@ -159,7 +160,13 @@ def list_session_events(
     least one is always given): continue with ``after`` = the last event's
     ``seq`` until it reaches ``last_seq``. Built in a worker thread, as JSON text.
     """
-    page = history(store, session.id, after, limit)
+    with collection_paused():  # a page's parsed inputs: hundreds of thousands of containers
+        return JSONTextResponse(events_page(store, session.id, after, limit))
+
+
+def events_page(store: Store, session_id: str, after: int, limit: int) -> str:
+    """The JSON text of an ``EventLog`` page (see :func:`list_session_events`)."""
+    page = history(store, session_id, after, limit)
     events: list[str] = []
     size = 0
     for entry in page.entries:
@@ -169,7 +176,7 @@ def list_session_events(
         events.append(text)
         size += len(text) + 1
     parts = [
-        f'"session":{dumps(session.id)}',
+        f'"session":{dumps(session_id)}',
         f'"events":[{",".join(events)}]',
         f'"last_seq":{page.last_seq}',
     ]
@@ -178,5 +185,5 @@ def list_session_events(
         shown = SnapshotEvent.model_construct(
             type="snapshot", seq=snapshot.seq, taken_at=snapshot.taken_at, state=snapshot.state
         ).model_dump(mode="json")
-        parts.append(f'"snapshot":{dumps(shown)}')
-    return JSONTextResponse("{" + ",".join(parts) + "}")
+        parts.append(f'"snapshot":{itemwise(shown)}')
+    return "{" + ",".join(parts) + "}"

@@ -14,7 +14,7 @@ from pydantic import TypeAdapter
 from api_schemas.events import DetectionsEvent, TracksEvent
 from api_schemas.limits import CEILINGS, limits_of
 from api_schemas.reports import DetectionReport, TrackReport
-from app.http.responses import dumps
+from app.http.responses import dumps, itemwise
 from app.stores import LogEntry
 
 TIMESTAMP: TypeAdapter[datetime] = TypeAdapter(datetime)
@@ -38,7 +38,7 @@ def event_json(entry: LogEntry) -> str:
     kind = dumps(entry.input["type"])
     return (
         f'{{"type":{kind},"seq":{entry.seq},"received_at":"{received_at}",'
-        f'"report":{dumps(entry.input["report"])}}}'
+        f'"report":{itemwise(entry.input["report"])}}}'  # a track at a time
     )
 
 

@@ -77,7 +77,7 @@ from app.http.errors import (
     StoreUnavailable,
     request_validation_error,
 )
-from app.http.responses import dumps
+from app.http.responses import dumps, itemwise
 from app.metrics import ServiceMetrics
 from app.runtime import without_collection
 from app.sessions.hub import SESSION_ENDED, SESSION_RELOADED, STORE_UNAVAILABLE, Ending, Subscriber
@@ -704,9 +704,8 @@ class SessionRegistry:
             time_of = engine.time if at is None else at
 
             def build() -> str:
-                # one track at a time: no single C call holds the GIL for the whole answer
-                tracks = ",".join(wire_json(track) for track in track_fields(engine.picture(at)))
-                return f'{{"seq":{seq},"time":{dumps(time_of)},"tracks":[{tracks}]}}'
+                tracks = track_fields(engine.picture(at))
+                return f'{{"seq":{seq},"time":{dumps(time_of)},"tracks":{itemwise(tracks, wire_json)}}}'
 
             return await self._compute(len(engine.tracks), build)
 

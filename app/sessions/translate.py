@@ -46,6 +46,7 @@ from app.geo.geodesy import (
 )
 from app.geo.polar import polar_to_cartesian
 from app.http.errors import request_validation_error
+from app.http.responses import itemwise
 from core.association import AssociationResult
 from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, TotalConflict
@@ -586,7 +587,7 @@ def step_json(step: StepResult, seq: int) -> str:
         "tracks": track_fields(step.tracks),
         "association": _association_plain(step.association),
     }
-    return wire_json(document)
+    return itemwise(document, wire_json)  # no single C call for a 10 MB answer
 
 
 def track_fields(views: Sequence[FusedTrackView]) -> list[PlainObject]:

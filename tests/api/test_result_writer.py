@@ -22,6 +22,7 @@ from typing import Any
 
 import httpx
 import numpy as np
+import orjson
 import pytest
 from pydantic import BaseModel
 from websockets.sync.client import connect
@@ -29,6 +30,7 @@ from websockets.sync.client import connect
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
+from app.http.responses import dumps, itemwise
 from app.routes.fusion import geodetic_result
 from app.sessions.translate import (
     core_detection_report,
@@ -252,6 +254,8 @@ def test_every_written_result_is_the_response_models() -> None:
             engine_steps(config, bodies, detections), start=1
         ):
             text = step_json(step, seq)
+            # written item by item, the text is still orjson's compact text of the whole
+            assert orjson.dumps(orjson.loads(text)).decode() == text
             seen.step(round_trip(StepResult, text))
             origin = session_origin(session)
             if origin is not None:
@@ -265,6 +269,22 @@ def test_every_written_result_is_the_response_models() -> None:
     assert seen.kinds("matrix") == {True, False}
     assert seen.kinds("basis") == {"continuity", "association"}
     assert seen.kinds("geodetic") == {True, False}
+
+
+def test_itemwise_is_one_call_of_its_writer_byte_for_byte() -> None:
+    document = {
+        "seq": 3,
+        "time": 1e-7,
+        "tracks": [{"id": "t0", "state": np.array([1.5, -0.0, 2e300])}, {"id": "é\u2028"}],
+        "association": {"pairs": [], "matrix": {"rows": ["a"], "values": [[0.1, None]]}},
+        "empty": {},
+        "states": np.eye(2),
+    }
+    whole = orjson.dumps(document, option=orjson.OPT_SERIALIZE_NUMPY).decode()
+    assert itemwise(document, wire_json) == whole
+    plain = {**document, "tracks": [{"id": "é\u2028", "z": [1e-7, 2.0]}], "states": [[1, 2]]}
+    assert itemwise(plain) == json.dumps(plain, allow_nan=False, separators=(",", ":"))
+    assert itemwise(plain, dumps) != itemwise(plain, wire_json)  # the writers differ (1e-07)
 
 
 def test_the_wire_answers_are_the_response_models(live_server: LiveServer) -> None:
