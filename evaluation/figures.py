@@ -662,6 +662,19 @@ def draw_close_pair(reduced: bool, echo: Echo) -> Figure:
                 for r, row in zip(study.noise_ratios, study.rates[kind], strict=True)
             )
         )
+    if {"combined", DEFAULT_IMM_DISTANCE} <= set(study.rates):
+        echo(
+            f"close-pair {DEFAULT_IMM_DISTANCE} − combined, paired over the same seeds: "
+            + "; ".join(
+                f"{100 * r:g} %: {paired_difference(default, combined)}"
+                for r, default, combined in zip(
+                    study.noise_ratios,
+                    study.rates[DEFAULT_IMM_DISTANCE],
+                    study.rates["combined"],
+                    strict=True,
+                )
+            )
+        )
     echo(
         "close-pair swap floor: "
         + "; ".join(
@@ -780,6 +793,20 @@ def _crossing_summary(study: CrossingStudy) -> str:
                 f"{mean_interval(study.gospa[kind][index])}; id switches "
                 f"{mean_interval(study.switches[kind][index])}; target 2 final BetP "
                 f"{np.round(final, 2).tolist()}, at step 33 {np.round(before, 2).tolist()}"
+            )
+    others = [kind for kind in study.ospa if kind != DEFAULT_IMM_DISTANCE]
+    for kind in others if DEFAULT_IMM_DISTANCE in study.ospa else ():
+        for index, variance in enumerate(study.variances):
+            lines.append(
+                f"  {DEFAULT_IMM_DISTANCE} − {kind} {variance:g} m², paired over the seeds: "
+                + "; ".join(
+                    f"{name} {paired_difference(values[DEFAULT_IMM_DISTANCE][index], values[kind][index])}"
+                    for name, values in (
+                        ("OSPA", study.ospa),
+                        ("false assignments", study.false_counts),
+                        ("id switches", study.switches),
+                    )
+                )
             )
     return "\n".join(lines)
 
