@@ -840,25 +840,17 @@ def _plot_crossing_scores(axes: Axes, study: CrossingStudy) -> None:
 
 def _plot_crossing_doubt(axes: Axes, study: CrossingStudy) -> None:
     """Target 2's BetP after and before the crossing: does a false assignment mislead it?"""
-    fighter = study.classes.index("fighter")
     liner = study.classes.index("liner")
     for kind in study.betp:
         final = study.final_betp(kind, 2)
-        marker = CROSSING_MARKERS[kind]
-        axes.plot(
-            study.variances,
-            final[:, fighter],
-            "C3--",
-            marker=marker,
-            label=f"final BetP(fighter), {kind}",
-        )
-        axes.plot(
-            study.variances,
-            final[:, liner],
-            "C2--",
-            marker=marker,
-            label=f"final BetP(liner), {kind}",
-        )
+        for label, style in (("fighter", "C3--"), ("liner", "C2--")):
+            axes.plot(
+                study.variances,
+                final[:, study.classes.index(label)],
+                style,
+                marker=CROSSING_MARKERS[kind],
+                label=f"final BetP({label}), {kind}",
+            )
     before = np.nanmean(study.betp[DEFAULT_IMM_DISTANCE][:, :, 1, 33, liner], axis=1)
     axes.plot(
         study.variances,
