@@ -60,7 +60,7 @@ CATALOGUE: dict[str, FigureEntry] = {
         FigureEntry(
             "close-pair",
             "[MTT] Fig 16",
-            "false assignment rate vs noise, closest-model vs combined IMM distance",
+            "false assignment rate vs noise: closest-model, combined, gated-combined IMM distance",
         ),
         FigureEntry(
             "crossing",

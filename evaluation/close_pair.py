@@ -11,10 +11,12 @@ from the third scan on (two-point initiation) given to another track, or to
 none, is a false assignment. [MTT] averages 100 Monte Carlo runs per noise
 value.
 
-``imm_distance`` is compared: ``closest_model`` (the tracker's default) gates
-each pair on the model of the bank that explains it best, so a neighbour
-that sits where one of the manoeuvre models predicts looks like a perfect
-hit; ``combined`` uses the model-combined prediction of [MTT] §4.
+``imm_distance`` is compared: ``closest_model`` (the tracker's default
+before issue 13) gates each pair on the model of the bank that explains it
+best, so a neighbour that sits where one of the manoeuvre models predicts
+looks like a perfect hit; ``combined`` uses the model-combined prediction of
+[MTT] §4; ``gated_combined`` (the default since issue 13, docs/algorithms.md
+§4) gates on the closest model and decides on the combined distance.
 
 The paper's claim: "the rate of false assignments is relatively low even for
 an extreme scenario of targets evolving closely and sensor noise exceeding

@@ -33,6 +33,7 @@ from core.errors import InvalidInput
 from core.simulation.scenario import TargetTruth
 from core.simulation.tracklists import SensorTrackList, t2t_four
 from core.simulation.two_class import t2t_two_class
+from core.tracking.config import DEFAULT_IMM_DISTANCE
 from evaluation.accelerating import CASES as ACCELERATING_CASES
 from evaluation.accelerating import SCENES as ACCELERATING_SCENES
 from evaluation.accelerating import AcceleratingStudy, accelerating_study
@@ -620,16 +621,34 @@ CLOSE_PAIR_VARIANT_RUNS = 50
 separation on) differ from ``combined``'s by far more than the ± 0.02 of 50 runs."""
 
 
+CLOSE_PAIR_STYLES = (
+    ("closest_model", "o", "-"),
+    ("combined", "s", "-"),
+    ("gated_combined", "^", "--"),
+)
+"""IMM distance, marker, line style; the default (open markers, dashed) lies on ``combined``."""
+
+
+def _distance_label(kind: str) -> str:
+    """The IMM distance's name, with which is the tracker's default (issue 13)."""
+    if kind == DEFAULT_IMM_DISTANCE:
+        return f"{kind} (default since issue 13)"
+    if kind == "closest_model":
+        return f"{kind} (default before issue 13)"
+    return kind
+
+
 def draw_close_pair(reduced: bool, echo: Echo) -> Figure:
-    """[MTT] Fig 16: false assignment rate vs noise, closest-model vs combined IMM distance."""
+    """[MTT] Fig 16: false assignment rate vs noise, for each IMM distance."""
     seeds = _seeds(100, reduced)
     ratios = (0.0, 0.5, 2.0) if reduced else (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 2.0)
     n_steps = 20 if reduced else 60
     runs = {"closest_model": 1 if reduced else CLOSE_PAIR_VARIANT_RUNS}
     echo(
-        f"close-pair: seeds {seeds[0]}..{seeds[-1]} (combined, [MTT]'s 100 runs), "
-        f"{seeds[0]}..{runs['closest_model'] - 1} (closest_model, our default), "
-        f"{n_steps} steps, σ/d in {list(ratios)}"
+        f"close-pair: seeds {seeds[0]}..{seeds[-1]} (combined, [MTT]'s 100 runs; "
+        f"{DEFAULT_IMM_DISTANCE}, our default since issue 13), "
+        f"{seeds[0]}..{runs['closest_model'] - 1} (closest_model, the default before "
+        f"issue 13), {n_steps} steps, σ/d in {list(ratios)}"
     )
     study = close_pair_study(seeds, ratios, n_steps=n_steps, runs=runs)
     figure = Figure(figsize=(8, 4.8), layout="constrained")
@@ -641,6 +660,19 @@ def draw_close_pair(reduced: bool, echo: Echo) -> Figure:
             + "; ".join(
                 f"{100 * r:g} %: {mean_interval(row)}"
                 for r, row in zip(study.noise_ratios, study.rates[kind], strict=True)
+            )
+        )
+    if {"combined", DEFAULT_IMM_DISTANCE} <= set(study.rates):
+        echo(
+            f"close-pair {DEFAULT_IMM_DISTANCE} − combined, paired over the same seeds: "
+            + "; ".join(
+                f"{100 * r:g} %: {paired_difference(default, combined)}"
+                for r, default, combined in zip(
+                    study.noise_ratios,
+                    study.rates[DEFAULT_IMM_DISTANCE],
+                    study.rates["combined"],
+                    strict=True,
+                )
             )
         )
     echo(
@@ -662,11 +694,18 @@ def draw_close_pair(reduced: bool, echo: Echo) -> Figure:
 
 def _plot_close_pair(axes: Axes, study: ClosePairStudy) -> None:
     percent = 100.0 * study.noise_ratios
-    for kind, marker in (("closest_model", "o"), ("combined", "s")):
+    for kind, marker, style in CLOSE_PAIR_STYLES:
         intervals = [mean_interval(row) for row in study.rates[kind]]
-        mean = np.array([i.estimate for i in intervals])
-        spread = np.array([[m - i.low, i.high - m] for m, i in zip(mean, intervals, strict=True)])
-        axes.errorbar(percent, mean, yerr=spread.T, marker=marker, capsize=3, label=f"GNN, {kind}")
+        axes.errorbar(
+            percent,
+            [i.estimate for i in intervals],
+            yerr=_extent(intervals),
+            marker=marker,
+            ls=style,
+            mfc="none" if kind == DEFAULT_IMM_DISTANCE else None,
+            capsize=3,
+            label=f"GNN, {_distance_label(kind)}",
+        )
     axes.plot(percent, study.swap_floor, "k:", label="swap floor Φ̄(d / √2σ) (perfect prediction)")
     axes.axhline(0.5, color="0.6", lw=0.8)
     axes.set_xlabel("measurement noise σ per axis, % of the separation")
@@ -679,17 +718,22 @@ def _plot_close_pair(axes: Axes, study: ClosePairStudy) -> None:
 
 
 # ------------------------------------------------------------------ crossing
+CROSSING_CASES = ("paper's values", "our variant", "our default")
+"""Titles of the examples of :func:`~evaluation.crossing.crossing_study`, in its order."""
+
+CROSSING_MARKERS = {"combined": "s", "closest_model": "o", "gated_combined": "^"}
+"""IMM distance → marker in the panels across noise levels."""
+
+
 def draw_crossing(reduced: bool, echo: Echo) -> Figure:
     """[MTT] Fig 17–18, the paper's values first, then our variant; assignments and classes."""
     seeds = _seeds(20, reduced)
     variances = (0.2, 10.0) if reduced else (0.2, 1.0, 4.0, 10.0, 25.0)
     echo(f"crossing: seeds {list(seeds)}, measurement variances {list(variances)} m²")
     study = crossing_study(seeds, variances)
-    figure = Figure(figsize=(11, 14), layout="constrained")
-    grid = figure.subplots(4, 2)
-    for column, (example, case) in enumerate(
-        zip(study.examples, ("paper's values", "our variant"), strict=True)
-    ):
+    figure = Figure(figsize=(16, 14), layout="constrained")
+    grid = figure.subplots(4, 3)
+    for column, (example, case) in enumerate(zip(study.examples, CROSSING_CASES, strict=True)):
         _plot_crossing_example(grid[0][column], example, case)
         chosen = int(np.argmin(np.abs(study.variances - example.variance)))
         for row, target, title in (
@@ -717,6 +761,7 @@ def draw_crossing(reduced: bool, echo: Echo) -> Figure:
             _shade(axes, study.manoeuvres)
     _plot_crossing_swaps(grid[3][0], study)
     _plot_crossing_scores(grid[3][1], study)
+    _plot_crossing_doubt(grid[3][2], study)
     echo(_crossing_summary(study))
     return _titled(
         figure,
@@ -749,12 +794,26 @@ def _crossing_summary(study: CrossingStudy) -> str:
                 f"{mean_interval(study.switches[kind][index])}; target 2 final BetP "
                 f"{np.round(final, 2).tolist()}, at step 33 {np.round(before, 2).tolist()}"
             )
+    others = [kind for kind in study.ospa if kind != DEFAULT_IMM_DISTANCE]
+    for kind in others if DEFAULT_IMM_DISTANCE in study.ospa else ():
+        for index, variance in enumerate(study.variances):
+            lines.append(
+                f"  {DEFAULT_IMM_DISTANCE} − {kind} {variance:g} m², paired over the seeds: "
+                + "; ".join(
+                    f"{name} {paired_difference(values[DEFAULT_IMM_DISTANCE][index], values[kind][index])}"
+                    for name, values in (
+                        ("OSPA", study.ospa),
+                        ("false assignments", study.false_counts),
+                        ("id switches", study.switches),
+                    )
+                )
+            )
     return "\n".join(lines)
 
 
 def _plot_crossing_scores(axes: Axes, study: CrossingStudy) -> None:
     """Time-mean OSPA and identity switches per run, 95 % intervals over the runs."""
-    for kind, marker in (("combined", "s"), ("closest_model", "o")):
+    for kind in study.ospa:
         for values, style, name in (
             (study.ospa[kind], "-", "OSPA (m)"),
             (study.switches[kind], "--", "identity switches"),
@@ -764,10 +823,10 @@ def _plot_crossing_scores(axes: Axes, study: CrossingStudy) -> None:
                 study.variances,
                 [i.estimate for i in intervals],
                 yerr=_extent(intervals),
-                marker=marker,
+                marker=CROSSING_MARKERS[kind],
                 ls=style,
                 capsize=2,
-                label=f"{name}, {kind}",
+                label=f"{name}, {_distance_label(kind)}",
             )
     axes.set_xscale("log")
     axes.set_xlabel("measurement variance per axis (m²)")
@@ -777,6 +836,36 @@ def _plot_crossing_scores(axes: Axes, study: CrossingStudy) -> None:
         loc="left",
     )
     axes.legend(fontsize=6, loc="upper left")
+
+
+def _plot_crossing_doubt(axes: Axes, study: CrossingStudy) -> None:
+    """Target 2's BetP after and before the crossing: does a false assignment mislead it?"""
+    liner = study.classes.index("liner")
+    for kind in study.betp:
+        final = study.final_betp(kind, 2)
+        for label, style in (("fighter", "C3--"), ("liner", "C2--")):
+            axes.plot(
+                study.variances,
+                final[:, study.classes.index(label)],
+                style,
+                marker=CROSSING_MARKERS[kind],
+                label=f"final BetP({label}), {kind}",
+            )
+    before = np.nanmean(study.betp[DEFAULT_IMM_DISTANCE][:, :, 1, 33, liner], axis=1)
+    axes.plot(
+        study.variances,
+        before,
+        "k:",
+        marker="v",
+        mfc="none",
+        label=f"BetP(liner) at step 33, before the crossing ({DEFAULT_IMM_DISTANCE})",
+    )
+    axes.axhline(1 / 3, color="0.6", lw=0.8)
+    axes.set_xscale("log")
+    axes.set_ylim(-0.02, 1.02)
+    axes.set_xlabel("measurement variance per axis (m²)")
+    axes.set_title("target 2 (mean of runs; perfect doubt: 1/3)", fontsize=9, loc="left")
+    axes.legend(fontsize=6, loc="center left")
 
 
 def _plot_crossing_example(axes: Axes, example: CrossingRun, case: str) -> None:
@@ -837,55 +926,31 @@ def _plot_crossing_example(axes: Axes, example: CrossingRun, case: str) -> None:
 
 
 def _plot_crossing_swaps(axes: Axes, study: CrossingStudy) -> None:
-    for kind, marker in (("combined", "s"), ("closest_model", "o")):
+    """Share of runs with a false assignment, and of runs that keep target 1's track."""
+    for kind in study.first_false:
         share = study.swapped_share(kind)
         bounds = np.array([wilson(p * len(study.seeds), len(study.seeds)) for p in share])
         axes.errorbar(
             study.variances,
             share,
             yerr=np.abs(bounds - share[:, None]).T,
-            marker=marker,
+            marker=CROSSING_MARKERS[kind],
             capsize=2,
-            label=f"runs with a false assignment ({kind}; Wilson 95 %)",
+            label=f"runs with a false assignment ({_distance_label(kind)}; Wilson 95 %)",
         )
-    fighter = study.classes.index("fighter")
-    liner = study.classes.index("liner")
-    final = study.final_betp("closest_model", 2)
-    axes.plot(
-        study.variances,
-        final[:, fighter],
-        "C3--",
-        marker="^",
-        label="target 2: final BetP(fighter), closest_model",
-    )
-    axes.plot(
-        study.variances,
-        final[:, liner],
-        "C2--",
-        marker="v",
-        label="target 2: final BetP(liner), closest_model",
-    )
-    before = np.nanmean(study.betp["closest_model"][:, :, 1, 33, liner], axis=1)
-    axes.plot(
-        study.variances,
-        before,
-        "C2:",
-        marker="v",
-        mfc="none",
-        label="target 2: BetP(liner) at step 33, before the crossing",
-    )
-    axes.plot(
-        study.variances,
-        study.alive_at_end("combined", 1),
-        "k:",
-        marker="x",
-        label="target 1's track alive at the end (combined)",
-    )
-    axes.axhline(1 / 3, color="0.6", lw=0.8)
+    for kind in study.betp:
+        axes.plot(
+            study.variances,
+            study.alive_at_end(kind, 1),
+            "k:",
+            marker=CROSSING_MARKERS[kind],
+            mfc="none",
+            label=f"target 1's track alive at the end ({kind})",
+        )
     axes.set_xscale("log")
     axes.set_ylim(-0.02, 1.02)
     axes.set_xlabel("measurement variance per axis (m²); final separation 5 m per axis")
-    axes.set_title("across noise levels (perfect doubt: 1/3)", fontsize=9, loc="left")
+    axes.set_title("across noise levels", fontsize=9, loc="left")
     axes.legend(fontsize=6, loc="center left")
 
 
