@@ -178,3 +178,15 @@ def test_relation_errors_name_the_problem() -> None:
 @given(st.integers(0, 7))
 def test_frame_mask_round_trip(mask: int) -> None:
     assert FRAME.mask(FRAME.subset(mask)) == mask
+
+
+def test_plausibility_never_exceeds_one_when_the_masses_round_above_it() -> None:
+    # Four masses drawn from a Dirichlet whose float64 sum is 1 + 2⁻⁵² (a whole-mass
+    # sum, as a fused class mass has; AVX-512 kernels round other sums this way).
+    masses = [0.5017535083586557, 0.1583447529128556, 0.12389774916694181, 0.21600398956154693]
+    assert sum(masses) > 1.0
+    frame = Frame(["a", "b", "c", "d"])
+    mass = MassFunction.from_sets(frame, list(zip(["a", "ab", "ac", "ad"], masses, strict=True)))
+    # "a" lies in every focal set: Pl({a}) = Σ m = 1 by hand, never above it
+    assert mass.singleton_plausibility()[0] == 1.0
+    assert np.all(mass.singleton_plausibility() <= 1.0)

@@ -6,16 +6,24 @@ times out of the sensor estimates) after the first 40 reports of the
 restore-property scenario (seed 0, class masses, covariance intersection):
 tentative, confirmed and phantom tracks. Restored by today's engine it must
 export the same plain data again (the layout is unchanged, version 1) and
-continue the remaining reports exactly as an engine that ran them all
-uninterrupted; an export of an unknown version is refused by name.
+continue the remaining reports as an engine that ran them all uninterrupted:
+the same ids, statuses, reasons, pairings and decisions, and every number
+within 1e-9 (relative). Not bit for bit: the export was written on another
+machine, and numpy's and OpenBLAS's kernels round differently on another
+CPU (with AVX-512 the uninterrupted engine's history differs in the last bit
+from the file's). On one machine a restore continues bit for bit
+(``test_restore_property.py``). An export of an unknown version is refused
+by name.
 """
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
+from numpy.testing import assert_allclose
 
 from core.errors import InvalidInput
 from core.fusion.engine import SessionEngine
@@ -27,6 +35,24 @@ from .test_restore_property import VARIANTS, scenario, session_config
 EXPORT = Path(__file__).parent / "exports" / "engine_v1.json"
 WRITTEN_AFTER = 40
 CONFIG = session_config(StateFusion.COVARIANCE_INTERSECTION, VARIANTS["classes"])
+RTOL = 1e-9
+
+
+def assert_same_document(actual: Any, expected: Any, where: str = "") -> None:
+    """Equal JSON documents, but for floats, which agree to :data:`RTOL`."""
+    if isinstance(expected, float) or isinstance(actual, float):
+        assert isinstance(actual, int | float) and isinstance(expected, int | float), where
+        assert_allclose(actual, expected, rtol=RTOL, atol=1e-12, err_msg=where)
+    elif isinstance(expected, dict):
+        assert isinstance(actual, dict) and actual.keys() == expected.keys(), where
+        for key, value in expected.items():
+            assert_same_document(actual[key], value, f"{where}/{key}")
+    elif isinstance(expected, list):
+        assert isinstance(actual, list) and len(actual) == len(expected), where
+        for index, (mine, theirs) in enumerate(zip(actual, expected, strict=True)):
+            assert_same_document(mine, theirs, f"{where}/{index}")
+    else:
+        assert actual == expected, where
 
 
 def test_an_old_export_loads_and_continues_like_an_uninterrupted_engine() -> None:
@@ -41,11 +67,9 @@ def test_an_old_export_loads_and_continues_like_an_uninterrupted_engine() -> Non
     for report in reports[:WRITTEN_AFTER]:
         uninterrupted.apply(report)
     for index, report in enumerate(reports[WRITTEN_AFTER:], start=WRITTEN_AFTER):
-        expected = serialise(uninterrupted.apply(report))
-        assert serialise(restored.apply(report)) == expected, index
-    assert json.dumps(restored.export(), sort_keys=True) == json.dumps(
-        uninterrupted.export(), sort_keys=True
-    )
+        expected = json.loads(serialise(uninterrupted.apply(report)))
+        assert_same_document(json.loads(serialise(restored.apply(report))), expected, f"{index}")
+    assert_same_document(restored.export(), uninterrupted.export())
 
 
 def test_an_export_of_an_unknown_version_is_refused_by_name() -> None:
