@@ -19,6 +19,7 @@ from app.http.rate_limit import RateLimit, parse_rates
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
 from app.routes import associate, docs, fusion, health, metrics, sessions, streams, viewer
+from app.runtime import CollectionTimes, LoopLag
 from app.sessions.registry import SessionRegistry
 from app.settings import Settings, get_settings
 from app.stores import open_store
@@ -48,13 +49,19 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         sys.setswitchinterval(GIL_SWITCH_INTERVAL_S)
+        app.openapi()  # built before serving: the first GET /openapi.json held the loop 250 ms
         store = open_store(settings.store, redis_prefix=settings.redis_prefix)
         app.state.store = store
         registry = SessionRegistry(store, settings, service_metrics)
         app.state.registry = registry
+        collections = CollectionTimes(service_metrics.collections)
+        collections.install()
+        tasks = [
+            asyncio.create_task(registry.run_expiry(), name="session-expiry"),
+            asyncio.create_task(LoopLag(service_metrics.loop_lag).run(), name="loop-lag"),
+        ]
         # a store that answers is restored before the first request; one that is down is
         # retried in the background (the process starts and answers /healthz meanwhile)
-        tasks = [asyncio.create_task(registry.run_expiry(), name="session-expiry")]
         try:
             await registry.restore_all()
             service_metrics.sessions.set(store.count_sessions())
@@ -70,6 +77,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                     await task
             await registry.aclose()
             store.close()
+            collections.remove()
 
     app = FastAPI(
         title="credal-fusion",

@@ -38,6 +38,23 @@ LATENCY_BUCKETS = (
     10.0,
 )
 
+LOOP_LAG_BUCKETS = (
+    0.001,
+    0.0025,
+    0.005,
+    0.01,
+    0.02,
+    0.03,
+    0.04,
+    0.05,
+    0.075,
+    0.1,
+    0.25,
+    1.0,
+    5.0,
+)
+"""Event-loop lag: 0.05 s is the limit of docs/design.md ("Bounded work")."""
+
 
 @dataclass(frozen=True)
 class ServiceMetrics:
@@ -54,6 +71,8 @@ class ServiceMetrics:
     store_inputs: Gauge
     rebuilds: Counter
     internal_errors: Counter
+    loop_lag: Histogram
+    collections: Histogram
 
     @classmethod
     def create(cls) -> ServiceMetrics:
@@ -118,6 +137,22 @@ class ServiceMetrics:
             internal_errors=Counter(
                 "credal_internal_errors",
                 "Requests answered 500 internal-error (a bug; the log has each reference).",
+                registry=registry,
+            ),
+            loop_lag=Histogram(
+                "credal_event_loop_lag_seconds",
+                "How late the event loop woke a timer: how long it was busy (or waited for "
+                "the GIL) with every request on hold. Sampled every 5 ms (app.runtime.LoopLag); "
+                "a stall of S seconds reads between S - 0.005 and S.",
+                buckets=LOOP_LAG_BUCKETS,
+                registry=registry,
+            ),
+            collections=Histogram(
+                "credal_gc_pause_seconds",
+                "Garbage collections by generation and how long each held the GIL (every "
+                "thread, the event loop's included, waits meanwhile; app.runtime.CollectionTimes).",
+                ("generation",),
+                buckets=LOOP_LAG_BUCKETS,
                 registry=registry,
             ),
         )

@@ -26,9 +26,13 @@ from __future__ import annotations
 
 import gc
 import threading
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import TypeVar
+
+import anyio
+from prometheus_client import Histogram
 
 T = TypeVar("T")
 
@@ -78,3 +82,50 @@ def without_collection(function: Callable[[], T]) -> Callable[[], T]:
             return function()
 
     return paused
+
+
+class LoopLag:
+    """Measures how late the event loop wakes a timer, every ``period`` seconds, into ``lag``.
+
+    A late wake-up is the time the loop spent on something else with every
+    request on hold: a callback that ran long, or a wait for the GIL held by a
+    worker thread (a long C call, a garbage collection). A stall of S seconds
+    reads between S − ``period`` and S (``bench/bounds.py`` reads the histogram
+    per route)."""
+
+    def __init__(self, lag: Histogram, period: float = 0.005) -> None:
+        self.lag = lag
+        self.period = period
+
+    async def run(self) -> None:
+        """Sample until cancelled."""
+        while True:
+            started = time.perf_counter()
+            await anyio.sleep(self.period)
+            late = max(0.0, time.perf_counter() - started - self.period)
+            self.lag.observe(late)
+
+
+class CollectionTimes:
+    """Times every garbage collection into ``pauses`` (by generation), from ``gc.callbacks``.
+
+    A collection holds the GIL from start to stop, in whichever thread allocated
+    when a threshold was crossed, so its time is a stall of the event loop too.
+    Installed by the serving process (:meth:`install`, :meth:`remove`)."""
+
+    def __init__(self, pauses: Histogram) -> None:
+        self._series = [pauses.labels(str(generation)) for generation in range(3)]
+        self._started = 0.0
+
+    def __call__(self, phase: str, info: dict[str, int]) -> None:
+        if phase == "start":
+            self._started = time.perf_counter()
+        else:
+            self._series[info["generation"]].observe(time.perf_counter() - self._started)
+
+    def install(self) -> None:
+        gc.callbacks.append(self)
+
+    def remove(self) -> None:
+        if self in gc.callbacks:
+            gc.callbacks.remove(self)

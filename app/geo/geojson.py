@@ -11,6 +11,7 @@ convention as a geodetic track-list report.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -32,15 +33,33 @@ def _columns(tracks: Sequence[PlainTrack], indices: tuple[int, ...]) -> np.ndarr
     return columns
 
 
+@dataclass(frozen=True)
+class GeodeticOutput:
+    """``?frame=geodetic``: the session's origin frame and which state components are the
+    position; :meth:`points` gives each state's ``geodetic: {lat, lon, alt}``."""
+
+    frame: LocalFrame
+    position: tuple[int, ...]
+
+    def points(self, states: Sequence[np.ndarray | Sequence[float]]) -> list[dict[str, float]]:
+        """``{lat, lon, alt}`` of each state's position, in one vectorised conversion."""
+        columns = np.zeros((len(states), 3))
+        if len(states) and self.position:
+            columns[:, : len(self.position)] = np.asarray(states, dtype=np.float64)[
+                :, list(self.position)
+            ]
+        return [
+            {"lat": lat, "lon": lon, "alt": alt}
+            for lat, lon, alt in self.frame.to_geodetic(columns).tolist()
+        ]
+
+
 def with_geodetic(
     tracks: Sequence[PlainTrack], frame: LocalFrame, position_indices: tuple[int, ...]
 ) -> list[PlainTrack]:
     """The tracks with ``geodetic: {lat, lon, alt}`` added (``?frame=geodetic``)."""
-    geodetic = frame.to_geodetic(_columns(tracks, position_indices))
-    return [
-        {**track, "geodetic": {"lat": float(lat), "lon": float(lon), "alt": float(alt)}}
-        for track, (lat, lon, alt) in zip(tracks, geodetic.tolist(), strict=True)
-    ]
+    points = GeodeticOutput(frame, position_indices).points([track["state"] for track in tracks])
+    return [{**track, "geodetic": point} for track, point in zip(tracks, points, strict=True)]
 
 
 def feature_collection(

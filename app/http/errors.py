@@ -556,6 +556,7 @@ PROBLEM_STATUSES: dict[int, str] = {
     401: "Missing or malformed bearer token",
     403: "The token does not grant access",
     404: "Not found",
+    408: "The body did not arrive within ``body_read_timeout`` (the connection is closed)",
     409: "Conflict with the session state",
     413: "Body too large",
     422: "Invalid request (every invalid field is listed in `errors`) or a limit exceeded",

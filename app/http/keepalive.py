@@ -28,9 +28,16 @@ ended by TCP's own retransmission timeout.
 Every bad message is answered with an ``error`` message (the connection
 stays open) — invalid JSON, nesting too deep, a schema violation, more than
 ``max_body_bytes``, more than ``ws_messages_per_second`` — except a message
-beyond ``WS_FRAME_FACTOR × max_body_bytes``: uvicorn stops reading it there
+beyond ``WS_FRAME_FACTOR × max_body_bytes``: uvicorn stops parsing it there
 (it is never buffered whole) and closes with 1009; the ``error`` naming
-``max_body_bytes`` is sent just before that close frame.
+``max_body_bytes`` is sent just before that close frame, and the rest of the
+frame is read and discarded (up to ``DRAIN_BYTES``, for at most
+:data:`DRAIN_SECONDS`) before the socket closes, so that the peer can read
+both instead of a connection reset — as an oversize HTTP body is drained
+before its 413.
+
+Messages are not compressed (no per-message deflate): zlib runs on the event
+loop, and compressing one 10 MB result held it ~200 ms (``bench/bounds.py``).
 """
 
 from __future__ import annotations
@@ -41,9 +48,12 @@ from uvicorn.protocols.websockets.websockets_sansio_impl import WebSocketsSansIO
 from websockets.exceptions import PayloadTooBig
 from websockets.frames import Frame, Opcode
 
+from app.http.body_limits import DRAIN_BYTES
 from app.http.errors import LimitExceeded, error_message, problem_for
 from app.settings import Settings
 
+DRAIN_SECONDS = 2.0
+"""How long the rest of a refused oversize frame is read (and discarded) before closing."""
 WS_FRAME_FACTOR = 4
 """uvicorn accepts WebSocket messages up to 4 × ``max_body_bytes``: the application answers
 those above ``max_body_bytes`` with an ``error``; beyond, the protocol closes with 1009."""
@@ -58,9 +68,16 @@ class PatientWebSocketProtocol(WebSocketsSansIOProtocol):
         self.sent_since_pong = 0
         """Messages sent since the peer's last pong (the first is the connection's ack)."""
         self.ever_ponged = False
+        self.draining: int | None = None
+        """Bytes of a refused oversize frame still to read and discard before closing."""
 
     def data_received(self, data: bytes) -> None:
         self.received_at = self.loop.time()
+        if self.draining is not None:
+            self.draining -= len(data)  # the rest of a refused frame: read, never parsed
+            if self.draining <= 0:
+                self.transport.close()
+            return
         super().data_received(data)
 
     async def send(self, message: Any) -> None:
@@ -76,12 +93,25 @@ class PatientWebSocketProtocol(WebSocketsSansIOProtocol):
 
     def handle_parser_exception(self) -> None:
         too_big = self.conn.parser_exc
-        if isinstance(too_big, PayloadTooBig) and not self.close_sent:
-            # ahead of the close frame uvicorn is about to write (the connection is closing:
-            # the frame is written as is, not through the connection's state machine)
-            text = oversize_error(self.config.ws_max_size, too_big, self.scope.get("path"))
-            self.transport.write(Frame(Opcode.TEXT, text.encode()).serialize(mask=False))
-        super().handle_parser_exception()
+        if not isinstance(too_big, PayloadTooBig) or self.close_sent:
+            super().handle_parser_exception()
+            return
+        # ahead of the close frame (the connection is closing: the frame is written as is,
+        # not through the connection's state machine)
+        text = oversize_error(self.config.ws_max_size, too_big, self.scope.get("path"))
+        self.transport.write(Frame(Opcode.TEXT, text.encode()).serialize(mask=False))
+        # uvicorn's handler, but the transport closes only once the rest of the refused
+        # frame is read (up to DRAIN_BYTES, for at most DRAIN_SECONDS): closed with it
+        # unread, the socket resets and the peer loses the error and the close frame
+        assert self.conn.close_sent is not None
+        close = self.conn.close_sent
+        self.queue.put_nowait(
+            {"type": "websocket.disconnect", "code": close.code, "reason": close.reason}
+        )
+        self.transport.write(b"".join(self.conn.data_to_send()))
+        self.close_sent = True
+        self.draining = min(getattr(too_big, "size", None) or DRAIN_BYTES, DRAIN_BYTES)
+        self.loop.call_later(DRAIN_SECONDS, self.transport.close)
 
     def keepalive_timeout(self) -> None:
         owed = self.sent_since_pong > (0 if self.ever_ponged else 1)
@@ -115,4 +145,7 @@ def server_options(settings: Settings) -> dict[str, Any]:
         "ws_max_size": WS_FRAME_FACTOR * settings.max_body_bytes,
         "ws_ping_interval": settings.ws_ping_interval,
         "ws_ping_timeout": settings.ws_ping_timeout,
+        # no per-message deflate: compressing a 10 MB result is zlib on the event loop
+        # (250 ms of stall, bench/bounds.py); HTTP answers are not compressed either
+        "ws_per_message_deflate": False,
     }

@@ -177,13 +177,16 @@ def _is_json(request: Request) -> bool:
 
 @functools.cache
 def body_model(endpoint: Callable[..., Any]) -> type[BaseModel] | None:
-    """The model a route's body is validated as (its one pydantic-model parameter), if any."""
+    """The model a route's body is validated as (its one pydantic-model parameter that is not
+    a dependency: ``SettingsDep`` is a model too, but ``Annotated`` with ``Depends``), if any."""
     try:
-        hints = typing.get_type_hints(endpoint)
+        hints = typing.get_type_hints(endpoint, include_extras=True)
     except (NameError, TypeError):
         return None
     hints.pop("return", None)
     models = [
-        hint for hint in hints.values() if isinstance(hint, type) and issubclass(hint, BaseModel)
+        hint
+        for hint in hints.values()
+        if isinstance(hint, type) and issubclass(hint, BaseModel)  # plain: not Annotated
     ]
     return models[0] if len(models) == 1 else None

@@ -1,12 +1,23 @@
-"""JSON answers built from plain data (the engine's results are not re-validated on the way out)."""
+"""JSON answers built from plain data (the engine's results are not re-validated on the way out).
+
+Big answers (a 2 000-track picture is ~10 MB) never hold the event loop or the
+GIL for long in one piece: their text is written one list item at a time
+(:func:`itemwise`, in a worker thread), and the body is sent in slices of
+:data:`SLICE_BYTES` (:class:`SlicedResponse`), so the loop serves other
+connections between two slices.
+"""
 
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from fastapi.responses import JSONResponse, Response
+from starlette.types import Receive, Scope, Send
+
+SLICE_BYTES = 256 * 1024
+"""A body is handed to the server in pieces of this size."""
 
 
 def dumps(content: Any) -> str:
@@ -19,23 +30,48 @@ def itemwise(document: object, write: Callable[[object], str] = dumps) -> str:
     ``wire_json``) of a document with string keys, written one list item at a time: dicts
     are entered, each list's items written whole (a step result's tracks, pairs and matrix
     rows; a logged report's tracks). Each call of the writer stays small, so no single C
-    call holds the GIL, stalling the event loop, for the whole of a 10 MB answer."""
+    call holds the GIL, stalling the event loop, for the whole of a 10 MB answer.
+
+    An iterator stands for a list whose items are made as they are written (a step's
+    tracks built from the engine's views): each is freed once written, so no big
+    structure is freed in one piece (a deallocation holds the GIL throughout too)."""
     if isinstance(document, dict):
         members = (f"{write(key)}:{itemwise(value, write)}" for key, value in document.items())
         return "{" + ",".join(members) + "}"
-    if isinstance(document, list):
+    if isinstance(document, list | Iterator):
         return "[" + ",".join(write(item) for item in document) + "]"
     return write(document)
 
 
-class PlainJSONResponse(JSONResponse):
+class SlicedResponse(Response):
+    """An answer whose body goes to the server :data:`SLICE_BYTES` at a time."""
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        await send(
+            {"type": "http.response.start", "status": self.status_code, "headers": self.raw_headers}
+        )
+        body = self.body
+        for start in range(0, max(len(body), 1), SLICE_BYTES):
+            end = start + SLICE_BYTES
+            await send(
+                {
+                    "type": "http.response.body",
+                    "body": body[start:end],
+                    "more_body": end < len(body),
+                }
+            )
+        if self.background is not None:
+            await self.background()
+
+
+class PlainJSONResponse(SlicedResponse, JSONResponse):
     """A JSON answer of plain data; the route's ``response_model`` documents its shape."""
 
     def render(self, content: Any) -> bytes:
         return dumps(content).encode("utf-8")
 
 
-class JSONTextResponse(Response):
+class JSONTextResponse(SlicedResponse):
     """A JSON answer whose text is already serialised (a step result, built once per input)."""
 
     media_type = "application/json"

@@ -54,7 +54,7 @@ def run_association(request: AssociateRequest) -> PlainObject:
 
 
 @router.post(
-    "/v1/associate", response_model=AssociateResponse, responses=problem_responses(413, 422)
+    "/v1/associate", response_model=AssociateResponse, responses=problem_responses(408, 413, 422)
 )
 async def associate_tracks(request: AssociateRequest, settings: SettingsDep) -> JSONTextResponse:
     """Two track lists and a method → the assignment with its score matrix (no session, no token).

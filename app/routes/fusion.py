@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+import functools
+from typing import Annotated, Literal
 
-import orjson
 from fastapi import APIRouter, Path, Query
 from fastapi.responses import Response
 
@@ -13,8 +13,7 @@ from api_schemas.config import SessionConfig
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
-from app.geo.geodesy import LocalFrame
-from app.geo.geojson import GEOJSON_MEDIA_TYPE, feature_collection, with_geodetic
+from app.geo.geojson import GEOJSON_MEDIA_TYPE, GeodeticOutput, with_geodetic
 from app.http.deps import CurrentSessionDep, LiveSessionDep, RegistryDep
 from app.http.errors import (
     TrackNotFound,
@@ -22,8 +21,8 @@ from app.http.errors import (
     request_validation_error,
 )
 from app.http.requests import WireRoute
-from app.http.responses import JSONTextResponse, dumps
-from app.sessions.translate import session_origin, wire_json
+from app.http.responses import JSONTextResponse
+from app.sessions.translate import picture_geojson, picture_json, session_geodetic, wire_json
 
 router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
 
@@ -34,28 +33,22 @@ OutputFrame = Annotated[
 ]
 
 
-def origin_of(config: SessionConfig, parameter: str) -> LocalFrame:
-    """The session's origin frame, or a 422 at the query ``parameter``: it has none."""
-    frame = session_origin(config)
-    if frame is None:
+def geodetic_output(config: SessionConfig, parameter: str) -> GeodeticOutput:
+    """The session's origin frame, for geodetic positions, or a 422 at the query
+    ``parameter``: the session has none."""
+    geodetic = session_geodetic(config)
+    if geodetic is None:
         raise request_validation_error(
             [FieldIssue((parameter,), "the session has no origin: geodetic output needs one")],
             prefix="query",
         )
-    return frame
-
-
-def geodetic_result(result: str, frame: LocalFrame, config: SessionConfig) -> str:
-    """A step result's JSON text with ``geodetic`` added to each fused track."""
-    document: dict[str, Any] = orjson.loads(result)
-    document["tracks"] = with_geodetic(document["tracks"], frame, tuple(config.state.position))
-    return dumps(document)
+    return geodetic
 
 
 @router.post(
     "/{sid}/tracks",
     response_model=StepResult,
-    responses=problem_responses(401, 403, 404, 409, 413, 422, 503),
+    responses=problem_responses(401, 403, 404, 409, 408, 413, 422, 503),
 )
 async def submit_tracks(
     report: TrackReport,
@@ -72,17 +65,16 @@ async def submit_tracks(
     newer than the sensor's previous one.
     """
     # refused before anything is applied
-    origin = origin_of(session.config, "frame") if frame == "geodetic" else None
-    result = await registry.submit_tracks(session, report, explain=explain)
-    if origin is not None:
-        result = geodetic_result(result, origin, session.config)
-    return JSONTextResponse(result)
+    geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
+    return JSONTextResponse(
+        await registry.submit(session, report, explain=explain, geodetic=geodetic)
+    )
 
 
 @router.post(
     "/{sid}/detections",
     response_model=StepResult,
-    responses=problem_responses(401, 403, 404, 409, 413, 422, 503),
+    responses=problem_responses(401, 403, 404, 409, 408, 413, 422, 503),
 )
 async def submit_detections(
     report: DetectionReport,
@@ -101,11 +93,10 @@ async def submit_detections(
     422 for a sensor without a measurement model.
     """
     # refused before anything is applied
-    origin = origin_of(session.config, "frame") if frame == "geodetic" else None
-    result = await registry.submit_detections(session, report, explain=explain)
-    if origin is not None:
-        result = geodetic_result(result, origin, session.config)
-    return JSONTextResponse(result)
+    geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
+    return JSONTextResponse(
+        await registry.submit(session, report, explain=explain, geodetic=geodetic)
+    )
 
 
 @router.get(
@@ -135,18 +126,16 @@ async def list_fused_tracks(
     """
     config = session.config
     if format == "geojson":
-        origin = origin_of(config, "format")
-        _, _, tracks = await registry.picture(session, time)
-        collection = feature_collection(
-            tracks, origin, tuple(config.state.position), tuple(config.state.velocity)
+        geodetic = geodetic_output(config, "format")
+        velocity = tuple(config.state.velocity)
+        text = await registry.picture(
+            session, time, lambda _seq, _time, views: picture_geojson(views, geodetic, velocity)
         )
-        return Response(dumps(collection), media_type=GEOJSON_MEDIA_TYPE)
+        return JSONTextResponse(text, media_type=GEOJSON_MEDIA_TYPE)
     if frame == "geodetic":
-        origin = origin_of(config, "frame")
-        seq, time_of, tracks = await registry.picture(session, time)
-        geodetic = with_geodetic(tracks, origin, tuple(config.state.position))
-        return JSONTextResponse(wire_json({"seq": seq, "time": time_of, "tracks": geodetic}))
-    return JSONTextResponse(await registry.picture_json(session, time))
+        write = functools.partial(picture_json, geodetic=geodetic_output(config, "frame"))
+        return JSONTextResponse(await registry.picture(session, time, write))
+    return JSONTextResponse(await registry.picture(session, time))
 
 
 @router.get(
@@ -166,17 +155,15 @@ async def get_fused_track(
     each history point (needs the session's ``origin``, else 422); their
     ``state`` stays in the session frame.
     """
-    config = session.config
-    origin = origin_of(config, "frame") if frame == "geodetic" else None
+    geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
     detail = await registry.track_detail(session, tid)
     if detail is None:
         raise TrackNotFound(session.id, tid)
-    if origin is not None:
-        positions = tuple(config.state.position)
-        (track,) = with_geodetic([detail["track"]], origin, positions)
+    if geodetic is not None:
+        (track,) = with_geodetic([detail["track"]], geodetic.frame, geodetic.position)
         detail = {
             **detail,
             "track": track,
-            "history": with_geodetic(detail["history"], origin, positions),
+            "history": with_geodetic(detail["history"], geodetic.frame, geodetic.position),
         }
     return JSONTextResponse(wire_json(detail))

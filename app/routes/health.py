@@ -31,8 +31,9 @@ PING_TIMEOUT_S = 3.0
 
 
 @router.get("/healthz", operation_id="get_health")
-def get_health() -> Health:
-    """Liveness and version; needs no token."""
+async def get_health() -> Health:
+    """Liveness and version; needs no token. Answered on the event loop itself (no thread
+    hop): it answers as fast as the loop is free (``credal_event_loop_lag_seconds``)."""
     return Health(version=__version__)
 
 

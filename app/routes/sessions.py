@@ -48,7 +48,8 @@ MAX_SEQ = 2**53
 @router.post(
     "",
     status_code=HTTPStatus.CREATED,
-    responses=problem_responses(400, 413, 422, 429, 503),
+    response_model=SessionCreated,
+    responses=problem_responses(400, 408, 413, 422, 429, 503),
 )
 def create_session(
     config: SessionConfig,
@@ -56,7 +57,7 @@ def create_session(
     store: StoreDep,
     registry: RegistryDep,
     metrics: MetricsDep,
-) -> SessionCreated:
+) -> JSONTextResponse:
     """Create a session from a config; returns its id, its token (shown only here) and the resolved config."""
     registry.check_config(config)
     token = issue_token()
@@ -70,7 +71,9 @@ def create_session(
     store.create_session(record, max_sessions=settings.max_sessions)
     registry.add(record)
     metrics.sessions.set(store.count_sessions())
-    return SessionCreated(id=record.id, token=token, config=config, created_at=record.created_at)
+    created = SessionCreated(id=record.id, token=token, config=config, created_at=record.created_at)
+    # written here, in the worker thread: the resolved config of 64 fields of view is ~1 MB
+    return JSONTextResponse(created.model_dump_json(), status_code=HTTPStatus.CREATED)
 
 
 @router.get("", responses=problem_responses(401, 403, 503))

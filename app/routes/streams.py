@@ -30,6 +30,7 @@ fused track of every ``result`` sent on that connection (the session needs an
 
 from __future__ import annotations
 
+import functools
 import json
 import logging
 
@@ -43,8 +44,7 @@ from starlette.websockets import WebSocketDisconnect
 from api_schemas.issues import FieldIssue
 from api_schemas.problem import Problem
 from api_schemas.ws import DetectionsMessage, TracksMessage, client_message_adapter
-from app.geo.geodesy import LocalFrame
-from app.geo.geojson import with_geodetic
+from app.geo.geojson import GeodeticOutput, with_geodetic
 from app.http.deps import open_record
 from app.http.errors import (
     LimitExceeded,
@@ -57,10 +57,11 @@ from app.http.errors import (
     request_validation_error,
 )
 from app.http.rate_limit import MessageRate
-from app.http.requests import WireRoute, json_error, parse_json
-from app.http.responses import dumps
-from app.routes.fusion import geodetic_result, origin_of
-from app.sessions.hub import STORE_UNAVAILABLE, Ending
+from app.http.requests import OFFLOAD_BYTES, WireRoute, json_error, parse_json
+from app.http.responses import dumps, itemwise
+from app.routes.fusion import geodetic_output
+from app.runtime import collection_paused, without_collection
+from app.sessions.hub import STORE_UNAVAILABLE, Ending, Published
 from app.sessions.live import LiveSession
 from app.sessions.registry import SessionRegistry, result_message
 
@@ -103,18 +104,18 @@ def _subprotocol(websocket: WebSocket) -> str | None:
 OUTPUT_FRAMES = ("session", "geodetic")
 
 
-def _output_frame(websocket: WebSocket, session: LiveSession) -> LocalFrame | None:
-    """The session's origin frame when the connection asks ``?frame=geodetic``, else None."""
+def _output_frame(websocket: WebSocket, session: LiveSession) -> GeodeticOutput | None:
+    """The session's geodetic output when the connection asks ``?frame=geodetic``, else None."""
     frame = websocket.query_params.get("frame", "session")
     if frame not in OUTPUT_FRAMES:
         raise request_validation_error(
             [FieldIssue(("frame",), f"frame is one of {list(OUTPUT_FRAMES)}", frame)],
             prefix="query",
         )
-    return origin_of(session.config, "frame") if frame == "geodetic" else None
+    return geodetic_output(session.config, "frame") if frame == "geodetic" else None
 
 
-async def _open(websocket: WebSocket, sid: str) -> tuple[LiveSession, LocalFrame | None] | None:
+async def _open(websocket: WebSocket, sid: str) -> tuple[LiveSession, GeodeticOutput | None] | None:
     """The session (and the output frame the connection asks for) if the upgrade request may
     open it; otherwise refuse the upgrade."""
     app = websocket.app
@@ -134,14 +135,30 @@ async def _open(websocket: WebSocket, sid: str) -> tuple[LiveSession, LocalFrame
         return None
 
 
-def _geodetic_message(message: str, frame: LocalFrame, session: LiveSession) -> str:
-    """A hub message with ``geodetic`` added to its result's tracks (other messages as they are)."""
+async def _in_frame(published: Published, geodetic: GeodeticOutput | None) -> str:
+    """A published result's message in a subscriber's frame: written beside the step (a
+    geodetic subscriber of this instance was there before it), else converted here (a
+    result forwarded from another instance through Redis): parsing a 10 MB result holds the
+    GIL ~300 ms, a cost the geodetic text written beside the step avoids."""
+    if geodetic is None:
+        return published.text
+    if published.geodetic is not None:
+        return published.geodetic
+    convert = functools.partial(geodetic_message, published.text, geodetic)
+    if len(published.text) > OFFLOAD_BYTES:
+        return await anyio.to_thread.run_sync(without_collection(convert))
+    return convert()
+
+
+def geodetic_message(message: str, geodetic: GeodeticOutput) -> str:
+    """A hub message with ``geodetic`` added to its result's tracks (other messages as they
+    are), written a track at a time."""
     document = orjson.loads(message)
     if document.get("type") != "result":
         return message
-    positions = tuple(session.config.state.position)
-    document["result"]["tracks"] = with_geodetic(document["result"]["tracks"], frame, positions)
-    return dumps(document)
+    result = document["result"]
+    result["tracks"] = with_geodetic(result["tracks"], geodetic.frame, geodetic.position)
+    return itemwise(document)
 
 
 def _ack(session: LiveSession) -> str:
@@ -181,39 +198,44 @@ def _refusal(error: ServiceError, path: str) -> str:
     return error_message(problem_for(error, path), None)
 
 
-async def _answer(
-    session: LiveSession,
-    registry: SessionRegistry,
-    text: str,
-    path: str,
-    frame: LocalFrame | None = None,
-) -> str:
-    """The one answer (``result`` or ``error``) to one client message (``frame``: with the
-    tracks' geodetic positions)."""
-    settings = registry.settings
-    ref: str | None = None
+def _client_message(text: str, path: str, listed: int) -> TracksMessage | DetectionsMessage | str:
+    """``text`` parsed and validated as a client message, or the ``error`` message answering it."""
     try:
         document = parse_json(text)
     except json.JSONDecodeError as error:
         return error_message(problem_for(json_error(error.msg, error.pos, ()), path), None)
     try:
-        message = client_message_adapter.validate_python(document)
+        return client_message_adapter.validate_python(document)
     except ValidationError as error:
-        problem = _message_problem(error, path, document, settings.max_listed_errors)
+        problem = _message_problem(error, path, document, listed)
         return error_message(problem, _ref_of(document))
-    ref = message.ref
+
+
+async def _answer(
+    session: LiveSession,
+    registry: SessionRegistry,
+    text: str,
+    path: str,
+    geodetic: GeodeticOutput | None = None,
+) -> str:
+    """The one answer (``result`` or ``error``) to one client message (``geodetic``: with the
+    tracks' geodetic positions). A message larger than ``OFFLOAD_BYTES`` is parsed and
+    validated in a worker thread, as a REST body is."""
+    read = functools.partial(_client_message, text, path, registry.settings.max_listed_errors)
+    if len(text) > OFFLOAD_BYTES:
+        with collection_paused():
+            message = await anyio.to_thread.run_sync(read)
+    else:
+        message = read()
+    if isinstance(message, str):
+        return message
     try:
         if session.closed:  # evicted (store down, or a failed step): the registry reloads it
             session = await registry.get(session.id)
-        if isinstance(message, DetectionsMessage):
-            result = await registry.submit_detections(session, message.report())
-        else:
-            result = await registry.submit_tracks(session, message.report())
+        result = await registry.submit(session, message.report(), geodetic=geodetic)
     except Exception as error:  # every failure is answered; the connection stays open
-        return error_message(problem_for(error, path), ref)
-    if frame is not None:
-        result = geodetic_result(result, frame, session.config)
-    return result_message(result, ref)
+        return error_message(problem_for(error, path), message.ref)
+    return result_message(result, message.ref)
 
 
 @router.websocket("/{sid}/stream")
@@ -222,7 +244,7 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
     opened = await _open(websocket, sid)
     if opened is None:
         return
-    session, frame = opened
+    session, geodetic = opened
     registry: SessionRegistry = websocket.app.state.registry
     path = websocket.url.path
     await websocket.accept(subprotocol=_subprotocol(websocket))
@@ -259,7 +281,7 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
                         path,
                     )
                 else:
-                    answer = await _answer(session, registry, text, path, frame)
+                    answer = await _answer(session, registry, text, path, geodetic)
                 await send.send(answer)
 
     async def writer() -> None:
@@ -281,22 +303,21 @@ async def subscribe_session(websocket: WebSocket, sid: str) -> None:
     opened = await _open(websocket, sid)
     if opened is None:
         return
-    session, frame = opened
+    session, geodetic = opened
     registry: SessionRegistry = websocket.app.state.registry
     await websocket.accept(subprotocol=_subprotocol(websocket))
     try:
-        subscriber = await registry.subscribe(session)  # in place before the ack: nothing missed
+        # in place before the ack: nothing missed
+        subscriber = await registry.subscribe(session, geodetic=geodetic is not None)
     except StoreUnavailable:
         await websocket.close(code=STORE_UNAVAILABLE.code, reason=STORE_UNAVAILABLE.reason)
         return
     await websocket.send_text(_ack(session))
 
     async def pump() -> None:
-        while not isinstance(message := await subscriber.next(), Ending):
-            if frame is not None:
-                message = _geodetic_message(message, frame, session)
-            await websocket.send_text(message)
-        await websocket.close(code=message.code, reason=message.reason)
+        while not isinstance(published := await subscriber.next(), Ending):
+            await websocket.send_text(await _in_frame(published, geodetic))
+        await websocket.close(code=published.code, reason=published.reason)
 
     try:
         async with anyio.create_task_group() as tasks:

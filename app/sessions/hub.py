@@ -6,6 +6,11 @@ slow subscriber skips ahead to the latest state (the ``seq`` numbers show the
 gap) and a fast one receives every result in order. Everything runs on the
 event loop thread.
 
+A result is published as a :class:`Published`: its message text, and the same
+message with the tracks' geodetic positions when a subscriber of this
+instance asked for them (``?frame=geodetic``) before the step was applied
+(written beside the step, in its worker thread).
+
 A subscription ends with an :class:`Ending`, the WebSocket close code and
 reason its subscriber is told: the session ended (1000), or the store is
 unavailable (1013, "try again later": subscribe again once ``/readyz`` says
@@ -35,15 +40,25 @@ SESSION_RELOADED = Ending(1013, "session reloaded from the store")
 """The session was evicted from memory after a failed step; subscribe again."""
 
 
-class Subscriber:
-    """One subscriber's queue of serialised messages, closed by an :class:`Ending`."""
+@dataclass(frozen=True)
+class Published:
+    """A ``result`` message: its text, and with geodetic positions if written (else ``None``)."""
 
-    def __init__(self, capacity: int = SUBSCRIBER_QUEUE) -> None:
-        self.queue: asyncio.Queue[str | Ending] = asyncio.Queue(maxsize=capacity)
+    text: str
+    geodetic: str | None = None
+
+
+class Subscriber:
+    """One subscriber's queue of results, closed by an :class:`Ending`; ``geodetic``: it wants
+    the tracks' geodetic positions."""
+
+    def __init__(self, capacity: int = SUBSCRIBER_QUEUE, *, geodetic: bool = False) -> None:
+        self.queue: asyncio.Queue[Published | Ending] = asyncio.Queue(maxsize=capacity)
+        self.geodetic = geodetic
         self.dropped = 0
         self.closed = False
 
-    def offer(self, message: str | Ending) -> None:
+    def offer(self, message: Published | Ending) -> None:
         """Queue ``message``, dropping the oldest queued ones if the queue is full."""
         if self.closed:
             return
@@ -54,7 +69,7 @@ class Subscriber:
         if isinstance(message, Ending):
             self.closed = True
 
-    async def next(self) -> str | Ending:
+    async def next(self) -> Published | Ending:
         """The next message, or why the subscription ended."""
         return await self.queue.get()
 
@@ -65,17 +80,21 @@ class Hub:
     def __init__(self) -> None:
         self._subscribers: set[Subscriber] = set()
 
-    def subscribe(self, capacity: int = SUBSCRIBER_QUEUE) -> Subscriber:
+    def subscribe(self, capacity: int = SUBSCRIBER_QUEUE, *, geodetic: bool = False) -> Subscriber:
         """A new subscriber that receives every message published from now on."""
-        subscriber = Subscriber(capacity)
+        subscriber = Subscriber(capacity, geodetic=geodetic)
         self._subscribers.add(subscriber)
         return subscriber
+
+    def wants_geodetic(self) -> bool:
+        """Whether a subscriber wants geodetic positions (then the steps write them too)."""
+        return any(subscriber.geodetic for subscriber in self._subscribers)
 
     def unsubscribe(self, subscriber: Subscriber) -> None:
         """Stop delivering to ``subscriber``."""
         self._subscribers.discard(subscriber)
 
-    def publish(self, message: str) -> None:
+    def publish(self, message: Published) -> None:
         """Deliver ``message`` to every subscriber (never waits)."""
         for subscriber in self._subscribers:
             subscriber.offer(message)

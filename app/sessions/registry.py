@@ -2,7 +2,7 @@
 
 Per session (:class:`LiveSession`): the engine, an ``asyncio.Lock`` that
 applies inputs one at a time in arrival order, and a :class:`~app.sessions.hub.Hub`
-for subscribers. One input (:meth:`SessionRegistry.submit_tracks`):
+for subscribers. One input (:meth:`SessionRegistry.submit`):
 
 1. checks that need only the config (limits, sensor, dimensions, labels);
 2. under the lock, the engine applies it (in a worker thread unless the work
@@ -56,7 +56,7 @@ import functools
 import logging
 import math
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from typing import Any, TypeVar
@@ -69,6 +69,7 @@ from api_schemas.consistency import detection_report_issues, track_report_issues
 from api_schemas.reports import DetectionReport, TrackReport
 from app.cluster.fanout import ResultFanout, open_fanout
 from app.cluster.lease import SessionLeases, new_owner_id, open_leases
+from app.geo.geojson import GeodeticOutput
 from app.http.errors import (
     LimitExceeded,
     SessionLeased,
@@ -77,20 +78,28 @@ from app.http.errors import (
     StoreUnavailable,
     request_validation_error,
 )
-from app.http.responses import dumps, itemwise
+from app.http.responses import dumps
 from app.metrics import ServiceMetrics
 from app.runtime import without_collection
-from app.sessions.hub import SESSION_ENDED, SESSION_RELOADED, STORE_UNAVAILABLE, Ending, Subscriber
+from app.sessions.hub import (
+    SESSION_ENDED,
+    SESSION_RELOADED,
+    STORE_UNAVAILABLE,
+    Ending,
+    Published,
+    Subscriber,
+)
 from app.sessions.live import LiveSession, new_session, restore_snapshot
 from app.sessions.log import event_from_entry, log_input
 from app.sessions.translate import (
     PlainObject,
     core_detection_report,
     fusion_config,
+    picture_json,
     session_frame_report,
+    session_geodetic,
     step_json,
     track_fields,
-    wire_json,
 )
 from app.settings import Settings
 from app.stores import (
@@ -114,17 +123,20 @@ hop adds under load. Larger steps run in a worker thread."""
 
 logger = logging.getLogger("credal_fusion.sessions")
 T = TypeVar("T")
+Report = TrackReport | DetectionReport
 
 
 @dataclass
 class Step:
     """An applied (not yet logged) input: the engine that holds it, its result as JSON text,
-    the input as it is logged (both built beside the step, off the event loop) and the CPU
+    the same with the tracks' geodetic positions if asked (by its sender or a subscriber),
+    the input as it is logged (all built beside the step, off the event loop) and the CPU
     time of the engine step alone (the thread's)."""
 
     engine: SessionEngine
     fusion: FusionConfig
     result: str
+    geodetic: str | None
     logged: PlainObject
     engine_cpu_s: float
 
@@ -372,9 +384,10 @@ class SessionRegistry:
         return sum(session.lease_deadline > now for session in self) if self.shared else 0
 
     # ------------------------------------------------------------ subscribers
-    async def subscribe(self, session: LiveSession) -> Subscriber:
-        """A subscriber of every result of the session published from now on, on any instance."""
-        subscriber = session.hub.subscribe()
+    async def subscribe(self, session: LiveSession, *, geodetic: bool = False) -> Subscriber:
+        """A subscriber of every result of the session published from now on, on any instance
+        (``geodetic``: it wants the tracks' geodetic positions, written beside each step)."""
+        subscriber = session.hub.subscribe(geodetic=geodetic)
         if self.shared:
             try:
                 await self._forward(session)
@@ -403,7 +416,7 @@ class SessionRegistry:
                 async with self.fanout.subscribe(session.id) as results:
                     subscribed.set_result(None)
                     async for message in results:
-                        session.hub.publish(message)
+                        session.hub.publish(Published(message))
             except Exception as error:
                 if not subscribed.done():
                     subscribed.set_exception(error)
@@ -429,15 +442,13 @@ class SessionRegistry:
             )
         return series
 
-    def check_tracks(self, session: LiveSession, report: TrackReport) -> None:
+    @staticmethod
+    def check(session: LiveSession, report: Report) -> None:
         """Checks that need only the config: item limit, sensor, dimensions, class labels."""
-        issues = track_report_issues(report, session.config)
-        if issues:
-            raise request_validation_error(issues)
-
-    def check_detections(self, session: LiveSession, report: DetectionReport) -> None:
-        """Checks of a detection batch that need only the config."""
-        issues = detection_report_issues(report, session.config)
+        if isinstance(report, TrackReport):
+            issues = track_report_issues(report, session.config)
+        else:
+            issues = detection_report_issues(report, session.config)
         if issues:
             raise request_validation_error(issues)
 
@@ -457,7 +468,12 @@ class SessionRegistry:
         return SessionEngine.restore(fusion, session.engine.export()), fusion
 
     def _apply(
-        self, session: LiveSession, report: TrackReport | DetectionReport, *, explain: bool
+        self,
+        session: LiveSession,
+        report: Report,
+        *,
+        explain: bool,
+        geodetic: GeodeticOutput | None = None,
     ) -> Step:
         """Apply an input to the session's engine (or a copy with a new sensor); logs nothing."""
         engine, fusion = self._engine_for(session, report.sensor)
@@ -473,40 +489,39 @@ class SessionRegistry:
             engine_cpu_s = time.thread_time() - started
         except CoreStaleReport as stale:
             raise StaleReport(stale.sensor, stale.time, stale.last_time) from None
-        result = step_json(step, session.seq + 1)  # serialised once, here
+        seq = session.seq + 1
         return Step(
             engine=engine,
             fusion=fusion,
-            result=result,
+            result=step_json(step, seq),  # serialised once, here
+            geodetic=None if geodetic is None else step_json(step, seq, geodetic),
             logged=log_input(report),
             engine_cpu_s=engine_cpu_s,
         )
 
-    async def submit_tracks(
-        self, session: LiveSession, report: TrackReport, *, explain: bool = False
+    async def submit(
+        self,
+        session: LiveSession,
+        report: Report,
+        *,
+        explain: bool = False,
+        geodetic: GeodeticOutput | None = None,
     ) -> str:
-        """Apply one track list, log it durably, then return (and publish) its result (JSON text)."""
-        await self._compute(
-            len(report.tracks), functools.partial(self.check_tracks, session, report)
-        )
-        return await self._submit(session, report, len(report.tracks), explain=explain)
-
-    async def submit_detections(
-        self, session: LiveSession, report: DetectionReport, *, explain: bool = False
-    ) -> str:
-        """Apply one detection batch (local tracker, then fusion), log it, return its result."""
-        await self._compute(
-            len(report.detections), functools.partial(self.check_detections, session, report)
-        )
-        return await self._submit(session, report, len(report.detections), explain=explain)
+        """Apply one input (a track list, or detections for the sensor's local tracker), log
+        it durably, publish its result, and return the answer to its sender (JSON text;
+        ``geodetic``: with the tracks' geodetic positions)."""
+        items = len(report.tracks) if isinstance(report, TrackReport) else len(report.detections)
+        await self._compute(items, functools.partial(self.check, session, report))
+        return await self._submit(session, report, items, explain=explain, geodetic=geodetic)
 
     async def _submit(
         self,
         session: LiveSession,
-        report: TrackReport | DetectionReport,
+        report: Report,
         items: int,
         *,
         explain: bool,
+        geodetic: GeodeticOutput | None,
     ) -> str:
         """Under the session lock: (lease,) apply, log durably, then publish and return the result.
 
@@ -516,57 +531,72 @@ class SessionRegistry:
         kind = "tracks" if isinstance(report, TrackReport) else "detections"
         async with session.lock:
             if not session.closed:
-                return await self._submit_locked(session, report, items, kind, explain=explain)
-        return await self._submit(await self.get(session.id), report, items, explain=explain)
+                return await self._submit_locked(
+                    session, report, items, kind, explain=explain, geodetic=geodetic
+                )
+        return await self._submit(
+            await self.get(session.id), report, items, explain=explain, geodetic=geodetic
+        )
 
     async def _submit_locked(
         self,
         session: LiveSession,
-        report: TrackReport | DetectionReport,
+        report: Report,
         items: int,
         kind: str,
         *,
         explain: bool,
+        geodetic: GeodeticOutput | None,
     ) -> str:
         """:meth:`_submit` once the session's lock is held."""
+        if geodetic is None and session.hub.wants_geodetic():
+            written = session_geodetic(session.config)  # for the subscribers
+        else:
+            written = geodetic
+        apply = functools.partial(self._apply, session, report, explain=explain, geodetic=written)
         with anyio.CancelScope(shield=True):
             if self.shared:
                 await self._hold_lease(session)
             try:
-                step = await self._apply_and_log(session, report, items, kind, explain=explain)
+                step = await self._apply_and_log(session, apply, report.sensor, items, kind)
             except SequenceConflict:
                 if not self.shared:
                     raise
                 # overtaken by another instance: rebuild from the store, apply once more
                 await self._refresh(session)
-                step = await self._apply_and_log(session, report, items, kind, explain=explain)
+                step = await self._apply_and_log(session, apply, report.sensor, items, kind)
             self._series(kind).inputs.inc()
-            if self.shared:
+            if self.shared:  # local subscribers too receive it through Redis (the text only)
                 await self._publish(session, result_message(step.result))
             elif len(session.hub):
-                session.hub.publish(result_message(step.result))
+                session.hub.publish(
+                    Published(
+                        result_message(step.result),
+                        None if step.geodetic is None else result_message(step.geodetic),
+                    )
+                )
             session.since_snapshot += 1
             if session.since_snapshot >= self.settings.snapshot_every:
                 await self._snapshot(session)
+        if geodetic is not None and step.geodetic is not None:
+            return step.geodetic
         return step.result
 
     async def _apply_and_log(
         self,
         session: LiveSession,
-        report: TrackReport | DetectionReport,
+        apply: Callable[[], Step],
+        sensor: str,
         items: int,
         kind: str,
-        *,
-        explain: bool,
     ) -> Step:
-        """Apply the input, append it to the log, then move the session on (else it is rebuilt)."""
+        """``apply()`` the input, append it to the log, then move the session on (else it is
+        rebuilt)."""
         started = time.perf_counter()
         size = items + len(session.tracks)
         engine_seq = None if session.engine is None else session.engine.seq
         try:
-            step = await self._compute(
-                size, functools.partial(self._apply, session, report, explain=explain)
-            )
+            step = await self._compute(size, apply)
         except BaseException:
             if session.engine is not None and session.engine.seq != engine_seq:
                 # the last defence: steps are transactions, so a refused input that changed
@@ -601,7 +631,7 @@ class SessionRegistry:
         session.engine, session.fusion = step.engine, step.fusion
         session.seq = seq
         session.last_input_at = received_at
-        session.sensor_inputs[report.sensor] = session.sensor_inputs.get(report.sensor, 0) + 1
+        session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
         return step
 
     async def _hold_lease(self, session: LiveSession) -> None:
@@ -681,33 +711,23 @@ class SessionRegistry:
 
     # ------------------------------------------------------------ reads
     async def picture(
-        self, session: LiveSession, at: float | None
-    ) -> tuple[int, float | None, list[PlainObject]]:
-        """``(seq, time, tracks)``: the live fused tracks predicted to ``at`` (default: fusion
-        time), as :func:`~app.sessions.translate.track_fields` (written by ``wire_json``)."""
-        async with session.lock:
-            engine = session.engine
-            if engine is None or engine.time is None:
-                return session.seq, at, []
-            views: tuple[FusedTrackView, ...] = await self._compute(
-                len(engine.tracks), functools.partial(engine.picture, at)
-            )
-            return session.seq, engine.time if at is None else at, track_fields(views)
-
-    async def picture_json(self, session: LiveSession, at: float | None) -> str:
-        """:meth:`picture` as the JSON text of a ``FusedPicture``, built off the event loop."""
+        self,
+        session: LiveSession,
+        at: float | None,
+        write: Callable[[int, float | None, Sequence[FusedTrackView]], str] = picture_json,
+    ) -> str:
+        """``write(seq, time, views)`` of the live fused tracks predicted to ``at`` (default:
+        the fusion time), built off the event loop: a ``FusedPicture`` by default (the routes
+        pass the geodetic and GeoJSON writers)."""
         async with session.lock:
             engine = session.engine
             seq = session.seq
             if engine is None or engine.time is None:
-                return dumps({"seq": seq, "time": at, "tracks": []})
+                return write(seq, at, ())
             time_of = engine.time if at is None else at
-
-            def build() -> str:
-                tracks = track_fields(engine.picture(at))
-                return f'{{"seq":{seq},"time":{dumps(time_of)},"tracks":{itemwise(tracks, wire_json)}}}'
-
-            return await self._compute(len(engine.tracks), build)
+            return await self._compute(
+                len(engine.tracks), lambda: write(seq, time_of, engine.picture(at))
+            )
 
     async def track_detail(self, session: LiveSession, track_id: str) -> PlainObject | None:
         """One live fused track at the fusion time with its history (for ``wire_json``), or ``None``."""

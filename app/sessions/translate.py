@@ -7,7 +7,7 @@ Inputs: :func:`core_track_report`. Outputs: the one writer of the
 contract's result shape (:mod:`api_schemas.results` documents it, and
 ``tests/api/test_result_writer.py`` validates its output against those
 models): :func:`step_json` for a step result (the per-input hot path),
-:func:`track_fields` for fused tracks (``GET …/tracks``), both written by
+:func:`picture_json` for fused tracks (``GET …/tracks``), both written by
 orjson in C straight from the engine's views (numpy arrays and ``Source``
 dataclasses, no intermediate lists); every non-finite score of a matrix is
 ``null``, any other non-finite number refused.
@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -44,6 +44,7 @@ from app.geo.geodesy import (
     rotate_covariances,
     sensor_to_session,
 )
+from app.geo.geojson import GeodeticOutput, feature_collection
 from app.geo.polar import polar_to_cartesian
 from app.http.errors import request_validation_error
 from app.http.responses import itemwise
@@ -353,6 +354,13 @@ def session_origin(config: SessionConfig) -> LocalFrame | None:
     return None if origin is None else LocalFrame(origin.lat, origin.lon, origin.alt)
 
 
+def session_geodetic(config: SessionConfig) -> GeodeticOutput | None:
+    """Geodetic positions of the session's tracks (``?frame=geodetic``; ``None`` without an
+    ``origin``)."""
+    frame = session_origin(config)
+    return None if frame is None else GeodeticOutput(frame, tuple(config.state.position))
+
+
 def sensor_site(sensor: SensorConfig | None, origin: LocalFrame | None) -> tuple[np.ndarray, float]:
     """A sensor's site in the session frame (3 coordinates; default the origin) and heading;
     ``origin`` is the session's (:func:`session_origin`: a geodetic site needs it)."""
@@ -571,9 +579,10 @@ def _association_plain(association: AssociationView) -> PlainObject:
     }
 
 
-def step_json(step: StepResult, seq: int) -> str:
+def step_json(step: StepResult, seq: int, geodetic: GeodeticOutput | None = None) -> str:
     """A step result in the contract's shape (``StepResult``), numbered ``seq`` (the
-    session's input number), as compact JSON text (hot path).
+    session's input number), as compact JSON text (hot path); ``geodetic``: with each
+    track's ``geodetic`` position (``?frame=geodetic``).
 
     Refuses (``ValueError``) a non-finite time, state, covariance or score instead
     of writing ``null``; a pair's or a matrix cell's non-finite score is ``null``.
@@ -584,18 +593,71 @@ def step_json(step: StepResult, seq: int) -> str:
         "seq": seq,
         "time": step.time,
         "sensor": step.sensor,
-        "tracks": track_fields(step.tracks),
+        "tracks": track_items(step.tracks, geodetic),
         "association": _association_plain(step.association),
     }
     return itemwise(document, wire_json)  # no single C call for a 10 MB answer
 
 
-def track_fields(views: Sequence[FusedTrackView]) -> list[PlainObject]:
-    """Fused tracks in the contract's shape (``FusedTrack``), for :func:`wire_json`: states
-    and covariances stay numpy arrays, sources ``Source`` dataclasses (orjson writes both
-    in C). Refuses (``ValueError``) a non-finite state, covariance or score."""
+def picture_json(
+    seq: int,
+    time: float | None,
+    views: Sequence[FusedTrackView],
+    geodetic: GeodeticOutput | None = None,
+) -> str:
+    """The live fused tracks at ``time`` (a ``FusedPicture``) as compact JSON text."""
+    document = {"seq": seq, "time": time, "tracks": track_items(views, geodetic)}
+    return itemwise(document, wire_json)
+
+
+def picture_geojson(
+    views: Sequence[FusedTrackView], geodetic: GeodeticOutput, velocity: tuple[int, ...]
+) -> str:
+    """The live fused tracks as a GeoJSON FeatureCollection (``?format=geojson``), written
+    a feature at a time."""
     _check_finite(views)
-    return [_track_fast(view) for view in views]
+    tracks = [
+        {
+            "id": view.id,
+            "status": view.status.value,
+            "state": view.state,
+            "classification": _decision(view.classification),
+        }
+        for view in views
+    ]
+    return itemwise(feature_collection(tracks, geodetic.frame, geodetic.position, velocity))
+
+
+def _decision(assessment: ClassAssessment | None) -> PlainObject | None:
+    """What a GeoJSON feature says of a track's class: its decision and BetP."""
+    if assessment is None or assessment.mass is None:
+        return None
+    labels = assessment.mass.frame.labels
+    return {
+        "decision": assessment.decision,
+        "pignistic": dict(zip(labels, assessment.pignistic.tolist(), strict=True)),
+    }
+
+
+def track_items(
+    views: Sequence[FusedTrackView], geodetic: GeodeticOutput | None = None
+) -> Iterator[PlainObject]:
+    """Fused tracks in the contract's shape (``FusedTrack``), for :func:`wire_json`, made one
+    at a time as they are written (:func:`~app.http.responses.itemwise`): states and
+    covariances stay numpy arrays, sources ``Source`` dataclasses (orjson writes both in C).
+    Refuses (``ValueError``, before the first) a non-finite state, covariance or score."""
+    _check_finite(views)
+    if geodetic is None:
+        return (_track_fast(view) for view in views)
+    points = geodetic.points([view.state for view in views])
+    return (
+        {**_track_fast(view), "geodetic": point} for view, point in zip(views, points, strict=True)
+    )
+
+
+def track_fields(views: Sequence[FusedTrackView]) -> list[PlainObject]:
+    """:func:`track_items` as a list."""
+    return list(track_items(views))
 
 
 def wire_json(document: object) -> str:

@@ -78,3 +78,15 @@ def test_a_silent_peer_owed_nothing_is_still_dropped(pinging_server: LiveServer)
     assert received.startswith(b"HTTP/1.1 101")
     close_1011 = b"\x88" + bytes([2 + len(b"keepalive ping timeout")]) + (1011).to_bytes(2, "big")
     assert close_1011 in received
+
+
+def test_messages_are_not_compressed_even_when_the_client_offers(
+    pinging_server: LiveServer,
+) -> None:
+    """zlib would run on the event loop for every result: the offer is declined."""
+    sid, headers = open_session(pinging_server)
+    url = pinging_server.url.replace("http://", "ws://") + f"/v1/sessions/{sid}/stream"
+    with connect(url, additional_headers=headers, compression="deflate") as ws:
+        assert "permessage-deflate" in str(ws.request.headers.get("Sec-WebSocket-Extensions"))
+        assert ws.response.headers.get("Sec-WebSocket-Extensions") is None
+        assert json.loads(ws.recv(timeout=10))["type"] == "ack"

@@ -52,3 +52,16 @@ def test_errors_are_documented_as_problem_json() -> None:
                     status,
                 )
     assert "HTTPValidationError" not in json.dumps(document)
+
+
+def test_every_route_with_a_body_documents_the_413_and_408_of_its_body_limits() -> None:
+    document = json.loads(generated())
+    with_body = [
+        (path, method, operation)
+        for path, item in document["paths"].items()
+        for method, operation in item.items()
+        if "requestBody" in operation
+    ]
+    assert len(with_body) >= 4  # sessions, tracks, detections, associate
+    for path, method, operation in with_body:
+        assert {"408", "413"} <= operation["responses"].keys(), (method, path)

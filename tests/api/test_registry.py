@@ -13,7 +13,7 @@ import pytest
 
 from api_schemas.reports import TrackReport
 from app.metrics import ServiceMetrics
-from app.sessions.hub import SESSION_ENDED, Hub
+from app.sessions.hub import SESSION_ENDED, Hub, Published
 from app.sessions.registry import SessionRegistry
 from app.stores import MemoryStore, SessionRecord
 from app.stores.base import StoreUsage
@@ -41,7 +41,7 @@ def new_session(target: SessionRegistry, config: dict[str, Any], sid: str = "s1"
 async def feed(target: SessionRegistry, sid: str, bodies: list[dict[str, Any]]) -> list[Any]:
     session = await target.get(sid)
     return [
-        json.loads(await target.submit_tracks(session, TrackReport.model_validate(body)))
+        json.loads(await target.submit(session, TrackReport.model_validate(body)))
         for body in bodies
     ]
 
@@ -52,13 +52,13 @@ def test_rebuilt_session_equals_the_live_one() -> None:
         new_session(live, session_config())
         await feed(live, "s1", reports(STEPS))
         session = await live.get("s1")
-        picture = await live.picture_json(session, None)
+        picture = await live.picture(session, None)
         load = live.store.load("s1")
         assert load.snapshot is not None and load.snapshot.seq == 8 and len(load.entries) == 1
         live.discard("s1")  # forget it in memory: the next use rebuilds it from the store
         rebuilt = await live.get("s1")
         assert rebuilt is not session and rebuilt.seq == STEPS
-        assert await live.picture_json(rebuilt, None) == picture
+        assert await live.picture(rebuilt, None) == picture
         assert rebuilt.sensor_inputs == session.sensor_inputs
         assert rebuilt.last_input_at == session.last_input_at
 
@@ -86,7 +86,7 @@ def test_session_without_sensors_accepts_any_sensor_up_to_the_limit() -> None:
         target.discard("s1")
         rebuilt = await target.get("s1")
         assert rebuilt.sensor_ids() == ["radar-1", "radar-2"]
-        assert await target.picture_json(rebuilt, None) == await target.picture_json(session, None)
+        assert await target.picture(rebuilt, None) == await target.picture(session, None)
 
     asyncio.run(scenario())
 
@@ -116,11 +116,13 @@ def test_slow_subscriber_gets_the_latest_results_never_a_backlog() -> None:
         hub = Hub()
         slow = hub.subscribe(capacity=4)
         for seq in range(1, 101):
-            hub.publish(f"result {seq}")
+            hub.publish(Published(f"result {seq}"))
         assert slow.queue.qsize() == 4 and slow.dropped == 96
-        assert [await slow.next() for _ in range(4)] == [f"result {n}" for n in range(97, 101)]
-        hub.publish("result 101")
-        assert await slow.next() == "result 101"
+        assert [await slow.next() for _ in range(4)] == [
+            Published(f"result {n}") for n in range(97, 101)
+        ]
+        hub.publish(Published("result 101"))
+        assert await slow.next() == Published("result 101")
         hub.close()
         assert await slow.next() == SESSION_ENDED and len(hub) == 0
 
@@ -134,7 +136,11 @@ def test_subscriber_receives_published_results() -> None:
         session = await target.get("s1")
         subscriber = session.hub.subscribe()
         results = await feed(target, "s1", reports(3))
-        received = [json.loads(str(await subscriber.next()))["result"] for _ in range(3)]
+        received = []
+        for _ in range(3):
+            published = await subscriber.next()
+            assert isinstance(published, Published) and published.geodetic is None
+            received.append(json.loads(published.text)["result"])
         assert received == results
 
     asyncio.run(scenario())

@@ -98,7 +98,7 @@ def test_a_held_lease_refuses_the_other_instance_until_released() -> None:
             assert await feed(a, SID, bodies[:1]) == expected[:1]
             session = await b.get(SID)
             with pytest.raises(SessionLeased) as refused:
-                await b.submit_tracks(session, TrackReport.model_validate(bodies[1]))
+                await b.submit(session, TrackReport.model_validate(bodies[1]))
             assert refused.value.headers() == {"Retry-After": "1"}
             assert session.seq == 1  # loaded after A's input; the refused one changed nothing
             await a.aclose()  # shutdown releases the lease at once

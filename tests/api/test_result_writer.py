@@ -30,15 +30,17 @@ from websockets.sync.client import connect
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
+from app.geo.geojson import GeodeticOutput
 from app.http.responses import dumps, itemwise
-from app.routes.fusion import geodetic_result
+from app.routes.streams import geodetic_message
+from app.sessions.registry import result_message
 from app.sessions.translate import (
     core_detection_report,
     fusion_config,
+    picture_json,
     session_frame_report,
     session_origin,
     step_json,
-    track_fields,
     wire_json,
 )
 from core.fusion.engine import SessionEngine
@@ -259,9 +261,12 @@ def test_every_written_result_is_the_response_models() -> None:
             seen.step(round_trip(StepResult, text))
             origin = session_origin(session)
             if origin is not None:
-                seen.step(round_trip(StepResult, geodetic_result(text, origin, session)))
-            picture = {"seq": seq, "time": step.time, "tracks": track_fields(engine.picture())}
-            seen.tracks(round_trip(FusedPicture, wire_json(picture))["tracks"])
+                geodetic = GeodeticOutput(origin, tuple(session.state.position))
+                seen.step(round_trip(StepResult, step_json(step, seq, geodetic)))
+                shown = picture_json(seq, step.time, engine.picture(), geodetic)
+                seen.tracks(round_trip(FusedPicture, shown)["tracks"])
+            picture = picture_json(seq, step.time, engine.picture())
+            seen.tracks(round_trip(FusedPicture, picture)["tracks"])
     assert seen.kinds("status") >= {"tentative", "confirmed", "phantom", "terminated"}
     assert seen.kinds("class state") == {"defined", "total_conflict"}
     assert seen.kinds("decision") == {"decided", "tied", "undefined"}
@@ -365,3 +370,20 @@ def test_step_json_writes_arrays_in_their_logical_order() -> None:
     transposed = replace(step, tracks=(replace(track, covariance=np.asfortranarray(skewed.T)),))
     written = json.loads(step_json(transposed, 1))["tracks"][0]["covariance"]
     assert written == skewed.T.tolist()
+
+
+def test_a_result_converted_to_geodetic_after_the_fact_equals_the_one_written_with_it() -> None:
+    """A geodetic subscriber fed through Redis converts the published text; one of this
+    instance gets the text written beside the step: both say the same."""
+    converted = 0
+    for config, bodies, detections in SCENES:
+        for seq, (session, _, step) in enumerate(engine_steps(config, bodies, detections), start=1):
+            origin = session_origin(session)
+            if origin is None:
+                continue
+            geodetic = GeodeticOutput(origin, tuple(session.state.position))
+            after = geodetic_message(result_message(step_json(step, seq)), geodetic)
+            beside = result_message(step_json(step, seq, geodetic))
+            assert json.loads(after) == json.loads(beside)
+            converted += bool(step.tracks)
+    assert converted > 0
