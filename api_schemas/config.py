@@ -38,6 +38,10 @@ MAX_STATE_DIM = 64
 
 StateIndex = Annotated[int, Field(ge=0, lt=MAX_STATE_DIM)]
 Point = Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)]
+Vertex = Annotated[tuple[FiniteFloat, ...], Field(min_length=2, max_length=2, strict=False)]
+"""A polygon vertex: a JSON array of two numbers, a tuple once validated (a config keeps
+up to 64 000 of them; tuples of floats leave the garbage collector's lists after one
+pass, where lists would be walked at every full collection)."""
 StateFusionMethod = Literal["covariance_intersection", "independent", "latest"]
 TrackingPreset = Literal["aircraft", "pedestrian"]
 
@@ -160,7 +164,7 @@ class PolygonFieldOfView(WireModel):
 
     kind: Literal["polygon"]
     frame: FovFrame = Field(default="session", description=FOV_FRAME_DESCRIPTION)
-    vertices: Annotated[list[Point], Field(min_length=3, max_length=1000)]
+    vertices: Annotated[tuple[Vertex, ...], Field(min_length=3, max_length=1000, strict=False)]
 
 
 FieldOfView = Annotated[SectorFieldOfView | PolygonFieldOfView, Field(discriminator="kind")]

@@ -318,7 +318,10 @@ def _detail(error: Mapping[str, Any], root: object) -> str:
         return f"invalid JSON{at}: {reason}" if reason else f"invalid JSON{at}"
     if kind == "extra_forbidden" and loc:
         return unknown_key_detail(root, loc)
-    return message
+    # a tuple once validated (a polygon's vertices) is an array on the wire
+    if kind == "tuple_type":
+        return "Input should be a valid array"
+    return "Array" + message.removeprefix("Tuple") if message.startswith("Tuple ") else message
 
 
 def field_errors(errors: Iterable[Mapping[str, Any]], root: object = None) -> list[FieldError]:

@@ -7,6 +7,7 @@ the service's counters; :func:`restore_snapshot` is its inverse.
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 from dataclasses import dataclass, field
 from datetime import datetime
 
@@ -28,6 +29,8 @@ class LiveSession:
     """A session in memory: its engine and what the service counts about it."""
 
     record: SessionRecord
+    """Its identity and token hash; the raw config is not kept here (``config`` holds it
+    validated: a config of 64 polygon fields of view is 64 000 lists as JSON data)."""
     config: SessionConfig
     fusion: FusionConfig | None
     frame: Frame | None
@@ -104,7 +107,7 @@ def new_session(record: SessionRecord) -> LiveSession:
         config = SessionConfig.model_validate(record.config)
     fusion = fusion_config(config) if config.sensors else None
     return LiveSession(
-        record=record,
+        record=dataclasses.replace(record, config={}),
         config=config,
         fusion=fusion,
         frame=class_frame(config.classes),

@@ -22,9 +22,7 @@ from app.stores.base import (
     StoreUsage,
     check_seq,
     decode,
-    dumps,
     encode,
-    loads,
     require,
     session_limit,
 )
@@ -49,8 +47,13 @@ class _Stored:
 @dataclass
 class _SessionData:
     record: SessionRecord
+    """The session's record, its config kept apart as JSON text in ``config``."""
+    config: bytes | str
     log: list[_Stored] = field(default_factory=list)
     snapshot: _Stored | None = None
+
+    def full_record(self) -> SessionRecord:
+        return replace(self.record, config=decode(self.config))
 
 
 class MemoryStore:
@@ -81,17 +84,17 @@ class MemoryStore:
                 raise session_limit(max_sessions, len(self._sessions))
             if not record.deleted:
                 self._sessions[record.id] = _SessionData(
-                    replace(record, config=loads(dumps(record.config)))
+                    replace(record, config={}), encode(record.config)
                 )
 
     def get_session(self, session_id: str) -> SessionRecord | None:
         with self._lock:
             data = self._live(session_id)
-            return data.record if data is not None else None
+            return data.full_record() if data is not None else None
 
     def list_sessions(self) -> list[SessionRecord]:
         with self._lock:
-            records = [data.record for data in self._sessions.values()]
+            records = [data.full_record() for data in self._sessions.values()]
         return sorted(records, key=lambda record: (record.created_at, record.id))
 
     def count_sessions(self) -> int:
@@ -144,7 +147,7 @@ class MemoryStore:
             data = self._require(session_id)
             after = data.snapshot.seq if data.snapshot is not None else 0
             return SessionLoad(
-                session=data.record,
+                session=data.full_record(),
                 snapshot=None if data.snapshot is None else data.snapshot.snapshot(),
                 entries=[logged.entry() for logged in data.log if logged.seq > after],
             )
@@ -166,7 +169,7 @@ class MemoryStore:
                 inputs=sum(len(data.log) for data in sessions),
                 snapshots=sum(data.snapshot is not None for data in sessions),
                 bytes=sum(
-                    len(dumps(data.record.config))
+                    len(data.config)
                     + sum(len(logged.text) for logged in data.log)
                     + (len(data.snapshot.text) if data.snapshot is not None else 0)
                     for data in sessions

@@ -300,6 +300,24 @@ ROWS = [
         set_sensor("fov", {"kind": "cone"}),
     ),
     BadBody(
+        "polygon vertices not an array",
+        "/sessions",
+        ("body", "sensors", 0, "fov", "polygon", "vertices"),
+        set_sensor("fov", {"kind": "polygon", "vertices": "0,0 1,0 1,1"}),
+    ),
+    BadBody(
+        "a polygon vertex of three numbers",
+        "/sessions",
+        ("body", "sensors", 0, "fov", "polygon", "vertices", 2),
+        set_sensor("fov", {"kind": "polygon", "vertices": [[0, 0], [1, 0], [1, 1, 1]]}),
+    ),
+    BadBody(
+        "a polygon vertex as text",
+        "/sessions",
+        ("body", "sensors", 0, "fov", "polygon", "vertices", 1, 0),
+        set_sensor("fov", {"kind": "polygon", "vertices": [[0, 0], ["1", 0], [1, 1]]}),
+    ),
+    BadBody(
         "duplicate sensor ids", "/sessions", ("body", "sensors", 1, "id"), add_duplicate_sensor
     ),
     BadBody(
@@ -430,6 +448,7 @@ def test_bad_body_is_422_problem_naming_the_field(real_app: RealApp, row: BadBod
     )
     assert all(error["pointer"].startswith("#") and error["detail"] for error in problem["errors"])
     assert not any(error["detail"].startswith("Value error") for error in problem["errors"])
+    assert not any("tuple" in error["detail"].lower() for error in problem["errors"])  # wire words
     assert "invalid field" in problem["detail"]
     after = real_app.client.get(f"/v1/sessions/{real_app.sid}", headers=real_app.headers).json()
     assert after["seq"] == before["seq"] and after["counts"] == before["counts"]
