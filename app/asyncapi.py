@@ -66,13 +66,17 @@ message: not JSON, nested too deep, duplicate keys, invalid UTF-8 in a binary
 frame, a message larger than `CREDAL_MAX_BODY_BYTES`, more than
 `CREDAL_WS_MESSAGES_PER_SECOND` messages in a second (an `error` with status
 429, the message not applied). The one exception: a message beyond 4 times
-`CREDAL_MAX_BODY_BYTES` is not read to its end; its `error` (422
-`limit-exceeded`, `limit` `max_body_bytes`, `ref` null) is the last message
-before the server closes the connection with 1009.
+`CREDAL_MAX_BODY_BYTES` is not parsed; its `error` (422 `limit-exceeded`,
+`limit` `max_body_bytes`, `ref` null) is the last message before the server
+closes the connection with 1009 (the rest of the message is read and
+discarded first, up to 8 MB or 2 s, so that the client receives both).
 
 Backpressure: the server keeps at most 16 answers per `stream` connection;
 when the client does not read them, the server stops reading its messages
 and TCP pushes back on the client. Nothing grows without bound.
+
+Messages are not compressed: the server declines `permessage-deflate`
+(compressing a 10 MB result would hold its event loop ~200 ms).
 
 A `detections` message runs the sensor's local tracker (the sensor needs a
 `measurement` model in the session config) and then the fusion step, like
