@@ -42,20 +42,23 @@ def event_json(entry: LogEntry) -> str:
     )
 
 
+EVENTS: dict[str, type[TracksEvent] | type[DetectionsEvent]] = {
+    "tracks": TracksEvent,
+    "detections": DetectionsEvent,
+}
+"""A logged input's ``type`` → the event it is read as."""
+
+
 def _event(entry: LogEntry) -> TracksEvent | DetectionsEvent:
     kind = entry.input["type"]
-    if kind == "tracks":
-        return TracksEvent(
-            type="tracks",
-            seq=entry.seq,
-            received_at=entry.received_at,
-            report=TrackReport.model_validate(entry.input["report"]),
-        )
-    if kind == "detections":
-        return DetectionsEvent(
-            type="detections",
-            seq=entry.seq,
-            received_at=entry.received_at,
-            report=DetectionReport.model_validate(entry.input["report"]),
-        )
-    raise ValueError(f"log entry {entry.seq}: unknown input type {kind!r}")
+    event = EVENTS.get(kind)
+    if event is None:
+        raise ValueError(f"log entry {entry.seq}: unknown input type {kind!r}")
+    return event.model_validate(
+        {
+            "type": kind,
+            "seq": entry.seq,
+            "received_at": entry.received_at,
+            "report": entry.input["report"],
+        }
+    )
