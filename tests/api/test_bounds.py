@@ -12,11 +12,12 @@ from __future__ import annotations
 import json
 import threading
 from collections.abc import Callable, Iterator
-from typing import Any
+from typing import Any, TypeVar
 
 import httpx
 import numpy as np
 import pytest
+from websockets.sync.client import connect
 
 from core.belief.summary import MAX_FUSED_FOCAL_SETS
 from tests.api.conftest import LiveServer, make_settings, serving
@@ -27,6 +28,7 @@ CLASSES = [f"c{index}" for index in range(20)]
 PAIRS = 400
 CLASS_PAIRS = 100
 MAX_BODY = 1024 * 1024
+T = TypeVar("T")
 STATE = {"dim": 4, "position": [0, 2], "velocity": [1, 3]}
 
 
@@ -69,7 +71,7 @@ def tracks(count: int, evidence: str, seed: int) -> list[dict[str, Any]]:
     return result
 
 
-def polled(url: str, work: Callable[[], httpx.Response]) -> tuple[httpx.Response, list[int]]:
+def polled(url: str, work: Callable[[], T]) -> tuple[T, list[int]]:
     """``work()``'s answer and the statuses of ``/healthz`` polled while it ran."""
     statuses: list[int] = []
     done = threading.Event()
@@ -185,3 +187,67 @@ def test_the_heaviest_session_config(server: LiveServer) -> None:
     too_many = dict(config, sensors=[{"id": f"s{i}"} for i in range(65)])
     refused = httpx.post(f"{server.url}/v1/sessions", json=too_many)
     assert refused.status_code == 422 and refused.json()["limit"] == "max_sensors"
+
+
+ORIGIN = {"lat": 43.6, "lon": 1.44, "alt": 150.0}
+
+
+def test_the_heaviest_lists_in_the_geodetic_frame_and_over_websockets(server: LiveServer) -> None:
+    """Geodetic answers and reads, GeoJSON, and a ``stream`` input with a geodetic
+    subscriber open: every one answered whole, ``/healthz`` answered meanwhile."""
+    config = {
+        "state": STATE,
+        "classes": CLASSES,
+        "origin": ORIGIN,
+        "sensors": [{"id": f"s{i}"} for i in range(3)],
+    }
+    created = httpx.post(f"{server.url}/v1/sessions", json=config).json()
+    sid, auth = created["id"], {"Authorization": f"Bearer {created['token']}"}
+    lists = [
+        {"sensor": f"s{i}", "time": 1.0, "tracks": tracks(TRACKS, "likelihoods", seed=10 + i)}
+        for i in range(3)
+    ]
+    with httpx.Client(base_url=server.url, headers=auth, timeout=120) as client:
+        assert client.post(f"/v1/sessions/{sid}/tracks", json=lists[0]).status_code == 200
+        answer, health = polled(
+            server.url,
+            lambda: client.post(
+                f"/v1/sessions/{sid}/tracks", params={"frame": "geodetic"}, json=lists[1]
+            ),
+        )
+        assert answer.status_code == 200 and set(health) == {200}
+        assert answer.json()["tracks"] and all("geodetic" in t for t in answer.json()["tracks"])
+        for params in ({"frame": "geodetic"}, {"format": "geojson"}):
+            read, health = polled(
+                server.url, lambda p=params: client.get(f"/v1/sessions/{sid}/tracks", params=p)
+            )
+            assert read.status_code == 200 and set(health) == {200}
+            assert len(read.content) <= 2 * len(answer.content)
+        features = client.get(f"/v1/sessions/{sid}/tracks", params={"format": "geojson"}).json()
+        assert len(features["features"]) == len(
+            client.get(f"/v1/sessions/{sid}/tracks").json()["tracks"]
+        )
+
+        ws = server.url.replace("http://", "ws://") + f"/v1/sessions/{sid}"
+        headers = [("Authorization", auth["Authorization"])]
+
+        def stream_with_a_subscriber() -> tuple[dict[str, Any], dict[str, Any]]:
+            with (
+                connect(f"{ws}/subscribe?frame=geodetic", additional_headers=headers) as sub,
+                connect(f"{ws}/stream", additional_headers=headers) as stream,
+            ):
+                assert json.loads(sub.recv(timeout=30))["type"] == "ack"
+                assert json.loads(stream.recv(timeout=30))["type"] == "ack"
+                stream.send(json.dumps({"type": "tracks", "ref": "heavy", **lists[2]}))
+                return json.loads(stream.recv(timeout=120)), json.loads(sub.recv(timeout=120))
+
+        (answered, published), health = polled(server.url, stream_with_a_subscriber)
+    assert set(health) == {200}
+    assert answered["type"] == published["type"] == "result" and answered["ref"] == "heavy"
+    mine, theirs = answered["result"], published["result"]
+    assert theirs["seq"] == mine["seq"] == 3
+    # the subscriber's copy is the same result with each track's geodetic position added
+    assert all("geodetic" in track for track in theirs["tracks"])
+    assert [{k: v for k, v in t.items() if k != "geodetic"} for t in theirs["tracks"]] == mine[
+        "tracks"
+    ]
