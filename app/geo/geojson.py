@@ -23,13 +23,15 @@ GEOJSON_MEDIA_TYPE = "application/geo+json"
 PlainTrack = dict[str, Any]
 
 
-def _columns(tracks: Sequence[PlainTrack], indices: tuple[int, ...]) -> np.ndarray:
-    """State components ``indices`` of every track as ENU columns (N, 3), zero-padded: a
+State = np.ndarray | Sequence[float]
+
+
+def _columns(states: Sequence[State], indices: tuple[int, ...]) -> np.ndarray:
+    """State components ``indices`` of every state as ENU columns (N, 3), zero-padded: a
     2-D session's tracks sit at the origin's height (z = 0) and move horizontally."""
-    columns = np.zeros((len(tracks), 3))
-    if tracks and indices:
-        states = np.array([track["state"] for track in tracks], dtype=np.float64)
-        columns[:, : len(indices)] = states[:, list(indices)]
+    columns = np.zeros((len(states), 3))
+    if len(states) and indices:
+        columns[:, : len(indices)] = np.asarray(states, dtype=np.float64)[:, list(indices)]
     return columns
 
 
@@ -41,40 +43,32 @@ class GeodeticOutput:
     frame: LocalFrame
     position: tuple[int, ...]
 
-    def points(self, states: Sequence[np.ndarray | Sequence[float]]) -> list[dict[str, float]]:
+    def points(self, states: Sequence[State]) -> list[dict[str, float]]:
         """``{lat, lon, alt}`` of each state's position, in one vectorised conversion."""
-        columns = np.zeros((len(states), 3))
-        if len(states) and self.position:
-            columns[:, : len(self.position)] = np.asarray(states, dtype=np.float64)[
-                :, list(self.position)
-            ]
         return [
             {"lat": lat, "lon": lon, "alt": alt}
-            for lat, lon, alt in self.frame.to_geodetic(columns).tolist()
+            for lat, lon, alt in self.frame.to_geodetic(_columns(states, self.position)).tolist()
         ]
 
 
-def with_geodetic(
-    tracks: Sequence[PlainTrack], frame: LocalFrame, position_indices: tuple[int, ...]
-) -> list[PlainTrack]:
+def with_geodetic(tracks: Sequence[PlainTrack], geodetic: GeodeticOutput) -> list[PlainTrack]:
     """The tracks with ``geodetic: {lat, lon, alt}`` added (``?frame=geodetic``)."""
-    points = GeodeticOutput(frame, position_indices).points([track["state"] for track in tracks])
+    points = geodetic.points([track["state"] for track in tracks])
     return [{**track, "geodetic": point} for track, point in zip(tracks, points, strict=True)]
 
 
 def feature_collection(
-    tracks: Sequence[PlainTrack],
-    frame: LocalFrame,
-    position_indices: tuple[int, ...],
-    velocity_indices: tuple[int, ...],
+    tracks: Sequence[PlainTrack], geodetic: GeodeticOutput, velocity_indices: tuple[int, ...]
 ) -> dict[str, Any]:
     """A FeatureCollection of the tracks' positions (module docstring)."""
-    geodetic = frame.to_geodetic(_columns(tracks, position_indices))
-    velocities = _columns(tracks, velocity_indices)
-    local = np.einsum("tij,tj->ti", frame.rotation_to(geodetic[:, 0], geodetic[:, 1]), velocities)
+    states = [track["state"] for track in tracks]
+    frame = geodetic.frame
+    positions = frame.to_geodetic(_columns(states, geodetic.position))
+    velocities = _columns(states, velocity_indices)
+    local = np.einsum("tij,tj->ti", frame.rotation_to(positions[:, 0], positions[:, 1]), velocities)
     features = []
     for track, (lat, lon, alt), velocity in zip(
-        tracks, geodetic.tolist(), local.tolist(), strict=True
+        tracks, positions.tolist(), local.tolist(), strict=True
     ):
         classification = track.get("classification") or {}
         features.append(

@@ -160,10 +160,10 @@ async def get_fused_track(
     if detail is None:
         raise TrackNotFound(session.id, tid)
     if geodetic is not None:
-        (track,) = with_geodetic([detail["track"]], geodetic.frame, geodetic.position)
+        (track,) = with_geodetic([detail["track"]], geodetic)
         detail = {
             **detail,
             "track": track,
-            "history": with_geodetic(detail["history"], geodetic.frame, geodetic.position),
+            "history": with_geodetic(detail["history"], geodetic),
         }
     return JSONTextResponse(wire_json(detail))

@@ -157,7 +157,7 @@ def geodetic_message(message: str, geodetic: GeodeticOutput) -> str:
     if document.get("type") != "result":
         return message
     result = document["result"]
-    result["tracks"] = with_geodetic(result["tracks"], geodetic.frame, geodetic.position)
+    result["tracks"] = with_geodetic(result["tracks"], geodetic)
     return itemwise(document)
 
 

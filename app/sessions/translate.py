@@ -625,7 +625,7 @@ def picture_geojson(
         }
         for view in views
     ]
-    return itemwise(feature_collection(tracks, geodetic.frame, geodetic.position, velocity))
+    return itemwise(feature_collection(tracks, geodetic, velocity))
 
 
 def _decision(assessment: ClassAssessment | None) -> PlainObject | None:

@@ -6,7 +6,7 @@ import numpy as np
 from numpy.testing import assert_allclose
 
 from app.geo.geodesy import LocalFrame
-from app.geo.geojson import feature_collection, with_geodetic
+from app.geo.geojson import GeodeticOutput, feature_collection, with_geodetic
 from tests.api.proj_oracle import proj_enu
 
 ORIGIN = (52.0, 4.4, 12.0)
@@ -27,7 +27,7 @@ def test_feature_collection_positions_and_velocities() -> None:
         track("F1", [20_000.0, 100.0, -35_000.0, 0.0, 9_000.0, 0.0]),
         track("F2", [0.0, 0.0, 0.0, 50.0, 0.0, -2.0]),
     ]
-    collection = feature_collection(tracks, frame, (0, 2, 4), (1, 3, 5))
+    collection = feature_collection(tracks, GeodeticOutput(frame, (0, 2, 4)), (1, 3, 5))
     assert collection["type"] == "FeatureCollection"
     features = collection["features"]
     assert [feature["id"] for feature in features] == ["F1", "F2"]
@@ -50,7 +50,7 @@ def test_feature_collection_positions_and_velocities() -> None:
 
 def test_geodetic_field_added_to_two_dimensional_tracks() -> None:
     frame = LocalFrame(*ORIGIN)
-    out = with_geodetic([track("F1", [1000.0, 0.0, 2000.0, 0.0])], frame, (0, 2))
+    out = with_geodetic([track("F1", [1000.0, 0.0, 2000.0, 0.0])], GeodeticOutput(frame, (0, 2)))
     lat, lon, alt = proj_enu(ORIGIN).transform(1000.0, 2000.0, 0.0, direction="INVERSE")
     assert_allclose(
         [out[0]["geodetic"]["lat"], out[0]["geodetic"]["lon"], out[0]["geodetic"]["alt"]],
