@@ -549,8 +549,10 @@ class SessionRegistry:
         geodetic: GeodeticOutput | None,
     ) -> str:
         """:meth:`_submit` once the session's lock is held."""
-        if geodetic is None and session.hub.wants_geodetic():
-            written = session_geodetic(session.config)  # for the subscribers
+        if geodetic is None and not self.shared and session.hub.wants_geodetic():
+            # for this instance's subscribers (with a shared store they are fed through Redis,
+            # the session-frame text only)
+            written = session_geodetic(session.config)
         else:
             written = geodetic
         apply = functools.partial(self._apply, session, report, explain=explain, geodetic=written)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Iterator
 from typing import Any
 
 import httpx
@@ -22,8 +23,9 @@ from websockets.sync.client import ClientConnection, connect
 
 from api_schemas.ws import server_message_adapter
 
-from .conftest import LiveServer
+from .conftest import LiveServer, make_settings, serving
 from .proj_oracle import proj_enu
+from .redis_support import REDIS_URL, redis_prefix
 
 ORIGIN = {"lat": 43.6, "lon": 1.44, "alt": 150.0}
 CONFIG = {
@@ -72,7 +74,23 @@ def _check_geodetic(tracks: list[dict[str, Any]]) -> None:
         assert math.isclose(geodetic["alt"], other[2], abs_tol=1e-3)
 
 
-def test_stream_and_subscribe_answer_in_geodetic(live_server: LiveServer) -> None:
+@pytest.fixture(params=["memory", "redis"])
+def store_server(request: pytest.FixtureRequest) -> Iterator[LiveServer]:
+    """A live server on the memory store (a geodetic subscriber's text is written beside the
+    step) and on Redis (subscribers are fed through Redis: the text is converted)."""
+    if request.param == "memory":
+        with serving(make_settings()) as server:
+            yield server
+        return
+    with (
+        redis_prefix("geodetic") as prefix,
+        serving(make_settings(store=REDIS_URL, redis_prefix=prefix)) as server,
+    ):
+        yield server
+
+
+def test_stream_and_subscribe_answer_in_geodetic(store_server: LiveServer) -> None:
+    live_server = store_server
     with httpx.Client(base_url=live_server.url, timeout=30) as client:
         sid, headers = _create(client, CONFIG)
     with (
