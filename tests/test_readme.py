@@ -99,6 +99,18 @@ def replayed(output: str) -> None:
     assert status == "204"
 
 
+def stalls(output: str) -> None:
+    """The loop's lag is sampled every 5 ms: a server that has answered the blocks above
+    has many samples, and the collector's pauses are there by generation."""
+    samples = dict(line.rsplit(" ", 1) for line in output.splitlines())
+    assert float(samples["credal_event_loop_lag_seconds_count"]) > 10
+    assert 'credal_event_loop_lag_seconds_bucket{le="0.05"}' in samples
+    generations = {key for key in samples if key.startswith("credal_gc_pause_seconds_count")}
+    assert generations == {
+        f'credal_gc_pause_seconds_count{{generation="{n}"}}' for n in range(3)
+    }, generations
+
+
 def geodetic(output: str) -> None:
     """The track is where the WGS84 geodesic from the radar puts it (PROJ's Geod), to 30 m:
     12.5 km at azimuth 45° (the session's north and the radar's differ by 0.03°: 6 m)."""
@@ -121,6 +133,7 @@ CHECKS: dict[str, Callable[[str], None]] = {
     "websockets.sync.client": streamed,
     "simulate t2t-four --server": simulated,
     "credal-fusion export": replayed,
+    "/metrics": stalls,
     "format=geojson": geodetic,
 }
 """Each runnable block, by a piece of its text, and what its output must show."""
