@@ -15,7 +15,7 @@ lowest index); otherwise it chooses ``*``. An item in total conflict chooses ``*
 
 Options
 -------
-alpha, gate_probability, evidence : as for ``mercier``
+alpha, gate_probability, evidence, scale : as for ``mercier``
 score : {"belief", "betp"}
     **Reading**: [DH] decides "by the maximum belief" on the matrix of
     combined masses of eq 19 — for the singletons Y_j and * the mass is the

@@ -18,6 +18,8 @@ alpha : float in (0, 1], default 0.9
 gate_probability : float in (0, 1], default 0.999 (the frame; see the Reading
     in :mod:`core.association.pairwise_evidence`)
 evidence : "fuzzy" (default, Reading of [DH] eq 23–27) | "likelihood"
+scale : "gate" (default: s = exp(−γ D), γ = ln 2 / gate, [T2T] eq 11) | "fixed" (s = exp(−D/2));
+    see :mod:`core.association.pairwise_evidence`
 """
 
 from __future__ import annotations

@@ -3,13 +3,29 @@
 For an item i and a candidate partner j, a mass function on {Y_j, ¬Y_j}
 ("i comes from j" or not): ``a`` on Y_j, ``b`` on ¬Y_j, ``c = 1 − a − b`` on Θ.
 
-Evidence models (option ``evidence``; ``f`` is pluggable as the spec asks):
+Evidence models (option ``evidence``; ``f`` is pluggable):
 
-- ``"fuzzy"`` (default) — **Reading of [DH] eq 23–27** (garbled in the seed):
-  from the fuzzy similarity ``s = exp(−D/2)``, ``a = α max(0, 2s − 1)``,
+- ``"fuzzy"`` (default) — **Reading of [DH] eq 23–27** (garbled in the text):
+  from the fuzzy similarity ``s``, ``a = α max(0, 2s − 1)``,
   ``b = α max(0, 1 − 2s)``.
-- ``"likelihood"`` — the generic form of §3.4 with f = s:
+- ``"likelihood"`` — the generic form of docs/algorithms.md §3.4 with f = s:
   ``a = α s``, ``b = α (1 − s)``, ``c = 1 − α``.
+
+The similarity's scale (option ``scale``) — **Reading:** [T2T] §1 says
+Mercier's method "models information in the same way as" Denœux's, whose
+weight is ``exp(−γ D)`` with γ tied to the non-association distance λ by
+``exp(−γλ) = 1 − exp(−γλ)``, i.e. ``γ = ln 2 / λ`` ([T2T] eq 11):
+
+- ``"gate"`` (default): ``s = exp(−γ D)`` with ``γ = ln 2 / T`` and T the
+  method's own gate (``gate_probability``, docs/algorithms.md §3.1). Then
+  ``s > 1/2`` exactly when D < T: the fuzzy evidence supports a pair inside
+  the gate and refutes it outside, as GNN's threshold and Denœux's γ do.
+- ``"fixed"``: ``s = exp(−D/2)`` whatever the gate (the reading used before;
+  the fuzzy evidence then supports a pair only when D < 2 ln 2 ≈ 1.39, which
+  rejects about half of the true pairs of a 2-D measurement).
+
+The models below take the distance already put on the ``s = exp(−D/2)``
+scale: ``"gate"`` passes ``2γ D``.
 
 Class information (§3.6) is a second source on the same pair with mass K on
 ¬Y_j and 1 − K on Θ; Dempster's rule gives
@@ -26,6 +42,7 @@ problems sparse. ``gate_probability = 1`` puts every item in every frame.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -38,13 +55,17 @@ from core.association.rows import RaggedRows
 from core.belief import pairwise_evidence_betp_rows
 from core.belief.gbt import leave_one_out_sums
 from core.distance import CandidatePairs, threshold_from_probability
+from core.errors import OptionError
 
 Evidence = tuple[FloatArray, FloatArray, FloatArray]
 EvidenceModel = Callable[[FloatArray, float], Evidence]
 
 
 def fuzzy_evidence(distance: FloatArray, alpha: float) -> Evidence:
-    """[DH] eq 23–27 as read in docs/algorithms.md §3.4: s = e^{−D/2}, a = α(2s−1)⁺, b = α(1−2s)⁺."""
+    """[DH] eq 23–27 as read in docs/algorithms.md §3.4: s = e^{−D/2}, a = α(2s−1)⁺, b = α(1−2s)⁺.
+
+    ``distance`` is on the e^{−D/2} scale (the ``scale`` option rescales D first).
+    """
     similarity = np.exp(-0.5 * distance)
     support = alpha * np.maximum(0.0, 2.0 * similarity - 1.0)
     refute = alpha * np.maximum(0.0, 1.0 - 2.0 * similarity)
@@ -161,7 +182,10 @@ def score_rows(
 
 DEFAULT_ALPHA = 0.9
 DEFAULT_GATE_PROBABILITY = 0.999
-EVIDENCE_OPTIONS = ("alpha", "gate_probability", "evidence")
+SCALES = ("gate", "fixed")
+"""The similarity's scale (module docstring): γ = ln 2 / gate, or the fixed e^{−D/2}."""
+DEFAULT_SCALE = "gate"
+EVIDENCE_OPTIONS = ("alpha", "gate_probability", "evidence", "scale")
 
 
 @dataclass(frozen=True)
@@ -176,11 +200,14 @@ class EvidenceOptions:
         The frame of each item holds the candidates with D ≤ chi2.ppf(p, q)
         (doubled for ``mean``); 1 keeps every pair. Default 0.999.
     evidence : {"fuzzy", "likelihood"} or an EvidenceModel callable
+    scale : {"gate", "fixed"}
+        s = exp(−γ D) with γ = ln 2 / gate (default), or exp(−D/2) (module docstring).
     """
 
     alpha: float = DEFAULT_ALPHA
     gate_probability: float = DEFAULT_GATE_PROBABILITY
     evidence: str | EvidenceModel = "fuzzy"
+    scale: str = DEFAULT_SCALE
 
     @classmethod
     def parse(cls, method: str, options: Options) -> EvidenceOptions:
@@ -192,7 +219,13 @@ class EvidenceOptions:
         evidence = options.get("evidence", "fuzzy")
         if not callable(evidence):
             evidence = choice(method, options, "evidence", "fuzzy", tuple(EVIDENCE_MODELS))
-        return cls(alpha, probability, evidence)
+        scale = choice(method, options, "scale", DEFAULT_SCALE, SCALES)
+        if scale == "gate" and probability >= 1.0:
+            raise OptionError(
+                f"{method}: option 'scale' 'gate' takes γ = ln 2 / gate from 'gate_probability', "
+                "which must then be below 1 (or use 'scale' 'fixed')"
+            )
+        return cls(alpha, probability, evidence, scale)
 
     def gate(self, problem: AssociationProblem) -> float:
         """The frame's distance gate (inf for gate_probability = 1)."""
@@ -202,10 +235,16 @@ class EvidenceOptions:
             self.gate_probability, problem.dimension, problem.distance
         )
 
+    def similarity_factor(self, problem: AssociationProblem) -> float:
+        """The factor that puts D on the models' e^{−D/2} scale: 2γ = 2 ln 2 / gate, or 1."""
+        if self.scale == "fixed":
+            return 1.0
+        return 2.0 * math.log(2.0) / self.gate(problem)  # [T2T] eq 11 with λ = the gate
+
     def pair_evidence(self, problem: AssociationProblem, pairs: CandidatePairs) -> Evidence:
         """(a, b, c) of every pair, with the class source combined in when present."""
         model = self.evidence if callable(self.evidence) else EVIDENCE_MODELS[self.evidence]
-        evidence = model(pairs.distance, self.alpha)
+        evidence = model(pairs.distance * self.similarity_factor(problem), self.alpha)
         class_plausibility = problem.class_plausibility(pairs)
         if class_plausibility is not None:
             evidence = with_class_evidence(evidence, class_plausibility)

@@ -84,15 +84,16 @@ def pairwise_mass(frame_elements, partner, a, b, c) -> dict:
     return {frozenset([partner]): a, theta - {partner}: b, theta: c}
 
 
-def fuzzy(d: float, alpha: float) -> tuple[float, float, float]:
-    s = math.exp(-d / 2)
+def fuzzy(d: float, alpha: float, gamma: float = 0.5) -> tuple[float, float, float]:
+    """[DH]'s fuzzy reading with s = exp(−γ d) (γ = 1/2: the fixed scale; ln 2 / gate: the gate's)."""
+    s = math.exp(-gamma * d)
     a = alpha * max(0.0, 2 * s - 1)
     b = alpha * max(0.0, 1 - 2 * s)
     return a, b, 1 - a - b
 
 
-def likelihood(d: float, alpha: float) -> tuple[float, float, float]:
-    s = math.exp(-d / 2)
+def likelihood(d: float, alpha: float, gamma: float = 0.5) -> tuple[float, float, float]:
+    s = math.exp(-gamma * d)
     return alpha * s, alpha * (1 - s), 1 - alpha
 
 

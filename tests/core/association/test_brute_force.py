@@ -138,8 +138,11 @@ def test_hachour_brute_force(seed, likelihood, maximise):
     assert decided(default) == best
 
 
-def pairwise_scores(d, alpha, gate, score, direction="incoming", evidence=fuzzy):
-    """Per item: scores of its frame members (within the gate) and of *, by enumeration."""
+def pairwise_scores(d, alpha, gate, score, direction="incoming", evidence=fuzzy, gamma=0.5):
+    """Per item: scores of its frame members (within the gate) and of *, by enumeration.
+
+    The similarity is exp(−γ D): γ = 1/2 for the ``fixed`` scale, ln 2 / gate for ``gate``.
+    """
     matrix = d if direction == "incoming" else d.T  # rows: the other side, cols: items
     n, m = matrix.shape
     values = np.zeros((n, m))
@@ -147,7 +150,7 @@ def pairwise_scores(d, alpha, gate, score, direction="incoming", evidence=fuzzy)
     for t in range(m):
         partners = [ell for ell in range(n) if matrix[ell, t] <= gate]
         mass = combined_pairwise(
-            partners, {ell: evidence(matrix[ell, t], alpha) for ell in partners}
+            partners, {ell: evidence(matrix[ell, t], alpha, gamma) for ell in partners}
         )
         elements = [*partners, STAR]
         if score == "betp":
@@ -167,13 +170,16 @@ def pairwise_scores(d, alpha, gate, score, direction="incoming", evidence=fuzzy)
     alpha=st.sampled_from([0.9, 0.5]),
     gate_probability=st.sampled_from([0.9, 1.0]),
     evidence=st.sampled_from(["fuzzy", "likelihood"]),
+    scale=st.sampled_from(["gate", "fixed"]),
 )
-def test_mercier_brute_force(seed, alpha, gate_probability, evidence):
+def test_mercier_brute_force(seed, alpha, gate_probability, evidence, scale):
+    assume(scale == "fixed" or gate_probability < 1)  # the gate scale needs a finite gate
     known, incoming = instance(seed)
     d, _ = reference_distances(known, incoming)
     gate = chi2.ppf(gate_probability, 2) if gate_probability < 1 else math.inf
+    gamma = math.log(2) / gate if scale == "gate" else 0.5
     model = {"fuzzy": fuzzy, "likelihood": likelihood}[evidence]
-    scores, star = pairwise_scores(d, alpha, gate, "betp", "incoming", model)
+    scores, star = pairwise_scores(d, alpha, gate, "betp", "incoming", model, gamma)
     n, m = d.shape
 
     def objective(mt):
@@ -186,7 +192,12 @@ def test_mercier_brute_force(seed, alpha, gate_probability, evidence):
         known,
         incoming,
         "mercier",
-        {"alpha": alpha, "gate_probability": gate_probability, "evidence": evidence},
+        {
+            "alpha": alpha,
+            "gate_probability": gate_probability,
+            "evidence": evidence,
+            "scale": scale,
+        },
     )
     assert decided(result) == best
     np.testing.assert_allclose(result.scores.dense(), scores, atol=1e-12)
@@ -198,14 +209,16 @@ def test_mercier_brute_force(seed, alpha, gate_probability, evidence):
     seed=st.integers(0, 2**32 - 1),
     score=st.sampled_from(["belief", "betp"]),
     evidence=st.sampled_from(["fuzzy", "likelihood"]),
+    scale=st.sampled_from(["gate", "fixed"]),
 )
-def test_dang_han_brute_force(seed, score, evidence):
+def test_dang_han_brute_force(seed, score, evidence, scale):
     known, incoming = instance(seed)
     d, _ = reference_distances(known, incoming)
     gate = chi2.ppf(0.999, 2)
+    gamma = math.log(2) / gate if scale == "gate" else 0.5
     model = {"fuzzy": fuzzy, "likelihood": likelihood}[evidence]
-    forward, forward_star = pairwise_scores(d, 0.9, gate, score, "incoming", model)
-    backward, backward_star = pairwise_scores(d, 0.9, gate, score, "known", model)
+    forward, forward_star = pairwise_scores(d, 0.9, gate, score, "incoming", model, gamma)
+    backward, backward_star = pairwise_scores(d, 0.9, gate, score, "known", model, gamma)
     n, m = d.shape
 
     def choose(values, star, t):
@@ -222,7 +235,9 @@ def test_dang_han_brute_force(seed, score, evidence):
     expected = {
         (ell, t) for ell, t in enumerate(known_choice) if t >= 0 and incoming_choice[t] == ell
     }
-    result = associate(known, incoming, "dang_han", {"score": score, "evidence": evidence})
+    result = associate(
+        known, incoming, "dang_han", {"score": score, "evidence": evidence, "scale": scale}
+    )
     assert decided(result) == expected
     np.testing.assert_allclose(result.scores.dense(), forward, atol=1e-12)
     np.testing.assert_allclose(result.scores.new, forward_star, atol=1e-12)

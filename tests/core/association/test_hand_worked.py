@@ -92,6 +92,7 @@ def test_hachour_density_implicit_gate():
 
 
 def test_mercier_betp():
+    # the fixed scale s = e^{-D/2} (the former reading); the gate scale: the next test
     # one incoming item at D = 1 from known 0 and D = 4 from known 1, α = 0.9:
     # known 0: s = e^{-0.5}: a₁ = 0.9(2s − 1) = 0.191755, b₁ = 0, c₁ = 0.808245
     # known 1: s = e^{-2}:   a₂ = 0, b₂ = 0.9(1 − 2s) = 0.656396, c₂ = 0.343604
@@ -99,11 +100,36 @@ def test_mercier_betp():
     # BetP(Y₁) = 0.191755 + 0.530529/2 + 0.277716/3 = 0.549592
     # BetP(Y₂) = 0.277716/3 = 0.092572; BetP(*) = 0.265265 + 0.092572 = 0.357836
     known, incoming = one_dimensional([0.0, 3.0], [1.0])
-    result = associate(known, incoming, "mercier")
+    result = associate(known, incoming, "mercier", {"scale": "fixed"})
     assert result.pairs == [(0, 0, pytest.approx(0.5495916346781186, rel=1e-12))]
     assert_allclose(result.scores.dense()[:, 0], [0.5495916346781186, 0.0925719181265031])
     assert_allclose(result.scores.new, [0.35783644719537844], rtol=1e-12)
     assert_array_equal(result.missed, [1])
+
+
+def test_pairwise_evidence_on_the_gate_scale():
+    # the default scale ([T2T] eq 11 with λ = the gate): s = exp(−γ D), γ = ln 2 / T,
+    # T = chi2.ppf(0.999, 1) = 10.827566 (1-D, ``sum``: D = Δ²).
+    # one known item at D = T/2: s = 2^(−1/2) = 0.707107;
+    # fuzzy, α = 0.9: a = 0.9 (2s − 1) = 0.9 (√2 − 1) = 0.372792, b = 0, c = 0.627208
+    # Mercier: m(Y) = a, m({Y, *}) = c → BetP(Y) = a + c/2 = 0.686396, BetP(*) = c/2 = 0.313604
+    # Dang–Han: Bel(Y) = m(Y) / (1 − m(∅)) = a (one source: no conflict)
+    gate = 10.827566170662733
+    known, incoming = one_dimensional([0.0], [math.sqrt(gate / 2)])
+    a = 0.9 * (math.sqrt(2.0) - 1.0)
+    result = associate(known, incoming, "mercier")
+    assert result.pairs == [(0, 0, pytest.approx(a + (1 - a) / 2, rel=1e-12))]
+    assert result.scores.new[0] == pytest.approx((1 - a) / 2, rel=1e-12)
+    dang_han = associate(known, incoming, "dang_han")
+    assert dang_han.pairs == [(0, 0, pytest.approx(a, rel=1e-12))]
+    # the fixed scale s = e^{−D/2} = e^{−T/4} = 0.0667 refutes the same pair:
+    # a = 0, b = 0.9 (1 − 2s) = 0.779916 → BetP(*) = b + c/2 > BetP(Y) = c/2, declared new
+    for method in ("mercier", "dang_han"):
+        fixed = associate(known, incoming, method, {"scale": "fixed"})
+        assert fixed.pairs == [] and list(fixed.new) == [0]
+    # and a pair just outside the gate (D = 1.0001 T) leaves the frame under either scale
+    outside = one_dimensional([0.0], [math.sqrt(1.0001 * gate)])
+    assert associate(*outside, "mercier").pairs == []
 
 
 def test_dang_han_mutual_check():
@@ -113,7 +139,7 @@ def test_dang_han_mutual_check():
     # (m(Y_j) = a_j Π_{k≠j}(1 − a_k) ∝ a_j/(1 − a_j): the largest a, i.e. the smallest D)
     # mutual: only (k1, t1). t0 chose k0 but k0 chose t1: ignored → t0 new, k0 missed.
     known, incoming = one_dimensional([0.0, -0.5], [0.5, -0.3])
-    result = associate(known, incoming, "dang_han")
+    result = associate(known, incoming, "dang_han", {"scale": "fixed"})
     assert result.assignment() == {1: 1}
     assert_array_equal(result.new, [0])
     assert_array_equal(result.missed, [0])

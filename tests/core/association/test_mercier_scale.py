@@ -21,10 +21,15 @@ from scipy.stats import chi2
 
 from core.association import associate
 
+GATE_GAMMA = np.log(2.0) / chi2.ppf(0.999, 2)
+"""The default scale: s = exp(−γ D), γ = ln 2 / the 0.999 gate of a 2-D ``sum`` distance."""
 
-def evidence(distance: np.ndarray, alpha: float, kind: str) -> tuple[np.ndarray, ...]:
-    """(a, b, c) of §3.4: fuzzy (a = α(2s−1)⁺, b = α(1−2s)⁺) or likelihood (a = α s)."""
-    s = np.exp(-0.5 * distance)
+
+def evidence(
+    distance: np.ndarray, alpha: float, kind: str, gamma: float = GATE_GAMMA
+) -> tuple[np.ndarray, ...]:
+    """(a, b, c) of §3.4 with s = exp(−γ D): fuzzy (a = α(2s−1)⁺, b = α(1−2s)⁺) or likelihood (a = α s)."""
+    s = np.exp(-gamma * distance)
     if kind == "fuzzy":
         a, b = alpha * np.maximum(0.0, 2 * s - 1), alpha * np.maximum(0.0, 1 - 2 * s)
     else:
@@ -64,7 +69,12 @@ def sum_distances(known, incoming) -> np.ndarray:
 
 @pytest.mark.parametrize(("n", "box"), [(6, 1.0), (25, 0.5), (40, 3.0)])
 @pytest.mark.parametrize(
-    "options", [{}, {"evidence": "likelihood", "gate_probability": 1.0, "alpha": 0.7}]
+    "options",
+    [
+        {},
+        {"scale": "fixed"},
+        {"evidence": "likelihood", "gate_probability": 1.0, "alpha": 0.7, "scale": "fixed"},
+    ],
 )
 def test_small_frames_equal_the_straightforward_formula(n, box, options) -> None:
     rng = np.random.default_rng(n)
@@ -73,7 +83,8 @@ def test_small_frames_equal_the_straightforward_formula(n, box, options) -> None
     d = sum_distances(known, incoming)
     probability = options.get("gate_probability", 0.999)
     gate = np.inf if probability >= 1.0 else chi2.ppf(probability, 2)
-    a, b, c = evidence(d, options.get("alpha", 0.9), options.get("evidence", "fuzzy"))
+    gamma = 0.5 if options.get("scale") == "fixed" else np.log(2.0) / gate
+    a, b, c = evidence(d, options.get("alpha", 0.9), options.get("evidence", "fuzzy"), gamma)
     values = np.zeros(d.shape)
     star = np.ones(d.shape[1])
     for t in range(d.shape[1]):

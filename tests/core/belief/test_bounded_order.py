@@ -88,7 +88,7 @@ def sides(
         ("hachour", {"likelihood": "relative"}),
         ("hachour", {"likelihood": "relative", "plausibility_floor": 0.0}),
         ("mercier", {}),
-        ("mercier", {"evidence": "likelihood", "gate_probability": 1.0}),
+        ("mercier", {"evidence": "likelihood", "gate_probability": 1.0, "scale": "fixed"}),
         ("dang_han", {"score": "betp"}),
     ],
 )
