@@ -9,8 +9,13 @@ plausibility ([MTT] eq 22, credal) are the same number::
 
 Everything is computed in the log domain, vectorised over tracks.
 
-- μ_j are the IMM's **updated** mode probabilities of the step (docs/algorithms.md
-  §5: with the predicted ones, models that do not fit dilute Λ₁ at every step).
+- **Reading (``mode_probabilities``):** [MTT] §5.1.1 says "the *a posteriori*
+  probability μ_j"; §5.2 says only "the IMM models probabilities". Both are
+  defensible, and the caller chooses which μ it passes:
+  ``"updated"`` (default) — the IMM's posterior μ_j of the step, which
+  already holds that step's Λ_j (so eq 19 counts the step's likelihood
+  twice); ``"predicted"`` — the mixed prior c̄_j of the step, before its
+  measurement (eq 19 is then the behaviour's predictive likelihood).
 - **Reading:** when every model of a behaviour has μ_j = 0 exactly (log μ = −inf),
   eq 20 is 0/0; we then take μ' uniform over the behaviour.
 - **Reading (``likelihood_scale``):** Λ_j are densities, so Pl({b}) can exceed
@@ -33,6 +38,9 @@ from core.numerics import logsumexp
 
 LikelihoodScale = Literal["max", "clip"]
 LIKELIHOOD_SCALES: tuple[LikelihoodScale, ...] = ("max", "clip")
+ModeProbabilities = Literal["updated", "predicted"]
+MODE_PROBABILITY_READINGS: tuple[ModeProbabilities, ...] = ("updated", "predicted")
+"""Which μ_j eq 19/22 weights with (module Reading): the step's posterior, or its prior."""
 
 
 @dataclass(frozen=True)

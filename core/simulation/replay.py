@@ -21,6 +21,7 @@ from core.classification import (
     CredalClassification,
     CredalClassifier,
 )
+from core.classification.behaviours import MODE_PROBABILITY_READINGS, ModeProbabilities
 from core.errors import ScenarioError
 from core.simulation.scenario import Scenario
 from core.tracking.imm import IMMPredictor, IMMUpdater
@@ -82,8 +83,15 @@ def replay_single_target(
     target_id: int,
     preset: TrackingPreset,
     credal_options: Mapping[str, Any] | None = None,
+    mode_probabilities: ModeProbabilities = "updated",
 ) -> SingleTargetReplay:
-    """Track and classify one target of ``scenario`` on its own detections."""
+    """Track and classify one target of ``scenario`` on its own detections.
+
+    ``mode_probabilities`` is the μ both classifiers weight the behaviours with
+    ([MTT] eq 19/22; the Reading in :mod:`core.classification.behaviours`).
+    """
+    if mode_probabilities not in MODE_PROBABILITY_READINGS:
+        raise ScenarioError(f"mode_probabilities must be one of {MODE_PROBABILITY_READINGS}")
     det_steps, measurements = scenario.detections(target_id)
     if len(det_steps) < 2:
         raise ScenarioError(f"target {target_id} has fewer than two detections")
@@ -110,17 +118,18 @@ def replay_single_target(
         z = by_step.get(int(k), np.zeros(2))[None, :]
         update = updater.update(prediction, z, np.array([hit]))
         state = update.state
-        credal_state = credal.update(
-            credal_state, update.log_mode_probabilities, update.log_likelihoods, update.detected
+        log_mu = (
+            prediction.log_mode_probabilities
+            if mode_probabilities == "predicted"
+            else update.log_mode_probabilities
         )
-        bayes_state = bayesian.update(
-            bayes_state, update.log_mode_probabilities, update.log_likelihoods, update.detected
-        )
+        credal_state = credal.update(credal_state, log_mu, update.log_likelihoods, update.detected)
+        bayes_state = bayesian.update(bayes_state, log_mu, update.log_likelihoods, update.detected)
         means.append(update.combined()[0][0])
         mus.append(update.mode_probabilities[0])
         plaus.append(
             preset.behaviours.plausibilities(
-                update.log_mode_probabilities,
+                log_mu,
                 update.log_likelihoods,
                 credal.likelihood_scale,
             )[0]

@@ -74,7 +74,12 @@ from typing import Literal
 
 import numpy as np
 
-from core.classification.behaviours import LIKELIHOOD_SCALES, LikelihoodScale
+from core.classification.behaviours import (
+    LIKELIHOOD_SCALES,
+    MODE_PROBABILITY_READINGS,
+    LikelihoodScale,
+    ModeProbabilities,
+)
 from core.classification.credal import ACCUMULATIONS, DISCOUNTS, Accumulation, Discount
 from core.errors import TrackingError
 from core.geometry import Coverage, FieldOfView, PolygonView
@@ -107,12 +112,16 @@ class ClassificationOptions:
     discount : "none" | "instantaneous" | "cumulative"
     reliability : λ, or None for the default of ``discount``
     accumulation : "classes" | "behaviours"
+    mode_probabilities : "updated" | "predicted"
+        Which μ_j weight the behaviour plausibilities ([MTT] eq 22; the
+        Reading in :mod:`core.classification.behaviours`).
     """
 
     likelihood_scale: LikelihoodScale = "max"
     discount: Discount = "none"
     reliability: float | None = None
     accumulation: Accumulation = "classes"
+    mode_probabilities: ModeProbabilities = "updated"
 
     def __post_init__(self) -> None:
         if self.likelihood_scale not in LIKELIHOOD_SCALES:
@@ -121,6 +130,8 @@ class ClassificationOptions:
             raise TrackingError(f"discount must be one of {DISCOUNTS}")
         if self.accumulation not in ACCUMULATIONS:
             raise TrackingError(f"accumulation must be one of {ACCUMULATIONS}")
+        if self.mode_probabilities not in MODE_PROBABILITY_READINGS:
+            raise TrackingError(f"mode_probabilities must be one of {MODE_PROBABILITY_READINGS}")
         if self.reliability is not None and not (0.0 <= self.reliability <= 1.0):
             raise TrackingError(f"reliability must be in [0, 1], got {self.reliability!r}")
 

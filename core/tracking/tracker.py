@@ -394,9 +394,15 @@ class LocalTracker:
         self._state = _replaced(prediction.as_state(), candidates, update.state)
         if self.classifier is not None and self._classes is not None and len(candidates):
             every = len(candidates) == len(self._rows)
+            chosen = self.config.classification
+            log_mu = (  # [MTT] eq 19/22: posterior or prior μ (core.classification.behaviours)
+                prediction.log_mode_probabilities[candidates]
+                if chosen is not None and chosen.mode_probabilities == "predicted"
+                else update.log_mode_probabilities
+            )
             classified = self.classifier.update(
                 self._classes if every else self._classes.select(candidates),
-                update.log_mode_probabilities,
+                log_mu,
                 update.log_likelihoods,
                 update.detected,
             )
