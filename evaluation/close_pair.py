@@ -2,8 +2,9 @@
 
 Two aircraft fly in parallel ``separation`` metres apart
 (:func:`~core.simulation.nearby.close_pair_scenario`), one sensor with
-P_D = 1, and the measurement noise standard deviation goes from 0 to 200 %
-of the separation. Each run is tracked by the :class:`LocalTracker` with
+P_D = 1, and the measurement noise goes from 0 to 200 % of the separation:
+as a variance in m² (``noise_reading="variance"``, the text's "noise
+variance", first) or as a standard deviation (``"std"``, the other reading). Each run is tracked by the :class:`LocalTracker` with
 the 13-model aircraft IMM, GNN association and R equal to the simulated
 noise (floored at 1 µm² so that R stays positive definite at 0 %). A
 target's track is the one most of its detections went to; every detection
@@ -34,6 +35,7 @@ from scipy.stats import norm
 
 from core.arrays import FloatArray
 from core.simulation import close_pair_scenario
+from core.simulation.nearby import NoiseReading, close_pair_variance
 from core.tracking.config import IMM_DISTANCES, LocalTrackerConfig
 from evaluation.tracking import track_scenario
 
@@ -48,7 +50,9 @@ class ClosePairStudy:
     Attributes
     ----------
     noise_ratios : ndarray, shape (p,)
-        Measurement noise σ (per axis) as a fraction of the separation.
+        Measurement noise (per axis) as a fraction of the separation: the
+        variance in m² or σ in m, as ``noise_reading`` says.
+    noise_reading : "variance" | "std"
     separation : float
         Distance between the two targets (m).
     seeds : tuple of int
@@ -60,6 +64,7 @@ class ClosePairStudy:
 
     noise_ratios: FloatArray
     separation: float
+    noise_reading: NoiseReading
     seeds: tuple[int, ...]
     n_steps: int
     rates: Mapping[str, FloatArray]
@@ -69,6 +74,17 @@ class ClosePairStudy:
         return np.asarray(self.rates[imm_distance].mean(axis=1), dtype=np.float64)
 
     @property
+    def sigma(self) -> FloatArray:
+        """σ per axis (m) at each noise level."""
+        return np.sqrt(
+            [close_pair_variance(r, self.separation, self.noise_reading) for r in self.noise_ratios]
+        )
+
+    def decisions(self) -> int:
+        """Detections judged per run (both targets, from the third scan)."""
+        return 2 * (self.n_steps - 2)
+
+    @property
     def swap_floor(self) -> FloatArray:
         """Per-scan chance that two detections cross the mid-line: Φ̄(d / √(2σ²)).
 
@@ -76,7 +92,7 @@ class ClosePairStudy:
         the truth, GNN swaps the pair when the noise difference along the
         separation exceeds d.
         """
-        sigma = self.noise_ratios * self.separation
+        sigma = self.sigma
         with np.errstate(divide="ignore"):
             z = np.where(sigma > 0.0, self.separation / (math.sqrt(2.0) * sigma), np.inf)
         return np.asarray(norm.sf(z), dtype=np.float64)
@@ -89,10 +105,15 @@ def close_pair_rate(
     *,
     separation: float = 10.0,
     n_steps: int = 60,
+    noise_reading: NoiseReading = "variance",
 ) -> float:
     """One run's false assignment rate (module docstring)."""
     scenario = close_pair_scenario(
-        seed=seed, noise_ratio=noise_ratio, separation=separation, n_steps=n_steps
+        seed=seed,
+        noise_ratio=noise_ratio,
+        separation=separation,
+        n_steps=n_steps,
+        noise_reading=noise_reading,
     )
     variance = max(float(scenario.measurement_noise[0, 0]), NOISE_FLOOR)
     config = LocalTrackerConfig(
@@ -117,6 +138,7 @@ def close_pair_study(
     n_steps: int = 60,
     imm_distances: Sequence[str] = IMM_DISTANCES,
     runs: Mapping[str, int] | None = None,
+    noise_reading: NoiseReading = "variance",
 ) -> ClosePairStudy:
     """[MTT] Fig 16: the false assignment rate of every run at every noise level.
 
@@ -130,7 +152,12 @@ def close_pair_study(
             [
                 [
                     close_pair_rate(
-                        seed, float(ratio), kind, separation=separation, n_steps=n_steps
+                        seed,
+                        float(ratio),
+                        kind,
+                        separation=separation,
+                        n_steps=n_steps,
+                        noise_reading=noise_reading,
                     )
                     for seed in chosen[kind]
                 ]
@@ -142,6 +169,7 @@ def close_pair_study(
     return ClosePairStudy(
         noise_ratios=ratios,
         separation=separation,
+        noise_reading=noise_reading,
         seeds=tuple(seeds),
         n_steps=n_steps,
         rates=rates,

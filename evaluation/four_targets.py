@@ -35,6 +35,12 @@ HACHOUR_VARIANTS: dict[str, tuple[dict[str, object], float]] = {
     "density, km": ({"likelihood": "density"}, 1e-3),
 }
 """Label → (hachour options, length scale applied to the scene)."""
+MERCIER_VARIANTS: dict[str, dict[str, object]] = {
+    "gate scale": {},
+    "fixed scale": {"scale": "fixed"},
+}
+"""Label → mercier options: the two readings of its evidence scale
+(:mod:`core.association.pairwise_evidence`; gate 0.999 on the ``mean`` distance)."""
 
 DEFAULT_THRESHOLDS = np.geomspace(0.5, 500.0, 31)
 
@@ -56,9 +62,11 @@ class ThresholdSweep:
         :func:`~evaluation.pairing.decision_outcome`).
     hachour : dict of str to ndarray, shape (len(seeds),)
         Rate per realisation for each variant of :data:`HACHOUR_VARIANTS`.
+    mercier : dict of str to ndarray, shape (len(seeds),)
+        Rate per realisation for each reading of :data:`MERCIER_VARIANTS`.
     ties : dict of str to ndarray
-        Tie rate, shaped as the rates: keys ``"gnn"``, ``"denoeux"`` and the
-        hachour variants.
+        Tie rate, shaped as the rates: keys ``"gnn"``, ``"denoeux"``, the
+        hachour variants and ``"mercier " + label``.
     decisions : ndarray of int, shape (len(seeds),)
         Decisions per realisation (for the intervals, :mod:`evaluation.intervals`).
     position_sigma, separation : float
@@ -71,16 +79,31 @@ class ThresholdSweep:
     gnn: FloatArray
     denoeux: FloatArray
     hachour: dict[str, FloatArray]
+    mercier: dict[str, FloatArray]
     ties: dict[str, FloatArray]
     decisions: IntArray
     position_sigma: float
     separation: float
 
+    def swept(self, method: str) -> FloatArray:
+        """The (runs, k) rates of ``gnn`` or ``denoeux``."""
+        return self.gnn if method == "gnn" else self.denoeux
+
     def best(self, method: str) -> tuple[float, float]:
-        """(λ, mean rate) at the λ with the lowest mean rate of ``gnn`` or ``denoeux``."""
-        rates = (self.gnn if method == "gnn" else self.denoeux).mean(axis=0)
+        """(λ, mean rate) at the λ with the lowest mean rate of ``gnn`` or ``denoeux``.
+
+        Chosen on these runs: an *oracle* optimum. A rate to report is taken
+        at the λ another set of runs chose (:meth:`at_tuned`).
+        """
+        rates = self.swept(method).mean(axis=0)
         index = int(np.argmin(rates))
         return float(self.thresholds[index]), float(rates[index])
+
+    def at_tuned(self, method: str, tuning: ThresholdSweep) -> tuple[float, FloatArray]:
+        """(λ chosen on ``tuning``'s runs, these runs' rates at that λ): tuned apart from the report."""
+        threshold, _ = tuning.best(method)
+        index = int(np.argmin(np.abs(self.thresholds - threshold)))
+        return float(self.thresholds[index]), self.swept(method)[:, index]
 
 
 def threshold_sweep(
@@ -111,8 +134,10 @@ def threshold_sweep(
     gnn = np.empty((len(seeds), len(lambdas)))
     denoeux = np.empty_like(gnn)
     hachour = {label: np.empty(len(seeds)) for label in HACHOUR_VARIANTS}
+    mercier = {label: np.empty(len(seeds)) for label in MERCIER_VARIANTS}
     ties: dict[str, FloatArray] = {"gnn": np.empty_like(gnn), "denoeux": np.empty_like(gnn)}
     ties.update({label: np.empty(len(seeds)) for label in HACHOUR_VARIANTS})
+    ties.update({f"mercier {label}": np.empty(len(seeds)) for label in MERCIER_VARIANTS})
     decisions = np.empty(len(seeds), dtype=np.int64)
     for row, seed in enumerate(seeds):
         scenario = t2t_four(
@@ -132,6 +157,9 @@ def threshold_sweep(
             outcome = decision_outcome(scaled, "hachour", variant, seed=seed, order=order)
             hachour[label][row], ties[label][row] = outcome.rate, outcome.tie_rate
             decisions[row] = outcome.decisions
+        for label, options in MERCIER_VARIANTS.items():
+            outcome = decision_outcome(pairs, "mercier", options, seed=seed, order=order)
+            mercier[label][row], ties[f"mercier {label}"][row] = outcome.rate, outcome.tie_rate
     return ThresholdSweep(
         seeds=tuple(seeds),
         thresholds=lambdas,
@@ -139,6 +167,7 @@ def threshold_sweep(
         gnn=gnn,
         denoeux=denoeux,
         hachour=hachour,
+        mercier=mercier,
         ties=ties,
         decisions=decisions,
         position_sigma=position_sigma,

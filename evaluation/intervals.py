@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -196,22 +196,38 @@ class PairedDifference:
 
     difference: Interval
     p_value: float
+    spread: float = math.nan
+    """Standard deviation of the per-run differences."""
+    runs: int = 0
 
     def __str__(self) -> str:
         return f"{self.difference} (paired t, p = {self.p_value:.2g})"
 
 
-def paired_difference(first: ArrayLike, second: ArrayLike) -> PairedDifference:
-    """Mean paired difference of two per-run series, its t interval and the paired t test."""
+def paired_difference(
+    first: ArrayLike, second: ArrayLike, bounds: tuple[float, float] | None = None
+) -> PairedDifference:
+    """Mean paired difference of two per-run series, its t interval and the paired t test.
+
+    ``bounds``: the range the difference can take (``(−1, 1)`` for two rates);
+    the interval is clipped to it.
+    """
     differences = (
         np.asarray(first, dtype=np.float64).ravel() - np.asarray(second, dtype=np.float64).ravel()
     )
     interval = mean_interval(differences)
+    if bounds is not None:
+        interval = Interval(
+            interval.estimate,
+            max(bounds[0], interval.low),
+            min(bounds[1], interval.high),
+        )
     if differences.size < 2 or float(differences.std(ddof=1)) == 0.0:
         p_value = 1.0 if float(np.abs(differences).max(initial=0.0)) == 0.0 else 0.0
     else:
         p_value = float(stats.ttest_1samp(differences, 0.0).pvalue)
-    return PairedDifference(interval, p_value)
+    spread = float(differences.std(ddof=1)) if differences.size > 1 else math.nan
+    return PairedDifference(interval, p_value, spread, int(differences.size))
 
 
 BOOTSTRAP_RESAMPLES = 1000
@@ -253,3 +269,26 @@ def bootstrap_interval(
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN cells stay NaN
         low, high = np.nanpercentile(values, [tail, 100 - tail], axis=0)
     return estimate, np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64)
+
+
+def corrected(tests: Mapping[str, PairedDifference], family: str) -> str:
+    """The figure's tests, each with its Holm-adjusted p (a family-wise 5 % level).
+
+    One line per test: ``name: difference [interval] (p raw, p Holm over m tests)``
+    and whether it survives; the header names the family and its size.
+    """
+    names = list(tests)
+    adjusted = holm([tests[name].p_value for name in names])
+    lines = [f"{family}: Holm over {len(names)} paired tests (family-wise 5 %)"]
+    for name, p_holm in zip(names, adjusted, strict=True):
+        test = tests[name]
+        verdict = "significant" if p_holm <= 1 - LEVEL else "not significant"
+        power = ""
+        if p_holm > 1 - LEVEL and test.difference.estimate != 0.0 and test.spread > 0.0:
+            needed = runs_for_power(test.difference.estimate, test.spread, tests=len(names))
+            power = f"; 80 % power at this difference and spread needs {needed} runs"
+        lines.append(
+            f"  {name}: {test.difference} (paired t, p = {test.p_value:.2g}; "
+            f"Holm p = {p_holm:.2g}, {verdict}{power})"
+        )
+    return "\n".join(lines)

@@ -5,10 +5,13 @@ sensor with P_D = 1.
 
 ``close-pair``
     Two targets flying in parallel ``separation`` metres apart (along y) at
-    the same velocity. The measurement noise standard deviation is
-    ``noise_ratio × separation`` ([MTT] §6.2.1 varies the noise "from 0 % to
-    200 % of the distance between the two targets"; **Reading:** the
-    percentage applies to the standard deviation, per axis). No process noise
+    the same velocity. [MTT] §6.2.1 varies the "noise variance" "from 0 % to
+    200 % of the distance between the two targets". **Reading**
+    (``noise_reading``): ``"variance"`` (default, the text's letter) — the
+    variance per axis is ``noise_ratio × separation`` in m² (a distance read
+    as a number of m²: σ = √(r d)); ``"std"`` — the standard deviation per
+    axis is ``noise_ratio × separation`` (the percentage of a distance
+    applied to a distance). No process noise
     in the truth by default (``noise_intensity``): two independent random
     walks would drift apart by metres and the pair would not stay close.
 ``crossing``
@@ -24,11 +27,24 @@ sensor with P_D = 1.
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
 
 from core.errors import ScenarioError
 from core.simulation.scenario import Manoeuvre, Scenario, TargetTruth, observe, propagate
 from core.tracking.presets import GRAVITY
+
+NoiseReading = Literal["variance", "std"]
+NOISE_READINGS: tuple[NoiseReading, ...] = ("variance", "std")
+"""[MTT] §6.2.1's "noise variance … % of the distance" (module docstring)."""
+
+
+def close_pair_variance(noise_ratio: float, separation: float, reading: NoiseReading) -> float:
+    """The measurement variance per axis (m²) of ``close-pair`` under ``reading``."""
+    if reading == "variance":
+        return noise_ratio * separation
+    return (noise_ratio * separation) ** 2
 
 
 def close_pair_scenario(
@@ -38,10 +54,13 @@ def close_pair_scenario(
     separation: float = 10.0,
     n_steps: int = 60,
     noise_intensity: float = 0.0,
+    noise_reading: NoiseReading = "variance",
 ) -> Scenario:
     """Build ``close-pair`` (see the module docstring)."""
     if not (np.isfinite(noise_ratio) and noise_ratio >= 0.0):
         raise ScenarioError(f"noise_ratio must be >= 0, got {noise_ratio!r}")
+    if noise_reading not in NOISE_READINGS:
+        raise ScenarioError(f"noise_reading must be one of {NOISE_READINGS}, got {noise_reading!r}")
     if not (np.isfinite(separation) and separation > 0.0):
         raise ScenarioError(f"separation must be positive, got {separation!r}")
     rng = np.random.default_rng(seed)
@@ -53,7 +72,7 @@ def close_pair_scenario(
         )
         for target_id, offset in ((1, 0.0), (2, separation))
     )
-    noise = (noise_ratio * separation) ** 2 * np.eye(2)
+    noise = close_pair_variance(noise_ratio, separation, noise_reading) * np.eye(2)
     scans = observe(truths, n_steps, 1.0, noise, rng, sensor="radar")
     return Scenario(
         name="close-pair",

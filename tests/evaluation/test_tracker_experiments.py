@@ -25,7 +25,9 @@ def test_close_pair_combined_is_low_and_closest_model_confuses_the_pair() -> Non
     # [MTT] Fig 16: low rate while σ is well below the separation ("combined"); the
     # closest-model distance confuses the pair at any noise (the other aircraft sits
     # where the ±2g model predicts).
-    study = close_pair_study(seeds=(0, 1, 2), noise_ratios=(0.0, 0.25, 1.5), n_steps=30)
+    study = close_pair_study(
+        seeds=(0, 1, 2), noise_ratios=(0.0, 0.25, 1.5), n_steps=30, noise_reading="std"
+    )
     assert study.rates["combined"].shape == (3, 3)
     combined, closest = study.mean("combined"), study.mean("closest_model")
     assert combined[0] == 0.0 and combined[1] < 0.05
@@ -135,6 +137,7 @@ def test_gated_combined_neither_confuses_the_close_pair_nor_loses_the_4g_turn() 
         noise_ratios=(0.1, 0.25),
         n_steps=30,
         imm_distances=("closest_model", "gated_combined"),
+        noise_reading="std",
     )
     assert np.all(pair.mean("gated_combined") < 0.02)
     assert np.all(pair.mean("closest_model") > 0.2)  # the same runs confuse the pair

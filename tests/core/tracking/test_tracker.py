@@ -428,7 +428,7 @@ def test_cheap_jpda_tracker_follows_the_aircraft() -> None:
 def _close_pair_rate(noise_ratio: float, imm_distance: str, runs: int = 20) -> float:
     false = total = 0
     for seed in range(runs):
-        scenario = close_pair_scenario(seed=seed, noise_ratio=noise_ratio)
+        scenario = close_pair_scenario(seed=seed, noise_ratio=noise_ratio, noise_reading="std")
         variance = float(scenario.measurement_noise[0, 0])
         config = LocalTrackerConfig(
             measurement_noise=((variance, 0.0), (0.0, variance)),
