@@ -8,6 +8,11 @@ Fig 13)
 (:func:`core.simulation.replay.replay_single_target`); the paper's Fig 12–13
 are "averages of 20 Monte Carlo simulations", and so are these curves.
 
+Both readings of μ_j in [MTT] eq 19/22 are run (``mode_probabilities``:
+the IMM's posterior ``"updated"``, or the step's prior ``"predicted"``; the
+Reading in :mod:`core.classification.behaviours`): Fig 12–13's claims turn on
+it.
+
 The paper's claim (Fig 14–15): the credal classifier shows total ignorance
 before the first manoeuvre, a doubt between bomber and fighter after it and
 fighter after the sharp one; the Bayesian classifier ends on fighter too but
@@ -23,6 +28,7 @@ import numpy as np
 
 from core.arrays import FloatArray, IntArray
 from core.classification.bayesian import class_given_behaviour
+from core.classification.behaviours import ModeProbabilities
 from core.metrics import time_to_decision
 from core.simulation import aircraft_scenario
 from core.simulation.replay import replay_single_target
@@ -55,6 +61,8 @@ class AircraftClassification:
         Scaled behaviour plausibilities (Fig 12); NaN once the target is gone.
     manoeuvres : tuple of (int, int, str)
         The manoeuvre windows of target 2 (first step, last step, label).
+    mode_probabilities : "updated" | "predicted"
+        The μ reading the classifiers ran with.
     """
 
     seeds: tuple[int, ...]
@@ -65,6 +73,20 @@ class AircraftClassification:
     bayesian_behaviours: FloatArray
     behaviours: FloatArray
     manoeuvres: tuple[tuple[int, int, str], ...]
+    mode_probabilities: ModeProbabilities = "updated"
+
+    def b1_margin(self, first: int = 10, last: int = 49) -> FloatArray:
+        """Per run, mean over the steps of Pl(b1) − max(Pl(b2), Pl(b3)) (Fig 12: > 0 claimed)."""
+        rows = (self.steps >= first) & (self.steps <= last)
+        pl = self.behaviours[:, rows]
+        return np.asarray(np.mean(pl[:, :, 0] - pl[:, :, 1:].max(axis=2), axis=1), dtype=np.float64)
+
+    def b1_growth(self, first: int = 5, last: int = 49) -> FloatArray:
+        """Per run, P(b1 | Z) at ``last`` minus at ``first`` (Fig 13: b1 "tends to grow")."""
+        i, j = (int(np.flatnonzero(self.steps == k)[0]) for k in (first, last))
+        return np.asarray(
+            self.bayesian_behaviours[:, j, 0] - self.bayesian_behaviours[:, i, 0], dtype=np.float64
+        )
 
     def doubt_gap(self, kind: str) -> float:
         """Mean |P(bomber) − P(fighter)| over the doubt steps 55–69 (0: a perfect doubt)."""
@@ -101,10 +123,17 @@ class AircraftClassification:
         return float(np.nanmax(np.ptp(probabilities, axis=0)))
 
 
-def aircraft_classification(seeds: Sequence[int] = tuple(range(20))) -> AircraftClassification:
+def aircraft_classification(
+    seeds: Sequence[int] = tuple(range(20)), mode_probabilities: ModeProbabilities = "updated"
+) -> AircraftClassification:
     """Replay target 2 of the ``aircraft`` scenario once per seed ([MTT]: 20 runs)."""
     preset = aircraft()
-    replays = [replay_single_target(aircraft_scenario(seed=seed), TARGET, preset) for seed in seeds]
+    replays = [
+        replay_single_target(
+            aircraft_scenario(seed=seed), TARGET, preset, mode_probabilities=mode_probabilities
+        )
+        for seed in seeds
+    ]
     scenario = aircraft_scenario(seed=seeds[0])
     bayesian = np.stack([replay.bayesian for replay in replays])
     matrix = class_given_behaviour(preset.relation)  # (|C|, |B|)
@@ -124,4 +153,5 @@ def aircraft_classification(seeds: Sequence[int] = tuple(range(20))) -> Aircraft
             for m in scenario.manoeuvres
             if m.target_id == TARGET
         ),
+        mode_probabilities=mode_probabilities,
     )

@@ -28,6 +28,7 @@ from matplotlib.lines import Line2D
 from numpy.typing import ArrayLike
 
 from core.arrays import FloatArray
+from core.classification.behaviours import MODE_PROBABILITY_READINGS
 from core.distance.modified import scale_factor
 from core.errors import InvalidInput
 from core.simulation.scenario import TargetTruth
@@ -461,39 +462,50 @@ def _plot_classes(axes: Axes, comparison: ClassComparison) -> None:
 
 # ------------------------------------------------------------------ aircraft
 def draw_aircraft(reduced: bool, echo: Echo) -> Figure:
-    """[MTT] Fig 12, 14 and 15: target 2, behaviours, Bayesian and credal classes."""
+    """[MTT] Fig 12–15: target 2, behaviours, Bayesian and credal classes, under both μ readings."""
     seeds = _seeds(20, reduced)
-    echo(f"aircraft: seeds {list(seeds)} (target 2)")
-    result = aircraft_classification(seeds)
-    figure = Figure(figsize=(11, 9.5), layout="constrained")
-    top, behaviours, middle, bottom = figure.subplots(4, 1, sharex=True)
-    _plot_behaviours(top, result)
-    for axes, probabilities, labels, title in (
-        (
-            behaviours,
-            result.bayesian_behaviours,
-            BEHAVIOUR_LABELS,
-            "Fig 13: Bayesian behaviour probabilities P(b | Z) ([MTT]: b1 grows before 50)",
-        ),
-        (middle, result.bayesian, result.classes, "Fig 14: Bayesian class probabilities"),
-        (bottom, result.credal, result.classes, "Fig 15: credal BetP"),
-    ):
-        for index, label in enumerate(labels):
-            axes.plot(result.steps, probabilities[:, :, index].mean(axis=0), label=label)
-        axes.set_ylim(-0.02, 1.02)
-        axes.set_ylabel("probability")
-        axes.set_title(title, fontsize=9, loc="left")
-        axes.legend(fontsize=7, loc="center left")
-        _shade(axes, result.manoeuvres)
-    bottom.axvline(99.5, color="0.5", lw=0.8)
-    bottom.set_xlabel("step (target 2 disappears at 100)")
-    echo(_aircraft_summary(result))
+    echo(f"aircraft: seeds {list(seeds)} (target 2); family 2: seeds {list(_family(seeds))}")
+    figure = Figure(figsize=(13, 9.5), layout="constrained")
+    columns = figure.subplots(4, 2, sharex=True)
+    results = {}
+    for column, reading in enumerate(MODE_PROBABILITY_READINGS):
+        result = aircraft_classification(seeds, reading)
+        results[reading] = result
+        top, behaviours, middle, bottom = columns[:, column]
+        _plot_behaviours(top, result)
+        for axes, probabilities, labels, title in (
+            (
+                behaviours,
+                result.bayesian_behaviours,
+                BEHAVIOUR_LABELS,
+                "Fig 13: Bayesian P(b | Z) ([MTT]: b1 grows before 50)",
+            ),
+            (middle, result.bayesian, result.classes, "Fig 14: Bayesian class probabilities"),
+            (bottom, result.credal, result.classes, "Fig 15: credal BetP"),
+        ):
+            for index, label in enumerate(labels):
+                axes.plot(result.steps, probabilities[:, :, index].mean(axis=0), label=label)
+            axes.set_ylim(-0.02, 1.02)
+            axes.set_ylabel("probability")
+            axes.set_title(title, fontsize=9, loc="left")
+            axes.legend(fontsize=7, loc="center left")
+            _shade(axes, result.manoeuvres)
+        top.set_title(
+            f"μ reading '{reading}' — Fig 12: behaviour plausibilities (scaled by the step's max)",
+            fontsize=9,
+            loc="left",
+        )
+        bottom.axvline(99.5, color="0.5", lw=0.8)
+        bottom.set_xlabel("step (target 2 disappears at 100)")
+        echo(_aircraft_summary(result, "aircraft"))
+        echo(
+            _aircraft_summary(aircraft_classification(_family(seeds), reading), "aircraft family 2")
+        )
     return _titled(
         figure,
         "aircraft",
-        f"[MTT] Fig 12–15: target 2, mean of {len(seeds)} runs (seeds differ; largest "
-        f"range over the runs: credal {result.run_spread('credal'):.0e}, "
-        f"Bayesian {result.run_spread('bayesian'):.0e})",
+        f"[MTT] Fig 12–15: target 2, mean of {len(seeds)} runs; left: updated μ, right: "
+        "predicted μ ([MTT] §5.1.1 / §5.2 readings)",
         reduced,
     )
 
@@ -501,19 +513,32 @@ def draw_aircraft(reduced: bool, echo: Echo) -> Figure:
 BEHAVIOUR_LABELS = ("b1 (CV)", "b2 (≤ 2g)", "b3 (≤ 4g)")
 
 
-def _aircraft_summary(result: AircraftClassification) -> str:
+def _aircraft_summary(result: AircraftClassification, name: str) -> str:
     def at(probabilities: FloatArray, first: int, last: int) -> str:
         rows = (result.steps >= first) & (result.steps <= last)
         spans = probabilities[:, rows].reshape(-1, probabilities.shape[2])
         ends = zip(np.nanmin(spans, axis=0), np.nanmax(spans, axis=0), strict=True)
         return ", ".join(f"{low:.3f}–{high:.3f}" for low, high in ends)
 
-    lines = [f"aircraft: {len(result.seeds)} runs; ranges over runs and steps (min–max)"]
+    reading = result.mode_probabilities
+    lines = [
+        f"{name} ({reading} μ): {len(result.seeds)} runs (seeds {result.seeds[0]}–"
+        f"{result.seeds[-1]}); ranges over runs and steps (min–max)"
+    ]
     for first, last, window in ((0, 49, "before 50"), (55, 69, "55–69"), (76, 99, "76–99")):
         lines.append(
-            f"  {window}: P(b) {at(result.bayesian_behaviours, first, last)}; "
+            f"  {window}: Pl(b) {at(result.behaviours, first, last)}; "
+            f"P(b) {at(result.bayesian_behaviours, first, last)}; "
             f"Bayes P(c) {at(result.bayesian, first, last)}; BetP {at(result.credal, first, last)}"
         )
+    lines.append(
+        f"  Fig 12 b1 margin Pl(b1) − max(Pl(b2), Pl(b3)), steps 10–49, per run: "
+        f"{mean_interval(result.b1_margin())}"
+    )
+    lines.append(
+        f"  Fig 13 growth of P(b1 | Z) from step 5 to 49, per run: "
+        f"{mean_interval(result.b1_growth())}"
+    )
     lines.append(
         f"  doubt gap |P(bomber) − P(fighter)| 55–69: credal {result.doubt_gap('credal'):.3f}, "
         f"Bayesian {result.doubt_gap('bayesian'):.3f}; fighter ≥ 0.9 from step: credal "
