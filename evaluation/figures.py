@@ -31,6 +31,7 @@ from core.arrays import FloatArray
 from core.classification.behaviours import MODE_PROBABILITY_READINGS
 from core.distance.modified import scale_factor
 from core.errors import InvalidInput
+from core.simulation.nearby import NOISE_READINGS
 from core.simulation.scenario import TargetTruth
 from core.simulation.tracklists import SensorTrackList, t2t_four
 from core.simulation.two_class import t2t_two_class
@@ -771,72 +772,108 @@ CLOSE_PAIR_STYLES = (
 
 
 def _distance_label(kind: str) -> str:
-    """The IMM distance's name, with which is the tracker's default (issue 13)."""
+    """The IMM distance's name, saying which is the tracker's default."""
     if kind == DEFAULT_IMM_DISTANCE:
-        return f"{kind} (default since issue 13)"
+        return f"{kind} (the tracker's default)"
     if kind == "closest_model":
-        return f"{kind} (default before issue 13)"
+        return f"{kind} (the former default)"
     return kind
 
 
+CLOSE_PAIR_FAMILY_SEPARATION = 30.0
+"""The second geometry of ``close-pair``: the aircraft 30 m apart instead of 10 m."""
+
+
 def draw_close_pair(reduced: bool, echo: Echo) -> Figure:
-    """[MTT] Fig 16: false assignment rate vs noise, for each IMM distance."""
+    """[MTT] Fig 16: false assignment rate vs noise, for each IMM distance, under both readings."""
     seeds = _seeds(100, reduced)
     ratios = (0.0, 0.5, 2.0) if reduced else (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 2.0)
     n_steps = 20 if reduced else 60
     runs = {"closest_model": 1 if reduced else CLOSE_PAIR_VARIANT_RUNS}
     echo(
         f"close-pair: seeds {seeds[0]}..{seeds[-1]} (combined, [MTT]'s 100 runs; "
-        f"{DEFAULT_IMM_DISTANCE}, our default since issue 13), "
-        f"{seeds[0]}..{runs['closest_model'] - 1} (closest_model, the default before "
-        f"issue 13), {n_steps} steps, σ/d in {list(ratios)}"
+        f"{DEFAULT_IMM_DISTANCE}, the tracker's default), "
+        f"{seeds[0]}..{runs['closest_model'] - 1} (closest_model), {n_steps} steps, "
+        f"noise/d in {list(ratios)}; reading 'variance' (σ² = r d m², the text's letter) "
+        "first, then 'std' (σ = r d)"
     )
-    study = close_pair_study(seeds, ratios, n_steps=n_steps, runs=runs)
-    figure = Figure(figsize=(8, 4.8), layout="constrained")
-    axes = figure.subplots()
-    _plot_close_pair(axes, study)
-    for kind in study.rates:
-        echo(
-            f"close-pair {kind}: "
-            + "; ".join(
-                f"{100 * r:g} %: {mean_interval(row)}"
-                for r, row in zip(study.noise_ratios, study.rates[kind], strict=True)
-            )
-        )
-    if {"combined", DEFAULT_IMM_DISTANCE} <= set(study.rates):
-        echo(
-            f"close-pair {DEFAULT_IMM_DISTANCE} − combined, paired over the same seeds: "
-            + "; ".join(
-                f"{100 * r:g} %: {paired_difference(default, combined)}"
-                for r, default, combined in zip(
-                    study.noise_ratios,
-                    study.rates[DEFAULT_IMM_DISTANCE],
-                    study.rates["combined"],
-                    strict=True,
-                )
-            )
-        )
+    figure = Figure(figsize=(12, 4.8), layout="constrained")
+    panels = figure.subplots(1, 2, sharey=True)
+    for axes, reading in zip(panels, NOISE_READINGS, strict=True):
+        study = close_pair_study(seeds, ratios, n_steps=n_steps, runs=runs, noise_reading=reading)
+        _plot_close_pair(axes, study)
+        echo(_close_pair_summary(study, f"close-pair ({reading})"))
+    family = _family(seeds)[: 10 if reduced else 50]
     echo(
-        "close-pair swap floor: "
-        + "; ".join(
-            f"{100 * r:g} %: {f:.3f}"
-            for r, f in zip(study.noise_ratios, study.swap_floor, strict=True)
-        )
+        f"close-pair family 2: {CLOSE_PAIR_FAMILY_SEPARATION:g} m apart, seeds "
+        f"{family[0]}..{family[-1]}, {DEFAULT_IMM_DISTANCE} and combined, both readings"
     )
+    for reading in NOISE_READINGS:
+        study = close_pair_study(
+            family,
+            ratios,
+            separation=CLOSE_PAIR_FAMILY_SEPARATION,
+            n_steps=n_steps,
+            imm_distances=("combined", DEFAULT_IMM_DISTANCE),
+            noise_reading=reading,
+        )
+        echo(_close_pair_summary(study, f"close-pair family 2 ({reading})"))
     return _titled(
         figure,
         "close-pair",
-        f"[MTT] Fig 16: two aircraft {study.separation:g} m apart, "
+        "[MTT] Fig 16: two aircraft 10 m apart; left: noise variance = r·d (m²), right: σ = r·d; "
         + ", ".join(f"{kind} {rates.shape[1]}" for kind, rates in study.rates.items())
         + " runs per point",
         reduced,
     )
 
 
+def _close_pair_summary(study: ClosePairStudy, name: str) -> str:
+    decisions = study.decisions()
+    lines = [
+        f"{name}: σ per axis (m) "
+        + ", ".join(
+            f"{100 * r:g} %: {sigma:.2f}"
+            for r, sigma in zip(study.noise_ratios, study.sigma, strict=True)
+        )
+    ]
+    for kind in study.rates:
+        lines.append(
+            f"{name} {kind}: "
+            + "; ".join(
+                f"{100 * r:g} %: {rate_interval(row, decisions)}"
+                for r, row in zip(study.noise_ratios, study.rates[kind], strict=True)
+            )
+        )
+    if {"combined", DEFAULT_IMM_DISTANCE} <= set(study.rates):
+        tests = {
+            f"{DEFAULT_IMM_DISTANCE} − combined at {100 * r:g} %": paired_difference(
+                default, combined, (-1.0, 1.0)
+            )
+            for r, default, combined in zip(
+                study.noise_ratios,
+                study.rates[DEFAULT_IMM_DISTANCE],
+                study.rates["combined"],
+                strict=True,
+            )
+        }
+        lines.append(corrected(tests, f"{name} tests"))
+    lines.append(
+        f"{name} swap floor: "
+        + "; ".join(
+            f"{100 * r:g} %: {f:.3f}"
+            for r, f in zip(study.noise_ratios, study.swap_floor, strict=True)
+        )
+    )
+    return "\n".join(lines)
+
+
 def _plot_close_pair(axes: Axes, study: ClosePairStudy) -> None:
     percent = 100.0 * study.noise_ratios
     for kind, marker, style in CLOSE_PAIR_STYLES:
-        intervals = [mean_interval(row) for row in study.rates[kind]]
+        if kind not in study.rates:
+            continue
+        intervals = [rate_interval(row, study.decisions()) for row in study.rates[kind]]
         axes.errorbar(
             percent,
             [i.estimate for i in intervals],
@@ -849,11 +886,13 @@ def _plot_close_pair(axes: Axes, study: ClosePairStudy) -> None:
         )
     axes.plot(percent, study.swap_floor, "k:", label="swap floor Φ̄(d / √2σ) (perfect prediction)")
     axes.axhline(0.5, color="0.6", lw=0.8)
-    axes.set_xlabel("measurement noise σ per axis, % of the separation")
+    unit = "variance, % of d in m²" if study.noise_reading == "variance" else "σ per axis, % of d"
+    axes.set_xlabel(f"measurement noise: {unit}")
     axes.set_ylabel("false assignment rate")
     axes.set_ylim(-0.02, 0.62)
+    reading = "the text's letter" if study.noise_reading == "variance" else "other reading"
     axes.set_title(
-        "13-model aircraft IMM, R = simulated noise; 95 % t intervals over the runs", fontsize=9
+        f"reading '{study.noise_reading}' ({reading}); 95 % intervals (t ∪ Wilson)", fontsize=9
     )
     axes.legend(fontsize=8, loc="center right")
 
