@@ -4,7 +4,9 @@ Each Monte Carlo run of :func:`~core.simulation.road.road_four_scenario`
 (T = 0.1 s, σ² = 0.5 m², Poisson clutter) is tracked by the
 :class:`LocalTracker` with the road filter of
 :func:`~evaluation.tracking.road_config` and one association method
-per curve: the evidential method of [DH] itself (``dang_han``), our
+per curve: the evidential method of [DH] itself (``dang_han``, its evidence
+scale tied to its gate — the default — and, labelled, the former fixed scale
+``s = exp(−D/2)``; :mod:`core.association.pairwise_evidence`), our
 ``gnn`` and ``denoeux`` (the session default) and the cheap JPDA baseline
 ([DH] eq 16, B = 0, PDA update). A vehicle's track is the one most of its
 detections went to; the RMS error at step k is over the runs where that
@@ -38,6 +40,7 @@ from evaluation.tracking import TrackedRun, road_config, track_scenario, trackin
 
 METHODS: Mapping[str, tuple[str, Mapping[str, object]]] = {
     "dang_han [DH]": ("dang_han", {}),
+    "dang_han, fixed scale": ("dang_han", {"scale": "fixed"}),
     "gnn": ("gnn", {"gate_probability": 0.999}),
     "denoeux (default)": ("denoeux", {"gate_probability": 0.999}),
     "cheap JPDA": ("cheap_jpda", {"bias": 0.0}),
@@ -187,6 +190,7 @@ def road_four_study(
     *,
     n_steps: int = 100,
     methods: Mapping[str, tuple[str, Mapping[str, object]]] = METHODS,
+    lane_change: tuple[int, int] = (40, 59),
 ) -> RoadFourStudy:
     """[DH] Fig 2–5: every method on the same M seeded runs (module docstring).
 
@@ -199,7 +203,9 @@ def road_four_study(
     losses: dict[str, FloatArray] = {}
     false_counts: dict[str, FloatArray] = {}
     scores: dict[str, dict[str, FloatArray]] = {"ospa": {}, "gospa": {}, "switches": {}}
-    scenarios = [road_four_scenario(seed, n_steps=n_steps) for seed in seeds]
+    scenarios = [
+        road_four_scenario(seed, n_steps=n_steps, lane_change=lane_change) for seed in seeds
+    ]
     for label, (method, options) in methods.items():
         rows = []
         measured = []
