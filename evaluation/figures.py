@@ -37,6 +37,7 @@ from core.simulation.tracklists import SensorTrackList, t2t_four
 from core.simulation.two_class import t2t_two_class
 from core.tracking.config import DEFAULT_IMM_DISTANCE
 from evaluation.accelerating import CASES as ACCELERATING_CASES
+from evaluation.accelerating import P_DETECT as ACCELERATING_P_DETECT
 from evaluation.accelerating import SCENES as ACCELERATING_SCENES
 from evaluation.accelerating import AcceleratingStudy, accelerating_study
 from evaluation.aircraft import AircraftClassification, aircraft_classification
@@ -54,6 +55,7 @@ from evaluation.intervals import (
     wilson,
 )
 from evaluation.overtaking import CASES as OVERTAKING_CASES
+from evaluation.overtaking import P_DETECT as OVERTAKING_P_DETECT
 from evaluation.overtaking import OvertakingStudy, overtaking_study
 from evaluation.pedestrian import (
     PedestrianClassification,
@@ -1413,10 +1415,22 @@ def _plot_road_table(axes: Axes, study: RoadFourStudy) -> None:
 
 
 # -------------------------------------------------------------- accelerating
+COUNT_FIELDS = ("stolen", "false_alarms", "identity_switches")
+"""Outcome fields that count events per run (Poisson ∪ bootstrap intervals); others are errors."""
+
+
+def _field_interval(values: FloatArray, field: str) -> Interval:
+    return count_interval(values) if field in COUNT_FIELDS else mean_interval(values)
+
+
 def draw_accelerating(reduced: bool, echo: Echo) -> Figure:
     """[HZ] Fig 5: the lost track of an accelerating vehicle, four tracker cases."""
     seeds = _seeds(20, reduced)
-    echo(f"accelerating: seeds {list(seeds)}")
+    echo(
+        f"accelerating: seeds {list(seeds)}; scene 'accelerating' = [HZ]'s (clutter 3/frame, "
+        f"P_D {ACCELERATING_P_DETECT:g}, adjacent lanes); 'stealing' exploratory (no clutter, "
+        "P_D 1, 7 m apart: chosen to show Fig 5a's stealing)"
+    )
     study = accelerating_study(seeds)
     figure = Figure(figsize=(12, 8), layout="constrained")
     count = len(ACCELERATING_CASES)
@@ -1427,21 +1441,53 @@ def draw_accelerating(reduced: bool, echo: Echo) -> Figure:
     for index, scene in enumerate(ACCELERATING_SCENES):
         axes = figure.add_subplot(grid[1, index * count : (index + 1) * count])
         _plot_accelerating_bars(axes, study, scene)
-        for case in ACCELERATING_CASES:
-            fields = ("stolen", "false_alarms", "ospa", "identity_switches")
-            terminated = _share_interval(study.values(scene, case, "terminated"))
-            reinitiated = _share_interval(study.values(scene, case, "reinitiated"))
-            echo(
-                f"accelerating {scene} {case}: "
-                + "; ".join(f"{f} {mean_interval(study.values(scene, case, f))}" for f in fields)
-                + f"; terminated {terminated}; re-initiated {reinitiated}"
-            )
+    echo(_accelerating_summary(study, ACCELERATING_SCENES, "accelerating"))
+    family = _family(seeds)
+    scene = "accelerating, lead 5 m"
+    echo(f"accelerating family 2: scene '{scene}', seeds {list(family)}")
+    echo(
+        _accelerating_summary(
+            accelerating_study(family, scenes=(scene,)), (scene,), "accelerating family 2"
+        )
+    )
     return _titled(
         figure,
         "accelerating",
         f"[HZ] Fig 5: vehicle 2 accelerates at 6 m/s² from step 40, {len(seeds)} runs per case",
         reduced,
     )
+
+
+def _accelerating_summary(study: AcceleratingStudy, scenes: Sequence[str], name: str) -> str:
+    lines = []
+    fields = ("stolen", "false_alarms", "ospa", "identity_switches")
+    for scene in scenes:
+        for case in ACCELERATING_CASES:
+            terminated = _share_interval(study.values(scene, case, "terminated"))
+            reinitiated = _share_interval(study.values(scene, case, "reinitiated"))
+            lines.append(
+                f"{name} {scene} {case}: "
+                + "; ".join(
+                    f"{f} {_field_interval(study.values(scene, case, f), f)}" for f in fields
+                )
+                + f"; terminated {terminated}; re-initiated {reinitiated}"
+            )
+        tests = {
+            f"{scene}: (b) − (a) stolen": paired_difference(
+                study.values(scene, "(b) modified", "stolen"),
+                study.values(scene, "(a) plain", "stolen"),
+            ),
+            f"{scene}: (b) − (a) false alarms": paired_difference(
+                study.values(scene, "(b) modified", "false_alarms"),
+                study.values(scene, "(a) plain", "false_alarms"),
+            ),
+            f"{scene}: (c) − (b) false alarms": paired_difference(
+                study.values(scene, "(c) modified + termination", "false_alarms"),
+                study.values(scene, "(b) modified", "false_alarms"),
+            ),
+        }
+        lines.append(corrected(tests, f"{name} {scene} tests"))
+    return "\n".join(lines)
 
 
 def _plot_accelerating_plan(axes: Axes, study: AcceleratingStudy, case: str) -> None:
@@ -1477,9 +1523,9 @@ def _plot_accelerating_bars(axes: Axes, study: AcceleratingStudy, scene: str) ->
         ],
     )
     detail = (
-        "clutter 3/frame, 8 s"
+        f"[HZ]'s: clutter 3/frame, P_D {ACCELERATING_P_DETECT:g}, 8 s"
         if scene == "accelerating"
-        else "vehicle 1 two lanes away, no clutter, 16 s"
+        else "exploratory: vehicle 1 two lanes away, no clutter, P_D 1, 16 s"
     )
     axes.set_title(f"scene '{scene}' ({detail}); 95 % intervals", fontsize=9, loc="left")
     axes.legend(fontsize=6, loc="upper right")
@@ -1494,12 +1540,13 @@ def _grouped_bars(
     """One bar per (group, series): the mean of its per-run values with a 95 % interval.
 
     ``series``: (label, per-run values of each group, is a share of runs): a
-    share gets the Wilson interval of its runs, a count per run the t interval.
+    share gets the Wilson interval of its runs, a count per run
+    :func:`~evaluation.intervals.count_interval`'s.
     """
     positions = np.arange(len(groups))
     for offset, (label, per_group, share) in enumerate(series):
         intervals = [
-            _share_interval(values) if share else mean_interval(values) for values in per_group
+            _share_interval(values) if share else count_interval(values) for values in per_group
         ]
         bars = axes.bar(
             positions + (offset - (len(series) - 1) / 2) * width,
@@ -1522,27 +1569,64 @@ def _share_interval(values: np.ndarray) -> Interval:
 
 
 # ---------------------------------------------------------------- overtaking
+OVERTAKING_FAMILY_CLUTTER = 2.0
+"""The second scene of ``overtaking``: clutter 2 per frame and sensor instead of 1."""
+
+
 def draw_overtaking(reduced: bool, echo: Echo) -> Figure:
-    """[HZ] Fig 6: identity of an overtaking vehicle through the blind zone, five cases."""
+    """[HZ] Fig 6: identity of an overtaking vehicle through the blind zone, seven cases."""
     seeds = _seeds(20, reduced)
-    echo(f"overtaking: seeds {list(seeds)}")
+    echo(
+        f"overtaking: seeds {list(seeds)}; P_D {OVERTAKING_P_DETECT:g}, clutter 1/frame per "
+        "sensor; (a), (b) without field-of-view knowledge as [HZ]'s baseline, (a′), (b′) "
+        "with it (departure)"
+    )
     study = overtaking_study(seeds)
-    figure = Figure(figsize=(11, 4.8), layout="constrained")
-    left, right = figure.subplots(1, 2, width_ratios=(1, 1.3))
+    figure = Figure(figsize=(12, 5), layout="constrained")
+    left, right = figure.subplots(1, 2, width_ratios=(1, 1.5))
     _plot_overtaking_example(left, study)
     _plot_overtaking_bars(right, study)
-    for case in OVERTAKING_CASES:
-        fields = ("stolen", "false_alarms", "ospa", "identity_switches", "phantom_steps")
-        echo(
-            f"overtaking {case}: identity kept {_share_interval(study.values(case, 'kept'))}; "
-            + "; ".join(f"{f} {mean_interval(study.values(case, f))}" for f in fields)
+    echo(_overtaking_summary(study, "overtaking"))
+    family = _family(seeds)
+    echo(
+        f"overtaking family 2: clutter {OVERTAKING_FAMILY_CLUTTER:g}/frame per sensor, seeds "
+        f"{list(family)}"
+    )
+    echo(
+        _overtaking_summary(
+            overtaking_study(family, clutter_rate=OVERTAKING_FAMILY_CLUTTER),
+            "overtaking family 2",
         )
+    )
     return _titled(
         figure,
         "overtaking",
         f"[HZ] Fig 6: a vehicle overtakes through the blind zone, {len(seeds)} runs per case",
         reduced,
     )
+
+
+def _overtaking_summary(study: OvertakingStudy, name: str) -> str:
+    lines = []
+    fields = ("stolen", "false_alarms", "ospa", "identity_switches", "phantom_steps")
+    for case in OVERTAKING_CASES:
+        lines.append(
+            f"{name} {case}: identity kept {_share_interval(study.values(case, 'kept'))}; "
+            + "; ".join(
+                f"{f} {_field_interval(study.values(case, f), f if f != 'phantom_steps' else 'stolen')}"
+                for f in fields
+            )
+        )
+    kept = {case: study.values(case, "kept") for case in OVERTAKING_CASES}
+    tests = {
+        f"{case} − (c), identity kept": paired_difference(
+            kept[case], kept["(c) modified + phantoms"], (-1.0, 1.0)
+        )
+        for case in OVERTAKING_CASES
+        if case != "(c) modified + phantoms"
+    }
+    lines.append(corrected(tests, f"{name} tests"))
+    return "\n".join(lines)
 
 
 def _plot_overtaking_example(axes: Axes, study: OvertakingStudy) -> None:

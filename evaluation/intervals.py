@@ -223,7 +223,10 @@ def paired_difference(
             min(bounds[1], interval.high),
         )
     if differences.size < 2 or float(differences.std(ddof=1)) == 0.0:
-        p_value = 1.0 if float(np.abs(differences).max(initial=0.0)) == 0.0 else 0.0
+        # every run differs by the same amount: no t test; the exact two-sided sign test
+        # (n runs all on one side: p = 2 · 2^−n), 1 when they are all equal
+        same = float(np.abs(differences).max(initial=0.0)) == 0.0
+        p_value = 1.0 if same else min(1.0, 2.0 * 0.5**differences.size)
     else:
         p_value = float(stats.ttest_1samp(differences, 0.0).pvalue)
     spread = float(differences.std(ddof=1)) if differences.size > 1 else math.nan

@@ -76,6 +76,7 @@ def accelerating_scenario(
     lead: float = 0.0,
     speeds: tuple[float, float] = (1.0, 0.5),
     lanes: tuple[float, float] = (-1.75, 1.75),
+    p_detect: float = 1.0,
 ) -> Scenario:
     """Build ``accelerating`` (see the module docstring).
 
@@ -95,6 +96,10 @@ def accelerating_scenario(
         Initial speeds along y of vehicles 1 and 2 (m/s; (1, 0.5) by default).
     lanes : (float, float)
         Lateral positions x of vehicles 1 and 2 (m; adjacent lanes ±1.75 by default).
+    p_detect : float
+        Probability of detecting each vehicle at each frame ([HZ] §6's simulator
+        has "missed targets" without a number: 1 by default, the experiments
+        choose theirs).
     """
     rng = np.random.default_rng(seed)
     region: Region = ((-10.0, 10.0), (0.0, 80.0))
@@ -127,6 +132,7 @@ def accelerating_scenario(
         noise,
         rng,
         sensor="front",
+        p_detect=p_detect,
         clutter_rate=clutter_rate,
         region=region,
         visible=lambda position: inside(region, position),
@@ -154,8 +160,9 @@ def overtaking_scenario(
     *,
     n_steps: int = 120,
     clutter_rate: float = 1.0,
+    p_detect: float = 1.0,
 ) -> Scenario:
-    """Build ``overtaking`` (see the module docstring)."""
+    """Build ``overtaking`` (see the module docstring; ``p_detect`` as for ``accelerating``)."""
     rng = np.random.default_rng(seed)
     regions: dict[str, Region] = {
         "rear": ((-10.0, 10.0), (-40.0, -5.0)),
@@ -181,6 +188,7 @@ def overtaking_scenario(
                 noise,
                 rng,
                 sensor=sensor,
+                p_detect=p_detect,
                 clutter_rate=clutter_rate,
                 region=region,
                 visible=_coverage(region),

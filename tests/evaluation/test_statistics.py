@@ -109,6 +109,14 @@ def test_paired_difference_is_scipys_paired_t() -> None:
     assert (ours.difference.low, ours.difference.high) == pytest.approx((low, high), rel=1e-12)
 
 
+def test_constant_differences_get_the_exact_sign_test() -> None:
+    # every run one better: no spread for a t test; the sign test's p is binomtest's
+    for runs in (2, 5, 20):
+        ours = paired_difference(np.ones(runs), np.zeros(runs))
+        assert ours.p_value == pytest.approx(stats.binomtest(runs, runs).pvalue, rel=1e-12)
+    assert paired_difference(np.zeros(4), np.zeros(4)).p_value == 1.0
+
+
 def test_runs_for_power_reaches_the_power_by_simulation_free_check() -> None:
     # effect 0.5 σ at level 0.05, power 0.8: the textbook answer is n = 34 (paired t)
     n = runs_for_power(0.5, 1.0)
