@@ -189,6 +189,7 @@ def crossing_study(
         (0, *VARIANT_CASE),
         (0, *DEFAULT_CASE),
     ),
+    final_separation: float = 5.0,
 ) -> CrossingStudy:
     """[MTT] Fig 17–18 over seeds and measurement variances (module docstring)."""
     classes = aircraft().classes.labels
@@ -206,7 +207,9 @@ def crossing_study(
         table = {name: np.full(counts.shape, np.nan) for name in scores}
         for v, variance in enumerate(variances):
             for r, seed in enumerate(seeds):
-                scenario = crossing_scenario(seed=seed, measurement_variance=variance)
+                scenario = crossing_scenario(
+                    seed=seed, measurement_variance=variance, final_separation=final_separation
+                )
                 run = track_scenario(scenario, _config(variance, kind))
                 own = _own_tracks(run)
                 steps: list[int] = []

@@ -17,11 +17,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from core.arrays import FloatArray, IntArray
+from core.arrays import BoolArray, FloatArray, IntArray
 from core.simulation import aircraft_scenario
 from core.simulation.scenario import Scenario
 from core.tracking.config import LocalTrackerConfig
@@ -113,6 +114,42 @@ def tracked_aircraft(
         confirm_threshold=float(config.score.confirm_threshold),
         last_step={track: max(run.status_of(track)) for track in confirmed},
     )
+
+
+@dataclass(frozen=True)
+class SceneEvents:
+    """[MTT] Fig 4–5 and 10–11's events over seeds (plain SPRT), one entry per seed.
+
+    Attributes
+    ----------
+    seeds : tuple of int
+    target_2_predicted_to_end : ndarray of bool
+        Fig 10–11 scene: target 2's track is still alive at the last step (the paper's claim).
+    target_4_taken : ndarray of bool
+        Fig 4–5 events: target 4's detections (steps 70–89) went mostly to target 2's
+        coasting track (the event one seed showed).
+    """
+
+    seeds: tuple[int, ...]
+    target_2_predicted_to_end: BoolArray
+    target_4_taken: BoolArray
+
+
+def scene_events(seeds: Sequence[int], n_steps: int = 121) -> SceneEvents:
+    """Count the plain-SPRT events of :func:`tracked_aircraft` over ``seeds``."""
+    alive, taken = [], []
+    config = LocalTrackerConfig(
+        fields_of_view={"radar": None}, life_cycle=life_cycle(dict(NO_TERMINATION))
+    )
+    for seed in seeds:
+        plain = aircraft_scenario(seed=seed, n_steps=n_steps)
+        run = track_scenario(plain, config)
+        own = run.track_of(2, 1, 34)
+        alive.append(own is not None and max(run.status_of(own)) == n_steps - 1)
+        gapped = track_scenario(_without_gaps(plain, SCORE_GAPS), config)
+        own = gapped.track_of(2, 1, 34)
+        taken.append(own is not None and gapped.track_of(4, 70, 89) == own)
+    return SceneEvents(tuple(seeds), np.array(alive), np.array(taken))
 
 
 def pedestrian_truths(seed: int = 0) -> FloatArray:
