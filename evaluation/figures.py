@@ -1807,12 +1807,12 @@ def _plot_peer_speed(axes: Axes, study: PeerScene) -> None:
 def _peer_table(study: PeerScene) -> str:
     """The scene's rows as a Markdown table (estimates [95 % t interval over the seeds])."""
 
-    def cell(values: FloatArray, digits: int = 1) -> str:
+    def cell(values: FloatArray, digits: int = 1, count: bool = False) -> str:
         if np.all(np.isnan(values)):
             return "–"
         if len(values) < 2:  # one draw: no interval
             return f"{float(values[0]):.{digits}f}"
-        interval = mean_interval(values)
+        interval = count_interval(values) if count else mean_interval(values)
         return f"{interval.estimate:.{digits}f} [{interval.low:.{digits}f}, {interval.high:.{digits}f}]"
 
     lines = [
@@ -1829,7 +1829,10 @@ def _peer_table(study: PeerScene) -> str:
         accuracy = [
             cell(scores[f]) if scored else "–" for f in ("gospa", "localisation", "missed", "false")
         ]
-        rest = [cell(scores[f]) if scored else "–" for f in ("switches", "late")]
+        rest = [
+            cell(scores["switches"], count=True) if scored else "–",
+            cell(scores["late"]) if scored else "–",
+        ]
         siap = [
             cell(scores[f], 2) if scored else "–"
             for f in ("completeness", "spuriousness", "position")
@@ -1850,17 +1853,22 @@ def _peer_table(study: PeerScene) -> str:
         )
     if len(study.seeds) < 2:  # one draw: no paired test
         return "\n".join(lines)
+    tests = {}
     for tracker in ("ours", "ours-rest"):
         if tracker in study.scores:
-            difference = paired_difference(
+            tests[f"{tracker} − {study.reference}, GOSPA"] = paired_difference(
                 study.scores[tracker]["gospa"], study.scores[study.reference]["gospa"]
             )
-            lines.append(f"\n{tracker} − {study.reference}, GOSPA: {difference}")
-    if "ss-jpda" in study.scores:
-        difference = paired_difference(
-            study.scores["ours"]["gospa"], study.scores["ss-jpda"]["gospa"]
-        )
-        lines.append(f"ours − ss-jpda, GOSPA: {difference}")
+    for metric in ("gospa", "switches"):
+        if "ss-jpda" in study.scores:
+            tests[f"ours − ss-jpda, {metric}"] = paired_difference(
+                study.scores["ours"][metric], study.scores["ss-jpda"][metric]
+            )
+    tests[f"ours − {study.reference}, id switches"] = paired_difference(
+        study.scores["ours"]["switches"], study.scores[study.reference]["switches"]
+    )
+    lines.append("")
+    lines.append(corrected(tests, f"peers {study.name} tests"))
     return "\n".join(lines)
 
 
