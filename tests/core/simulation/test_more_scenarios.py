@@ -37,16 +37,23 @@ def test_every_evaluation_scenario_is_registered_and_seeded() -> None:
 
 
 @pytest.mark.parametrize("ratio", [0.0, 0.5, 2.0])
-def test_close_pair_noise_is_a_fraction_of_the_separation(ratio: float) -> None:
-    scenario = close_pair_scenario(seed=2, noise_ratio=ratio, separation=10.0, n_steps=200)
+@pytest.mark.parametrize("reading", ["variance", "std"])
+def test_close_pair_noise_is_a_fraction_of_the_separation(ratio: float, reading: str) -> None:
+    # [MTT] §6.2.1: "variance" (the letter) σ² = r·d m²; "std" σ = r·d
+    scenario = close_pair_scenario(
+        seed=2, noise_ratio=ratio, separation=10.0, n_steps=200, noise_reading=reading
+    )
     gap = scenario.truth(2).states[:, 2] - scenario.truth(1).states[:, 2]
     np.testing.assert_allclose(gap, 10.0)
     steps, measurements = scenario.detections(1)
     assert len(steps) == 200
     errors = measurements - scenario.truth(1).states[:, [0, 2]]
-    assert np.sqrt(np.mean(errors**2)) == pytest.approx(ratio * 10.0, rel=0.15, abs=1e-12)
+    sigma = np.sqrt(ratio * 10.0) if reading == "variance" else ratio * 10.0
+    assert np.sqrt(np.mean(errors**2)) == pytest.approx(sigma, rel=0.15, abs=1e-12)
     with pytest.raises(ScenarioError):
         close_pair_scenario(noise_ratio=-1.0)
+    with pytest.raises(ScenarioError):
+        close_pair_scenario(noise_reading="sigma")  # type: ignore[arg-type]
 
 
 def test_crossing_targets_pass_then_fly_close() -> None:
