@@ -13,7 +13,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from api_schemas.base import MAX_CLASSES
 from api_schemas.limits import MAX_FOCAL_SETS, MAX_ITEMS, MAX_SENSORS, WireLimits
-from app.http.errors import MAX_LISTED_ERRORS
+from app.errors import MAX_LISTED_ERRORS
 from app.http.rate_limit import parse_rates
 from app.stores.redis_keys import DEFAULT_PREFIX
 

@@ -30,7 +30,7 @@ from api_schemas.reports import DetectionReport, TrackReport
 from app.commands.errors import CommandError, pydantic_line
 from app.commands.progress import shown as progress
 from app.commands.runner import Input, raise_for_problem, run_locally, run_on_server
-from app.http.responses import dumps
+from app.outputs.text import dumps
 
 Body = dict[str, Any]
 

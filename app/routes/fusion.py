@@ -16,9 +16,9 @@ from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
 from app.geo.geojson import GEOJSON_MEDIA_TYPE, GeodeticOutput, with_geodetic
 from app.http.deps import CurrentSessionDep, LiveSessionDep, RegistryDep
 from app.http.errors import (
+    InvalidFields,
     TrackNotFound,
     problem_responses,
-    request_validation_error,
 )
 from app.http.requests import WireRoute
 from app.http.responses import JSONTextResponse
@@ -38,7 +38,7 @@ def geodetic_output(config: SessionConfig, parameter: str) -> GeodeticOutput:
     ``parameter``: the session has none."""
     geodetic = session_geodetic(config)
     if geodetic is None:
-        raise request_validation_error(
+        raise InvalidFields(
             [FieldIssue((parameter,), "the session has no origin: geodetic output needs one")],
             prefix="query",
         )

@@ -47,6 +47,7 @@ from api_schemas.ws import DetectionsMessage, TracksMessage, client_message_adap
 from app.geo.geojson import GeodeticOutput, with_geodetic
 from app.http.deps import open_record
 from app.http.errors import (
+    InvalidFields,
     LimitExceeded,
     ServiceError,
     StoreUnavailable,
@@ -54,11 +55,10 @@ from app.http.errors import (
     error_message,
     problem_for,
     problem_response,
-    request_validation_error,
 )
 from app.http.rate_limit import MessageRate
 from app.http.requests import OFFLOAD_BYTES, WireRoute, json_error, parse_json
-from app.http.responses import dumps, itemwise
+from app.outputs.text import dumps, itemwise
 from app.routes.fusion import geodetic_output
 from app.runtime import collection_paused, without_collection
 from app.sessions.hub import STORE_UNAVAILABLE, Ending, Published
@@ -108,7 +108,7 @@ def _output_frame(websocket: WebSocket, session: LiveSession) -> GeodeticOutput 
     """The session's geodetic output when the connection asks ``?frame=geodetic``, else None."""
     frame = websocket.query_params.get("frame", "session")
     if frame not in OUTPUT_FRAMES:
-        raise request_validation_error(
+        raise InvalidFields(
             [FieldIssue(("frame",), f"frame is one of {list(OUTPUT_FRAMES)}", frame)],
             prefix="query",
         )

@@ -14,7 +14,7 @@ from pydantic import TypeAdapter
 from api_schemas.events import DetectionsEvent, TracksEvent
 from api_schemas.limits import CEILINGS, limits_of
 from api_schemas.reports import DetectionReport, TrackReport
-from app.http.responses import dumps, itemwise
+from app.outputs.text import dumps, itemwise
 from app.stores import LogEntry
 
 TIMESTAMP: TypeAdapter[datetime] = TypeAdapter(datetime)

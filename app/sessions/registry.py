@@ -16,7 +16,7 @@ for subscribers. One input (:meth:`SessionRegistry.submit`):
    log is compacted to the ``log_retention`` inputs behind that snapshot.
 
 Outages: a store that cannot be reached raises
-:class:`~app.http.errors.StoreUnavailable` (503 with ``Retry-After``); an input
+:class:`~app.errors.StoreUnavailable` (503 with ``Retry-After``); an input
 whose append failed is not acknowledged, and its session is evicted (its
 subscribers are closed with 1013 "store unavailable") and rebuilt from the
 store on its next use, once the store answers again.
@@ -69,17 +69,17 @@ from api_schemas.consistency import detection_report_issues, track_report_issues
 from api_schemas.reports import DetectionReport, TrackReport
 from app.cluster.fanout import ResultFanout, open_fanout
 from app.cluster.lease import SessionLeases, new_owner_id, open_leases
-from app.geo.geojson import GeodeticOutput
-from app.http.errors import (
+from app.errors import (
+    InvalidFields,
     LimitExceeded,
     SessionLeased,
     SessionNotFound,
     StaleReport,
     StoreUnavailable,
-    request_validation_error,
 )
-from app.http.responses import dumps
+from app.geo.geojson import GeodeticOutput
 from app.metrics import ServiceMetrics
+from app.outputs.text import dumps
 from app.runtime import without_collection
 from app.sessions.hub import (
     SESSION_ENDED,
@@ -450,7 +450,7 @@ class SessionRegistry:
         else:
             issues = detection_report_issues(report, session.config)
         if issues:
-            raise request_validation_error(issues)
+            raise InvalidFields(issues)
 
     def _engine_for(self, session: LiveSession, sensor: str) -> tuple[SessionEngine, FusionConfig]:
         """The engine to apply a report of ``sensor`` to (a copy with the sensor joined, if new)."""

@@ -37,6 +37,7 @@ from api_schemas.config import (
 )
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import DetectionReport, SensorTrack, TrackReport
+from app.errors import InvalidFields
 from app.geo.geodesy import (
     LocalFrame,
     geodetic_to_session,
@@ -46,8 +47,7 @@ from app.geo.geodesy import (
 )
 from app.geo.geojson import GeodeticOutput, feature_collection
 from app.geo.polar import polar_to_cartesian
-from app.http.errors import request_validation_error
-from app.http.responses import itemwise
+from app.outputs.text import itemwise
 from core.association import AssociationResult
 from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, TotalConflict
@@ -118,9 +118,7 @@ def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> Sens
         site, heading = sensor_site(sensor, session_origin(config))
         fov = None if sensor.fov is None else field_of_view(sensor.fov, site, heading)
     except InvalidInput as error:
-        raise request_validation_error(
-            [FieldIssue(("sensors", index, "fov"), str(error), None)]
-        ) from None
+        raise InvalidFields([FieldIssue(("sensors", index, "fov"), str(error), None)]) from None
     return SensorSpec(
         id=sensor.id,
         reliability=sensor.reliability,
@@ -293,7 +291,7 @@ def fusion_config(config: SessionConfig, extra_sensors: Iterable[str] = ()) -> F
     try:
         region = None if config.region is None else field_of_view(config.region)
     except InvalidInput as error:
-        raise request_validation_error([FieldIssue(("region",), str(error), None)]) from None
+        raise InvalidFields([FieldIssue(("region",), str(error), None)]) from None
     assert region is None or isinstance(region, PolygonView)
     return FusionConfig(
         region=region,
@@ -643,7 +641,7 @@ def track_items(
     views: Sequence[FusedTrackView], geodetic: GeodeticOutput | None = None
 ) -> Iterator[PlainObject]:
     """Fused tracks in the contract's shape (``FusedTrack``), for :func:`wire_json`, made one
-    at a time as they are written (:func:`~app.http.responses.itemwise`): states and
+    at a time as they are written (:func:`~app.outputs.text.itemwise`): states and
     covariances stay numpy arrays, sources ``Source`` dataclasses (orjson writes both in C).
     Refuses (``ValueError``, before the first) a non-finite state, covariance or score."""
     _check_finite(views)

@@ -1,0 +1,1 @@
+"""Output formats: one writer per format (:mod:`app.outputs.formats`)."""
