@@ -17,7 +17,8 @@ import yaml
 from pydantic import BaseModel
 from pydantic.json_schema import models_json_schema
 
-from api_schemas.ws import AckMessage, DetectionsMessage, ErrorMessage, ResultMessage, TracksMessage
+from api_schemas.ws import AckMessage, ErrorMessage, ResultMessage
+from app.inputs import INPUT_KINDS
 from core import __version__
 
 DEFAULT_PATH = Path("docs") / "asyncapi.yaml"
@@ -26,16 +27,7 @@ SCHEMA_REF = "#/components/schemas/{model}"
 Direction = Literal["client", "server"]
 
 MESSAGES: dict[str, tuple[type[BaseModel], Direction, str]] = {
-    "tracks": (
-        TracksMessage,
-        "client",
-        "A sensor's track list; answered by one `result` (or `error`).",
-    ),
-    "detections": (
-        DetectionsMessage,
-        "client",
-        "A sensor's detections; answered by one `result` (or `error`).",
-    ),
+    **{tag: (kind.message_model, "client", kind.summary) for tag, kind in INPUT_KINDS.items()},
     "result": (
         ResultMessage,
         "server",
@@ -173,7 +165,8 @@ def payload_schemas() -> dict[str, Any]:
 
 def build_asyncapi() -> dict[str, Any]:
     """The AsyncAPI 3.0 document as plain data."""
-    stream_messages = ["tracks", "detections", "result", "error", "ack"]
+    inputs = list(INPUT_KINDS)
+    stream_messages = [*inputs, "result", "error", "ack"]
     subscribe_messages = ["result", "error", "ack"]
     return {
         "asyncapi": "3.0.0",
@@ -205,7 +198,7 @@ def build_asyncapi() -> dict[str, Any]:
             "send_inputs": {
                 "action": "send",
                 "channel": {"$ref": "#/channels/stream"},
-                "messages": _refs(["tracks", "detections"], "#/channels/stream/messages"),
+                "messages": _refs(inputs, "#/channels/stream/messages"),
             },
             "receive_step_results": {
                 "action": "receive",

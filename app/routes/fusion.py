@@ -1,17 +1,16 @@
-"""Inputs and the fused picture of a session: ``/v1/sessions/{sid}/tracks`` and ``…/detections``."""
+"""Inputs and the fused picture of a session: ``POST /v1/sessions/{sid}/{tag}`` for every\ninput kind (:mod:`app.inputs`), ``GET …/tracks`` and ``GET …/tracks/{tid}``."""
 
 from __future__ import annotations
 
 import functools
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Path, Query
 from fastapi.responses import Response
 
-from api_schemas.base import FiniteFloat
+from api_schemas.base import FiniteFloat, WireModel
 from api_schemas.config import SessionConfig
 from api_schemas.issues import FieldIssue
-from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
 from app.geo.geojson import GEOJSON_MEDIA_TYPE, GeodeticOutput, with_geodetic
 from app.http.deps import CurrentSessionDep, LiveSessionDep, RegistryDep
@@ -22,6 +21,7 @@ from app.http.errors import (
 )
 from app.http.requests import WireRoute
 from app.http.responses import JSONTextResponse
+from app.inputs import INPUT_KINDS, Input, InputKind
 from app.sessions.translate import picture_geojson, picture_json, session_geodetic, wire_json
 
 router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
@@ -45,58 +45,41 @@ def geodetic_output(config: SessionConfig, parameter: str) -> GeodeticOutput:
     return geodetic
 
 
-@router.post(
-    "/{sid}/tracks",
-    response_model=StepResult,
-    responses=problem_responses(401, 403, 404, 409, 408, 413, 422, 503),
-)
-async def submit_tracks(
-    report: TrackReport,
-    session: LiveSessionDep,
-    registry: RegistryDep,
-    explain: Annotated[
-        bool, Query(description="add the association method's score matrix")
-    ] = False,
-    frame: OutputFrame = "session",
-) -> JSONTextResponse:
-    """One sensor's track list → the fused result of that step (acknowledged once logged).
+Explain = Annotated[bool, Query(description="add the association method's score matrix")]
 
-    409 ``stale-report`` (with ``time`` and ``last_time``) for a report not
-    newer than the sensor's previous one.
-    """
-    # refused before anything is applied
-    geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
-    return JSONTextResponse(
-        await registry.submit(session, report, explain=explain, geodetic=geodetic)
+
+def _submit_route(kind: InputKind[Any]) -> None:
+    """``POST /v1/sessions/{sid}/{tag}`` for the input kind ``kind`` (its report as the body)."""
+
+    async def submit(
+        report: WireModel,
+        session: LiveSessionDep,
+        registry: RegistryDep,
+        explain: Explain = False,
+        frame: OutputFrame = "session",
+    ) -> JSONTextResponse:
+        # refused before anything is applied
+        geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
+        submitted = Input(kind, report)
+        return JSONTextResponse(
+            await registry.submit(session, submitted, explain=explain, geodetic=geodetic)
+        )
+
+    submit.__annotations__["report"] = kind.report_model
+    submit.__name__ = submit.__qualname__ = f"submit_{kind.tag}"
+    submit.__doc__ = kind.description
+    router.add_api_route(
+        f"/{{sid}}/{kind.tag}",
+        submit,
+        methods=["POST"],
+        response_model=StepResult,
+        responses=problem_responses(401, 403, 404, 409, 408, 413, 422, 503),
+        name=submit.__name__,
     )
 
 
-@router.post(
-    "/{sid}/detections",
-    response_model=StepResult,
-    responses=problem_responses(401, 403, 404, 409, 408, 413, 422, 503),
-)
-async def submit_detections(
-    report: DetectionReport,
-    session: LiveSessionDep,
-    registry: RegistryDep,
-    explain: Annotated[bool, Query(description="add the association score matrix")] = False,
-    frame: OutputFrame = "session",
-) -> JSONTextResponse:
-    """One sensor's detections → the fused result of that step.
-
-    The session's local tracker for that sensor (configured by its
-    ``measurement`` model and ``tracking``) updates its tracks; its confirmed
-    tracks updated by this scan enter the fusion step like a track list.
-    409 ``stale-report`` when the batch is not newer than the sensor's
-    previous input (scans may come at any increasing times, on no grid);
-    422 for a sensor without a measurement model.
-    """
-    # refused before anything is applied
-    geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
-    return JSONTextResponse(
-        await registry.submit(session, report, explain=explain, geodetic=geodetic)
-    )
+for _kind in INPUT_KINDS.values():
+    _submit_route(_kind)
 
 
 @router.get(

@@ -33,6 +33,7 @@ from __future__ import annotations
 import functools
 import json
 import logging
+from typing import Any
 
 import anyio
 import orjson
@@ -43,7 +44,6 @@ from starlette.websockets import WebSocketDisconnect
 
 from api_schemas.issues import FieldIssue
 from api_schemas.problem import Problem
-from api_schemas.ws import DetectionsMessage, TracksMessage, client_message_adapter
 from app.geo.geojson import GeodeticOutput, with_geodetic
 from app.http.deps import open_record
 from app.http.errors import (
@@ -58,6 +58,7 @@ from app.http.errors import (
 )
 from app.http.rate_limit import MessageRate
 from app.http.requests import OFFLOAD_BYTES, WireRoute, json_error, parse_json
+from app.inputs import INPUT_KINDS, client_messages, message_input
 from app.outputs.text import dumps, itemwise
 from app.routes.fusion import geodetic_output
 from app.runtime import collection_paused, without_collection
@@ -73,7 +74,6 @@ OUTBOX_SIZE = 16
 POLICY_VIOLATION = 1008
 BEARER_SUBPROTOCOL = "bearer"
 """Browsers offer the token as the subprotocols ``["bearer", token]``; the server accepts ``bearer``."""
-MESSAGE_TAGS = ("tracks", "detections")
 DISCONNECTED = (WebSocketDisconnect, OSError, anyio.ClosedResourceError, anyio.BrokenResourceError)
 """What a peer that went away raises on our side (uvicorn's ClientDisconnected is an OSError)."""
 
@@ -171,17 +171,14 @@ def _ref_of(document: object) -> str | None:
     return ref if isinstance(ref, str) and 0 < len(ref) <= 128 else None
 
 
-MESSAGE_TYPES = {"tracks": TracksMessage, "detections": DetectionsMessage}
-
-
 def _message_problem(error: ValidationError, path: str, document: object, listed: int) -> Problem:
     """A validation problem located in the message (the union's tag is left out of the path)."""
     errors = []
-    allowed = " or ".join(repr(tag) for tag in MESSAGE_TAGS)
+    allowed = " or ".join(repr(tag) for tag in INPUT_KINDS)
     for entry in error.errors():
         loc = list(entry.get("loc", ()))
         message = entry.get("msg", "")
-        if loc and loc[0] in MESSAGE_TAGS:
+        if loc and loc[0] in INPUT_KINDS:
             loc = loc[1:]
         elif entry.get("type") == "union_tag_not_found":  # pydantic: "Unable to extract tag …"
             loc, message = ["type"], f"Field required: every message has a 'type', {allowed}"
@@ -190,7 +187,8 @@ def _message_problem(error: ValidationError, path: str, document: object, listed
             loc, message = ["type"], f"{tag!r} is not a message type: 'type' is {allowed}"
         errors.append({**entry, "loc": tuple(loc), "msg": message})
     kind = document.get("type") if isinstance(document, dict) else None
-    root = MESSAGE_TYPES.get(kind) if isinstance(kind, str) else None
+    found = INPUT_KINDS.get(kind) if isinstance(kind, str) else None
+    root = None if found is None else found.message_model
     return problem_for(RequestValidationError(errors), path, listed=listed, root=root)
 
 
@@ -198,14 +196,14 @@ def _refusal(error: ServiceError, path: str) -> str:
     return error_message(problem_for(error, path), None)
 
 
-def _client_message(text: str, path: str, listed: int) -> TracksMessage | DetectionsMessage | str:
+def _client_message(text: str, path: str, listed: int) -> Any:
     """``text`` parsed and validated as a client message, or the ``error`` message answering it."""
     try:
         document = parse_json(text)
     except json.JSONDecodeError as error:
         return error_message(problem_for(json_error(error.msg, error.pos, ()), path), None)
     try:
-        return client_message_adapter.validate_python(document)
+        return client_messages().validate_python(document)
     except ValidationError as error:
         problem = _message_problem(error, path, document, listed)
         return error_message(problem, _ref_of(document))
@@ -232,7 +230,7 @@ async def _answer(
     try:
         if session.closed:  # evicted (store down, or a failed step): the registry reloads it
             session = await registry.get(session.id)
-        result = await registry.submit(session, message.report(), geodetic=geodetic)
+        result = await registry.submit(session, message_input(message), geodetic=geodetic)
     except Exception as error:  # every failure is answered; the connection stays open
         return error_message(problem_for(error, path), message.ref)
     return result_message(result, message.ref)

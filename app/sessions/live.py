@@ -13,6 +13,7 @@ from datetime import datetime
 
 from api_schemas.config import SessionConfig
 from api_schemas.limits import CEILINGS, limits_of
+from app.errors import LimitExceeded
 from app.sessions.hub import Hub
 from app.sessions.translate import PlainObject, class_frame, fusion_config
 from app.stores import SessionRecord, Snapshot
@@ -90,6 +91,20 @@ class LiveSession:
     def idle_since(self) -> datetime:
         """When the session last received an input (or was created)."""
         return self.last_input_at or self.record.created_at
+
+    def engine_for(self, sensor: str, max_sensors: int) -> tuple[SessionEngine, FusionConfig]:
+        """The engine to apply an input of ``sensor`` to, and its config: the session's own, or
+        a copy with the sensor joined (an open session seeing it first; at most ``max_sensors``)."""
+        known = not self.open_sensors or sensor in self.joined_sensors
+        if self.engine is not None and self.fusion is not None and known:
+            return self.engine, self.fusion
+        joined = self.joined_sensors
+        if len(joined) >= max_sensors:
+            raise LimitExceeded("max_sensors", max_sensors, len(joined) + 1, what="sensors")
+        fusion = fusion_config(self.config, [*joined, sensor])
+        if self.engine is None:
+            return SessionEngine(fusion), fusion
+        return SessionEngine.restore(fusion, self.engine.export()), fusion
 
     def snapshot_state(self) -> PlainObject:
         """What a snapshot keeps: the engine export and the service's counters."""

@@ -65,19 +65,15 @@ import anyio
 from prometheus_client import Counter, Histogram
 
 from api_schemas.config import SessionConfig
-from api_schemas.consistency import detection_report_issues, track_report_issues
-from api_schemas.reports import DetectionReport, TrackReport
 from app.cluster.fanout import ResultFanout, open_fanout
 from app.cluster.lease import SessionLeases, new_owner_id, open_leases
 from app.errors import (
-    InvalidFields,
-    LimitExceeded,
     SessionLeased,
     SessionNotFound,
-    StaleReport,
     StoreUnavailable,
 )
 from app.geo.geojson import GeodeticOutput
+from app.inputs import Input
 from app.metrics import ServiceMetrics
 from app.outputs.text import dumps
 from app.runtime import without_collection
@@ -90,13 +86,11 @@ from app.sessions.hub import (
     Subscriber,
 )
 from app.sessions.live import LiveSession, new_session, restore_snapshot
-from app.sessions.log import event_from_entry, log_input
+from app.sessions.log import logged_input
 from app.sessions.translate import (
     PlainObject,
-    core_detection_report,
     fusion_config,
     picture_json,
-    session_frame_report,
     session_geodetic,
     step_json,
     track_fields,
@@ -110,7 +104,6 @@ from app.stores import (
     Snapshot,
     Store,
 )
-from core.errors import StaleReport as CoreStaleReport
 from core.fusion.config import FusionConfig
 from core.fusion.engine import SessionEngine
 from core.fusion.reports import FusedTrackView
@@ -123,7 +116,6 @@ hop adds under load. Larger steps run in a worker thread."""
 
 logger = logging.getLogger("credal_fusion.sessions")
 T = TypeVar("T")
-Report = TrackReport | DetectionReport
 
 
 @dataclass
@@ -258,9 +250,8 @@ class SessionRegistry:
         """Apply logged inputs to the session in order (a worker thread, under its lock)."""
         record = session.record
         for entry in entries:
-            event = event_from_entry(entry)
             try:
-                step = self._apply(session, event.report, explain=False)
+                step = self._apply(session, logged_input(entry), explain=False)
             except Exception:
                 logger.exception("session %s: replay of input %d failed", record.id, entry.seq)
             else:
@@ -442,82 +433,46 @@ class SessionRegistry:
             )
         return series
 
-    @staticmethod
-    def check(session: LiveSession, report: Report) -> None:
-        """Checks that need only the config: item limit, sensor, dimensions, class labels."""
-        if isinstance(report, TrackReport):
-            issues = track_report_issues(report, session.config)
-        else:
-            issues = detection_report_issues(report, session.config)
-        if issues:
-            raise InvalidFields(issues)
-
-    def _engine_for(self, session: LiveSession, sensor: str) -> tuple[SessionEngine, FusionConfig]:
-        """The engine to apply a report of ``sensor`` to (a copy with the sensor joined, if new)."""
-        known = not session.open_sensors or sensor in session.joined_sensors
-        if session.engine is not None and session.fusion is not None and known:
-            return session.engine, session.fusion
-        joined = session.joined_sensors
-        if len(joined) >= self.settings.max_sensors:
-            raise LimitExceeded(
-                "max_sensors", self.settings.max_sensors, len(joined) + 1, what="sensors"
-            )
-        fusion = fusion_config(session.config, [*joined, sensor])
-        if session.engine is None:
-            return SessionEngine(fusion), fusion
-        return SessionEngine.restore(fusion, session.engine.export()), fusion
-
     def _apply(
         self,
         session: LiveSession,
-        report: Report,
+        submitted: Input,
         *,
         explain: bool,
         geodetic: GeodeticOutput | None = None,
     ) -> Step:
         """Apply an input to the session's engine (or a copy with a new sensor); logs nothing."""
-        engine, fusion = self._engine_for(session, report.sensor)
-        try:
-            if isinstance(report, TrackReport):
-                track_report = session_frame_report(report, session.config)
-                started = time.thread_time()
-                step = engine.apply(track_report, explain=explain)
-            else:
-                detection_report = core_detection_report(report, session.config)
-                started = time.thread_time()
-                step = engine.apply_detections(detection_report, explain=explain)
-            engine_cpu_s = time.thread_time() - started
-        except CoreStaleReport as stale:
-            raise StaleReport(stale.sensor, stale.time, stale.last_time) from None
-        seq = session.seq + 1
+        engine, fusion = session.engine_for(submitted.sensor, self.settings.max_sensors)
+        applied = submitted.apply(engine, session.config, explain=explain)
+        step, seq = applied.step, session.seq + 1
         return Step(
             engine=engine,
             fusion=fusion,
             result=step_json(step, seq),  # serialised once, here
             geodetic=None if geodetic is None else step_json(step, seq, geodetic),
-            logged=log_input(report),
-            engine_cpu_s=engine_cpu_s,
+            logged=submitted.logged(),
+            engine_cpu_s=applied.engine_cpu_s,
         )
 
     async def submit(
         self,
         session: LiveSession,
-        report: Report,
+        submitted: Input,
         *,
         explain: bool = False,
         geodetic: GeodeticOutput | None = None,
     ) -> str:
-        """Apply one input (a track list, or detections for the sensor's local tracker), log
-        it durably, publish its result, and return the answer to its sender (JSON text;
-        ``geodetic``: with the tracks' geodetic positions)."""
-        items = len(report.tracks) if isinstance(report, TrackReport) else len(report.detections)
-        await self._compute(items, functools.partial(self.check, session, report))
-        return await self._submit(session, report, items, explain=explain, geodetic=geodetic)
+        """Apply one input (of any kind: :mod:`app.inputs`), log it durably, publish its
+        result, and return the answer to its sender (JSON text; ``geodetic``: with the
+        tracks' geodetic positions). It is checked against the session's config first."""
+        items = submitted.items
+        await self._compute(items, functools.partial(submitted.check, session.config))
+        return await self._submit(session, submitted, items, explain=explain, geodetic=geodetic)
 
     async def _submit(
         self,
         session: LiveSession,
-        report: Report,
+        submitted: Input,
         items: int,
         *,
         explain: bool,
@@ -528,45 +483,46 @@ class SessionRegistry:
         An input that waited for the lock of a session evicted meanwhile goes to the session
         as the store has it now: 404 if it was deleted, 503 if the store is down.
         """
-        kind = "tracks" if isinstance(report, TrackReport) else "detections"
         async with session.lock:
             if not session.closed:
                 return await self._submit_locked(
-                    session, report, items, kind, explain=explain, geodetic=geodetic
+                    session, submitted, items, explain=explain, geodetic=geodetic
                 )
         return await self._submit(
-            await self.get(session.id), report, items, explain=explain, geodetic=geodetic
+            await self.get(session.id), submitted, items, explain=explain, geodetic=geodetic
         )
 
     async def _submit_locked(
         self,
         session: LiveSession,
-        report: Report,
+        submitted: Input,
         items: int,
-        kind: str,
         *,
         explain: bool,
         geodetic: GeodeticOutput | None,
     ) -> str:
         """:meth:`_submit` once the session's lock is held."""
+        kind, sensor = submitted.kind.tag, submitted.sensor
         if geodetic is None and not self.shared and session.hub.wants_geodetic():
             # for this instance's subscribers (with a shared store they are fed through Redis,
             # the session-frame text only)
             written = session_geodetic(session.config)
         else:
             written = geodetic
-        apply = functools.partial(self._apply, session, report, explain=explain, geodetic=written)
+        apply = functools.partial(
+            self._apply, session, submitted, explain=explain, geodetic=written
+        )
         with anyio.CancelScope(shield=True):
             if self.shared:
                 await self._hold_lease(session)
             try:
-                step = await self._apply_and_log(session, apply, report.sensor, items, kind)
+                step = await self._apply_and_log(session, apply, sensor, items, kind)
             except SequenceConflict:
                 if not self.shared:
                     raise
                 # overtaken by another instance: rebuild from the store, apply once more
                 await self._refresh(session)
-                step = await self._apply_and_log(session, apply, report.sensor, items, kind)
+                step = await self._apply_and_log(session, apply, sensor, items, kind)
             self._series(kind).inputs.inc()
             if self.shared:  # local subscribers too receive it through Redis (the text only)
                 await self._publish(session, result_message(step.result))

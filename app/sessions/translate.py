@@ -15,7 +15,6 @@ dataclasses, no intermediate lists); every non-finite score of a matrix is
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
@@ -36,17 +35,13 @@ from api_schemas.config import (
     TwoPointInitiation,
 )
 from api_schemas.issues import FieldIssue
-from api_schemas.reports import DetectionReport, SensorTrack, TrackReport
+from api_schemas.reports import SensorTrack
 from app.errors import InvalidFields
 from app.geo.geodesy import (
     LocalFrame,
-    geodetic_to_session,
     heading_rotation,
-    rotate_covariances,
-    sensor_to_session,
 )
 from app.geo.geojson import GeodeticOutput, feature_collection
-from app.geo.polar import polar_to_cartesian
 from app.outputs.text import itemwise
 from core.association import AssociationResult
 from core.belief import Frame, MassFunction
@@ -57,11 +52,8 @@ from core.fusion.motion import MotionKind, MotionModel, StateLayout
 from core.fusion.reports import (
     AssociationView,
     FusedTrackView,
-    ReportedTrack,
     StepResult,
 )
-from core.fusion.reports import DetectionReport as CoreDetectionReport
-from core.fusion.reports import TrackReport as CoreTrackReport
 from core.fusion.state import StateFusion
 from core.geometry import FieldOfView, PolygonView, Sector
 from core.lifecycle import LifeCycleConfig
@@ -319,33 +311,6 @@ def class_likelihoods(evidence: ClassEvidence, frame: Frame) -> np.ndarray:
     return np.array([values.get(label, 1.0) for label in frame.labels], dtype=np.float64)
 
 
-def reported_track(track: SensorTrack, frame: Frame | None) -> ReportedTrack:
-    """One sensor track for the engine."""
-    evidence = track.classification
-    mass = likelihoods = None
-    if evidence is not None and frame is not None:
-        if evidence.mass is not None:
-            mass = class_mass(evidence, frame)
-        else:
-            likelihoods = class_likelihoods(evidence, frame)
-    return ReportedTrack(
-        id=track.id,
-        state=np.asarray(track.state, dtype=np.float64),
-        covariance=np.asarray(track.covariance, dtype=np.float64),
-        class_mass=mass,
-        class_likelihoods=likelihoods,
-    )
-
-
-def core_track_report(report: TrackReport, frame: Frame | None) -> CoreTrackReport:
-    """A sensor's track list for the engine."""
-    return CoreTrackReport(
-        sensor=report.sensor,
-        time=report.time,
-        tracks=tuple(reported_track(track, frame) for track in report.tracks),
-    )
-
-
 def session_origin(config: SessionConfig) -> LocalFrame | None:
     """The session's ENU frame at its WGS84 ``origin`` (``None`` without one)."""
     origin = config.origin
@@ -372,112 +337,6 @@ def sensor_site(sensor: SensorConfig | None, origin: LocalFrame | None) -> tuple
     assert origin is not None and site.lat is not None and site.lon is not None  # config-checked
     altitude = origin.alt if site.alt is None else site.alt
     return origin.from_geodetic(site.lat, site.lon, altitude)[0], site.heading_deg
-
-
-def session_frame_report(report: TrackReport, config: SessionConfig) -> CoreTrackReport:
-    """A track list for the engine in the session frame, whatever its ``frame``.
-
-    ``"sensor"``: turned by the sensor's heading and moved to its site;
-    ``"geodetic"``: lat/lon/alt to session ENU, velocities and covariance
-    turned between the tangent planes (:mod:`app.geo.geodesy`). States and
-    covariances of the whole report are converted in one vectorised pass.
-    """
-    core = core_track_report(report, class_frame(config.classes))
-    if report.frame == "session" or not core.tracks:
-        return core
-    dim = config.state.dim
-    states = np.array([track.state for track in core.tracks]).reshape(-1, dim)
-    covariances = np.array([track.covariance for track in core.tracks]).reshape(-1, dim, dim)
-    position, velocity = tuple(config.state.position), tuple(config.state.velocity)
-    if report.frame == "sensor":
-        site, heading = sensor_site(config.sensor(report.sensor), session_origin(config))
-        states, covariances = sensor_to_session(
-            states, covariances, position, velocity, site, heading
-        )
-    else:
-        frame = session_origin(config)
-        assert frame is not None  # checked against the config before
-        states, covariances = geodetic_to_session(frame, states, covariances, position, velocity)
-    tracks = tuple(
-        dataclasses.replace(track, state=state, covariance=covariance)
-        for track, state, covariance in zip(core.tracks, states, covariances, strict=True)
-    )
-    return dataclasses.replace(core, tracks=tracks)
-
-
-def site_axes(sensor: SensorConfig, origin: LocalFrame | None, dimension: int) -> np.ndarray | None:
-    """Rotation (d × d) from the ENU axes at a geodetic site to the session's at ``origin``
-    (``None`` at a session-frame ``position``: the sensor measures in the session's axes)."""
-    site = sensor.site
-    if site is None or site.lat is None or site.lon is None or origin is None:
-        return None
-    rotation: np.ndarray = origin.rotation_from(site.lat, site.lon)[0][:dimension, :dimension]
-    return rotation
-
-
-def polar_detection_report(
-    report: DetectionReport, config: SessionConfig, sensor: SensorConfig
-) -> CoreDetectionReport:
-    """A polar sensor's detections as converted positions, each with its own covariance.
-
-    Azimuth and elevation are measured in the site's own ENU axes: at a
-    geodetic site the converted offsets and covariances are turned into the
-    session's axes (``R_origin R_siteᵀ``, exact: :mod:`app.geo.geodesy`); the
-    tilt between the two planes is 0.009° per km from the origin.
-    """
-    noise = sensor.measurement
-    assert noise is not None
-    dim = len(config.state.position)
-    origin = session_origin(config)  # once, for the site and its axes
-    site, _ = sensor_site(sensor, origin)
-    detections = report.detections
-    ranges = np.array([d.range for d in detections], dtype=np.float64)
-    azimuths = np.array([d.azimuth_deg for d in detections], dtype=np.float64)
-    elevations = (
-        np.array([d.elevation_deg for d in detections], dtype=np.float64) if dim == 3 else None
-    )
-    offsets, covariances = polar_to_cartesian(
-        ranges,
-        azimuths,
-        noise.polar_sigmas,
-        np.zeros(dim),
-        elevations,
-        noise.sigma_elevation_deg,
-    )
-    offsets, covariances = offsets.reshape(-1, dim), covariances.reshape(-1, dim, dim)
-    turn = site_axes(sensor, origin, dim)
-    if turn is not None:
-        offsets = offsets @ turn.T
-        covariances = rotate_covariances(np.broadcast_to(turn, covariances.shape), covariances)
-    range_rates = None
-    if noise.sigma_range_rate is not None and any(d.range_rate is not None for d in detections):
-        range_rates = np.array(
-            [math.nan if d.range_rate is None else d.range_rate for d in detections],
-            dtype=np.float64,
-        )
-    return CoreDetectionReport(
-        report.sensor, report.time, offsets + site[:dim], covariances, range_rates
-    )
-
-
-# ------------------------------------------------------------------ outputs
-def core_detection_report(report: DetectionReport, config: SessionConfig) -> CoreDetectionReport:
-    """Wire detections as the core's: measurements (m × q) and, when any detection gives its
-    own ``r``, one R per detection (the sensor's ``measurement.r`` for the others)."""
-    polar = config.sensor(report.sensor)
-    if polar is not None and polar.measurement is not None and polar.measurement.kind == "polar":
-        return polar_detection_report(report, config, polar)
-    dim = len(report.detections[0].z or ()) if report.detections else 2
-    measurements = np.array([d.z for d in report.detections], dtype=np.float64).reshape(-1, dim)
-    if all(detection.r is None for detection in report.detections):
-        return CoreDetectionReport(report.sensor, report.time, measurements, None)
-    sensor = next((s for s in config.sensors if s.id == report.sensor), None)
-    default = None if sensor is None or sensor.measurement is None else sensor.measurement.r
-    covariances = np.array(
-        [detection.r if detection.r is not None else default for detection in report.detections],
-        dtype=np.float64,
-    )
-    return CoreDetectionReport(report.sensor, report.time, measurements, covariances)
 
 
 def finite_or_none(value: float | None) -> float | None:

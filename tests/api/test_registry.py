@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from api_schemas.reports import TrackReport
+from app.inputs import parse_input
 from app.metrics import ServiceMetrics
 from app.sessions.hub import SESSION_ENDED, Hub, Published
 from app.sessions.registry import SessionRegistry
@@ -41,8 +41,7 @@ def new_session(target: SessionRegistry, config: dict[str, Any], sid: str = "s1"
 async def feed(target: SessionRegistry, sid: str, bodies: list[dict[str, Any]]) -> list[Any]:
     session = await target.get(sid)
     return [
-        json.loads(await target.submit(session, TrackReport.model_validate(body)))
-        for body in bodies
+        json.loads(await target.submit(session, parse_input("tracks", body))) for body in bodies
     ]
 
 

@@ -32,13 +32,13 @@ from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
 from app.geo.geojson import GeodeticOutput
 from app.http.responses import dumps, itemwise
+from app.inputs.detections import core_detection_report
+from app.inputs.tracks import session_frame_report
 from app.routes.streams import geodetic_message
 from app.sessions.registry import result_message
 from app.sessions.translate import (
-    core_detection_report,
     fusion_config,
     picture_json,
-    session_frame_report,
     session_origin,
     step_json,
     wire_json,

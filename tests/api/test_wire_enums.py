@@ -38,7 +38,7 @@ from api_schemas.results import (
     StatusReason,
     TrackStatus,
 )
-from app.sessions.translate import core_detection_report
+from app.inputs.detections import core_detection_report
 from core.association import DEFAULT_DISTANCE, LOCAL_TRACKING_DEFAULT, TRACK_TO_TRACK_DEFAULT
 from core.association.associate import METHODS
 from core.association.denoeux import DEFAULT_GATE_PROBABILITY
