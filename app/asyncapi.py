@@ -14,11 +14,12 @@ from pathlib import Path
 from typing import Any, Literal
 
 import yaml
-from pydantic import BaseModel
+from pydantic import BaseModel, create_model
 from pydantic.json_schema import models_json_schema
 
+from api_schemas.base import WireModel
 from api_schemas.ws import AckMessage, ErrorMessage, ResultMessage
-from app.inputs import INPUT_KINDS
+from app.inputs import DECODED_KINDS, INPUT_KINDS, DecodedKind
 from core import __version__
 
 DEFAULT_PATH = Path("docs") / "asyncapi.yaml"
@@ -44,10 +45,51 @@ MESSAGES: dict[str, tuple[type[BaseModel], Direction, str]] = {
         "Sent once when the connection is ready, with the session's latest `seq`.",
     ),
 }
-"""Message name (its ``type`` tag) → model, who sends it, what it means."""
+"""Message name (its ``type`` tag) → model, who sends it, what it means; a decoded kind
+(:data:`~app.inputs.DECODED_KINDS`) adds its answer here and its binary message below."""
+
+
+def decoded_answer(kind: DecodedKind[Any]) -> type[BaseModel]:
+    """The server's ``<tag>_result`` message answering a decoded kind's binary message."""
+    tag = f"{kind.tag}_result"
+    name = "".join(part.title() for part in tag.split("_")) + "Message"
+    model: type[BaseModel] = create_model(
+        name,
+        __base__=WireModel,
+        __doc__=f"Server → client: the answer to a `{kind.tag}` binary message.",
+        type=(Literal[tag], ...),  # type: ignore[arg-type]
+        ref=(str | None, ...),
+        result=(kind.answer_model, ...),
+    )
+    return model
+
+
+for _kind in DECODED_KINDS.values():
+    MESSAGES[f"{_kind.tag}_result"] = (
+        decoded_answer(_kind),
+        "server",
+        f"The answer to a `{_kind.tag}` binary message.",
+    )
+
+
+def _binary_message(kind: DecodedKind[Any]) -> dict[str, Any]:
+    return {
+        "name": kind.tag,
+        "title": f"{kind.tag} (binary)",
+        "summary": kind.summary,
+        "contentType": kind.media_type,
+        "payload": {"type": "string", "format": "binary"},
+        "x-direction": "client",
+        "x-query": kind.parameters.model_json_schema(),
+    }
+
 
 DESCRIPTION = """\
-Every message is one JSON object (a text frame) with a required `type` tag.
+Every message is one JSON object (a text frame) with a required `type` tag, but the
+binary messages of the decoded kinds (bytes of a surveillance format, listed below with
+their content type; a binary frame whose first byte is not `{` or `[`), each answered by
+one `<kind>_result` (or `error`); the connection's query gives that kind's parameters
+(its `x-query`; `?decode=` names the kind when several are registered).
 
 `stream`: the client sends `tracks` and `detections` messages (the REST bodies
 plus `type` and an optional `ref`); the server answers each with exactly one
@@ -165,8 +207,9 @@ def payload_schemas() -> dict[str, Any]:
 
 def build_asyncapi() -> dict[str, Any]:
     """The AsyncAPI 3.0 document as plain data."""
-    inputs = list(INPUT_KINDS)
-    stream_messages = [*inputs, "result", "error", "ack"]
+    inputs = [*INPUT_KINDS, *DECODED_KINDS]
+    answers = [f"{tag}_result" for tag in DECODED_KINDS]
+    stream_messages = [*inputs, "result", *answers, "error", "ack"]
     subscribe_messages = ["result", "error", "ack"]
     return {
         "asyncapi": "3.0.0",
@@ -203,7 +246,9 @@ def build_asyncapi() -> dict[str, Any]:
             "receive_step_results": {
                 "action": "receive",
                 "channel": {"$ref": "#/channels/stream"},
-                "messages": _refs(["result", "error", "ack"], "#/channels/stream/messages"),
+                "messages": _refs(
+                    ["result", *answers, "error", "ack"], "#/channels/stream/messages"
+                ),
             },
             "receive_subscription": {
                 "action": "receive",
@@ -212,7 +257,10 @@ def build_asyncapi() -> dict[str, Any]:
             },
         },
         "components": {
-            "messages": {name: _message(name) for name in MESSAGES},
+            "messages": {
+                **{name: _message(name) for name in MESSAGES},
+                **{tag: _binary_message(kind) for tag, kind in DECODED_KINDS.items()},
+            },
             "schemas": payload_schemas(),
             "securitySchemes": {"bearer": {"type": "http", "scheme": "bearer"}},
         },

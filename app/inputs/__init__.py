@@ -14,20 +14,26 @@ from typing import Annotated, Any, Union
 from pydantic import Field, TypeAdapter
 
 from api_schemas.base import WireModel
-from app.inputs.base import Applied, Input, InputKind
+
+# ASTERIX from app.inputs.asterix import Asterix
+from app.inputs.base import Applied, Decoded, DecodedKind, Input, InputKind, SessionView
 from app.inputs.detections import Detections
 from app.inputs.tracks import Tracks
 
 INPUT_KINDS: dict[str, InputKind[Any]] = {}
-"""Tag → input kind, in registration order."""
+"""Tag → input kind whose body is a JSON report, in registration order."""
+DECODED_KINDS: dict[str, DecodedKind[Any]] = {}
+"""Tag → input kind whose body is bytes decoded into JSON kinds' inputs (ASTERIX)."""
 
 
-def register_input_kind(kind: InputKind[Any]) -> InputKind[Any]:
+def register_input_kind(kind: InputKind[Any] | DecodedKind[Any]) -> None:
     """Add ``kind`` to the registry (its tag must be new)."""
-    if kind.tag in INPUT_KINDS:
+    if kind.tag in INPUT_KINDS or kind.tag in DECODED_KINDS:
         raise ValueError(f"input kind {kind.tag!r} is registered already")
-    INPUT_KINDS[kind.tag] = kind
-    return kind
+    if isinstance(kind, DecodedKind):
+        DECODED_KINDS[kind.tag] = kind
+    else:
+        INPUT_KINDS[kind.tag] = kind
 
 
 def input_kind(tag: str) -> InputKind[Any]:
@@ -63,12 +69,17 @@ def message_input(message: Any) -> Input:
 
 register_input_kind(Tracks())
 register_input_kind(Detections())
+# ASTERIX register_input_kind(Asterix())
 
 __all__ = [
+    "DECODED_KINDS",
     "INPUT_KINDS",
     "Applied",
+    "Decoded",
+    "DecodedKind",
     "Input",
     "InputKind",
+    "SessionView",
     "client_messages",
     "input_kind",
     "message_input",

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import time
 from abc import ABC, abstractmethod
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar, Generic, TypeVar
 
@@ -23,11 +24,13 @@ from api_schemas.base import WireModel
 from api_schemas.config import SessionConfig
 from api_schemas.issues import FieldIssue
 from app.errors import InvalidFields, StaleReport
+from app.outputs.text import dumps
 from core.errors import StaleReport as CoreStaleReport
 from core.fusion.engine import SessionEngine
 from core.fusion.reports import StepResult
 
 ReportT = TypeVar("ReportT", bound=WireModel)
+ParametersT = TypeVar("ParametersT", bound=WireModel)
 PlainObject = dict[str, Any]
 
 
@@ -136,3 +139,49 @@ class Input:
     def logged(self) -> PlainObject:
         """:meth:`InputKind.logged`."""
         return self.kind.logged(self.report)
+
+
+@dataclass(frozen=True)
+class Decoded:
+    """What a :class:`DecodedKind` made of a body: the inputs to apply, in order, and its
+    account of the body (every record and what became of it: the answer's fields but the
+    step results)."""
+
+    inputs: tuple[Input, ...]
+    account: PlainObject
+
+
+class DecodedKind(ABC, Generic[ParametersT]):
+    """A kind whose body is not a JSON report but bytes (a surveillance format): decoded into
+    inputs of the JSON kinds, which are what the session applies and logs.
+
+    ``POST /v1/sessions/{sid}/{tag}`` takes the bytes (``media_type``) with the query
+    ``parameters``; a WebSocket ``stream`` takes them as a binary message, with the
+    parameters in the connection's query. The answer is ``answer_model``: the account
+    and one step result per input applied.
+    """
+
+    tag: ClassVar[str]
+    media_type: ClassVar[str]
+    parameters: ClassVar[type[WireModel]]
+    answer_model: ClassVar[type[WireModel]]
+    summary: ClassVar[str]
+    description: ClassVar[str]
+
+    @abstractmethod
+    def decode(self, data: bytes, parameters: ParametersT, session: SessionView) -> Decoded:
+        """The inputs ``data`` holds for the session (:class:`~app.errors.ServiceError` for
+        data it cannot take: malformed, or not for this session)."""
+
+    def answer(self, decoded: Decoded, results: Sequence[str]) -> str:
+        """The answer's JSON text: the account and the step results (JSON texts already)."""
+        account = dumps(decoded.account)
+        return f'{account[:-1]},"results":[{",".join(results)}]}}'
+
+
+@dataclass(frozen=True)
+class SessionView:
+    """What a decoder may read of its session: the config and each sensor's latest time."""
+
+    config: SessionConfig
+    last_time: Callable[[str], float | None]

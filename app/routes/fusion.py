@@ -3,17 +3,17 @@
 from __future__ import annotations
 
 import functools
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
 from fastapi import APIRouter, Path, Query
 from fastapi.responses import Response
 
-from api_schemas.base import FiniteFloat, WireModel
+from api_schemas.base import FiniteFloat
 from api_schemas.config import SessionConfig
 from api_schemas.issues import FieldIssue
-from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
+from api_schemas.results import FusedPicture, FusedTrackDetail
 from app.geo.geojson import GEOJSON_MEDIA_TYPE, GeodeticOutput, with_geodetic
-from app.http.deps import CurrentSessionDep, LiveSessionDep, RegistryDep
+from app.http.deps import CurrentSessionDep, RegistryDep
 from app.http.errors import (
     InvalidFields,
     TrackNotFound,
@@ -21,7 +21,6 @@ from app.http.errors import (
 )
 from app.http.requests import WireRoute
 from app.http.responses import JSONTextResponse
-from app.inputs import INPUT_KINDS, Input, InputKind
 from app.sessions.translate import picture_geojson, picture_json, session_geodetic, wire_json
 
 router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
@@ -43,43 +42,6 @@ def geodetic_output(config: SessionConfig, parameter: str) -> GeodeticOutput:
             prefix="query",
         )
     return geodetic
-
-
-Explain = Annotated[bool, Query(description="add the association method's score matrix")]
-
-
-def _submit_route(kind: InputKind[Any]) -> None:
-    """``POST /v1/sessions/{sid}/{tag}`` for the input kind ``kind`` (its report as the body)."""
-
-    async def submit(
-        report: WireModel,
-        session: LiveSessionDep,
-        registry: RegistryDep,
-        explain: Explain = False,
-        frame: OutputFrame = "session",
-    ) -> JSONTextResponse:
-        # refused before anything is applied
-        geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
-        submitted = Input(kind, report)
-        return JSONTextResponse(
-            await registry.submit(session, submitted, explain=explain, geodetic=geodetic)
-        )
-
-    submit.__annotations__["report"] = kind.report_model
-    submit.__name__ = submit.__qualname__ = f"submit_{kind.tag}"
-    submit.__doc__ = kind.description
-    router.add_api_route(
-        f"/{{sid}}/{kind.tag}",
-        submit,
-        methods=["POST"],
-        response_model=StepResult,
-        responses=problem_responses(401, 403, 404, 409, 408, 413, 422, 503),
-        name=submit.__name__,
-    )
-
-
-for _kind in INPUT_KINDS.values():
-    _submit_route(_kind)
 
 
 @router.get(

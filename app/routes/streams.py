@@ -58,7 +58,7 @@ from app.http.errors import (
 )
 from app.http.rate_limit import MessageRate
 from app.http.requests import OFFLOAD_BYTES, WireRoute, json_error, parse_json
-from app.inputs import INPUT_KINDS, client_messages, message_input
+from app.inputs import DECODED_KINDS, INPUT_KINDS, client_messages, message_input
 from app.outputs.text import dumps, itemwise
 from app.routes.fusion import geodetic_output
 from app.runtime import collection_paused, without_collection
@@ -236,6 +236,51 @@ async def _answer(
     return result_message(result, message.ref)
 
 
+def _looks_like_json(data: bytes) -> bool:
+    """Whether a binary message is JSON text (as a text message is read) rather than the bytes
+    of a decoded kind (ASTERIX: its first byte is a category, never ``{`` or ``[`` here)."""
+    start = data.lstrip()[:1]
+    return not DECODED_KINDS or start in (b"{", b"[") or not data
+
+
+async def _decoded_answer(
+    websocket: WebSocket,
+    session: LiveSession,
+    data: bytes,
+    path: str,
+    geodetic: GeodeticOutput | None,
+) -> str:
+    """The answer to a binary message: bytes of a decoded kind (``?decode=TAG``, default the
+    first registered), with that kind's parameters in the connection's query."""
+    registry: SessionRegistry = websocket.app.state.registry
+    query = websocket.query_params
+    tag = query.get("decode", next(iter(DECODED_KINDS)))
+    try:
+        kind = DECODED_KINDS.get(tag)
+        if kind is None:
+            raise InvalidFields(
+                [FieldIssue(("decode",), f"decode is one of {list(DECODED_KINDS)}", tag)],
+                prefix="query",
+            )
+        fields = {name: query[name] for name in kind.parameters.model_fields if name in query}
+        try:
+            parameters = kind.parameters.model_validate(fields)
+        except ValidationError as error:
+            raise InvalidFields(
+                [
+                    FieldIssue(tuple(entry["loc"]), entry["msg"], None, entry["type"])
+                    for entry in error.errors()
+                ],
+                prefix="query",
+            ) from None
+        if session.closed:
+            session = await registry.get(session.id)
+        answer = await registry.submit_decoded(session, kind, data, parameters, geodetic=geodetic)
+    except Exception as error:  # every failure is answered; the connection stays open
+        return error_message(problem_for(error, path), None)
+    return f'{{"type":"{kind.tag}_result","ref":null,"result":{answer}}}'
+
+
 @router.websocket("/{sid}/stream")
 async def stream_session(websocket: WebSocket, sid: str) -> None:
     """Send inputs, receive one answer per input, in order."""
@@ -259,12 +304,16 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
                 if incoming["type"] == "websocket.disconnect":
                     return
                 text = incoming.get("text")
+                data = b""
                 if text is None:
-                    text = bytes(incoming.get("bytes") or b"").decode("utf-8", errors="replace")
-                if len(text) > settings.max_body_bytes:
+                    data = bytes(incoming.get("bytes") or b"")
+                    if _looks_like_json(data):
+                        text, data = data.decode("utf-8", errors="replace"), b""
+                size = len(data) if text is None else len(text)
+                if size > settings.max_body_bytes:
                     answer = _refusal(
                         LimitExceeded(
-                            "max_body_bytes", settings.max_body_bytes, len(text), what="message"
+                            "max_body_bytes", settings.max_body_bytes, size, what="message"
                         ),
                         path,
                     )
@@ -278,6 +327,8 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
                         ),
                         path,
                     )
+                elif text is None:
+                    answer = await _decoded_answer(websocket, session, data, path, geodetic)
                 else:
                     answer = await _answer(session, registry, text, path, geodetic)
                 await send.send(answer)
