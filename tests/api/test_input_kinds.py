@@ -100,7 +100,7 @@ def test_a_decoded_kind_registered_once_is_served_by_rest_websocket_log_and_open
         assert answer.json()["lines"] == 4 * 3
         results = answer.json()["results"]
         with client.websocket_connect(
-            f"/v1/sessions/{posted['id']}/stream?sensor=cam", headers=auth
+            f"/v1/sessions/{posted['id']}/stream?sensor=cam&decode=xy", headers=auth
         ) as socket:
             socket.receive_json()  # ack
             socket.send_bytes(xy_text(SCANS[4:], first=4))
