@@ -16,6 +16,7 @@ from pydantic import Field, TypeAdapter
 from api_schemas.base import WireModel
 
 # ASTERIX from app.inputs.asterix import Asterix
+from app.inputs.asterix import Asterix
 from app.inputs.base import Applied, Decoded, DecodedKind, Input, InputKind, SessionView
 from app.inputs.detections import Detections
 from app.inputs.tracks import Tracks
@@ -69,6 +70,7 @@ def message_input(message: Any) -> Input:
 
 register_input_kind(Tracks())
 register_input_kind(Detections())
+register_input_kind(Asterix())
 # ASTERIX register_input_kind(Asterix())
 
 __all__ = [
