@@ -15,7 +15,7 @@ from pydantic import Field, StringConstraints, TypeAdapter
 from api_schemas.base import WireModel
 from api_schemas.problem import Problem
 from api_schemas.reports import DetectionReport, TrackReport
-from api_schemas.results import StepResult
+from api_schemas.results import FusedFeatureCollection, StepResult
 
 ClientRef = Annotated[str, StringConstraints(min_length=1, max_length=128)]
 
@@ -35,11 +35,12 @@ class DetectionsMessage(DetectionReport):
 
 
 class ResultMessage(WireModel):
-    """Server → client: the fused result of an input (``ref`` echoes the input's)."""
+    """Server → client: the fused result of an input (``ref`` echoes the input's), in the
+    connection's ``format`` (``json``: a ``StepResult``; ``geojson``: a FeatureCollection)."""
 
     type: Literal["result"]
     ref: str | None
-    result: StepResult
+    result: StepResult | FusedFeatureCollection
 
 
 class ErrorMessage(WireModel):

@@ -20,6 +20,7 @@ from pydantic.json_schema import models_json_schema
 from api_schemas.base import WireModel
 from api_schemas.ws import AckMessage, ErrorMessage, ResultMessage
 from app.inputs import DECODED_KINDS, INPUT_KINDS, DecodedKind
+from app.outputs import FRAMES, OUTPUT_FORMATS
 from core import __version__
 
 DEFAULT_PATH = Path("docs") / "asyncapi.yaml"
@@ -127,13 +128,14 @@ it closes with code 1013, reason `store unavailable`: subscribe again once
 `GET /readyz` answers 200. An input sent on `stream` while the store is down
 gets an `error` with the 503 `store-unavailable` problem and is not applied.
 
-Both channels take the query parameter `frame` on connect
-(`…/stream?frame=geodetic`, `…/subscribe?frame=geodetic`), as the REST inputs
-and reads do: with `geodetic`, every fused track of every `result` sent on the
-connection carries `geodetic: {lat, lon, alt}` (WGS84) beside its
-session-frame `state`. The session needs an `origin`; without one, or for a
-value other than `session` and `geodetic`, the upgrade is refused with the 422
-problem naming `query/frame`.
+Both channels take the query parameters `format` and `frame` on connect
+(`…/stream?frame=geodetic`, `…/subscribe?format=geojson`), as the REST inputs
+and reads do: with `frame=geodetic`, every fused track of every `result` sent on
+the connection carries `geodetic: {lat, lon, alt}` (WGS84) beside its
+session-frame `state`; with `format=geojson` every `result` is a GeoJSON
+FeatureCollection (with `seq`, `time`, `sensor`). Both need the session's
+`origin`; without one, or for an unknown value, the upgrade is refused with the
+422 problem naming `query/frame` or `query/format`.
 
 Both channels need the session's bearer token (or the admin token) in the
 `Authorization` header of the upgrade request, or, from a browser (which
@@ -171,17 +173,25 @@ FRAME_QUERY: dict[str, Any] = {
     "properties": {
         "frame": {
             "type": "string",
-            "enum": ["session", "geodetic"],
+            "enum": list(FRAMES),
             "default": "session",
             "description": (
                 "geodetic: every fused track of every `result` on this connection carries "
                 "`geodetic: {lat, lon, alt}` (WGS84; the session needs an `origin`, else the "
                 "upgrade is refused with 422 at `query/frame`)"
             ),
-        }
+        },
+        "format": {
+            "type": "string",
+            "enum": list(OUTPUT_FORMATS),
+            "default": "json",
+            "description": "every `result` on this connection in this output format: "
+            + "; ".join(f"{name}: {f.description}" for name, f in OUTPUT_FORMATS.items()),
+        },
     },
 }
-"""The query parameters of both channels' upgrade request (the REST routes' ``?frame``)."""
+"""The query parameters of both channels' upgrade request (the REST routes' ``format`` and
+``frame``)."""
 
 
 def _channel(address: str, description: str, names: Sequence[str]) -> dict[str, Any]:

@@ -18,8 +18,8 @@ import httpx
 from api_schemas.limits import MAX_SENSORS
 from app.commands.errors import http_failure
 from app.inputs import parse_input
+from app.outputs.json_results import step_json
 from app.sessions.live import new_session, restore_snapshot
-from app.sessions.translate import step_json
 from app.stores import SessionRecord, Snapshot
 
 Body = dict[str, Any]

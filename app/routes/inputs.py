@@ -9,13 +9,12 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Query, Request
 
 from api_schemas.base import WireModel
-from api_schemas.results import StepResult
 from app.http.deps import LiveSessionDep, RegistryDep
 from app.http.errors import problem_responses
 from app.http.requests import WireRoute
 from app.http.responses import JSONTextResponse
 from app.inputs import DECODED_KINDS, INPUT_KINDS, DecodedKind, Input, InputKind
-from app.routes.fusion import OutputFrame, geodetic_output
+from app.routes.fusion import OutputFormat, OutputFrame, output_of, output_responses
 
 Explain = Annotated[bool, Query(description="add the association method's score matrix")]
 
@@ -29,12 +28,13 @@ def _submit_route(router: APIRouter, kind: InputKind[Any]) -> None:
         registry: RegistryDep,
         explain: Explain = False,
         frame: OutputFrame = "session",
+        format: OutputFormat = "json",
     ) -> JSONTextResponse:
-        # refused before anything is applied
-        geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
+        output = output_of(session.config, format, frame)  # refused before anything is applied
         submitted = Input(kind, report)
         return JSONTextResponse(
-            await registry.submit(session, submitted, explain=explain, geodetic=geodetic)
+            await registry.submit(session, submitted, explain=explain, output=output),
+            media_type=output.media_type,
         )
 
     submit.__annotations__["report"] = kind.report_model
@@ -44,8 +44,8 @@ def _submit_route(router: APIRouter, kind: InputKind[Any]) -> None:
         f"/{{sid}}/{kind.tag}",
         submit,
         methods=["POST"],
-        response_model=StepResult,
-        responses=problem_responses(401, 403, 404, 409, 408, 413, 422, 503),
+        response_model=None,  # the formats' models: output_responses
+        responses=output_responses("step", 401, 403, 404, 409, 408, 413, 422, 503),
         name=submit.__name__,
     )
 
@@ -61,12 +61,13 @@ def _decoded_route(router: APIRouter, kind: DecodedKind[Any]) -> None:
         registry: RegistryDep,
         explain: Explain = False,
         frame: OutputFrame = "session",
+        format: OutputFormat = "json",
     ) -> JSONTextResponse:
-        geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
+        output = output_of(session.config, format, frame)
         data = await request.body()
         return JSONTextResponse(
             await registry.submit_decoded(
-                session, kind, data, parameters, explain=explain, geodetic=geodetic
+                session, kind, data, parameters, explain=explain, output=output
             )
         )
 

@@ -56,7 +56,7 @@ import functools
 import logging
 import math
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from typing import Any, TypeVar
@@ -72,9 +72,10 @@ from app.errors import (
     SessionNotFound,
     StoreUnavailable,
 )
-from app.geo.geojson import GeodeticOutput
 from app.inputs import DecodedKind, Input, SessionView
 from app.metrics import ServiceMetrics
+from app.outputs import JSON, Output
+from app.outputs.json_results import track_fields
 from app.outputs.text import dumps
 from app.runtime import without_collection
 from app.sessions.hub import (
@@ -87,14 +88,7 @@ from app.sessions.hub import (
 )
 from app.sessions.live import LiveSession, new_session, restore_snapshot
 from app.sessions.log import logged_input
-from app.sessions.translate import (
-    PlainObject,
-    fusion_config,
-    picture_json,
-    session_geodetic,
-    step_json,
-    track_fields,
-)
+from app.sessions.translate import PlainObject, fusion_config
 from app.settings import Settings
 from app.stores import (
     LogEntry,
@@ -106,7 +100,6 @@ from app.stores import (
 )
 from core.fusion.config import FusionConfig
 from core.fusion.engine import SessionEngine
-from core.fusion.reports import FusedTrackView
 
 TINY_WORK = 64
 """Report tracks + live fused tracks up to which a step runs on the event loop.
@@ -123,17 +116,21 @@ T = TypeVar("T")
 
 @dataclass
 class Step:
-    """An applied (not yet logged) input: the engine that holds it, its result as JSON text,
-    the same with the tracks' geodetic positions if asked (by its sender or a subscriber),
-    the input as it is logged (all built beside the step, off the event loop) and the CPU
-    time of the engine step alone (the thread's)."""
+    """An applied (not yet logged) input: the engine that holds it, its result written in every
+    output asked (by its sender, or a subscriber of this instance; :data:`~app.outputs.JSON`
+    always), the input as it is logged (all built beside the step, off the event loop) and
+    the CPU time of the engine step alone (the thread's)."""
 
     engine: SessionEngine
     fusion: FusionConfig
-    result: str
-    geodetic: str | None
+    written: dict[Output, str]
     logged: PlainObject
     engine_cpu_s: float
+
+    @property
+    def result(self) -> str:
+        """The result as the contract's JSON in the session frame."""
+        return self.written[JSON]
 
 
 @dataclass(frozen=True)
@@ -378,10 +375,10 @@ class SessionRegistry:
         return sum(session.lease_deadline > now for session in self) if self.shared else 0
 
     # ------------------------------------------------------------ subscribers
-    async def subscribe(self, session: LiveSession, *, geodetic: bool = False) -> Subscriber:
-        """A subscriber of every result of the session published from now on, on any instance
-        (``geodetic``: it wants the tracks' geodetic positions, written beside each step)."""
-        subscriber = session.hub.subscribe(geodetic=geodetic)
+    async def subscribe(self, session: LiveSession, output: Output = JSON) -> Subscriber:
+        """A subscriber of every result of the session published from now on, on any instance,
+        written as ``output`` (beside each step, when this instance applies it)."""
+        subscriber = session.hub.subscribe(output=output)
         if self.shared:
             try:
                 await self._forward(session)
@@ -410,7 +407,7 @@ class SessionRegistry:
                 async with self.fanout.subscribe(session.id) as results:
                     subscribed.set_result(None)
                     async for message in results:
-                        session.hub.publish(Published(message))
+                        session.hub.publish(Published({JSON: message}))
             except Exception as error:
                 if not subscribed.done():
                     subscribed.set_exception(error)
@@ -442,17 +439,17 @@ class SessionRegistry:
         submitted: Input,
         *,
         explain: bool,
-        geodetic: GeodeticOutput | None = None,
+        outputs: frozenset[Output] = frozenset((JSON,)),
     ) -> Step:
-        """Apply an input to the session's engine (or a copy with a new sensor); logs nothing."""
+        """Apply an input to the session's engine (or a copy with a new sensor), write its
+        result in ``outputs`` (and JSON); logs nothing."""
         engine, fusion = session.engine_for(submitted.sensor, self.settings.max_sensors)
         applied = submitted.apply(engine, session.config, explain=explain)
         step, seq = applied.step, session.seq + 1
         return Step(
             engine=engine,
             fusion=fusion,
-            result=step_json(step, seq),  # serialised once, here
-            geodetic=None if geodetic is None else step_json(step, seq, geodetic),
+            written={output: output.step(step, seq) for output in outputs | {JSON}},  # once, here
             logged=submitted.logged(),
             engine_cpu_s=applied.engine_cpu_s,
         )
@@ -463,14 +460,14 @@ class SessionRegistry:
         submitted: Input,
         *,
         explain: bool = False,
-        geodetic: GeodeticOutput | None = None,
+        output: Output = JSON,
     ) -> str:
         """Apply one input (of any kind: :mod:`app.inputs`), log it durably, publish its
-        result, and return the answer to its sender (JSON text; ``geodetic``: with the
-        tracks' geodetic positions). It is checked against the session's config first."""
+        result, and return the answer to its sender (text of ``output``). It is checked
+        against the session's config first."""
         items = submitted.items
         await self._compute(items, functools.partial(submitted.check, session.config))
-        return await self._submit(session, submitted, items, explain=explain, geodetic=geodetic)
+        return await self._submit(session, submitted, items, explain=explain, output=output)
 
     async def submit_decoded(
         self,
@@ -480,7 +477,7 @@ class SessionRegistry:
         parameters: Any,
         *,
         explain: bool = False,
-        geodetic: GeodeticOutput | None = None,
+        output: Output = JSON,
     ) -> str:
         """Decode ``data`` (a kind of :data:`~app.inputs.DECODED_KINDS`) into inputs, checked
         against the session's config, then submit each in order; the kind's answer (JSON text).
@@ -489,7 +486,7 @@ class SessionRegistry:
         decode = functools.partial(kind.decode, data, parameters, view)
         decoded = await self._compute(len(data) // DECODED_BYTES_PER_ITEM, decode)
         results = [
-            await self.submit(session, item, explain=explain, geodetic=geodetic)
+            await self.submit(session, item, explain=explain, output=output)
             for item in decoded.inputs
         ]
         return kind.answer(decoded, results)
@@ -501,7 +498,7 @@ class SessionRegistry:
         items: int,
         *,
         explain: bool,
-        geodetic: GeodeticOutput | None,
+        output: Output,
     ) -> str:
         """Under the session lock: (lease,) apply, log durably, then publish and return the result.
 
@@ -511,10 +508,10 @@ class SessionRegistry:
         async with session.lock:
             if not session.closed:
                 return await self._submit_locked(
-                    session, submitted, items, explain=explain, geodetic=geodetic
+                    session, submitted, items, explain=explain, output=output
                 )
         return await self._submit(
-            await self.get(session.id), submitted, items, explain=explain, geodetic=geodetic
+            await self.get(session.id), submitted, items, explain=explain, output=output
         )
 
     async def _submit_locked(
@@ -524,18 +521,15 @@ class SessionRegistry:
         items: int,
         *,
         explain: bool,
-        geodetic: GeodeticOutput | None,
+        output: Output,
     ) -> str:
         """:meth:`_submit` once the session's lock is held."""
         kind, sensor = submitted.kind.tag, submitted.sensor
-        if geodetic is None and not self.shared and session.hub.wants_geodetic():
-            # for this instance's subscribers (with a shared store they are fed through Redis,
-            # the session-frame text only)
-            written = session_geodetic(session.config)
-        else:
-            written = geodetic
+        # this instance's subscribers are written for beside the step (with a shared store
+        # they are fed the JSON text through Redis and convert it)
+        outputs = {output} if self.shared else {output, *session.hub.outputs()}
         apply = functools.partial(
-            self._apply, session, submitted, explain=explain, geodetic=written
+            self._apply, session, submitted, explain=explain, outputs=frozenset(outputs)
         )
         with anyio.CancelScope(shield=True):
             if self.shared:
@@ -553,17 +547,12 @@ class SessionRegistry:
                 await self._publish(session, result_message(step.result))
             elif len(session.hub):
                 session.hub.publish(
-                    Published(
-                        result_message(step.result),
-                        None if step.geodetic is None else result_message(step.geodetic),
-                    )
+                    Published({kind: result_message(text) for kind, text in step.written.items()})
                 )
             session.since_snapshot += 1
             if session.since_snapshot >= self.settings.snapshot_every:
                 await self._snapshot(session)
-        if geodetic is not None and step.geodetic is not None:
-            return step.geodetic
-        return step.result
+        return step.written[output]
 
     async def _apply_and_log(
         self,
@@ -693,23 +682,17 @@ class SessionRegistry:
             logger.exception("session %s: snapshot at seq %d failed", session.id, session.seq)
 
     # ------------------------------------------------------------ reads
-    async def picture(
-        self,
-        session: LiveSession,
-        at: float | None,
-        write: Callable[[int, float | None, Sequence[FusedTrackView]], str] = picture_json,
-    ) -> str:
-        """``write(seq, time, views)`` of the live fused tracks predicted to ``at`` (default:
-        the fusion time), built off the event loop: a ``FusedPicture`` by default (the routes
-        pass the geodetic and GeoJSON writers)."""
+    async def picture(self, session: LiveSession, at: float | None, output: Output = JSON) -> str:
+        """The live fused tracks predicted to ``at`` (default: the fusion time) written as
+        ``output``, built off the event loop."""
         async with session.lock:
             engine = session.engine
             seq = session.seq
             if engine is None or engine.time is None:
-                return write(seq, at, ())
+                return output.picture(seq, at, ())
             time_of = engine.time if at is None else at
             return await self._compute(
-                len(engine.tracks), lambda: write(seq, time_of, engine.picture(at))
+                len(engine.tracks), lambda: output.picture(seq, time_of, engine.picture(at))
             )
 
     async def track_detail(self, session: LiveSession, track_id: str) -> PlainObject | None:

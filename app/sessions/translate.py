@@ -16,11 +16,10 @@ dataclasses, no intermediate lists); every non-finite score of a matrix is
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
-import orjson
 
 from api_schemas.associate import AssociateRequest
 from api_schemas.association import AssociationOptions
@@ -41,19 +40,14 @@ from app.geo.geodesy import (
     LocalFrame,
     heading_rotation,
 )
-from app.geo.geojson import GeodeticOutput, feature_collection
-from app.outputs.text import itemwise
+from app.geo.geojson import GeodeticOutput
+from app.outputs.json_results import finite_or_none
 from core.association import AssociationResult
 from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, TotalConflict
-from core.fusion.classes import ClassAssessment, accumulate_likelihoods
+from core.fusion.classes import accumulate_likelihoods
 from core.fusion.config import FusionConfig, SensorSpec
 from core.fusion.motion import MotionKind, MotionModel, StateLayout
-from core.fusion.reports import (
-    AssociationView,
-    FusedTrackView,
-    StepResult,
-)
 from core.fusion.state import StateFusion
 from core.geometry import FieldOfView, PolygonView, Sector
 from core.lifecycle import LifeCycleConfig
@@ -321,7 +315,11 @@ def session_geodetic(config: SessionConfig) -> GeodeticOutput | None:
     """Geodetic positions of the session's tracks (``?frame=geodetic``; ``None`` without an
     ``origin``)."""
     frame = session_origin(config)
-    return None if frame is None else GeodeticOutput(frame, tuple(config.state.position))
+    return (
+        None
+        if frame is None
+        else GeodeticOutput(frame, tuple(config.state.position), tuple(config.state.velocity))
+    )
 
 
 def sensor_site(sensor: SensorConfig | None, origin: LocalFrame | None) -> tuple[np.ndarray, float]:
@@ -337,189 +335,6 @@ def sensor_site(sensor: SensorConfig | None, origin: LocalFrame | None) -> tuple
     assert origin is not None and site.lat is not None and site.lon is not None  # config-checked
     altitude = origin.alt if site.alt is None else site.alt
     return origin.from_geodetic(site.lat, site.lon, altitude)[0], site.heading_deg
-
-
-def finite_or_none(value: float | None) -> float | None:
-    """``value`` if it is a finite number, else ``None``."""
-    return value if value is not None and math.isfinite(value) else None
-
-
-def _check_finite(views: Sequence[FusedTrackView]) -> None:
-    """Raise ``ValueError`` naming the first track with a non-finite state or covariance.
-
-    One test over every track of the step (the arrays are small: per-track
-    calls would cost more than the test); the culprit is looked for only then.
-    """
-    if not views:
-        return
-    states = np.concatenate([view.state for view in views])
-    covariances = np.concatenate([view.covariance.ravel() for view in views])
-    if np.isfinite(states).all() and np.isfinite(covariances).all():
-        return
-    for view in views:
-        for what, values in (("state", view.state), ("covariance", view.covariance)):
-            if not np.isfinite(values).all():
-                raise ValueError(f"fused track {view.id!r}: non-finite {what}")
-
-
-def _class_fast(assessment: ClassAssessment | None) -> PlainObject | None:
-    """A track's classification in the contract's shape; a non-finite conflict raises.
-
-    Under total conflict every distribution is ``None`` (only the state and the
-    conflict are known).
-    """
-    if assessment is None:
-        return None
-    conflict = float(assessment.conflict)
-    if not math.isfinite(conflict):
-        raise ValueError("non-finite class conflict")
-    mass = assessment.mass
-    if mass is None:
-        return {
-            "state": assessment.state.value,
-            "mass": None,
-            "pignistic": None,
-            "belief": None,
-            "plausibility": None,
-            "conflict": assessment.conflict,
-            "decision": None,
-            "decision_state": assessment.decision_state.value,
-            "summarized": assessment.summarized,
-        }
-    labels = mass.frame.labels
-    return {
-        "state": assessment.state.value,
-        "mass": [{"set": list(subset), "mass": value} for subset, value in mass.focal_sets()],
-        "pignistic": dict(zip(labels, assessment.pignistic.tolist(), strict=True)),
-        "belief": dict(zip(labels, assessment.belief.tolist(), strict=True)),
-        "plausibility": dict(zip(labels, assessment.plausibility.tolist(), strict=True)),
-        "conflict": assessment.conflict,
-        "decision": assessment.decision,
-        "decision_state": assessment.decision_state.value,
-        "summarized": assessment.summarized,
-    }
-
-
-def _track_fast(view: FusedTrackView) -> PlainObject:
-    score = float(view.score)
-    if not math.isfinite(score):
-        raise ValueError(f"fused track {view.id!r}: non-finite score")
-    return {
-        "id": view.id,
-        "status": view.status.value,
-        "state": np.ascontiguousarray(view.state, dtype=np.float64),  # finite: _check_finite
-        "covariance": np.ascontiguousarray(view.covariance, dtype=np.float64),
-        "sources": view.sources,  # frozen dataclasses (sensor, track, time): the wire names
-        "classification": _class_fast(view.classification),
-        "score": score,
-        "reason": view.reason.value,
-    }
-
-
-def _association_plain(association: AssociationView) -> PlainObject:
-    matrix = association.matrix
-    return {
-        "method": association.method,
-        "pairs": [
-            {"fused": fused, "track": track, "score": finite_or_none(score), "basis": basis}
-            for fused, track, score, basis in association.pairs
-        ],
-        "new": list(association.new),
-        "missed": list(association.missed),
-        "matrix": None
-        if matrix is None
-        else {
-            "rows": list(matrix[0]),
-            "cols": list(matrix[1]),
-            "values": [[finite_or_none(value) for value in row] for row in matrix[2].tolist()],
-        },
-    }
-
-
-def step_json(step: StepResult, seq: int, geodetic: GeodeticOutput | None = None) -> str:
-    """A step result in the contract's shape (``StepResult``), numbered ``seq`` (the
-    session's input number), as compact JSON text (hot path); ``geodetic``: with each
-    track's ``geodetic`` position (``?frame=geodetic``).
-
-    Refuses (``ValueError``) a non-finite time, state, covariance or score instead
-    of writing ``null``; a pair's or a matrix cell's non-finite score is ``null``.
-    """
-    if not math.isfinite(step.time):
-        raise ValueError("non-finite step time")
-    document = {
-        "seq": seq,
-        "time": step.time,
-        "sensor": step.sensor,
-        "tracks": track_items(step.tracks, geodetic),
-        "association": _association_plain(step.association),
-    }
-    return itemwise(document, wire_json)  # no single C call for a 10 MB answer
-
-
-def picture_json(
-    seq: int,
-    time: float | None,
-    views: Sequence[FusedTrackView],
-    geodetic: GeodeticOutput | None = None,
-) -> str:
-    """The live fused tracks at ``time`` (a ``FusedPicture``) as compact JSON text."""
-    document = {"seq": seq, "time": time, "tracks": track_items(views, geodetic)}
-    return itemwise(document, wire_json)
-
-
-def picture_geojson(
-    views: Sequence[FusedTrackView], geodetic: GeodeticOutput, velocity: tuple[int, ...]
-) -> str:
-    """The live fused tracks as a GeoJSON FeatureCollection (``?format=geojson``), written
-    a feature at a time."""
-    _check_finite(views)
-    tracks = [
-        {
-            "id": view.id,
-            "status": view.status.value,
-            "state": view.state,
-            "classification": _decision(view.classification),
-        }
-        for view in views
-    ]
-    return itemwise(feature_collection(tracks, geodetic, velocity))
-
-
-def _decision(assessment: ClassAssessment | None) -> PlainObject | None:
-    """What a GeoJSON feature says of a track's class: its decision and BetP."""
-    if assessment is None or assessment.mass is None:
-        return None
-    labels = assessment.mass.frame.labels
-    return {
-        "decision": assessment.decision,
-        "pignistic": dict(zip(labels, assessment.pignistic.tolist(), strict=True)),
-    }
-
-
-def track_items(
-    views: Sequence[FusedTrackView], geodetic: GeodeticOutput | None = None
-) -> Iterator[PlainObject]:
-    """Fused tracks in the contract's shape (``FusedTrack``), for :func:`wire_json`, made one
-    at a time as they are written (:func:`~app.outputs.text.itemwise`): states and
-    covariances stay numpy arrays, sources ``Source`` dataclasses (orjson writes both in C).
-    Refuses (``ValueError``, before the first) a non-finite state, covariance or score."""
-    _check_finite(views)
-    if geodetic is None:
-        return (_track_fast(view) for view in views)
-    points = geodetic.points([view.state for view in views])
-    return (
-        {**_track_fast(view), "geodetic": point} for view, point in zip(views, points, strict=True)
-    )
-
-
-def track_fields(views: Sequence[FusedTrackView]) -> list[PlainObject]:
-    """:func:`track_items` as a list."""
-    return list(track_items(views))
-
-
-def wire_json(document: object) -> str:
-    """Compact JSON text of a document holding :func:`track_fields` output."""
-    return orjson.dumps(document, option=orjson.OPT_SERIALIZE_NUMPY).decode()
 
 
 # ------------------------------------------------------- stateless associate

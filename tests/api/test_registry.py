@@ -13,6 +13,7 @@ import pytest
 
 from app.inputs import parse_input
 from app.metrics import ServiceMetrics
+from app.outputs import JSON
 from app.sessions.hub import SESSION_ENDED, Hub, Published
 from app.sessions.registry import SessionRegistry
 from app.stores import MemoryStore, SessionRecord
@@ -115,13 +116,13 @@ def test_slow_subscriber_gets_the_latest_results_never_a_backlog() -> None:
         hub = Hub()
         slow = hub.subscribe(capacity=4)
         for seq in range(1, 101):
-            hub.publish(Published(f"result {seq}"))
+            hub.publish(Published({JSON: f"result {seq}"}))
         assert slow.queue.qsize() == 4 and slow.dropped == 96
         assert [await slow.next() for _ in range(4)] == [
-            Published(f"result {n}") for n in range(97, 101)
+            Published({JSON: f"result {n}"}) for n in range(97, 101)
         ]
-        hub.publish(Published("result 101"))
-        assert await slow.next() == Published("result 101")
+        hub.publish(Published({JSON: "result 101"}))
+        assert await slow.next() == Published({JSON: "result 101"})
         hub.close()
         assert await slow.next() == SESSION_ENDED and len(hub) == 0
 
@@ -138,7 +139,7 @@ def test_subscriber_receives_published_results() -> None:
         received = []
         for _ in range(3):
             published = await subscriber.next()
-            assert isinstance(published, Published) and published.geodetic is None
+            assert isinstance(published, Published) and set(published.texts) == {JSON}
             received.append(json.loads(published.text)["result"])
         assert received == results
 
