@@ -145,9 +145,17 @@ def detection_report_issues(report: DetectionReport, config: SessionConfig) -> l
                     None,
                 )
             )
-        issues.extend(
-            _class_issues(detection.classification, config, ("detections", index, "classification"))
-        )
+        loc = ("detections", index, "classification")
+        issues.extend(_class_issues(detection.classification, config, loc))
+        if detection.classification is not None and config.tracking.preset is None:
+            issues.append(
+                FieldIssue(
+                    loc,
+                    "class evidence on detections joins the local tracks' classification, "
+                    "which needs 'tracking.preset'",
+                    None,
+                )
+            )
     return issues
 
 

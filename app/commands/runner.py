@@ -46,9 +46,9 @@ def run_locally(config: Body, inputs: Iterable[Input]) -> Iterator[Body]:
             continue
         submitted = parse_input(kind, body)
         submitted.check(session.config)
-        engine, fusion = session.engine_for(submitted.sensor, MAX_SENSORS)
-        applied = submitted.apply(engine, session.config, explain=False)
-        session.engine, session.fusion = engine, fusion
+        engine, _ = session.engine_for(submitted.sensor, MAX_SENSORS)
+        applied = submitted.apply(engine, session.config, explain=False)  # a refusal ends the run
+        session.engine = engine
         session.seq += 1
         yield json.loads(step_json(applied.step, session.seq))
 

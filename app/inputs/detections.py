@@ -8,6 +8,7 @@ positions with each detection's own covariance (:mod:`app.geo.polar`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -21,7 +22,7 @@ from api_schemas.ws import DetectionsMessage
 from app.geo.geodesy import LocalFrame, rotate_covariances
 from app.geo.polar import polar_to_cartesian
 from app.inputs.base import InputKind
-from app.sessions.translate import sensor_site, session_origin
+from app.sessions.translate import class_frame, evidence_mass, sensor_site, session_origin
 from core.fusion.engine import SessionEngine
 from core.fusion.reports import DetectionReport as CoreDetectionReport
 from core.fusion.reports import StepResult
@@ -117,8 +118,22 @@ def polar_detection_report(
 
 
 def core_detection_report(report: DetectionReport, config: SessionConfig) -> CoreDetectionReport:
-    """Wire detections as the core's: measurements (m × q) and, when any detection gives its
-    own ``r``, one R per detection (the sensor's ``measurement.r`` for the others)."""
+    """Wire detections as the core's: measurements (m × q), one R per detection when any
+    gives its own ``r`` (the sensor's ``measurement.r`` for the others), and the class
+    evidence of those that give it (a mass each on the session's class frame)."""
+    core = _measured(report, config)
+    frame = class_frame(config.classes)
+    if frame is None or all(d.classification is None for d in report.detections):
+        return core
+    masses = tuple(
+        None if d.classification is None else evidence_mass(d.classification, frame)
+        for d in report.detections
+    )
+    return dataclasses.replace(core, class_masses=masses)
+
+
+def _measured(report: DetectionReport, config: SessionConfig) -> CoreDetectionReport:
+    """The detections' measurements and noises for the core."""
     polar = config.sensor(report.sensor)
     if polar is not None and polar.measurement is not None and polar.measurement.kind == "polar":
         return polar_detection_report(report, config, polar)

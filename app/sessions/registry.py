@@ -64,7 +64,6 @@ from typing import Any, TypeVar
 import anyio
 from prometheus_client import Counter, Histogram
 
-from api_schemas.config import SessionConfig
 from app.cluster.fanout import ResultFanout, open_fanout
 from app.cluster.lease import SessionLeases, new_owner_id, open_leases
 from app.errors import (
@@ -88,7 +87,7 @@ from app.sessions.hub import (
 )
 from app.sessions.live import LiveSession, new_session, restore_snapshot
 from app.sessions.log import logged_input
-from app.sessions.translate import PlainObject, fusion_config
+from app.sessions.translate import PlainObject
 from app.settings import Settings
 from app.stores import (
     LogEntry,
@@ -98,7 +97,6 @@ from app.stores import (
     Snapshot,
     Store,
 )
-from core.fusion.config import FusionConfig
 from core.fusion.engine import SessionEngine
 
 TINY_WORK = 64
@@ -122,7 +120,6 @@ class Step:
     the CPU time of the engine step alone (the thread's)."""
 
     engine: SessionEngine
-    fusion: FusionConfig
     written: dict[Output, str]
     logged: PlainObject
     engine_cpu_s: float
@@ -195,15 +192,10 @@ class SessionRegistry:
         return await anyio.to_thread.run_sync(without_collection(function))
 
     # ------------------------------------------------------------ lifecycle
-    def check_config(self, config: SessionConfig) -> None:
-        """Refuse a config the engine cannot run (422 located at the field)."""
-        fusion_config(config, [] if config.sensors else ["probe"])
-
-    def add(self, record: SessionRecord) -> LiveSession:
-        """Register a session just created in the store."""
-        session = new_session(record)
-        self._sessions[record.id] = session
-        self._tokens[record.token_hash] = record.id
+    def add(self, session: LiveSession) -> LiveSession:
+        """Register a session just created in the store (:func:`~app.sessions.live.new_session`)."""
+        self._sessions[session.id] = session
+        self._tokens[session.record.token_hash] = session.id
         return session
 
     def knows_token(self, token_hash: str) -> bool:
@@ -255,7 +247,7 @@ class SessionRegistry:
             except Exception:
                 logger.exception("session %s: replay of input %d failed", record.id, entry.seq)
             else:
-                session.engine, session.fusion = step.engine, step.fusion
+                session.engine = step.engine
             sensor = str(entry.input.get("report", {}).get("sensor", ""))
             session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
             session.seq = entry.seq
@@ -443,12 +435,16 @@ class SessionRegistry:
     ) -> Step:
         """Apply an input to the session's engine (or a copy with a new sensor), write its
         result in ``outputs`` (and JSON); logs nothing."""
-        engine, fusion = session.engine_for(submitted.sensor, self.settings.max_sensors)
-        applied = submitted.apply(engine, session.config, explain=explain)
+        engine, joined = session.engine_for(submitted.sensor, self.settings.max_sensors)
+        try:
+            applied = submitted.apply(engine, session.config, explain=explain)
+        except BaseException:
+            if joined:
+                engine.leave(submitted.sensor)  # a refused input joins no sensor
+            raise
         step, seq = applied.step, session.seq + 1
         return Step(
             engine=engine,
-            fusion=fusion,
             written={output: output.step(step, seq) for output in outputs | {JSON}},  # once, here
             logged=submitted.logged(),
             engine_cpu_s=applied.engine_cpu_s,
@@ -600,7 +596,7 @@ class SessionRegistry:
             # the engine holds an unlogged step: rebuild on next use
             self.discard(session.id, SESSION_RELOADED)
             raise
-        session.engine, session.fusion = step.engine, step.fusion
+        session.engine = step.engine
         session.seq = seq
         session.last_input_at = received_at
         session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
@@ -654,7 +650,7 @@ class SessionRegistry:
         load = await self._io(self.store.load, session.id)
         fresh = await anyio.to_thread.run_sync(functools.partial(self._rebuild, load.session, load))
         logger.info("session %s: rebuilt from the store at seq %d", session.id, fresh.seq)
-        session.engine, session.fusion = fresh.engine, fresh.fusion
+        session.engine = fresh.engine
         session.seq = fresh.seq
         session.sensor_inputs = fresh.sensor_inputs
         session.last_input_at = fresh.last_input_at

@@ -338,24 +338,24 @@ def sensor_site(sensor: SensorConfig | None, origin: LocalFrame | None) -> tuple
 
 
 # ------------------------------------------------------- stateless associate
+def evidence_mass(evidence: ClassEvidence | None, frame: Frame) -> MassFunction:
+    """Reported class evidence as one mass function on ``frame``: focal sets as given,
+    likelihoods by [MTT] eq 10 (GBT); vacuous without evidence or when they contradict
+    themselves totally."""
+    vacuous = MassFunction.vacuous(frame)
+    if evidence is None:
+        return vacuous
+    if evidence.mass is not None:
+        return class_mass(evidence, frame)
+    try:
+        return accumulate_likelihoods(None, frame, class_likelihoods(evidence, frame))[0]
+    except TotalConflict:
+        return vacuous
+
+
 def evidence_masses(tracks: Sequence[SensorTrack], frame: Frame) -> list[MassFunction]:
     """Class masses of one side of ``POST /v1/associate`` (vacuous where a track has none)."""
-    vacuous = MassFunction.vacuous(frame)
-    masses = []
-    for track in tracks:
-        evidence = track.classification
-        if evidence is None:
-            masses.append(vacuous)
-        elif evidence.mass is not None:
-            masses.append(class_mass(evidence, frame))
-        else:
-            try:
-                masses.append(
-                    accumulate_likelihoods(None, frame, class_likelihoods(evidence, frame))[0]
-                )
-            except TotalConflict:
-                masses.append(vacuous)
-    return masses
+    return [evidence_mass(track.classification, frame) for track in tracks]
 
 
 def side_arrays(tracks: Sequence[SensorTrack], dim: int) -> tuple[np.ndarray, np.ndarray]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import threading
 from datetime import UTC, datetime, timedelta
@@ -15,6 +16,7 @@ from app.inputs import parse_input
 from app.metrics import ServiceMetrics
 from app.outputs import JSON
 from app.sessions.hub import SESSION_ENDED, Hub, Published
+from app.sessions.live import new_session as live_session
 from app.sessions.registry import SessionRegistry
 from app.stores import MemoryStore, SessionRecord
 from app.stores.base import StoreUsage
@@ -35,7 +37,7 @@ def new_session(target: SessionRegistry, config: dict[str, Any], sid: str = "s1"
         id=sid, config=config, token_hash="sha256:0", created_at=datetime.now(UTC)
     )
     target.store.create_session(record)
-    target.add(record)
+    target.add(live_session(record))
     return record
 
 
@@ -176,3 +178,32 @@ def test_only_the_memory_store_is_called_on_the_event_loop(tmp_path: Path) -> No
     assert MemoryStore.blocking is False
     assert SqliteStore(tmp_path / "s.db").blocking is True
     assert RedisStore.blocking is True
+
+
+def test_sensors_joining_an_open_session_equal_the_same_sensors_configured() -> None:
+    """A sensor joins an open session in place (no export and restore of the engine): step
+    for step the results equal those of a session that names the same sensors in the order
+    they joined (default reliability and P_D); an input the engine refuses joins no sensor."""
+
+    async def scenario() -> None:
+        target = registry()
+        sensors = ["radar-1", "radar-2", "radar-3"]
+        named = session_config(sensors)
+        for sensor in named["sensors"]:
+            sensor.pop("reliability"), sensor.pop("p_detect")  # the defaults, as a joined one
+        new_session(target, named, "named")
+        new_session(target, session_config(sensors) | {"sensors": []}, "open")
+        bodies = reports(9, sensors)
+        refused = bodies[1] | {"tracks": [dict(bodies[1]["tracks"][0], state=[1e300] * 4)]}
+        session = await target.get("open")
+        with contextlib.suppress(Exception):
+            await feed(target, "open", [bodies[0], refused])
+        assert session.sensor_ids() == ["radar-1"] and session.seq == 1
+        expected = await feed(target, "named", bodies)
+        assert await feed(target, "open", bodies[1:]) == expected[1:]
+        assert session.sensor_ids() == sensors
+        target.discard("open")
+        rebuilt = await target.get("open")
+        assert await target.picture(rebuilt, None) == await target.picture(session, None)
+
+    asyncio.run(scenario())
