@@ -28,7 +28,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from api_schemas.issues import wire_location
-from api_schemas.keys import allowed_keys
+from api_schemas.keys import allowed_keys, body_path
 from api_schemas.limits import LIMIT_EXCEEDED
 from api_schemas.problem import FieldError, Problem
 from app.errors import (
@@ -136,15 +136,20 @@ def field_errors(errors: Iterable[Mapping[str, Any]], root: object = None) -> li
 
     ``root`` is the type the body was validated as (it names the keys an object allows).
     """
-    return [
-        FieldError(
-            loc=list(error.get("loc", ())),
-            pointer=pointer(list(error.get("loc", ())), str(error.get("type", ""))),
-            detail=_detail(error, root),
-            type=str(error.get("type", "value_error")),
+    found = []
+    for error in errors:
+        loc = list(error.get("loc", ()))
+        if root is not None:
+            loc = body_path(root, loc)  # where the value is in the body: no union tags
+        found.append(
+            FieldError(
+                loc=loc,
+                pointer=pointer(loc, str(error.get("type", ""))),
+                detail=_detail(error, root),
+                type=str(error.get("type", "value_error")),
+            )
         )
-        for error in errors
-    ]
+    return found
 
 
 def _validation_detail(errors: list[FieldError], total: int) -> str:

@@ -49,7 +49,7 @@ import asterix  # type: ignore[import-untyped]  # asterix-decoder: untyped
 from pydantic import Field
 
 from api_schemas.base import Identifier, WireModel
-from api_schemas.config import SensorConfig, SessionConfig
+from api_schemas.config import PolarMeasurement, SensorConfig, SessionConfig
 from api_schemas.issues import FieldIssue
 from api_schemas.results import StepResult
 from app.errors import InvalidFields, ServiceError, located
@@ -346,7 +346,7 @@ def _scans(
     if not plots:
         return
     measurement = None if sensor is None else sensor.measurement
-    if measurement is None or measurement.kind != "polar":
+    if not isinstance(measurement, PolarMeasurement):
         raise InvalidFields(
             [
                 FieldIssue(

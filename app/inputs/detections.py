@@ -13,11 +13,16 @@ import math
 
 import numpy as np
 
-from api_schemas.config import SensorConfig, SessionConfig
+from api_schemas.config import (
+    CartesianMeasurement,
+    PolarMeasurement,
+    SensorConfig,
+    SessionConfig,
+)
 from api_schemas.consistency import detection_report_issues
 from api_schemas.events import DetectionsEvent
 from api_schemas.issues import FieldIssue
-from api_schemas.reports import DetectionReport
+from api_schemas.reports import CartesianDetection, DetectionReport, PolarDetection
 from api_schemas.ws import DetectionsMessage
 from app.geo.geodesy import LocalFrame, rotate_covariances
 from app.geo.polar import polar_to_cartesian
@@ -83,11 +88,12 @@ def polar_detection_report(
     tilt between the two planes is 0.009° per km from the origin.
     """
     noise = sensor.measurement
-    assert noise is not None
+    assert isinstance(noise, PolarMeasurement)
     dim = len(config.state.position)
     origin = session_origin(config)  # once, for the site and its axes
     site, _ = sensor_site(sensor, origin)
-    detections = report.detections
+    detections = [d for d in report.detections if isinstance(d, PolarDetection)]
+    assert len(detections) == len(report.detections)  # checked against the config before
     ranges = np.array([d.range for d in detections], dtype=np.float64)
     azimuths = np.array([d.azimuth_deg for d in detections], dtype=np.float64)
     elevations = (
@@ -134,17 +140,19 @@ def core_detection_report(report: DetectionReport, config: SessionConfig) -> Cor
 
 def _measured(report: DetectionReport, config: SessionConfig) -> CoreDetectionReport:
     """The detections' measurements and noises for the core."""
-    polar = config.sensor(report.sensor)
-    if polar is not None and polar.measurement is not None and polar.measurement.kind == "polar":
-        return polar_detection_report(report, config, polar)
-    dim = len(report.detections[0].z or ()) if report.detections else 2
-    measurements = np.array([d.z for d in report.detections], dtype=np.float64).reshape(-1, dim)
-    if all(detection.r is None for detection in report.detections):
+    sensor = config.sensor(report.sensor)
+    if sensor is not None and isinstance(sensor.measurement, PolarMeasurement):
+        return polar_detection_report(report, config, sensor)
+    detections = [d for d in report.detections if isinstance(d, CartesianDetection)]
+    assert len(detections) == len(report.detections)  # checked against the config before
+    dim = len(detections[0].z) if detections else 2
+    measurements = np.array([d.z for d in detections], dtype=np.float64).reshape(-1, dim)
+    if all(detection.r is None for detection in detections):
         return CoreDetectionReport(report.sensor, report.time, measurements, None)
-    sensor = next((s for s in config.sensors if s.id == report.sensor), None)
-    default = None if sensor is None or sensor.measurement is None else sensor.measurement.r
+    noise = None if sensor is None else sensor.measurement
+    default = noise.r if isinstance(noise, CartesianMeasurement) else None
     covariances = np.array(
-        [detection.r if detection.r is not None else default for detection in report.detections],
+        [detection.r if detection.r is not None else default for detection in detections],
         dtype=np.float64,
     )
     return CoreDetectionReport(report.sensor, report.time, measurements, covariances)

@@ -25,7 +25,7 @@ from api_schemas.associate import AssociateRequest
 from api_schemas.association import AssociationOptions
 from api_schemas.classification import ClassEvidence
 from api_schemas.config import (
-    MeasurementModel,
+    PolarMeasurement,
     PolygonFieldOfView,
     SectorFieldOfView,
     SensorConfig,
@@ -123,10 +123,11 @@ def local_tracker_config(
     tracking = config.tracking
     interval = tracking.time_interval
     axes = len(config.state.position)
+    noise = sensor.measurement
     r = (
-        polar_reference_noise(sensor.measurement, fov, axes)
-        if sensor.measurement.r is None
-        else tuple(tuple(float(x) for x in row) for row in sensor.measurement.r)
+        polar_reference_noise(noise, fov, axes)
+        if isinstance(noise, PolarMeasurement)
+        else tuple(tuple(float(x) for x in row) for row in noise.r)
     )
     bank = None
     if tracking.preset is None:
@@ -174,7 +175,7 @@ def range_rate_model(
     """A polar sensor's range-rate model (its site, ``sigma_range_rate``), or None without σ:
     the detections' ``range_rate`` then stays unused."""
     noise = sensor.measurement
-    if noise is None or noise.kind != "polar" or noise.sigma_range_rate is None:
+    if not isinstance(noise, PolarMeasurement) or noise.sigma_range_rate is None:
         return None
     site, _ = sensor_site(sensor, session_origin(config))
     return RangeRateModel(tuple(float(x) for x in site[:axes]), noise.sigma_range_rate)
@@ -185,7 +186,7 @@ POLAR_REFERENCE_RANGE = 50_000.0
 
 
 def polar_reference_noise(
-    noise: MeasurementModel, fov: FieldOfView | None, axes: int
+    noise: PolarMeasurement, fov: FieldOfView | None, axes: int
 ) -> tuple[tuple[float, ...], ...]:
     """The R a polar sensor's tracker uses where a detection's own covariance is not passed.
 
