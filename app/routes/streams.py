@@ -66,7 +66,8 @@ from app.routes.fusion import output_of
 from app.runtime import collection_paused, without_collection
 from app.sessions.hub import STORE_UNAVAILABLE, Ending, Published
 from app.sessions.live import LiveSession
-from app.sessions.registry import SessionRegistry, result_message
+from app.sessions.pipeline import result_message
+from app.sessions.registry import SessionRegistry
 
 router = APIRouter(prefix="/v1/sessions", route_class=WireRoute)
 logger = logging.getLogger("credal_fusion.streams")

@@ -37,7 +37,7 @@ from app.inputs.tracks import session_frame_report
 from app.outputs import FRAMES, OUTPUT_FORMATS, Output, output_for
 from app.outputs.json_results import step_json, wire_json
 from app.routes.streams import converted_message
-from app.sessions.registry import result_message
+from app.sessions.pipeline import result_message
 from app.sessions.translate import fusion_config, session_geodetic
 from core.fusion.engine import SessionEngine
 from core.fusion.reports import StepResult as CoreStepResult
