@@ -15,7 +15,7 @@ from fastapi.routing import APIRoute
 
 from app.http.body_limits import BodyLimits
 from app.http.errors import StoreUnavailable, install_error_handlers
-from app.http.rate_limit import RateLimit, parse_rates
+from app.http.rate_limit import RateLimit
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
 from app.routes import (
@@ -31,7 +31,7 @@ from app.routes import (
 )
 from app.runtime import CollectionTimes, LoopLag
 from app.sessions.registry import SessionRegistry
-from app.settings import Settings, get_settings
+from app.settings import Settings, get_settings, parse_rates
 from app.stores import open_store
 from core import __version__
 

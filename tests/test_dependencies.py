@@ -90,9 +90,19 @@ def test_importing_all_of_core_loads_neither_the_service_nor_the_evaluation() ->
     assert not {"filterpy", "yaml", "tqdm"} & tops
 
 
-WEB_FREE = ("app/errors.py", "app/sessions", "app/stores", "app/cluster", "app/geo", "app/outputs")
-"""The service's domain: errors, sessions, stores, cluster, geodesy and output writers know
-nothing of HTTP (the edge, ``app/http`` and ``app/routes``, maps their errors to problems)."""
+WEB_FREE = (
+    "app/errors.py",
+    "app/settings.py",
+    "app/inputs",
+    "app/sessions",
+    "app/stores",
+    "app/cluster",
+    "app/geo",
+    "app/outputs",
+)
+"""The service's domain: errors, settings, input kinds, sessions, stores, cluster, geodesy
+and output writers know nothing of HTTP (the edge, ``app/http`` and ``app/routes``, maps
+their errors to problems)."""
 
 
 def full_imports(path: Path) -> set[str]:
