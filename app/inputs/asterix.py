@@ -30,8 +30,10 @@ plots shorter than the antenna period (I034/041, else the session's
 
 Every record is accounted for in the answer: the input it went into, or
 why it did not (another source, a duplicate of a record already in the body,
-no position, older than the sensor's latest input, a category this kind does
-not read). Malformed data (a block longer than the body, a record the
+no position, older than the sensor's latest input). A block of a category this
+kind does not read is one ``unsupported_category`` entry, never handed to the
+decoder (its C code crashes the process on some malformed blocks of categories
+the service does not need; the three it reads are fuzzed in the tests). Malformed data (a block longer than the body, a record the
 decoder cannot read) is a 422 ``malformed-asterix`` problem with its byte
 ``offset``; nothing is applied.
 """
@@ -70,6 +72,8 @@ DEFAULT_NACP, DEFAULT_NACV = 8, 1
 TWO_D_95 = 2.4477
 """A 2-D Gaussian holds 95 % of its mass within 2.4477 σ: σ = EPU / 2.4477."""
 SOURCE_PATTERN = r"^\d{1,3}/\d{1,3}$"
+CATEGORIES = (21, 34, 48)
+"""The categories this kind reads (and hands to the decoder)."""
 
 Outcome = Literal[
     "detection",
@@ -182,6 +186,11 @@ def records(data: bytes) -> tuple[int, list[_Record]]:
     count = 0
     for offset, category, block in blocks(data):
         count += 1
+        if category not in CATEGORIES:
+            # not decoded (the decoder crashes on some malformed blocks of categories this
+            # kind does not read): the block is accounted for as one unread record
+            found.append(_Record(offset, category, {}, block))
+            continue
         decoded = asterix.parse(block, verbose=False)
         position = offset + 3
         for record in decoded:
@@ -236,7 +245,7 @@ class Asterix(DecodedKind[AsterixParameters]):
                 "time": None,
                 "outcome": "unsupported_category",
             }
-            if record.category not in (21, 34, 48):
+            if record.category not in CATEGORIES:
                 continue
             if record.source != source:
                 record.answer["outcome"] = "other_source"
@@ -303,7 +312,7 @@ def _configured(config: SessionConfig, sensor: str) -> SensorConfig | None:
 
 def _only_source(found: list[_Record]) -> str | None:
     """The one SAC/SIC of the records this kind reads (422 at ``query/source`` for several)."""
-    sources = sorted({r.source for r in found if r.category in (21, 34, 48) and r.source})
+    sources = sorted({r.source for r in found if r.category in CATEGORIES and r.source})
     if len(sources) > 1:
         raise InvalidFields(
             [
