@@ -4,7 +4,8 @@
 data blocks (``application/octet-stream``, as a radar or an ADS-B ground
 station sends them over UDP), or a binary message on the WebSocket
 ``stream`` (``…/stream?sensor=ID[&source=SAC/SIC]``). The blocks are framed
-here (category, length) and their records decoded by ``asterix-decoder``;
+here (category, length) and their records decoded by ``asterix-decoder`` (in a
+child process: :mod:`app.inputs.asterix_decoder`);
 each record of the ``source`` (default: the one source the data holds) becomes:
 
 - CAT048 (monoradar target reports) → a polar detection of the sensor (its
@@ -31,9 +32,9 @@ plots shorter than the antenna period (I034/041, else the session's
 Every record is accounted for in the answer: the input it went into, or
 why it did not (another source, a duplicate of a record already in the body,
 no position, older than the sensor's latest input). A block of a category this
-kind does not read is one ``unsupported_category`` entry, never handed to the
-decoder (its C code crashes the process on some malformed blocks of categories
-the service does not need; the three it reads are fuzzed in the tests). Malformed data (a block longer than the body, a record the
+kind does not read is one ``unsupported_category`` entry, never decoded. The
+decoder's C code crashes on some malformed blocks: it runs in a child process,
+and a block it dies on is refused like any malformed data. Malformed data (a block longer than the body, a record the
 decoder cannot read) is a 422 ``malformed-asterix`` problem with its byte
 ``offset``; nothing is applied.
 """
@@ -47,7 +48,6 @@ from dataclasses import dataclass, field
 from http import HTTPStatus
 from typing import Annotated, Any, Literal
 
-import asterix  # type: ignore[import-untyped]  # asterix-decoder: untyped
 from pydantic import Field
 
 from api_schemas.base import Identifier, WireModel
@@ -55,6 +55,7 @@ from api_schemas.config import PolarMeasurement, SensorConfig, SessionConfig
 from api_schemas.issues import FieldIssue
 from api_schemas.results import StepResult
 from app.errors import InvalidFields, ServiceError, located
+from app.inputs.asterix_decoder import IsolatedDecoder
 from app.inputs.base import Decoded, DecodedKind, Input, SessionView
 from app.inputs.detections import Detections
 from app.inputs.tracks import Tracks
@@ -74,6 +75,8 @@ TWO_D_95 = 2.4477
 SOURCE_PATTERN = r"^\d{1,3}/\d{1,3}$"
 CATEGORIES = (21, 34, 48)
 """The categories this kind reads (and hands to the decoder)."""
+DECODER = IsolatedDecoder()
+"""``asterix-decoder``, in a child process (:mod:`app.inputs.asterix_decoder`)."""
 
 Outcome = Literal[
     "detection",
@@ -191,7 +194,9 @@ def records(data: bytes) -> tuple[int, list[_Record]]:
             # kind does not read): the block is accounted for as one unread record
             found.append(_Record(offset, category, {}, block))
             continue
-        decoded = asterix.parse(block, verbose=False)
+        decoded = DECODER.parse(block)
+        if decoded is None:
+            raise MalformedAsterix(offset, f"the decoder cannot read this CAT{category:03d} block")
         position = offset + 3
         for record in decoded:
             length = int(record.get("len", 0))

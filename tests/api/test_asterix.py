@@ -27,6 +27,7 @@ import asterix  # type: ignore[import-untyped]
 import numpy as np
 from fastapi.testclient import TestClient
 
+from app.inputs.asterix_decoder import IsolatedDecoder
 from app.main import create_app
 from tests.api.asterix_encoding import (
     FL_LSB,
@@ -292,7 +293,7 @@ CRASHING_CAT205 = bytes.fromhex(
     "0102070840a0284057c004b0abcdef004d"
 )
 """A CAT205 block (CAT048 records under another category byte) on which the decoder's C code
-crashes the process: a category this kind does not read is never handed to it."""
+crashes its process."""
 
 FUZZ = """
 import random, sys
@@ -319,9 +320,9 @@ print("survived")
 
 
 def test_mutated_blocks_are_decoded_or_refused_never_crash_the_process() -> None:
-    """Random byte flips and truncations of well-formed CAT048/034/021 blocks, in a child
-    process (the decoder is C: a crash would take the server down): each is decoded or
-    refused as malformed."""
+    """Random byte flips and truncations of well-formed CAT048/034/021 blocks (run in a child
+    process, in case the isolation failed): each is decoded or refused as malformed, and the
+    process lives."""
     done = subprocess.run(
         [sys.executable, "-c", FUZZ, "7", "3000"],
         cwd=Path(__file__).resolve().parents[2],
@@ -343,3 +344,15 @@ def test_a_block_of_another_category_is_accounted_for_not_decoded(client: TestCl
         "unsupported_category",
     )
     assert len(answer.json()["results"]) == 1  # the radar's scan after it
+
+
+def test_the_decoder_crashing_on_a_block_costs_that_block_only() -> None:
+    """The C decoder dies on the CAT205 block; in its child process that is one refused block:
+    a fresh child decodes the next one."""
+    decoder = IsolatedDecoder()
+    try:
+        assert decoder.parse(CRASHING_CAT205) is None
+        decoded = decoder.parse(block(34, [cat034_north(*RADAR, START, PERIOD)]))
+        assert decoded is not None and decoded[0]["I041"]["RotS"]["val"] == PERIOD
+    finally:
+        decoder.close()
