@@ -75,6 +75,7 @@ from typing import Literal
 import numpy as np
 
 from core.classification.behaviours import LIKELIHOOD_SCALES, LikelihoodScale
+from core.classification.calibration import SIGNIFICANCE
 from core.classification.credal import ACCUMULATIONS, DISCOUNTS, Accumulation, Discount
 from core.errors import TrackingError
 from core.geometry import Coverage, FieldOfView, PolygonView
@@ -107,12 +108,16 @@ class ClassificationOptions:
     discount : "none" | "instantaneous" | "cumulative"
     reliability : λ, or None for the default of ``discount``
     accumulation : "classes" | "behaviours"
+    significance : κ of the mode likelihoods' noise calibration
+        (:mod:`core.classification.calibration`, docs/algorithms.md §5); None: the raw
+        likelihoods of [MTT] eq 18
     """
 
     likelihood_scale: LikelihoodScale = "max"
     discount: Discount = "none"
     reliability: float | None = None
     accumulation: Accumulation = "classes"
+    significance: float | None = SIGNIFICANCE
 
     def __post_init__(self) -> None:
         if self.likelihood_scale not in LIKELIHOOD_SCALES:
@@ -123,6 +128,15 @@ class ClassificationOptions:
             raise TrackingError(f"accumulation must be one of {ACCUMULATIONS}")
         if self.reliability is not None and not (0.0 <= self.reliability <= 1.0):
             raise TrackingError(f"reliability must be in [0, 1], got {self.reliability!r}")
+        if self.significance is not None and not (
+            math.isfinite(self.significance) and self.significance >= 0.0
+        ):
+            raise TrackingError(f"significance must be >= 0 or None, got {self.significance!r}")
+
+
+PAPER_CLASSIFICATION = ClassificationOptions(significance=None)
+"""[MTT]'s classification as printed: the raw mode likelihoods (the papers' experiments ask
+for it; the default calibrates them to the sensor's noise, §8.5)."""
 
 
 @dataclass(frozen=True)

@@ -58,6 +58,7 @@ from core.arrays import BoolArray, FloatArray, IntArray
 from core.belief import MassFunction
 from core.classification import CredalClassification
 from core.classification.batched import BatchedCredalClassifier, CredalBatch, dense_to_mass
+from core.classification.calibration import noise_calibrated_log_likelihoods
 from core.distance.estimates import check_covariances
 from core.errors import TrackingError
 from core.lifecycle import (
@@ -147,8 +148,10 @@ class LocalTracker:
             raise TrackingError("a range-rate needs velocities in the state, not headings")
         self._associator = DetectionAssociator(config, self.bank, self._score_model)
         self.classifier: BatchedCredalClassifier | None = None
+        self._significance: float | None = None
         if found is not None and config.classification is not None:
             chosen = config.classification
+            self._significance = chosen.significance
             self.classifier = BatchedCredalClassifier(
                 found.behaviours,
                 found.relation,
@@ -394,10 +397,19 @@ class LocalTracker:
         self._state = _replaced(prediction.as_state(), candidates, update.state)
         if self.classifier is not None and self._classes is not None and len(candidates):
             every = len(candidates) == len(self._rows)
+            log_likelihoods = update.log_likelihoods
+            significance = self._significance
+            if significance is not None:  # §8.5: what the sensor's noise alone gives is no evidence
+                log_likelihoods = noise_calibrated_log_likelihoods(
+                    log_likelihoods,
+                    update.innovations,
+                    update.innovation_covariances,
+                    significance,
+                )
             classified = self.classifier.update(
                 self._classes if every else self._classes.select(candidates),
                 update.log_mode_probabilities,
-                update.log_likelihoods,
+                log_likelihoods,
                 update.detected,
             )
             self._classes = classified if every else self._classes.replace(candidates, classified)
