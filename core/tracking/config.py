@@ -81,7 +81,7 @@ from core.errors import TrackingError
 from core.geometry import Coverage, FieldOfView, PolygonView
 from core.lifecycle import LifeCycleConfig, ScoreModel
 from core.tracking.models import LinearMeasurementModel, ModelBank
-from core.tracking.presets import TrackingPreset, preset
+from core.tracking.presets import TrackingPreset, preset, with_classes
 from core.tracking.range_rate import RangeRateModel
 
 ImmDistance = Literal["closest_model", "combined", "gated_combined"]
@@ -175,6 +175,9 @@ class LocalTrackerConfig:
     region : the surveillance region (default: union of the sensors' ranges).
     classification : credal options, or None for no classification; ignored
         when the bank has no classes.
+    class_behaviours : the session's own classes, each with the preset's behaviours it
+        allows (in the class frame's order; :func:`core.tracking.presets.with_classes`);
+        None: the preset's classes.
     id_prefix : track ids are ``f"{id_prefix}{n}"``, n = 1, 2, ...
     """
 
@@ -204,6 +207,7 @@ class LocalTrackerConfig:
     )
     region: PolygonView | None = None
     classification: ClassificationOptions | None = field(default_factory=ClassificationOptions)
+    class_behaviours: Mapping[str, tuple[str, ...]] | None = None
     id_prefix: str = "L"
 
     def __post_init__(self) -> None:
@@ -238,16 +242,18 @@ class LocalTrackerConfig:
         object.__setattr__(self, "life_cycle", self.life_cycle.for_dimension(measured))
 
     def tracking_preset(self) -> TrackingPreset | None:
-        """The preset, or None when an explicit bank replaces it."""
+        """The preset (with the session's own classes, ``class_behaviours``), or None when
+        an explicit bank replaces it."""
+        if self.bank is not None:
+            return None
+        found = preset(
+            self.preset,
+            time_interval=self.time_interval,
+            axes=self.axes,
+            **dict(self.preset_options),
+        )
         return (
-            None
-            if self.bank is not None
-            else preset(
-                self.preset,
-                time_interval=self.time_interval,
-                axes=self.axes,
-                **dict(self.preset_options),
-            )
+            found if self.class_behaviours is None else with_classes(found, self.class_behaviours)
         )
 
     def model_bank(self) -> ModelBank:
