@@ -9,8 +9,8 @@ altitude taken as height) → ECEF → ENU at :data:`ORIGIN` (pymap3d). Glitches
 are dropped (a record that implies more than :data:`MAX_SPEED` horizontally or
 :data:`MAX_CLIMB` vertically from the last one kept), gaps up to
 :data:`MAX_GAP` are bridged, and the positions are smoothed on a 1 s grid by
-a Savitzky–Golay filter (:data:`SMOOTHING` s, quadratic), whose derivative is
-the velocity: ADS-B positions jitter by tens of metres along track.
+a Savitzky–Golay filter (:data:`SMOOTHING` s, quadratic), whose derivative on
+the grid is the velocity: ADS-B positions jitter by tens of metres along track.
 
 **Sensors** (:data:`RADARS`, :data:`ADSB`). Three 3-D polar radars at
 geodetic sites 20–100 km from most aircraft: range, azimuth from the site's
@@ -195,7 +195,7 @@ def load_flights(path: Path = EXTRACT, origin: tuple[float, float, float] = ORIG
             continue
         raw = np.stack([np.interp(grid, t, enu[:, k]) for k in range(3)], axis=-1)
         smooth = savgol_filter(raw, SMOOTHING, 2, axis=0)
-        velocity = savgol_filter(raw, SMOOTHING, 2, deriv=1, axis=0)
+        velocity = np.gradient(smooth, axis=0)  # the truth's own derivative (1 s grid)
         geodetic = np.stack(pymap3d.enu2geodetic(*smooth.T, *origin), axis=-1)
         flights.append(
             Flight(callsign, rows[0]["icao24"], kind_of(callsign), grid, smooth, velocity, geodetic)
