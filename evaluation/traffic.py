@@ -521,6 +521,18 @@ class TrafficScore:
         return (tally["fighter"] + tally["bomber"]) / decided if decided else 0.0
 
 
+def decided_shares(score: TrafficScore, kind: str) -> tuple[float, float]:
+    """Of ``kind``'s held pictures: the share decided at all, and the share decided fighter
+    or bomber (with the preset's Γ, where no behaviour supports ``liner`` alone, kinematics
+    can never decide an airliner ``liner``: its honest state is undecided)."""
+    tally = score.decisions.get(kind, Counter())
+    held = sum(tally.values())
+    if not held:
+        return 0.0, 0.0
+    decided = held - tally["undecided"]
+    return decided / held, (tally["fighter"] + tally["bomber"]) / held
+
+
 def assess(scene: Scene, run: ServiceRun) -> TrafficScore:
     """Match every picture's live tracks to the aircraft and measure (module docstring)."""
     flights = scene.flights
