@@ -62,6 +62,7 @@ from core.classification.calibration import noise_calibrated_log_likelihoods
 from core.distance.estimates import check_covariances
 from core.errors import TrackingError
 from core.lifecycle import (
+    CONFIRMED,
     PHANTOM,
     REASON_CODES,
     REASONS,
@@ -397,7 +398,7 @@ class LocalTracker:
         self._state = _replaced(prediction.as_state(), candidates, update.state)
         if self.classifier is not None and self._classes is not None and len(candidates):
             every = len(candidates) == len(self._rows)
-            log_likelihoods = update.log_likelihoods
+            log_likelihoods, detected = update.log_likelihoods, update.detected
             significance = self._significance
             if significance is not None:  # §8.5: what the sensor's noise alone gives is no evidence
                 log_likelihoods = noise_calibrated_log_likelihoods(
@@ -406,11 +407,15 @@ class LocalTracker:
                     update.innovation_covariances,
                     significance,
                 )
+                # and only a track confirmed and detected at its previous scan compares the
+                # models over one revisit (a tentative track's velocity is a guess, a coasting
+                # one's prediction spans a gap)
+                detected = detected & (self._rows.life.status[candidates] == CONFIRMED)
             classified = self.classifier.update(
                 self._classes if every else self._classes.select(candidates),
                 update.log_mode_probabilities,
                 log_likelihoods,
-                update.detected,
+                detected,
             )
             self._classes = classified if every else self._classes.replace(candidates, classified)
 
