@@ -58,7 +58,10 @@ from core.arrays import BoolArray, FloatArray, IntArray
 from core.belief import MassFunction
 from core.classification import CredalClassification
 from core.classification.batched import BatchedCredalClassifier, CredalBatch, dense_to_mass
-from core.classification.calibration import noise_calibrated_log_likelihoods
+from core.classification.calibration import (
+    noise_calibrated_log_likelihoods,
+    sharp_predictions,
+)
 from core.distance.estimates import check_covariances
 from core.errors import TrackingError
 from core.lifecycle import (
@@ -407,10 +410,18 @@ class LocalTracker:
                     update.innovation_covariances,
                     significance,
                 )
-                # and only a track confirmed and detected at its previous scan compares the
-                # models over one revisit (a tentative track's velocity is a guess, a coasting
-                # one's prediction spans a gap)
-                detected = detected & (self._rows.life.status[candidates] == CONFIRMED)
+                # and only a track confirmed and detected at its previous scan, whose best
+                # model predicted sharply, compares the models over one manoeuvre (a
+                # tentative track's velocity is a guess, a coasting one spans a gap)
+                h = self.bank.measurement.matrix
+                predicted = h @ prediction.covariances[candidates] @ h.T
+                detected = (
+                    detected
+                    & (self._rows.life.status[candidates] == CONFIRMED)
+                    & sharp_predictions(
+                        update.log_likelihoods, update.innovation_covariances, predicted
+                    )
+                )
             classified = self.classifier.update(
                 self._classes if every else self._classes.select(candidates),
                 update.log_mode_probabilities,

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from core.classification.calibration import noise_calibrated_log_likelihoods
+from core.classification.calibration import noise_calibrated_log_likelihoods, sharp_predictions
 from core.lifecycle import LifeCycleConfig
 from core.simulation.nearby import crossing_scenario
 from core.tracking.config import ClassificationOptions, LocalTrackerConfig
@@ -93,3 +93,16 @@ def test_the_papers_fighter_is_still_recognised_with_the_calibration() -> None:
     assert fighter is not None and other is not None and fighter != other
     assert run.pignistic_of(fighter, scenario.n_steps, 3)[-1][2] > 0.99
     np.testing.assert_allclose(run.pignistic_of(other, scenario.n_steps, 3)[-1], 1 / 3, atol=1e-9)
+
+
+def test_a_step_is_evidence_only_where_the_best_model_predicted_sharply() -> None:
+    """Worked by hand, q = 3, sharpness 2: R = I; the best model (the larger likelihood)
+    predicted with H P Hᵀ = 3.9 I (σ just under twice the detection's: kept) in the first row and 9 I
+    (three times: dropped) in the second; the other model's spread does not matter; a row
+    without a detection is dropped."""
+    eye = np.eye(3)
+    predicted = np.array([[3.9 * eye, 100 * eye], [100 * eye, 9 * eye], [eye, eye]])
+    innovation = predicted + eye
+    log_likelihoods = np.array([[0.0, -1.0], [-1.0, 0.0], [np.nan, np.nan]])
+    kept = sharp_predictions(log_likelihoods, innovation, predicted, sharpness=2.0)
+    np.testing.assert_array_equal(kept, [True, False, False])
