@@ -98,7 +98,7 @@ def main() -> int:
         + f" {'wall s':>6}"
     )
     scores = {}
-    with live_service() as url, httpx.Client(base_url=url, timeout=120) as client:
+    with live_service() as url:
         runs: list[tuple[str, list[str] | None, Any]] = [
             ("fused", None, session_config),
             *((radar.id, [radar.id], session_config) for radar in scene.radars),
@@ -106,7 +106,9 @@ def main() -> int:
         if args.tuned:
             runs.append(("fused, term. off", None, termination_off))
         for label, sensors, config in runs:
-            run = run_service(client, scene, sensors, config=config)
+            # a client per run: the scoring between runs outlasts the server's keep-alive
+            with httpx.Client(base_url=url, timeout=120) as client:
+                run = run_service(client, scene, sensors, config=config)
             scores[label] = score = assess(scene, run)
             print(_row(label, score, run.seconds, score.rmse(radar_only)), flush=True)
     print(
