@@ -23,6 +23,7 @@ def _serve(args: argparse.Namespace) -> int:
     import uvicorn
 
     from app.http.keepalive import server_options
+    from app.http.transport import raise_descriptor_limit
     from app.main import create_app
     from app.runtime import tune_garbage_collector
     from app.settings import get_settings
@@ -43,6 +44,7 @@ def _serve(args: argparse.Namespace) -> int:
     )
     application = create_app(settings)
     tune_garbage_collector()
+    raise_descriptor_limit()  # the connection limits decide, not the descriptor limit
     uvicorn.run(
         application,
         host=settings.host,

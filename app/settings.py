@@ -15,12 +15,14 @@ from api_schemas.base import MAX_CLASSES
 from api_schemas.limits import MAX_FOCAL_SETS, MAX_ITEMS, MAX_SENSORS, WireLimits
 from app.http.errors import MAX_LISTED_ERRORS
 from app.http.rate_limit import parse_rates
+from app.http.transport import TransportLimits
 from app.stores.redis_keys import DEFAULT_PREFIX
 
 DEFAULT_STORE = "sqlite:data/credal-fusion.db"
 MIN_ADMIN_TOKEN_LENGTH = 32
 """An admin token opens every session: at least 32 characters (``secrets.token_urlsafe(24)``)."""
 DEFAULTS = WireLimits()
+TRANSPORT = TransportLimits()
 
 
 class Settings(BaseSettings):
@@ -51,6 +53,34 @@ class Settings(BaseSettings):
         gt=0.0,
         description="seconds a client may take to send a request body; slower: 408 "
         "(a client trickling bytes cannot hold a connection and a buffer forever)",
+    )
+    max_header_bytes: int = Field(
+        TRANSPORT.max_header_bytes,
+        ge=1024,
+        description="request line and headers of one request; more: 431 and the connection closed",
+    )
+    max_header_count: int = Field(
+        TRANSPORT.max_header_count, ge=8, description="header lines of one request (431)"
+    )
+    request_head_timeout: float = Field(
+        TRANSPORT.request_head_timeout,
+        gt=0.0,
+        description="seconds from a connection (or a request's first byte) to the end of its "
+        "headers; slower: 408 and the connection closed (slowloris)",
+    )
+    keep_alive_timeout: float = Field(
+        5.0, gt=0.0, description="seconds an idle keep-alive connection stays open"
+    )
+    max_connections: int = Field(
+        TRANSPORT.max_connections,
+        ge=1,
+        description="open connections in all; at the limit a new one closes the oldest "
+        "connection still waiting for a request head, or gets 503 if none is",
+    )
+    max_connections_per_client: int = Field(
+        TRANSPORT.max_connections_per_client,
+        ge=1,
+        description="open connections (HTTP and WebSocket) of one client address; one more: 429",
     )
     access_log: bool = Field(
         True,
@@ -137,6 +167,16 @@ class Settings(BaseSettings):
                 "python -c 'import secrets; print(secrets.token_urlsafe(32))'"
             )
         return value
+
+    def transport_limits(self) -> TransportLimits:
+        """The limits the HTTP protocol checks before the application (:mod:`app.http.transport`)."""
+        return TransportLimits(
+            max_header_bytes=self.max_header_bytes,
+            max_header_count=self.max_header_count,
+            request_head_timeout=self.request_head_timeout,
+            max_connections=self.max_connections,
+            max_connections_per_client=self.max_connections_per_client,
+        )
 
     def wire_limits(self) -> WireLimits:
         """The limits the wire models check before validating a list's items."""

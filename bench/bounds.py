@@ -1,6 +1,8 @@
 """Bounded work: the heaviest legal input of each route, with ``/healthz`` polled meanwhile.
 
-Run with ``python bench/bounds.py`` (``make bench`` runs it too). The service
+Run with ``python bench/bounds.py`` (``make bench`` runs it too; ``--crowd``: only
+the transport rows of an anonymous crowd, a 64 MB header and 3 000 slowloris
+connections). The service
 runs as a subprocess with its default limits (memory store); for each route
 this process sends the largest input those limits allow while a thread polls
 ``/healthz`` every 5 ms on its own connection. Prints, per route: the answer's
@@ -15,8 +17,10 @@ the tests (``tests/api/test_bounds.py``) assert the answers and sizes.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import multiprocessing
+import socket
 import statistics
 import sys
 import time
@@ -306,11 +310,91 @@ def geodetic_and_stream_rows(url: str, c: httpx.Client, max_bytes: int) -> list[
     return rows
 
 
+def raw_port(url: str) -> int:
+    return int(url.rsplit(":", 1)[1])
+
+
+def huge_header(url: str, megabytes: int) -> tuple[int, int]:
+    """One request whose header is ``megabytes`` MB, written until the server answers or closes."""
+    head = b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Pad: "
+    piece = b"a" * 65536
+    received = b""
+    with socket.create_connection(("127.0.0.1", raw_port(url)), timeout=120) as connection:
+        with contextlib.suppress(OSError):
+            connection.sendall(head)
+            for _ in range(megabytes * 16):
+                connection.sendall(piece)
+            connection.sendall(b"\r\n\r\n")
+        with contextlib.suppress(OSError):
+            while chunk := connection.recv(65536):
+                received += chunk
+                if b"\r\n\r\n" in received:
+                    break
+    status = int(received.split(b" ", 2)[1]) if received else 0
+    return status, len(received)
+
+
+def slowloris(url: str, count: int, addresses: int, hold_s: float) -> tuple[int, int]:
+    """``count`` connections from ``addresses`` loopback addresses, each trickling a request
+    head one byte every 0.5 s for ``hold_s``; (200, how many the server still held)."""
+    connections = []
+    for index in range(count):
+        source = f"127.0.{index % addresses // 250 + 10}.{index % addresses % 250 + 1}"
+        with contextlib.suppress(OSError):
+            connections.append(
+                socket.create_connection(
+                    ("127.0.0.1", raw_port(url)), timeout=5, source_address=(source, 0)
+                )
+            )
+    head = b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Slow: " + b"a" * 1000
+    deadline = time.monotonic() + hold_s
+    sent = 0
+    while time.monotonic() < deadline:
+        for connection in connections:
+            with contextlib.suppress(OSError):
+                connection.send(head[sent : sent + 1])
+        sent += 1
+        time.sleep(0.5)
+    held = 0
+    for connection in connections:
+        connection.setblocking(False)
+        try:
+            connection.recv(65536)  # an answer (a refusal) or the end: not held
+        except BlockingIOError:
+            held += 1  # nothing to read: still open, waiting
+        except OSError:
+            pass
+        connection.close()
+    return 200, held
+
+
+def crowd_rows(url: str) -> list[dict[str, Any]]:
+    """What an anonymous client can spend before any route runs (issue 28): headers, slowloris.
+    A slowloris row's answer is how many of its connections the server still held."""
+    rows = [measure(url, "a 64 MB header", lambda _: huge_header(url, 64))]
+    for addresses in (1, 300):
+        row = measure(
+            url,
+            f"3 000 slowloris connections from {addresses} address(es), 10 s",
+            lambda _, a=addresses: slowloris(url, 3000, a, 10.0),
+        )
+        row["note"] = f"{row.pop('answer_bytes')} connections still held"
+        row["answer_bytes"] = 0
+        rows.append(row)
+    return rows
+
+
 def main() -> int:
     max_bytes = Settings().max_body_bytes
     port = free_port()
     rows = []
+    crowd_only = "--crowd" in sys.argv[1:]
     with server(service_command(port), port) as url, httpx.Client(base_url=url, timeout=300) as c:
+        if crowd_only:
+            rows.append(baseline := idle(url))
+            rows += crowd_rows(url)
+            print_rows(rows, baseline)
+            return 0
 
         def config_with(polygons: int) -> dict[str, Any]:
             """64 sensors, the first ``polygons`` with a 1 000-vertex field of view."""
@@ -427,6 +511,12 @@ def main() -> int:
                 )
             )
 
+        rows += crowd_rows(url)
+    print_rows(rows, baseline)
+    return 0
+
+
+def print_rows(rows: list[dict[str, Any]], baseline: dict[str, Any]) -> None:
     width = max(len(row["route"]) for row in rows)
     idle_max = max(baseline["healthz_max_ms"], 0.1)
     print(
@@ -439,7 +529,7 @@ def main() -> int:
             f"{row['request_ms']:10.0f}  {row['loop_lag_ms']:13.0f}  {row['gc_ms']:7.0f}  "
             f"{row['healthz_max_ms']:14.1f}  "
             f"{row['healthz_max_ms'] / idle_max:10.1f}  {row['healthz_p50_ms']:6.1f}  "
-            f"{row['healthz_failures']:8}"
+            f"{row['healthz_failures']:8}  {row.get('note', '')}"
         )
     worst = max(row["healthz_max_ms"] for row in rows)
     worst_lag = max(row["loop_lag_ms"] for row in rows)
@@ -451,7 +541,6 @@ def main() -> int:
         f"(target {TARGET_LOOP_LAG_MS:.0f} ms; the server's credal_event_loop_lag_seconds "
         "histogram, read before and after each route: the bound of the highest bucket reached)"
     )
-    return 0
 
 
 if __name__ == "__main__":

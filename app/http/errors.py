@@ -232,6 +232,55 @@ class BodyTooSlow(ServiceError):  # noqa: N818 - HTTP vocabulary
         )
 
 
+class HeadersTooLarge(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """A request head beyond ``limit`` (:mod:`app.http.transport`), refused unparsed."""
+
+    status = HTTPStatus.REQUEST_HEADER_FIELDS_TOO_LARGE
+    slug = "headers-too-large"
+    title = "Request headers too large"
+
+    def __init__(self, what: str, limit: str, maximum: int) -> None:
+        super().__init__(
+            f"request {what} exceed limit {limit} = {maximum}", limit=limit, maximum=maximum
+        )
+
+
+class HeadTooSlow(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """A request head not received within ``request_head_timeout`` (:mod:`app.http.transport`)."""
+
+    status = HTTPStatus.REQUEST_TIMEOUT
+    slug = "head-too-slow"
+    title = "Request head too slow"
+
+    def __init__(self, limit: str, maximum: float) -> None:
+        super().__init__(
+            f"the request head was not received within limit {limit} = {maximum} s",
+            limit=limit,
+            maximum=maximum,
+        )
+
+
+class TooManyConnections(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """A connection beyond ``max_connections_per_client`` (429) or ``max_connections`` (503)."""
+
+    status = HTTPStatus.SERVICE_UNAVAILABLE
+    slug = "too-many-connections"
+    title = "Too many connections"
+
+    def __init__(self, limit: str, maximum: int, who: str, status: int) -> None:
+        super().__init__(
+            f"{who} has {maximum} open connections: limit {limit} = {maximum}; "
+            "close one, or reuse one (keep-alive)",
+            limit=limit,
+            maximum=maximum,
+        )
+        self._status = status
+
+    @property
+    def status_code(self) -> int:
+        return self._status
+
+
 class TrackNotFound(ServiceError):  # noqa: N818 - HTTP vocabulary
     """The session has no live fused track with this id."""
 

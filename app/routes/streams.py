@@ -161,6 +161,12 @@ def geodetic_message(message: str, geodetic: GeodeticOutput) -> str:
     return itemwise(document)
 
 
+def message_bytes(text: str, limit: int) -> int:
+    """A text message's size in UTF-8 bytes (what ``max_body_bytes`` counts: a character is 1 to
+    4 bytes); past ``limit`` in characters already, that length (a lower bound) is enough."""
+    return len(text) if len(text) > limit else len(text.encode("utf-8", "surrogatepass"))
+
+
 def _ack(session: LiveSession) -> str:
     return dumps({"type": "ack", "ref": None, "seq": session.seq})
 
@@ -263,10 +269,11 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
                 text = incoming.get("text")
                 if text is None:
                     text = bytes(incoming.get("bytes") or b"").decode("utf-8", errors="replace")
-                if len(text) > settings.max_body_bytes:
+                size = message_bytes(text, settings.max_body_bytes)
+                if size > settings.max_body_bytes:
                     answer = _refusal(
                         LimitExceeded(
-                            "max_body_bytes", settings.max_body_bytes, len(text), what="message"
+                            "max_body_bytes", settings.max_body_bytes, size, what="message (bytes)"
                         ),
                         path,
                     )

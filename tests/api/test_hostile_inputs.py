@@ -18,6 +18,7 @@ is still accepted.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import http.client
 import json
@@ -83,6 +84,7 @@ def scene() -> Iterator[Scene]:
         max_focal_sets=MAX_FOCAL_SETS,
         ws_messages_per_second=WS_RATE,
         body_read_timeout=0.5,
+        request_head_timeout=1.0,
         rate_limit="none",
     )
     with serving(settings) as server, httpx.Client(base_url=server.url, timeout=30.0) as http:
@@ -165,6 +167,48 @@ def raw_http(request: bytes, *, wait: float = 2.0) -> Callable[[Scene], list[Ans
         return [Answer(status, content_type, body)]
 
     return send
+
+
+def raw_head(head: bytes, *, chunk: int = 65536) -> Callable[[Scene], list[Answer]]:
+    """A request head written in pieces until the server answers or closes (a refusal of a
+    head too large comes before the head ends); the answer's status read back."""
+
+    def send(scene: Scene) -> list[Answer]:
+        port = int(scene.server.url.rsplit(":", 1)[1])
+        with socket.create_connection(("127.0.0.1", port), timeout=10.0) as connection:
+            with contextlib.suppress(OSError):  # closed by the server mid-way: read its answer
+                for start in range(0, len(head), chunk):
+                    connection.sendall(head[start : start + chunk])
+            received = b""
+            with contextlib.suppress(OSError):
+                while chunk_in := connection.recv(65536):
+                    received += chunk_in
+        return [_parsed(received)]
+
+    return send
+
+
+def _parsed(received: bytes) -> Answer:
+    if not received:
+        return Answer(499, "closed", b"")
+    head, _, body = received.partition(b"\r\n\r\n")
+    content_type = ""
+    for line in head.split(b"\r\n")[1:]:
+        name, _, value = line.partition(b":")
+        if name.strip().lower() == b"content-type":
+            content_type = value.strip().decode()
+    return Answer(int(head.split(b" ", 2)[1]), content_type, body)
+
+
+def naming(limit: str, send: Callable[[Scene], list[Answer]]) -> Callable[[Scene], list[Answer]]:
+    """``send``, whose first answer must be the refusal that names ``limit``."""
+
+    def checked(scene: Scene) -> list[Answer]:
+        answers = send(scene)
+        assert json.loads(answers[0].body).get("limit") == limit, answers[0]
+        return answers
+
+    return checked
 
 
 def ws_messages(*frames: str | bytes) -> Callable[[Scene], list[Answer]]:
@@ -409,6 +453,26 @@ CASES: dict[str, Callable[[Scene], list[Answer]]] = {
             response.content,
         )
     ],
+    "a 4 MB header (max_header_bytes)": naming(
+        "max_header_bytes",
+        raw_head(b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Pad: " + b"a" * (4 << 20) + b"\r\n\r\n"),
+    ),
+    "a 4 MB request line (max_header_bytes)": naming(
+        "max_header_bytes",
+        raw_head(b"GET /healthz?" + b"a" * (4 << 20) + b" HTTP/1.1\r\nHost: x\r\n\r\n"),
+    ),
+    "101 header lines (max_header_count)": naming(
+        "max_header_count",
+        raw_head(
+            b"GET /healthz HTTP/1.1\r\nHost: x\r\n"
+            + b"".join(b"X-%d: 1\r\n" % index for index in range(100))
+            + b"\r\n"
+        ),
+    ),
+    "head slower than request_head_timeout": naming(
+        "request_head_timeout",
+        raw_http(b"GET /v1/sessions/{sid} HTTP/1.1\r\nHost: x\r\n", wait=1.5),
+    ),
     # --- WebSocket abuse
     "ws: not JSON": ws_messages("hello"),
     "ws: nested 30 000 deep": ws_messages(nested(30_000)),
@@ -417,6 +481,12 @@ CASES: dict[str, Callable[[Scene], list[Answer]]] = {
     ),
     "ws: message over 4 × max_body_bytes": ws_oversize(
         json.dumps({"type": "tracks", "pad": "x" * (4 * MAX_BODY)})
+    ),
+    "ws: 3-byte characters over max_body_bytes in bytes": naming(
+        "max_body_bytes",
+        ws_messages(
+            json.dumps({"type": "tracks", "pad": "\u20ac" * (MAX_BODY // 2)}, ensure_ascii=False)
+        ),
     ),
     "ws: binary frame of invalid UTF-8": ws_messages(b"\xff\xfe\x00"),
     "ws: duplicate keys": ws_messages('{"type": "tracks", "type": "detections"}'),

@@ -1,0 +1,289 @@
+"""Transport limits: what a connection may hold before the application sees a request.
+
+Checked in the HTTP protocol itself (uvicorn's httptools protocol, extended),
+before any header is parsed by the application and, for sizes, before the
+parser is fed the bytes beyond the limit:
+
+- ``max_header_bytes`` (16 KiB): the request line and headers of one request.
+  The parser is fed at most that many bytes of a request head; a longer head
+  gets ``431`` and the connection is closed. (Unbounded, one 64 MB header held
+  the event loop 5.7 s: the parser copies a header value as each piece arrives.)
+- ``max_header_count`` (100): header lines of one request (``431``).
+- ``request_head_timeout`` (10 s): from the connection (or the first byte of a
+  keep-alive connection's next request) to the end of the request head; a
+  client that is slower (slowloris) gets ``408`` and the connection is closed.
+  The body then has ``body_read_timeout`` (:mod:`app.http.body_limits`).
+- ``keep_alive_timeout`` (5 s): an idle keep-alive connection is closed.
+- ``max_connections_per_client`` (64): open connections of one client address
+  (HTTP and WebSocket alike); one more is answered ``429`` and closed.
+- ``max_connections`` (1 000): open connections in total. At the limit a new
+  connection closes the oldest one still waiting for its request head (an idle
+  or trickling connection: it has nothing in progress); if every connection is
+  busy, the new one is answered ``503`` and closed.
+
+Refusals are problem+json documents written by the protocol (the application
+never runs), with ``Connection: close``. The process's descriptor limit is
+raised to its hard limit at start (:func:`raise_descriptor_limit`), so the
+connection limits, not the operating system, decide.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import resource
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from http import HTTPStatus
+from typing import Any
+
+import httptools
+from uvicorn.protocols.http.httptools_impl import HttpToolsProtocol
+
+from app.http.body_limits import DRAIN_BYTES
+from app.http.errors import (
+    HeadersTooLarge,
+    HeadTooSlow,
+    ServiceError,
+    TooManyConnections,
+    problem_for,
+)
+from app.http.responses import dumps
+
+DRAIN_SECONDS = 2.0
+"""How long the rest of a refused head (or WebSocket frame) is read and discarded, at most
+``DRAIN_BYTES``, before the connection closes."""
+
+
+@dataclass(frozen=True)
+class TransportLimits:
+    """The limits of :mod:`app.http.transport` (from the settings)."""
+
+    max_header_bytes: int = 16 * 1024
+    max_header_count: int = 100
+    request_head_timeout: float = 10.0
+    max_connections: int = 1000
+    max_connections_per_client: int = 64
+
+
+def refusal_bytes(refusal: ServiceError) -> bytes:
+    """The raw HTTP answer of ``refusal`` (problem+json, the connection closed after it)."""
+    problem = problem_for(refusal)
+    body = dumps(problem.model_dump(mode="json", exclude_none=True)).encode()
+    status = HTTPStatus(refusal.status_code)
+    head = (
+        f"HTTP/1.1 {status.value} {status.phrase}\r\n"
+        "content-type: application/problem+json\r\n"
+        f"content-length: {len(body)}\r\n"
+        "connection: close\r\n\r\n"
+    )
+    return head.encode("ascii") + body
+
+
+@dataclass
+class Connections:
+    """The open connections of one server: per client address, and the ones waiting for a
+    request head (oldest first: the first to close when the total is reached)."""
+
+    limits: TransportLimits
+    per_client: dict[str, int] = field(default_factory=dict)
+    total: int = 0
+    waiting: OrderedDict[int, asyncio.BaseTransport] = field(default_factory=OrderedDict)
+
+    def admit(self, transport: asyncio.BaseTransport, client: str) -> ServiceError | None:
+        """Count a new connection, or the refusal it gets (then it is not counted)."""
+        limits = self.limits
+        if self.per_client.get(client, 0) >= limits.max_connections_per_client:
+            return TooManyConnections(
+                "max_connections_per_client",
+                limits.max_connections_per_client,
+                "this client address",
+                HTTPStatus.TOO_MANY_REQUESTS,
+            )
+        if self.total >= limits.max_connections:
+            if not self.waiting:
+                return TooManyConnections(
+                    "max_connections",
+                    limits.max_connections,
+                    "the server",
+                    HTTPStatus.SERVICE_UNAVAILABLE,
+                )
+            _, oldest = self.waiting.popitem(last=False)
+            oldest.close()  # its connection_lost releases its count
+        self.per_client[client] = self.per_client.get(client, 0) + 1
+        self.total += 1
+        return None
+
+    def release(self, client: str, transport: asyncio.BaseTransport) -> None:
+        self.waiting.pop(id(transport), None)
+        left = self.per_client.get(client, 0) - 1
+        if left > 0:
+            self.per_client[client] = left
+        else:
+            self.per_client.pop(client, None)
+        self.total -= 1
+
+    def wait_for_head(self, transport: asyncio.BaseTransport) -> None:
+        self.waiting[id(transport)] = transport
+        self.waiting.move_to_end(id(transport))
+
+    def busy(self, transport: asyncio.BaseTransport) -> None:
+        self.waiting.pop(id(transport), None)
+
+
+class GuardedHttpProtocol(HttpToolsProtocol):
+    """uvicorn's httptools protocol with the limits of this module (see :func:`guarded_http`).
+
+    A request head is the bytes from the end of the previous request (or the
+    connection's start) to the end of its headers: the parser is fed at most
+    ``max_header_bytes`` of them, and they must arrive within
+    ``request_head_timeout`` of the connection or of the head's first byte.
+    """
+
+    guard: Connections  # set per server by guarded_http
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.head_bytes = 0
+        self.header_count = 0
+        self.in_head = True
+        self.refused = False
+        self.counted: str | None = None
+        self.head_timer: asyncio.TimerHandle | None = None
+        self.draining: int | None = None
+        """Bytes still to read and discard after a refusal, before the connection closes."""
+
+    @property
+    def limits(self) -> TransportLimits:
+        return self.guard.limits
+
+    def connection_made(self, transport: asyncio.Transport) -> None:  # type: ignore[override]
+        super().connection_made(transport)
+        client = self.client[0] if self.client else "unknown"
+        refusal = self.guard.admit(transport, client)
+        if refusal is not None:
+            self._refuse(refusal)
+            return
+        self.counted = client
+        self.guard.wait_for_head(transport)
+        self._arm_head_timer()  # the time to the first byte counts
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        self._stop_head_timer()
+        if self.counted is not None:
+            self.guard.release(self.counted, self.transport)
+            self.counted = None
+        super().connection_lost(exc)
+
+    def _arm_head_timer(self) -> None:
+        if self.head_timer is None:
+            self.head_timer = self.loop.call_later(
+                self.limits.request_head_timeout, self._head_timed_out
+            )
+
+    def _stop_head_timer(self) -> None:
+        if self.head_timer is not None:
+            self.head_timer.cancel()
+            self.head_timer = None
+
+    def _head_timed_out(self) -> None:
+        self.head_timer = None
+        if self.in_head and not self.transport.is_closing():
+            self._refuse(HeadTooSlow("request_head_timeout", self.limits.request_head_timeout))
+
+    def _refuse(self, refusal: ServiceError, *, drain: bool = False) -> None:
+        """Answer ``refusal`` and close; ``drain``: the client is still sending (a head too
+        large), so the rest is read and discarded first (up to ``DRAIN_BYTES``, for at most
+        ``DRAIN_SECONDS``): a socket closed with unread bytes resets, and the peer loses the
+        answer."""
+        self.refused = True
+        if self.transport.is_closing():
+            return
+        self.transport.write(refusal_bytes(refusal))
+        if not drain or not self.transport.can_write_eof():
+            self.transport.close()
+            return
+        self.transport.write_eof()
+        self.draining = DRAIN_BYTES
+        self.loop.call_later(DRAIN_SECONDS, self.transport.close)
+
+    def data_received(self, data: bytes) -> None:
+        if self.draining is not None:
+            self.draining -= len(data)
+            if self.draining <= 0:
+                self.transport.close()
+            return
+        while data and not self.refused and not self.transport.is_closing():
+            if not self.in_head:
+                super().data_received(data)
+                return
+            budget = self.limits.max_header_bytes - self.head_bytes
+            if budget <= 0:
+                limit = self.limits.max_header_bytes
+                self._refuse(HeadersTooLarge("headers", "max_header_bytes", limit), drain=True)
+                return
+            piece, data = data[:budget], data[budget:]
+            self.head_bytes += len(piece)
+            super().data_received(piece)
+            if self.transport.get_protocol() is not self:
+                return  # upgraded to a WebSocket: the rest went to its protocol
+
+    def on_message_begin(self) -> None:
+        super().on_message_begin()
+        self.header_count = 0
+        self._arm_head_timer()  # a keep-alive connection's next request: from its first byte
+
+    def on_header(self, name: bytes, value: bytes) -> None:
+        self.header_count += 1
+        if self.header_count > self.limits.max_header_count:
+            limit = self.limits.max_header_count
+            self._refuse(HeadersTooLarge("header lines", "max_header_count", limit), drain=True)
+            raise httptools.HttpParserError("too many header lines")
+        super().on_header(name, value)
+
+    def send_400_response(self, msg: str) -> None:
+        if not self.refused:  # else a refusal is out already (the parser stopped on it)
+            super().send_400_response(msg)
+
+    def on_headers_complete(self) -> None:
+        self.in_head = False
+        self._stop_head_timer()
+        self.guard.busy(self.transport)
+        super().on_headers_complete()
+
+    def on_message_complete(self) -> None:
+        super().on_message_complete()
+        self.in_head = True  # what follows is the next request's head
+        self.head_bytes = 0
+
+    def on_response_complete(self) -> None:
+        super().on_response_complete()
+        if not self.transport.is_closing() and self.counted is not None:
+            self.guard.wait_for_head(self.transport)  # idle: the first to go at the limit
+
+    def handle_websocket_upgrade(self) -> None:
+        self._stop_head_timer()
+        self.guard.busy(self.transport)
+        counted, self.counted = self.counted, None  # the WebSocket protocol releases it
+        super().handle_websocket_upgrade()
+        if counted is not None:
+            guard, transport = self.guard, self.transport
+            protocol = transport.get_protocol()
+            protocol.release_connection = lambda: guard.release(counted, transport)  # type: ignore[attr-defined]
+
+
+def guarded_http(limits: TransportLimits) -> type[GuardedHttpProtocol]:
+    """The HTTP protocol class of one server (its own connection counts) under ``limits``."""
+    return type("GuardedHttpProtocol", (GuardedHttpProtocol,), {"guard": Connections(limits)})
+
+
+def raise_descriptor_limit() -> int:
+    """Raise this process's open-file limit to its hard limit; the new soft limit."""
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if hard == resource.RLIM_INFINITY or soft < hard:
+        target = hard if hard != resource.RLIM_INFINITY else max(soft, 65536)
+        try:
+            resource.setrlimit(resource.RLIMIT_NOFILE, (target, hard))
+            soft = target
+        except (ValueError, OSError):
+            pass
+    return soft
