@@ -89,6 +89,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         redoc_url=None,
     )
     app.state.settings = settings
+    app.state.tenancy = settings.tenancy()
     app.state.metrics = service_metrics
     install_error_handlers(app, service_metrics.internal_errors.inc)
     app.include_router(health.router)

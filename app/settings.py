@@ -15,12 +15,19 @@ from api_schemas.base import MAX_CLASSES
 from api_schemas.limits import MAX_FOCAL_SETS, MAX_ITEMS, MAX_SENSORS, WireLimits
 from app.http.errors import MAX_LISTED_ERRORS
 from app.http.rate_limit import parse_rates
+from app.http.security import hash_token
+from app.http.tenants import (
+    MIN_SECRET_LENGTH,
+    Access,
+    Tenancy,
+    check_secret,
+    is_loopback,
+    parse_api_keys,
+)
 from app.http.transport import TransportLimits
 from app.stores.redis_keys import DEFAULT_PREFIX
 
 DEFAULT_STORE = "sqlite:data/credal-fusion.db"
-MIN_ADMIN_TOKEN_LENGTH = 32
-"""An admin token opens every session: at least 32 characters (``secrets.token_urlsafe(24)``)."""
 DEFAULTS = WireLimits()
 TRANSPORT = TransportLimits()
 
@@ -41,7 +48,29 @@ class Settings(BaseSettings):
     admin_token: SecretStr | None = Field(
         None,
         description=f"opens every session and the admin routes; at least "
-        f"{MIN_ADMIN_TOKEN_LENGTH} characters",
+        f"{MIN_SECRET_LENGTH} visible ASCII characters",
+    )
+    access: Access = Field(
+        "auto",
+        description="who may create sessions: 'open' (anyone; each client address is a tenant), "
+        "'keys' (an API key of CREDAL_API_KEYS), 'auto': open on a loopback host, keys otherwise",
+    )
+    api_keys: SecretStr | None = Field(
+        None,
+        description="the tenants' API keys, 'name:key,name:key' (each key at least "
+        f"{MIN_SECRET_LENGTH} visible ASCII characters)",
+    )
+    tenant_max_sessions: int = Field(
+        100, ge=1, description="live sessions of one tenant (429 beyond, with Retry-After)"
+    )
+    tenant_inputs_per_second: int = Field(
+        500, ge=1, description="inputs (REST and WebSocket) of one tenant's sessions per second"
+    )
+    tenant_work_per_minute: int = Field(
+        40_000_000,
+        ge=1,
+        description="work units of one tenant's inputs per minute (an input's units: its items × "
+        "(the session's live fused tracks + 1))",
     )
     cors_origins: str = Field(
         "",
@@ -159,14 +188,34 @@ class Settings(BaseSettings):
 
     @field_validator("admin_token")
     @classmethod
-    def _admin_token_is_long(cls, value: SecretStr | None) -> SecretStr | None:
-        if value is not None and len(value.get_secret_value()) < MIN_ADMIN_TOKEN_LENGTH:
-            raise ValueError(
-                f"CREDAL_ADMIN_TOKEN must have at least {MIN_ADMIN_TOKEN_LENGTH} characters "
-                f"(got {len(value.get_secret_value())}); e.g. "
-                "python -c 'import secrets; print(secrets.token_urlsafe(32))'"
-            )
+    def _admin_token_is_a_secret(cls, value: SecretStr | None) -> SecretStr | None:
+        if value is not None:
+            check_secret("CREDAL_ADMIN_TOKEN", value.get_secret_value())
         return value
+
+    @field_validator("api_keys", mode="before")
+    @classmethod
+    def _empty_api_keys_is_none(cls, value: object) -> object:
+        return None if value == "" else value
+
+    @field_validator("api_keys")
+    @classmethod
+    def _api_keys_parse(cls, value: SecretStr | None) -> SecretStr | None:
+        if value is not None:
+            parse_api_keys(value.get_secret_value())
+        return value
+
+    def open_access(self) -> bool:
+        """Whether anyone may create sessions (``access``; ``auto``: on a loopback host)."""
+        return self.access == "open" or (self.access == "auto" and is_loopback(self.host))
+
+    def tenancy(self) -> Tenancy:
+        """The service's tenants (:mod:`app.http.tenants`)."""
+        keys = {} if self.api_keys is None else parse_api_keys(self.api_keys.get_secret_value())
+        admin = (
+            None if self.admin_token is None else hash_token(self.admin_token.get_secret_value())
+        )
+        return Tenancy(self.open_access(), keys, admin)
 
     def transport_limits(self) -> TransportLimits:
         """The limits the HTTP protocol checks before the application (:mod:`app.http.transport`)."""

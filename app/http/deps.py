@@ -12,6 +12,7 @@ from starlette.requests import HTTPConnection
 
 from app.http.errors import Forbidden, SessionNotFound, Unauthorized
 from app.http.security import Principal, is_admin_token, token_matches
+from app.http.tenants import Tenancy
 from app.metrics import ServiceMetrics
 from app.sessions.live import LiveSession
 from app.sessions.registry import SessionRegistry
@@ -101,14 +102,14 @@ def open_record(
 ) -> SessionRecord:
     """The session ``sid`` if ``token`` opens it: its own token or the admin token.
 
-    404 for an unknown session, 403 for a token that is neither this
-    session's nor the admin's (another session's token included).
+    404 alike for an unknown session and for a token that does not open it (another
+    session's token included): a token cannot tell which sessions exist.
     """
-    if record is None:
-        raise SessionNotFound(sid)
-    if token_matches(token, record.token_hash) or is_admin_token(token, _admin_token(settings)):
+    if record is not None and (
+        token_matches(token, record.token_hash) or is_admin_token(token, _admin_token(settings))
+    ):
         return record
-    raise Forbidden(f"this token does not open session {sid!r}")
+    raise SessionNotFound(sid)
 
 
 async def authorize_session(sid: SessionId, token: BearerToken, request: Request) -> SessionRecord:
@@ -123,6 +124,15 @@ async def authorize_session(sid: SessionId, token: BearerToken, request: Request
     return open_record(sid, record, token, _settings_of(request))
 
 
+async def creator_tenant(request: Request) -> str:
+    """The tenant a session-creating request acts for (its API key's; in open mode without a
+    key, its address's): 401 without a valid key in ``keys`` mode (:mod:`app.http.tenants`)."""
+    tenancy: Tenancy = request.app.state.tenancy
+    client = request.client.host if request.client is not None else None
+    return tenancy.creator(request.headers.get("authorization"), client)
+
+
+TenantDep = Annotated[str, Depends(creator_tenant)]
 AdminDep = Annotated[Principal, Depends(require_admin)]
 AuthorizedSession = Annotated[SessionRecord, Depends(authorize_session)]
 

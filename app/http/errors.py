@@ -312,14 +312,22 @@ class LimitExceeded(ServiceError):  # noqa: N818 - HTTP vocabulary
         what: str | None = None,
         status: int | None = None,
         loc: Sequence[str | int] = (),
+        retry_after_s: int | None = None,
     ) -> None:
         subject = what or limit
         detail = f"{subject}: limit {limit} is {maximum}" + (
             "" if actual is None else f", got {actual}"
         )
-        super().__init__(detail, limit=limit, maximum=maximum, actual=actual)
+        extensions: dict[str, Any] = {"limit": limit, "maximum": maximum, "actual": actual}
+        if retry_after_s is not None:
+            extensions["retry_after"] = retry_after_s
+        super().__init__(detail, **extensions)
         self._status = int(status) if status is not None else int(type(self).status)
         self.loc = tuple(loc)
+        self.retry_after_s = retry_after_s
+
+    def headers(self) -> dict[str, str]:
+        return {} if self.retry_after_s is None else {"Retry-After": str(self.retry_after_s)}
 
     def field_errors(self) -> list[FieldError] | None:
         return [_located(self.loc, self.detail, LIMIT_EXCEEDED)]

@@ -1,12 +1,12 @@
-"""Rate limits: per verified session token, or per client address for every other request.
+"""Rate limits: per tenant (:mod:`app.http.tenants`), decided from the request's token.
 
-Whom a request counts against is decided before its body is read, and only a
-token the service *verified* earns its own budget: the token of a live
-session held by this instance (the registry keeps their hashes) or the admin
+Whom a request counts against is decided before its body is read: the
+tenant of the token the service *verified* — the token of a live session
+held by this instance (its session's tenant: every token of a tenant shares
+one budget, so minting sessions never multiplies it), an API key or the admin
 token. A request with no token, an unknown or forged token (``Bearer
-fake<i>``), or to an unauthenticated route (``POST /v1/sessions``, ``POST
-/v1/associate``) counts against its client address, so inventing tokens
-never buys more requests.
+fake<i>``), or to an unauthenticated route counts against its client
+address's tenant.
 
 ``CREDAL_RATE_LIMIT`` takes the ``limits`` library's notation: one or more
 rates separated by ``;`` (``"200/second"``, ``"50/second;2000/minute"``);
@@ -27,7 +27,6 @@ Tokens are keyed by a hash, never kept in clear.
 
 from __future__ import annotations
 
-import hmac
 import math
 import time
 import uuid
@@ -44,6 +43,7 @@ from starlette.websockets import WebSocket
 
 from app.http.errors import RateLimited, problem_response
 from app.http.security import hash_token
+from app.http.tenants import address_tenant
 
 RATE_LIMIT = "rate_limit"
 UNLIMITED = frozenset({"", "none", "off", "0"})
@@ -64,35 +64,36 @@ def _rate_text(item: RateLimitItem) -> str:
     return f"{item.amount} per {item.multiples} {item.GRANULARITY.name}"
 
 
-def client_key(scope: Scope, verified: Callable[[str], bool]) -> str:
-    """Whom a request counts against: its token's hash if ``verified`` knows it, else its address."""
+def client_key(scope: Scope, tenant_of: Callable[[str], str | None]) -> str:
+    """Whom a request counts against: the tenant of its token (a live session's, an API key,
+    the admin token) if ``tenant_of`` knows it, else its client address's tenant."""
     for name, value in scope.get("headers", ()):
         if name == b"authorization":
             scheme, _, token = value.partition(b" ")
             token = token.strip()
             if scheme.lower() == b"bearer" and token:
-                token_hash = hash_token(token.decode("latin-1"))
-                if verified(token_hash):
-                    return "token:" + token_hash
+                tenant = tenant_of(token.decode("latin-1"))
+                if tenant is not None:
+                    return "tenant:" + tenant
             break
     client = scope.get("client")
-    return f"address:{client[0] if client else 'unknown'}"
+    return "tenant:" + address_tenant(client[0] if client else None)
 
 
-def verifier(scope: Scope) -> Callable[[str], bool]:
-    """Whether a token hash is a live session's (held here) or the admin token's."""
+def tenant_finder(scope: Scope) -> Callable[[str], str | None]:
+    """The tenant of a token: a live session's (held here), an API key's, the admin's."""
     state = getattr(scope.get("app"), "state", None)
-    settings = getattr(state, "settings", None)
-    admin = getattr(settings, "admin_token", None)
-    admin_hash = hash_token(admin.get_secret_value()) if admin is not None else None
+    tenancy = getattr(state, "tenancy", None)
 
-    def verified(token_hash: str) -> bool:
-        if admin_hash is not None and hmac.compare_digest(token_hash, admin_hash):
-            return True
+    def tenant_of(token: str) -> str | None:
+        hashed = hash_token(token)
+        if tenancy is not None and (tenant := tenancy.of_hash(hashed)) is not None:
+            return str(tenant)
         registry = getattr(state, "registry", None)  # set by the lifespan
-        return registry is not None and bool(registry.knows_token(token_hash))
+        found = None if registry is None else registry.tenant_of_token(hashed)
+        return None if found is None else str(found)
 
-    return verified
+    return tenant_of
 
 
 class RateLimit:
@@ -102,7 +103,7 @@ class RateLimit:
         self.app = app
         self.rates = rates
         self.limiter = SlidingWindowCounterRateLimiter(MemoryStorage())
-        self._verified: Callable[[str], bool] | None = None
+        self._tenant_of: Callable[[str], str | None] | None = None
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if (
@@ -112,9 +113,9 @@ class RateLimit:
         ):
             await self.app(scope, receive, send)
             return
-        if self._verified is None:  # the application's registry and settings, once
-            self._verified = verifier(scope)
-        key = client_key(scope, self._verified)
+        if self._tenant_of is None:  # the application's registry and tenants, once
+            self._tenant_of = tenant_finder(scope)
+        key = client_key(scope, self._tenant_of)
         for item in self.rates:
             if not await self.limiter.hit(item, key):
                 await self._refuse(scope, receive, send, item, key)
@@ -127,7 +128,8 @@ class RateLimit:
         reset = (await self.limiter.get_window_stats(item, key)).reset_time
         retry_after = max(1, math.ceil(reset - time.time()))
         rate = _rate_text(item)
-        who = "this token" if key.startswith("token:") else "this client address"
+        who = key.removeprefix("tenant:")
+        who = "this client address" if who.startswith("address:") else f"tenant {who!r}"
         response = problem_response(
             RateLimited(RATE_LIMIT, rate, who, retry_after), scope.get("path")
         )

@@ -27,6 +27,7 @@ from app.http.deps import (
     RegistryDep,
     SettingsDep,
     StoreDep,
+    TenantDep,
 )
 from app.http.errors import problem_responses
 from app.http.requests import WireRoute
@@ -49,16 +50,22 @@ MAX_SEQ = 2**53
     "",
     status_code=HTTPStatus.CREATED,
     response_model=SessionCreated,
-    responses=problem_responses(400, 408, 413, 422, 429, 503),
+    responses=problem_responses(400, 401, 408, 413, 422, 429, 503),
 )
 def create_session(
     config: SessionConfig,
+    tenant: TenantDep,
     settings: SettingsDep,
     store: StoreDep,
     registry: RegistryDep,
     metrics: MetricsDep,
 ) -> JSONTextResponse:
-    """Create a session from a config; returns its id, its token (shown only here) and the resolved config."""
+    """Create a session from a config; returns its id, its token (shown only here) and the resolved config.
+
+    The session belongs to the tenant of the request (its API key's; in open mode
+    without a key, its client address's): 401 without a valid key in ``keys`` mode,
+    429 with ``Retry-After`` beyond ``tenant_max_sessions`` or ``max_sessions``.
+    """
     registry.check_config(config)
     token = issue_token()
     record = SessionRecord(
@@ -66,9 +73,14 @@ def create_session(
         config=config.model_dump(mode="json"),
         token_hash=hash_token(token),
         created_at=datetime.now(UTC),
+        tenant=tenant,
     )
-    # counted and created in one step of the store: instances sharing it keep the limit
-    store.create_session(record, max_sessions=settings.max_sessions)
+    # counted and created in one step of the store: instances sharing it keep the limits
+    store.create_session(
+        record,
+        max_sessions=settings.max_sessions,
+        max_tenant_sessions=settings.tenant_max_sessions,
+    )
     registry.add(record)
     metrics.sessions.set(store.count_sessions())
     created = SessionCreated(id=record.id, token=token, config=config, created_at=record.created_at)

@@ -69,6 +69,7 @@ from api_schemas.consistency import detection_report_issues, track_report_issues
 from api_schemas.reports import DetectionReport, TrackReport
 from app.cluster.fanout import ResultFanout, open_fanout
 from app.cluster.lease import SessionLeases, new_owner_id, open_leases
+from app.cluster.quotas import TenantQuotas, input_work, open_quotas
 from app.geo.geojson import GeodeticOutput
 from app.http.errors import (
     LimitExceeded,
@@ -161,6 +162,7 @@ class SessionRegistry:
         *,
         leases: SessionLeases | None = None,
         fanout: ResultFanout | None = None,
+        quotas: TenantQuotas | None = None,
         owner: str | None = None,
     ) -> None:
         self.store = store
@@ -170,6 +172,9 @@ class SessionRegistry:
         """Several instances share the store: leases, fan-out through it, fresh reads."""
         self.leases = leases or open_leases(store)
         self.fanout = fanout or open_fanout(store)
+        self.quotas = quotas or open_quotas(
+            store, settings.tenant_inputs_per_second, settings.tenant_work_per_minute
+        )
         self.owner = owner or new_owner_id()
         self._sessions: dict[str, LiveSession] = {}
         self._load_lock = asyncio.Lock()
@@ -214,9 +219,11 @@ class SessionRegistry:
         self._tokens[record.token_hash] = record.id
         return session
 
-    def knows_token(self, token_hash: str) -> bool:
-        """Whether ``token_hash`` is the hash of a live session's token held in memory."""
-        return token_hash in self._tokens
+    def tenant_of_token(self, token_hash: str) -> str | None:
+        """The tenant of the live session (held in memory) whose token hashes to ``token_hash``."""
+        session_id = self._tokens.get(token_hash)
+        session = None if session_id is None else self._sessions.get(session_id)
+        return None if session is None else session.record.tenant
 
     async def record(self, session_id: str) -> SessionRecord | None:
         """The stored record of a live session (from memory when the session is loaded)."""
@@ -512,6 +519,7 @@ class SessionRegistry:
         ``geodetic``: with the tracks' geodetic positions)."""
         items = len(report.tracks) if isinstance(report, TrackReport) else len(report.detections)
         await self._compute(items, functools.partial(self.check, session, report))
+        await self.quotas.charge(session.record.tenant, input_work(items, len(session.tracks)))
         return await self._submit(session, report, items, explain=explain, geodetic=geodetic)
 
     async def _submit(

@@ -43,10 +43,32 @@ _PLAIN_KINDS = frozenset("biuf")
 """numpy dtype kinds whose ``tolist()`` is plain data (bool, signed/unsigned int, float)."""
 
 
+SESSION_SLOT_RETRY_S = 60
+"""``Retry-After`` of a session refused for want of a slot: a slot frees when a session is
+deleted or expires, which the service cannot foresee; a minute is a polite polling period."""
+
+
 def session_limit(max_sessions: int, live: int) -> LimitExceeded:
-    """The refusal of a session beyond ``max_sessions`` (429, the setting named)."""
+    """The refusal of a session beyond ``max_sessions`` (429, the setting named, ``Retry-After``)."""
     return LimitExceeded(
-        "max_sessions", max_sessions, live, what="sessions", status=HTTPStatus.TOO_MANY_REQUESTS
+        "max_sessions",
+        max_sessions,
+        live,
+        what="live sessions of the service (delete one, or wait for one to expire)",
+        status=HTTPStatus.TOO_MANY_REQUESTS,
+        retry_after_s=SESSION_SLOT_RETRY_S,
+    )
+
+
+def tenant_session_limit(max_sessions: int, live: int) -> LimitExceeded:
+    """The refusal of a session beyond the tenant's ``tenant_max_sessions`` (429)."""
+    return LimitExceeded(
+        "tenant_max_sessions",
+        max_sessions,
+        live,
+        what="live sessions of this tenant (delete one, or wait for one to expire)",
+        status=HTTPStatus.TOO_MANY_REQUESTS,
+        retry_after_s=SESSION_SLOT_RETRY_S,
     )
 
 
@@ -83,6 +105,9 @@ class SessionRecord:
     token_hash: str
     created_at: datetime
     deleted: bool = False
+    tenant: str = ""
+    """Who created it (:mod:`app.http.tenants`): its inputs count against that tenant's
+    quotas, whichever token sends them ("" for a session stored before tenants existed)."""
 
 
 @dataclass(frozen=True)
@@ -159,12 +184,18 @@ class Store(Protocol):
     under a lock, microseconds) is called on the event loop, where a thread hop would
     cost more than the call."""
 
-    def create_session(self, record: SessionRecord, max_sessions: int | None = None) -> None:
+    def create_session(
+        self,
+        record: SessionRecord,
+        max_sessions: int | None = None,
+        max_tenant_sessions: int | None = None,
+    ) -> None:
         """Store a new session; :class:`SessionExists` if the id is taken,
-        :func:`session_limit` (429) if ``max_sessions`` live sessions exist already.
+        :func:`session_limit` (429) if ``max_sessions`` live sessions exist already,
+        :func:`tenant_session_limit` (429) if its tenant has ``max_tenant_sessions``.
 
         Counting and storing are one atomic step of the store (one lock, one
-        transaction, one Lua script), so instances sharing it never exceed the limit.
+        transaction, one Lua script), so instances sharing it never exceed the limits.
         """
         ...
 

@@ -58,6 +58,7 @@ from app.stores.base import (
     dumps,
     loads,
     session_limit,
+    tenant_session_limit,
     unavailable_on,
 )
 from app.stores.redis_keys import DEFAULT_PREFIX, RedisKeys
@@ -71,24 +72,36 @@ SOCKET_TIMEOUT_S = 5.0
 UNREACHABLE = (redis.ConnectionError, redis.TimeoutError)
 """redis-py's errors of a server that does not answer (after its retries)."""
 
-# KEYS: session, index. ARGV: id, config, token_hash, created_at, deleted, score, the
-# session limit ('' for none). Replies 1 (created), 0 (the id exists) or -1 - live (the
-# index holds `limit` live sessions already): counting and creating are one step.
+# KEYS: session, index, tenants. ARGV: id, config, token_hash, created_at, deleted, score,
+# the session limit ('' for none), tenant, the tenant's limit ('' for none). Replies
+# {1} (created), {0} (the id exists), {-1, live} (the index holds `limit` live sessions
+# already) or {-2, live} (the tenant has its limit): counting and creating are one step.
 _CREATE = """
-if redis.call('EXISTS', KEYS[1]) == 1 then return 0 end
+if redis.call('EXISTS', KEYS[1]) == 1 then return {0} end
 if ARGV[7] ~= '' then
   local live = redis.call('ZCARD', KEYS[2])
-  if live >= tonumber(ARGV[7]) then return -1 - live end
+  if live >= tonumber(ARGV[7]) then return {-1, live} end
+end
+if ARGV[9] ~= '' then
+  local mine = tonumber(redis.call('HGET', KEYS[3], ARGV[8]) or '0')
+  if mine >= tonumber(ARGV[9]) then return {-2, mine} end
 end
 redis.call('HSET', KEYS[1], 'id', ARGV[1], 'config', ARGV[2], 'token_hash', ARGV[3],
-           'created_at', ARGV[4], 'deleted', ARGV[5], 'last_seq', '0')
-if ARGV[5] == '0' then redis.call('ZADD', KEYS[2], ARGV[6], ARGV[1]) end
-return 1
+           'created_at', ARGV[4], 'deleted', ARGV[5], 'last_seq', '0', 'tenant', ARGV[8])
+if ARGV[5] == '0' then
+  redis.call('ZADD', KEYS[2], ARGV[6], ARGV[1])
+  redis.call('HINCRBY', KEYS[3], ARGV[8], 1)
+end
+return {1}
 """
 
-# KEYS: session, index, log, snapshots. ARGV: id. Frees everything the session held.
+# KEYS: session, index, log, snapshots, tenants. ARGV: id. Frees everything the session held.
 _DELETE = """
 local live = redis.call('HGET', KEYS[1], 'deleted') == '0'
+if live then
+  local tenant = redis.call('HGET', KEYS[1], 'tenant') or ''
+  if redis.call('HINCRBY', KEYS[5], tenant, -1) <= 0 then redis.call('HDEL', KEYS[5], tenant) end
+end
 redis.call('ZREM', KEYS[2], ARGV[1])
 redis.call('UNLINK', KEYS[1], KEYS[3], KEYS[4])
 if live then return 1 end
@@ -178,6 +191,7 @@ def _record(fields: Mapping[str, str]) -> SessionRecord:
         token_hash=fields["token_hash"],
         created_at=datetime.fromisoformat(fields["created_at"]),
         deleted=fields["deleted"] == "1",
+        tenant=fields.get("tenant", ""),
     )
 
 
@@ -251,10 +265,15 @@ class RedisStore:
     def _reachable() -> contextlib.AbstractContextManager[None]:
         return unavailable_on(UNREACHABLE, "redis")
 
-    def create_session(self, record: SessionRecord, max_sessions: int | None = None) -> None:
+    def create_session(
+        self,
+        record: SessionRecord,
+        max_sessions: int | None = None,
+        max_tenant_sessions: int | None = None,
+    ) -> None:
         with self._reachable():
-            created = self._create(
-                keys=[self.keys.session(record.id), self.keys.sessions()],
+            reply: list[int] = self._create(
+                keys=[self.keys.session(record.id), self.keys.sessions(), self.keys.tenants()],
                 args=[
                     record.id,
                     dumps(record.config),
@@ -263,13 +282,19 @@ class RedisStore:
                     "1" if record.deleted else "0",
                     creation_score(record.created_at),
                     "" if max_sessions is None else str(max_sessions),
+                    record.tenant,
+                    "" if max_tenant_sessions is None else str(max_tenant_sessions),
                 ],
                 client=self._redis(),
             )
-        if created < 0:
+        outcome = int(reply[0])
+        if outcome == -1:
             assert max_sessions is not None
-            raise session_limit(max_sessions, -1 - int(created))
-        if not created:
+            raise session_limit(max_sessions, int(reply[1]))
+        if outcome == -2:
+            assert max_tenant_sessions is not None
+            raise tenant_session_limit(max_tenant_sessions, int(reply[1]))
+        if not outcome:
             raise SessionExists(record.id)
 
     def get_session(self, session_id: str) -> SessionRecord | None:
@@ -301,6 +326,7 @@ class RedisStore:
                     self.keys.sessions(),
                     self.keys.log(session_id),
                     self.keys.snapshots(session_id),
+                    self.keys.tenants(),
                 ],
                 args=[session_id],
                 client=self._redis(),

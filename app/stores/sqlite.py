@@ -43,10 +43,12 @@ from app.stores.base import (
     loads,
     require,
     session_limit,
+    tenant_session_limit,
     unavailable_on,
 )
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+"""1: the first; 2: sessions carry their tenant (a version-1 file is migrated on open)."""
 SNAPSHOTS_KEPT = 2
 BUSY_TIMEOUT_MS = 30_000
 JOURNAL_SIZE_LIMIT = 16 * 1024 * 1024
@@ -60,7 +62,8 @@ CREATE TABLE IF NOT EXISTS sessions (
     config TEXT NOT NULL,
     token_hash TEXT NOT NULL,
     created_at TEXT NOT NULL,
-    deleted INTEGER NOT NULL DEFAULT 0
+    deleted INTEGER NOT NULL DEFAULT 0,
+    tenant TEXT NOT NULL DEFAULT ''
 );
 CREATE TABLE IF NOT EXISTS inputs (
     session_id TEXT NOT NULL REFERENCES sessions(id),
@@ -90,6 +93,7 @@ def _record(row: sqlite3.Row) -> SessionRecord:
         token_hash=row["token_hash"],
         created_at=datetime.fromisoformat(row["created_at"]),
         deleted=bool(row["deleted"]),
+        tenant=row["tenant"],
     )
 
 
@@ -124,7 +128,11 @@ class SqliteStore:
                 if statement.strip():
                     connection.execute(statement)
             version = connection.execute("PRAGMA user_version").fetchone()[0]
-            if version == 0:
+            if version == 1:  # before tenants: every session's tenant is ''
+                connection.execute(
+                    "ALTER TABLE sessions ADD COLUMN tenant TEXT NOT NULL DEFAULT ''"
+                )
+            if version in (0, 1):
                 connection.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
             elif version != SCHEMA_VERSION:
                 raise RuntimeError(
@@ -186,7 +194,12 @@ class SqliteStore:
         ).fetchone()
         return int(row[0]) if row[0] is not None else 0
 
-    def create_session(self, record: SessionRecord, max_sessions: int | None = None) -> None:
+    def create_session(
+        self,
+        record: SessionRecord,
+        max_sessions: int | None = None,
+        max_tenant_sessions: int | None = None,
+    ) -> None:
         with self._write() as connection:  # one IMMEDIATE transaction: count, then insert
             exists = connection.execute(
                 "SELECT 1 FROM sessions WHERE id = ?", (record.id,)
@@ -199,14 +212,23 @@ class SqliteStore:
                 ).fetchone()
                 if live >= max_sessions:
                     raise session_limit(max_sessions, int(live))
+            if max_tenant_sessions is not None:
+                (mine,) = connection.execute(
+                    "SELECT COUNT(*) FROM sessions WHERE deleted = 0 AND tenant = ?",
+                    (record.tenant,),
+                ).fetchone()
+                if mine >= max_tenant_sessions:
+                    raise tenant_session_limit(max_tenant_sessions, int(mine))
             connection.execute(
-                "INSERT INTO sessions (id, config, token_hash, created_at, deleted) VALUES (?, ?, ?, ?, ?)",
+                "INSERT INTO sessions (id, config, token_hash, created_at, deleted, tenant)"
+                " VALUES (?, ?, ?, ?, ?, ?)",
                 (
                     record.id,
                     dumps(record.config),
                     record.token_hash,
                     record.created_at.isoformat(),
                     int(record.deleted),
+                    record.tenant,
                 ),
             )
 

@@ -72,10 +72,14 @@ def test_session_routes_need_the_sessions_own_token(client: TestClient) -> None:
     assert missing.headers["www-authenticate"].startswith("Bearer")
 
     assert client.get(events, headers={"Authorization": f"Basic {first_token}"}).status_code == 401
-    assert client.get(events, headers=bearer("not-a-token")).status_code == 403
+    # a token that does not open the session: 404 as for an unknown one (no existence oracle)
+    forged = client.get(events, headers=bearer("not-a-token"))
+    unknown = client.get("/v1/sessions/0123abcd/events", headers=bearer("not-a-token"))
+    assert forged.status_code == unknown.status_code == 404
+    assert forged.json()["title"] == unknown.json()["title"]
     other = client.get(events, headers=bearer(second_token))
-    assert other.status_code == 403
-    assert other.json()["type"] == "urn:credal-fusion:problem:forbidden"
+    assert other.status_code == 404
+    assert other.json()["type"] == "urn:credal-fusion:problem:session-not-found"
 
     assert client.get(events, headers=bearer(first_token)).status_code == 200
     assert client.get(events, headers=bearer(ADMIN_TOKEN)).status_code == 200
