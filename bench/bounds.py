@@ -36,7 +36,7 @@ from websockets.sync.client import connect
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from service import free_port, server, service_command
+from service import free_port, running, server, service_command
 
 from api_schemas.limits import WireLimits
 from app.settings import Settings
@@ -384,17 +384,105 @@ def crowd_rows(url: str) -> list[dict[str, Any]]:
     return rows
 
 
+SMALL_CONFIG = {"state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]}}
+
+
+def from_address(url: str, address: str) -> httpx.Client:
+    """A client whose connections come from ``address`` (any 127.x.y.z is loopback on Linux)."""
+    transport = httpx.HTTPTransport(local_address=address)
+    return httpx.Client(base_url=url, transport=transport, timeout=60.0)
+
+
+def anonymous_flood(url: str) -> str:
+    """One anonymous address creates sessions until refused; then another address tries one."""
+    created: list[dict[str, Any]] = []
+    with from_address(url, "127.0.0.9") as attacker, from_address(url, "127.0.0.10") as other:
+        refusal = None
+        started = time.perf_counter()
+        for _ in range(2000):
+            answer = attacker.post("/v1/sessions", json=SMALL_CONFIG)
+            if answer.status_code != 201:
+                refusal = answer
+                break
+            created.append(answer.json())
+        elapsed = time.perf_counter() - started
+        honest = other.post("/v1/sessions", json=SMALL_CONFIG)
+        if honest.status_code == 201:
+            created.append(honest.json())
+        for session in created:
+            attacker.delete(
+                f"/v1/sessions/{session['id']}",
+                headers={"Authorization": f"Bearer {session['token']}"},
+            )
+    refused = "never" if refusal is None else str(refusal.status_code)
+    retry = None if refusal is None else refusal.headers.get("Retry-After")
+    return (
+        f"one anonymous address created {len(created) - (honest.status_code == 201)} sessions in "
+        f"{elapsed:.1f} s, then {refused} (Retry-After: {retry}); another address then got "
+        f"{honest.status_code}"
+    )
+
+
+def minted_tokens(url: str, tokens: int = 15, seconds: float = 3.0) -> str:
+    """``tokens`` sessions of one address, each token hammering its session from its own
+    thread: how many requests per second were served (the rate limit is 20/s)."""
+    import threading
+
+    sessions = []
+    with httpx.Client(base_url=url, timeout=60.0) as client:
+        while len(sessions) < tokens:
+            answer = client.post("/v1/sessions", json=SMALL_CONFIG)
+            if answer.status_code == 201:
+                sessions.append(answer.json())
+            else:
+                time.sleep(0.2)
+        time.sleep(1.5)  # a fresh window
+    served = [0] * tokens
+    stop = time.perf_counter() + seconds
+
+    def hammer(index: int) -> None:
+        session = sessions[index]
+        headers = {"Authorization": f"Bearer {session['token']}"}
+        with httpx.Client(base_url=url, timeout=60.0) as client:
+            while time.perf_counter() < stop:
+                served[index] += (
+                    client.get(f"/v1/sessions/{session['id']}", headers=headers).status_code == 200
+                )
+
+    threads = [threading.Thread(target=hammer, args=(index,)) for index in range(tokens)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    return f"{tokens} fresh tokens of one address were served {sum(served) / seconds:.0f} requests/s (rate limit 20/s)"
+
+
+def identity_lines() -> list[str]:
+    """Issue 28's session flood and token minting, on their own servers (default settings, and
+    CREDAL_RATE_LIMIT=20/second for the minting)."""
+    lines = []
+    port = free_port()
+    with server(service_command(port), port) as url:
+        lines.append(anonymous_flood(url))
+    port = free_port()
+    with running(service_command(port), port, {"CREDAL_RATE_LIMIT": "20/second"}):
+        lines.append(minted_tokens(f"http://127.0.0.1:{port}"))
+    return lines
+
+
 def main() -> int:
     max_bytes = Settings().max_body_bytes
     port = free_port()
     rows = []
     crowd_only = "--crowd" in sys.argv[1:]
-    with server(service_command(port), port) as url, httpx.Client(base_url=url, timeout=300) as c:
-        if crowd_only:
+    if crowd_only:
+        with server(service_command(port), port) as url:
             rows.append(baseline := idle(url))
             rows += crowd_rows(url)
-            print_rows(rows, baseline)
-            return 0
+        print_rows(rows, baseline)
+        print("\n".join(identity_lines()))
+        return 0
+    with server(service_command(port), port) as url, httpx.Client(base_url=url, timeout=300) as c:
 
         def config_with(polygons: int) -> dict[str, Any]:
             """64 sensors, the first ``polygons`` with a 1 000-vertex field of view."""
@@ -513,6 +601,7 @@ def main() -> int:
 
         rows += crowd_rows(url)
     print_rows(rows, baseline)
+    print("\n".join(identity_lines()))
     return 0
 
 

@@ -51,7 +51,7 @@ from websockets.frames import Frame, Opcode
 
 from app.http.body_limits import DRAIN_BYTES
 from app.http.errors import LimitExceeded, error_message, problem_for
-from app.http.transport import DRAIN_SECONDS, guarded_http
+from app.http.transport import DRAIN_SECONDS, LISTEN_BACKLOG, guarded_http
 from app.settings import Settings
 
 WS_FRAME_FACTOR = 4
@@ -150,6 +150,7 @@ def server_options(settings: Settings) -> dict[str, Any]:
     """uvicorn's options that the service's settings decide (the CLI and the tests use them)."""
     return {
         "http": guarded_http(settings.transport_limits()),
+        "backlog": LISTEN_BACKLOG,
         "timeout_keep_alive": settings.keep_alive_timeout,
         "ws": PatientWebSocketProtocol,
         "ws_max_size": WS_FRAME_FACTOR * settings.max_body_bytes,

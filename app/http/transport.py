@@ -30,8 +30,10 @@ connection limits, not the operating system, decide.
 from __future__ import annotations
 
 import asyncio
+import functools
 import resource
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from http import HTTPStatus
 from typing import Any
@@ -54,6 +56,13 @@ DRAIN_SECONDS = 2.0
 ``DRAIN_BYTES``, before the connection closes."""
 
 
+LISTEN_BACKLOG = 256
+"""Connections the kernel queues before the server accepts them (uvicorn's default: 2 048).
+The server accepts what is queued in one turn of its event loop: a burst of 2 000 waiting
+connections was one long turn with every request on hold. Beyond the queue, a client's
+connection attempt is retried by its kernel."""
+
+
 @dataclass(frozen=True)
 class TransportLimits:
     """The limits of :mod:`app.http.transport` (from the settings)."""
@@ -63,6 +72,12 @@ class TransportLimits:
     request_head_timeout: float = 10.0
     max_connections: int = 1000
     max_connections_per_client: int = 64
+
+
+@functools.lru_cache(maxsize=32)
+def _cached_refusal(kind: Callable[..., ServiceError], *args: object) -> bytes:
+    """The answer of the refusal ``kind(*args)``, written once per server."""
+    return refusal_bytes(kind(*args))
 
 
 def refusal_bytes(refusal: ServiceError) -> bytes:
@@ -89,11 +104,12 @@ class Connections:
     total: int = 0
     waiting: OrderedDict[int, asyncio.BaseTransport] = field(default_factory=OrderedDict)
 
-    def admit(self, transport: asyncio.BaseTransport, client: str) -> ServiceError | None:
-        """Count a new connection, or the refusal it gets (then it is not counted)."""
+    def admit(self, transport: asyncio.BaseTransport, client: str) -> bytes | None:
+        """Count a new connection, or give the answer refusing it (then it is not counted)."""
         limits = self.limits
         if self.per_client.get(client, 0) >= limits.max_connections_per_client:
-            return TooManyConnections(
+            return _cached_refusal(
+                TooManyConnections,
                 "max_connections_per_client",
                 limits.max_connections_per_client,
                 "this client address",
@@ -101,7 +117,8 @@ class Connections:
             )
         if self.total >= limits.max_connections:
             if not self.waiting:
-                return TooManyConnections(
+                return _cached_refusal(
+                    TooManyConnections,
                     "max_connections",
                     limits.max_connections,
                     "the server",
@@ -188,17 +205,21 @@ class GuardedHttpProtocol(HttpToolsProtocol):
     def _head_timed_out(self) -> None:
         self.head_timer = None
         if self.in_head and not self.transport.is_closing():
-            self._refuse(HeadTooSlow("request_head_timeout", self.limits.request_head_timeout))
+            self._refuse(
+                _cached_refusal(
+                    HeadTooSlow, "request_head_timeout", self.limits.request_head_timeout
+                )
+            )
 
-    def _refuse(self, refusal: ServiceError, *, drain: bool = False) -> None:
-        """Answer ``refusal`` and close; ``drain``: the client is still sending (a head too
+    def _refuse(self, answer: bytes, *, drain: bool = False) -> None:
+        """Send ``answer`` (a refusal) and close; ``drain``: the client is still sending (a head too
         large), so the rest is read and discarded first (up to ``DRAIN_BYTES``, for at most
         ``DRAIN_SECONDS``): a socket closed with unread bytes resets, and the peer loses the
         answer."""
         self.refused = True
         if self.transport.is_closing():
             return
-        self.transport.write(refusal_bytes(refusal))
+        self.transport.write(answer)
         if not drain or not self.transport.can_write_eof():
             self.transport.close()
             return
@@ -219,7 +240,10 @@ class GuardedHttpProtocol(HttpToolsProtocol):
             budget = self.limits.max_header_bytes - self.head_bytes
             if budget <= 0:
                 limit = self.limits.max_header_bytes
-                self._refuse(HeadersTooLarge("headers", "max_header_bytes", limit), drain=True)
+                self._refuse(
+                    _cached_refusal(HeadersTooLarge, "headers", "max_header_bytes", limit),
+                    drain=True,
+                )
                 return
             piece, data = data[:budget], data[budget:]
             self.head_bytes += len(piece)
@@ -236,7 +260,10 @@ class GuardedHttpProtocol(HttpToolsProtocol):
         self.header_count += 1
         if self.header_count > self.limits.max_header_count:
             limit = self.limits.max_header_count
-            self._refuse(HeadersTooLarge("header lines", "max_header_count", limit), drain=True)
+            self._refuse(
+                _cached_refusal(HeadersTooLarge, "header lines", "max_header_count", limit),
+                drain=True,
+            )
             raise httptools.HttpParserError("too many header lines")
         super().on_header(name, value)
 
