@@ -146,6 +146,19 @@ class Settings(BaseSettings):
         description="known × incoming pairs of one POST /v1/associate whose tracks carry class "
         "evidence (each pair combines two class masses)",
     )
+    max_input_work: int = Field(
+        1_000_000,
+        ge=1,
+        description="work units of one input: its tracks or detections × (the tracks they may be "
+        "compared with + 1), i.e. the session's live fused tracks (and, for detections, the "
+        "sensor's local tracks); 2 000 tracks on a session of 499: ~1 s of CPU",
+    )
+    max_explain_cells: int = Field(
+        250_000,
+        ge=1,
+        description="cells of the score matrix ?explain=true adds: (known tracks + reported "
+        "tracks) × reported tracks (one cell is ~20 bytes of JSON)",
+    )
     max_listed_errors: int = Field(
         MAX_LISTED_ERRORS,
         ge=1,

@@ -81,6 +81,14 @@ def track_list(sensor: str, time_s: float, count: int, evidence: str) -> dict[st
     }
 
 
+MAX_INPUT_WORK = Settings().max_input_work
+
+
+def legal_items(known: int, wanted: int = LIMITS.max_tracks_per_input) -> int:
+    """The most items an input may carry to a session of ``known`` tracks (``max_input_work``)."""
+    return min(wanted, MAX_INPUT_WORK // (known + 1))
+
+
 def fitting(count: int, build: Callable[[int], dict[str, Any]], max_bytes: int) -> dict[str, Any]:
     """``build(n)`` for the largest n ≤ count whose JSON fits in ``max_bytes``."""
     while count > 1:
@@ -245,15 +253,20 @@ def geodetic_and_stream_rows(url: str, c: httpx.Client, max_bytes: int) -> list[
     """The heaviest likelihood inputs and reads in the geodetic frame and over WebSockets."""
     rows = []
     sid, headers = session(c, 3, classes=True, origin=True)
-    first, second, third = (
-        fitting(
-            LIMITS.max_tracks_per_input,
-            lambda n, s=sensor: track_list(s, 1.0, n, "likelihoods"),
-            max_bytes,
-        )
-        for sensor in ("s0", "s1", "s2")
+    first = fitting(
+        LIMITS.max_tracks_per_input, lambda n: track_list("s0", 1.0, n, "likelihoods"), max_bytes
     )
-    tracks = len(first["tracks"])
+    second = fitting(
+        legal_items(len(first["tracks"])),
+        lambda n: track_list("s1", 1.0, n, "likelihoods"),
+        max_bytes,
+    )
+    third = fitting(
+        legal_items(len(first["tracks"]) + len(second["tracks"])),
+        lambda n: track_list("s2", 1.0, n, "likelihoods"),
+        max_bytes,
+    )
+    tracks = len(second["tracks"])
     c.post(f"/v1/sessions/{sid}/tracks", json=first, headers=headers).raise_for_status()
     rows.append(
         measure(
@@ -303,7 +316,7 @@ def geodetic_and_stream_rows(url: str, c: httpx.Client, max_bytes: int) -> list[
     rows.append(
         measure(
             url,
-            f"WS stream ({tracks}, likelihoods) + geodetic subscriber",
+            f"WS stream ({len(third['tracks'])}, likelihoods) + geodetic subscriber",
             stream_and_subscribe,
         )
     )
@@ -368,10 +381,30 @@ def slowloris(url: str, count: int, addresses: int, hold_s: float) -> tuple[int,
     return 200, held
 
 
+def explained(url: str, client: httpx.Client, known: int, items: int) -> dict[str, Any]:
+    """``items`` tracks with ``?explain=true`` to a session holding ``known`` tracks."""
+    sid, headers = session(client, 2, classes=False)
+    first = track_list("s0", 1.0, known, "none")
+    client.post(f"/v1/sessions/{sid}/tracks", json=first, headers=headers).raise_for_status()
+    second = track_list("s1", 1.0, items, "none")
+    return measure(
+        url,
+        f"POST tracks ({items} on {known}, explain=true)",
+        lambda c: c.post(
+            f"/v1/sessions/{sid}/tracks", params={"explain": "true"}, json=second, headers=headers
+        ),
+    )
+
+
 def crowd_rows(url: str) -> list[dict[str, Any]]:
-    """What an anonymous client can spend before any route runs (issue 28): headers, slowloris.
-    A slowloris row's answer is how many of its connections the server still held."""
-    rows = [measure(url, "a 64 MB header", lambda _: huge_header(url, 64))]
+    """What an anonymous client can spend (issue 28): headers, slowloris, explain. A slowloris
+    row's answer is how many of its connections the server still held."""
+    with httpx.Client(base_url=url, timeout=300) as client:
+        rows = [
+            explained(url, client, 2000, 2000),
+            explained(url, client, 353, 353),  # (353 + 353) × 353 ≤ max_explain_cells
+        ]
+    rows.append(measure(url, "a 64 MB header", lambda _: huge_header(url, 64)))
     for addresses in (1, 300):
         row = measure(
             url,
@@ -520,8 +553,10 @@ def main() -> int:
             sid, headers = session(c, 2, classes=evidence != "none")
             count = LIMITS.max_tracks_per_input
             first = fitting(count, lambda n, e=evidence: track_list("s0", 1.0, n, e), max_bytes)
-            second = fitting(count, lambda n, e=evidence: track_list("s1", 1.0, n, e), max_bytes)
             tracks = len(first["tracks"])
+            second = fitting(
+                legal_items(tracks), lambda n, e=evidence: track_list("s1", 1.0, n, e), max_bytes
+            )
             rows.append(
                 measure(
                     url,
@@ -534,7 +569,7 @@ def main() -> int:
             rows.append(
                 measure(
                     url,
-                    f"POST tracks ({tracks}, {evidence}, 2nd sensor)",
+                    f"POST tracks ({len(second['tracks'])} on {tracks}, {evidence}, 2nd sensor)",
                     lambda client, b=second, s=sid, h=headers: client.post(
                         f"/v1/sessions/{s}/tracks", json=b, headers=h
                     ),

@@ -23,9 +23,14 @@ from app.http.errors import (
 from app.http.requests import WireRoute
 from app.http.responses import JSONTextResponse
 from app.sessions.translate import picture_geojson, picture_json, session_geodetic, wire_json
+from core.numerics import MAX_TIME
 
 router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
 
+EXPLAIN = (
+    "add the association's score matrix: (known + reported) × reported cells, at most "
+    "max_explain_cells (422 before the work beyond)"
+)
 TrackId = Annotated[str, Path(min_length=1, max_length=64, description="A fused track id.")]
 OutputFrame = Annotated[
     Literal["session", "geodetic"],
@@ -54,9 +59,7 @@ async def submit_tracks(
     report: TrackReport,
     session: LiveSessionDep,
     registry: RegistryDep,
-    explain: Annotated[
-        bool, Query(description="add the association method's score matrix")
-    ] = False,
+    explain: Annotated[bool, Query(description=EXPLAIN)] = False,
     frame: OutputFrame = "session",
 ) -> JSONTextResponse:
     """One sensor's track list → the fused result of that step (acknowledged once logged).
@@ -80,7 +83,7 @@ async def submit_detections(
     report: DetectionReport,
     session: LiveSessionDep,
     registry: RegistryDep,
-    explain: Annotated[bool, Query(description="add the association score matrix")] = False,
+    explain: Annotated[bool, Query(description=EXPLAIN)] = False,
     frame: OutputFrame = "session",
 ) -> JSONTextResponse:
     """One sensor's detections → the fused result of that step.
@@ -109,7 +112,12 @@ async def list_fused_tracks(
     registry: RegistryDep,
     time: Annotated[
         FiniteFloat | None,
-        Query(description="predict the tracks to this time (default: the fusion time)"),
+        Query(
+            ge=-MAX_TIME,
+            le=MAX_TIME,
+            description="predict the tracks to this time (default: the fusion time); at most "
+            "1e12 s in magnitude, as the inputs' times",
+        ),
     ] = None,
     frame: OutputFrame = "session",
     format: Annotated[

@@ -519,8 +519,39 @@ class SessionRegistry:
         ``geodetic``: with the tracks' geodetic positions)."""
         items = len(report.tracks) if isinstance(report, TrackReport) else len(report.detections)
         await self._compute(items, functools.partial(self.check, session, report))
-        await self.quotas.charge(session.record.tenant, input_work(items, len(session.tracks)))
+        work = self.check_work(session, report, items, explain=explain)
+        await self.quotas.charge(session.record.tenant, work)
         return await self._submit(session, report, items, explain=explain, geodetic=geodetic)
+
+    def check_work(self, session: LiveSession, report: Report, items: int, *, explain: bool) -> int:
+        """The input's work units (:func:`~app.cluster.quotas.input_work`), refused (422) beyond
+        ``max_input_work``, or beyond ``max_explain_cells`` for the matrix ``explain`` adds."""
+        known = len(session.tracks)
+        if isinstance(report, DetectionReport) and session.engine is not None:
+            tracker = session.engine.local_trackers.get(report.sensor)
+            known += 0 if tracker is None else tracker.n_tracks
+        settings = self.settings
+        where = ("tracks",) if isinstance(report, TrackReport) else ("detections",)
+        work = input_work(items, known)
+        if work > settings.max_input_work:
+            raise LimitExceeded(
+                "max_input_work",
+                settings.max_input_work,
+                work,
+                what=f"work units of this input ({items} items × ({known} known tracks + 1))",
+                loc=where,
+            )
+        cells = (known + items) * items
+        if explain and cells > settings.max_explain_cells:
+            raise LimitExceeded(
+                "max_explain_cells",
+                settings.max_explain_cells,
+                cells,
+                what=f"cells of the explained score matrix (({known} known + {items} reported "
+                f"tracks) × {items}); send the input without explain=true",
+                loc=where,
+            )
+        return work
 
     async def _submit(
         self,

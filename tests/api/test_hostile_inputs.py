@@ -41,6 +41,8 @@ MAX_BODY = 64 * 1024
 MAX_TRACKS = 20
 MAX_FOCAL_SETS = 8
 WS_RATE = 20
+MAX_WORK = 60  # a track list of 20 on the scene's 3 fused tracks is 20 × 4 = 80 work units
+MAX_EXPLAIN_CELLS = 30  # 8 tracks on 3 explained: (3 + 8) × 8 = 88 cells
 MAX_REFUSAL_BYTES = 16 * 1024
 GOOD = track_report("radar-1", 12.5, seed=1)
 LATER = track_report("radar-1", 13.0, seed=2)
@@ -85,6 +87,8 @@ def scene() -> Iterator[Scene]:
         ws_messages_per_second=WS_RATE,
         body_read_timeout=0.5,
         request_head_timeout=1.0,
+        max_input_work=MAX_WORK,
+        max_explain_cells=MAX_EXPLAIN_CELLS,
         rate_limit="none",
     )
     with serving(settings) as server, httpx.Client(base_url=server.url, timeout=30.0) as http:
@@ -432,6 +436,25 @@ CASES: dict[str, Callable[[Scene], list[Answer]]] = {
     "picture at time -1e308": get("/v1/sessions/{sid}/tracks", time="-1e308"),
     "session id of 65 characters": get("/v1/sessions/" + "s" * 65),
     "unknown fused track of 1 000 characters": get("/v1/sessions/{sid}/tracks/" + "t" * 1000),
+    "20 tracks over max_input_work (20 × (3 fused + 1))": naming(
+        "max_input_work", tracks(json.dumps(track_report("radar-1", 13.0, seed=3, targets=20)))
+    ),
+    "explain over max_explain_cells ((3 + 8) × 8)": naming(
+        "max_explain_cells",
+        lambda scene: [
+            post(
+                scene,
+                scene.tracks_path + "?explain=true",
+                json.dumps(track_report("radar-1", 13.0, seed=4, targets=8)),
+            )
+        ],
+    ),
+    "picture at time 1e102 (beyond the inputs' 1e12)": get(
+        "/v1/sessions/{sid}/tracks", time="1e102"
+    ),
+    "motion.q 1e300 (later predictions overflow)": lambda scene: [
+        post(scene, "/v1/sessions", json.dumps(dict(CONFIG, motion={"q": 1e300})))
+    ],
     # --- framing and headers
     "body slower than body_read_timeout": raw_http(
         b"POST /v1/sessions/{sid}/tracks HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
