@@ -60,7 +60,7 @@ def _check_store(url: str, redis_prefix: str) -> None:
     """Open the store once before serving: a store that cannot be used is one line, not a
     traceback from the application's start-up. A Redis server that is only unreachable
     now (not up yet) is a warning: the service starts, ``/readyz`` answers 503 until it is."""
-    from app.http.errors import StoreUnavailable
+    from app.http.errors import StoreCorrupt, StoreUnavailable
     from app.stores import open_store, parse_store_url
 
     try:
@@ -69,6 +69,8 @@ def _check_store(url: str, redis_prefix: str) -> None:
             store.count_sessions()
         finally:
             store.close()
+    except StoreCorrupt as error:  # serves, not ready (/readyz says why): the operator decides
+        print(f"credal-fusion serve: warning: {error.detail}; serving anyway", flush=True)
     except StoreUnavailable as error:
         if parse_store_url(url).kind != "redis":  # a file that cannot be opened: not an outage
             raise _unusable(url, error) from error

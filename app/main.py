@@ -9,12 +9,18 @@ import sys
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
-from fastapi import FastAPI
+from fastapi import FastAPI, Request, Response
 from fastapi.middleware.cors import CORSMiddleware
 from fastapi.routing import APIRoute
 
 from app.http.body_limits import BodyLimits
-from app.http.errors import StoreUnavailable, install_error_handlers
+from app.http.errors import (
+    SessionUnreadable,
+    StoreCorrupt,
+    StoreUnavailable,
+    install_error_handlers,
+    problem_answer,
+)
 from app.http.rate_limit import RateLimit, parse_rates
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
@@ -68,6 +74,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         except StoreUnavailable as error:
             logger.warning("serving without the store for now: %s", error.detail)
             tasks.append(asyncio.create_task(registry.restore_when_available(), name="restore"))
+        except StoreCorrupt as error:  # permanent: serve, say so (/readyz), never retry
+            registry.store_corrupt = error.detail
+            logger.error("serving with a damaged store: %s", error.detail)
         try:
             yield
         finally:
@@ -92,6 +101,18 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.tenancy = settings.tenancy()
     app.state.metrics = service_metrics
     install_error_handlers(app, service_metrics.internal_errors.inc)
+
+    async def unreadable(request: Request, error: Exception) -> Response:
+        """A session found unreadable (wherever it was read) is quarantined, then answered."""
+        registry: SessionRegistry = request.app.state.registry
+        if isinstance(error, SessionUnreadable):
+            registry.quarantine(error)
+        elif isinstance(error, StoreCorrupt):
+            registry.store_corrupt = error.detail
+        return problem_answer(request, error)
+
+    app.add_exception_handler(SessionUnreadable, unreadable)
+    app.add_exception_handler(StoreCorrupt, unreadable)
     app.include_router(health.router)
     app.include_router(metrics.router)
     app.include_router(sessions.router)

@@ -10,7 +10,7 @@ from fastapi.security.base import SecurityBase
 from fastapi.security.utils import get_authorization_scheme_param
 from starlette.requests import HTTPConnection
 
-from app.http.errors import Forbidden, SessionNotFound, Unauthorized
+from app.http.errors import Forbidden, SessionNotFound, SessionUnreadable, Unauthorized
 from app.http.security import Principal, is_admin_token, token_matches
 from app.http.tenants import Tenancy
 from app.metrics import ServiceMetrics
@@ -133,8 +133,22 @@ async def creator_tenant(request: Request) -> str:
 
 
 TenantDep = Annotated[str, Depends(creator_tenant)]
+
+
+async def deletable_session(sid: SessionId, token: BearerToken, request: Request) -> str:
+    """The id of a session the token may delete: :func:`authorize_session`, or a quarantined
+    session (unreadable: its token cannot be checked) with the admin token."""
+    try:
+        return (await authorize_session(sid, token, request)).id
+    except SessionUnreadable:
+        if is_admin_token(token, _admin_token(_settings_of(request))):
+            return sid
+        raise
+
+
 AdminDep = Annotated[Principal, Depends(require_admin)]
 AuthorizedSession = Annotated[SessionRecord, Depends(authorize_session)]
+DeletableSession = Annotated[str, Depends(deletable_session)]
 
 
 async def live_session(sid: SessionId, token: BearerToken, request: Request) -> LiveSession:

@@ -184,6 +184,45 @@ class StoreUnavailable(RetryLater):
         )
 
 
+class SessionUnreadable(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """The store holds a session it cannot read (corrupt data): the session is quarantined.
+
+    A permanent fault, so no ``Retry-After``: the operator repairs or deletes the
+    session (``DELETE`` with the admin token). The answer names the session and
+    what of it could not be read, never the stored text.
+    """
+
+    status = HTTPStatus.INTERNAL_SERVER_ERROR
+    slug = "session-unreadable"
+    title = "Session unreadable"
+
+    def __init__(self, session_id: str, what: str) -> None:
+        super().__init__(
+            f"session {session_id!r} is quarantined: its stored {what} cannot be read (corrupt "
+            "data, a permanent fault: retrying will not help; the operator repairs or deletes "
+            "it). Other sessions are served.",
+            session=session_id,
+            unreadable=what,
+        )
+        self.session_id = session_id
+        self.what = what
+
+
+class StoreCorrupt(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """The store's own structure is damaged (e.g. a malformed sqlite file): a permanent fault."""
+
+    status = HTTPStatus.INTERNAL_SERVER_ERROR
+    slug = "store-corrupt"
+    title = "Session store corrupt"
+
+    def __init__(self, store: str, reason: str) -> None:
+        super().__init__(
+            f"the {store} store is damaged ({reason}): a permanent fault, retrying will not "
+            "help; the operator restores it from a backup",
+            store=store,
+        )
+
+
 class RateLimited(RetryLater):
     """More requests than ``limit`` allows ``who`` (:mod:`app.http.rate_limit`)."""
 
@@ -621,6 +660,9 @@ PROBLEM_STATUSES: dict[int, str] = {
     413: "Body too large",
     422: "Invalid request (every invalid field is listed in `errors`) or a limit exceeded",
     429: "Too many requests (``rate_limit``, with ``Retry-After``) or too many sessions",
+    500: "An unexpected error (a ``reference`` to the server log), a quarantined session "
+    "(``session-unreadable``: its stored data cannot be read) or a damaged store "
+    "(``store-corrupt``): permanent, no ``Retry-After``",
     503: "The session store is unavailable, or another service instance applies this "
     "session's inputs (both with ``Retry-After``)",
 }
@@ -629,9 +671,11 @@ PROBLEM_STATUSES: dict[int, str] = {
 def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
     """OpenAPI ``responses`` entries documenting problem+json answers for ``statuses``.
 
-    Every route may answer 429 (the rate limit, :mod:`app.http.rate_limit`), so it is always listed.
+    Every route may answer 429 (the rate limit, :mod:`app.http.rate_limit`) and 500, so they
+    are always listed.
     """
+    always = {int(HTTPStatus.TOO_MANY_REQUESTS), int(HTTPStatus.INTERNAL_SERVER_ERROR)}
     return {
         status: {"model": Problem, "description": PROBLEM_STATUSES[status]}
-        for status in sorted({*statuses, int(HTTPStatus.TOO_MANY_REQUESTS)})
+        for status in sorted({*statuses, *always})
     }

@@ -59,7 +59,10 @@ async def get_readiness(request: Request) -> PlainJSONResponse:
     """Whether the service can take inputs now: the store (and its pub/sub) answers; no token."""
     registry: SessionRegistry = request.app.state.registry
     store = registry.store
-    components = [await _state("store", anyio.to_thread.run_sync(store.ping))]
+    if registry.store_corrupt is not None:  # permanent: no ping will mend it
+        components = [ComponentState(name="store", ready=False, detail=registry.store_corrupt)]
+    else:
+        components = [await _state("store", anyio.to_thread.run_sync(store.ping))]
     if registry.shared:
         components.append(await _state("fanout", registry.fanout.ping()))
     readiness = Readiness(
@@ -67,9 +70,12 @@ async def get_readiness(request: Request) -> PlainJSONResponse:
         store=store.kind,
         components=components,
         leases_held=registry.leases_held(),
+        quarantined=sorted(registry.quarantined),
     )
     return PlainJSONResponse(
         readiness.model_dump(mode="json"),
         status_code=HTTPStatus.OK if readiness.ready else HTTPStatus.SERVICE_UNAVAILABLE,
-        headers={} if readiness.ready else {"Retry-After": str(StoreUnavailable.retry_after_s)},
+        headers={}
+        if readiness.ready or registry.store_corrupt is not None  # permanent: no retry time
+        else {"Retry-After": str(StoreUnavailable.retry_after_s)},
     )

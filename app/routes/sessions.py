@@ -23,6 +23,7 @@ from app.http.deps import (
     AdminDep,
     AuthorizedSession,
     CurrentSessionDep,
+    DeletableSession,
     MetricsDep,
     RegistryDep,
     SettingsDep,
@@ -109,9 +110,12 @@ def list_sessions(_admin: AdminDep, store: StoreDep) -> SessionList:
     response_class=Response,
     responses=problem_responses(401, 403, 404, 503),
 )
-async def delete_session(session: AuthorizedSession, registry: RegistryDep) -> Response:
-    """End a session: it no longer accepts inputs nor answers (its token stops working)."""
-    await registry.delete(session.id)
+async def delete_session(session: DeletableSession, registry: RegistryDep) -> Response:
+    """End a session: it no longer accepts inputs nor answers (its token stops working).
+
+    A quarantined session (``GET /readyz`` lists them: the store cannot read it)
+    is deleted with the admin token."""
+    await registry.delete(session)
     return Response(status_code=HTTPStatus.NO_CONTENT)
 
 

@@ -75,6 +75,7 @@ from app.http.errors import (
     LimitExceeded,
     SessionLeased,
     SessionNotFound,
+    SessionUnreadable,
     StaleReport,
     StoreUnavailable,
     request_validation_error,
@@ -85,6 +86,7 @@ from app.runtime import without_collection
 from app.sessions.hub import (
     SESSION_ENDED,
     SESSION_RELOADED,
+    SESSION_UNREADABLE,
     STORE_UNAVAILABLE,
     Ending,
     Published,
@@ -182,6 +184,10 @@ class SessionRegistry:
         self._tokens: dict[str, str] = {}
         """Token hash → id of the live sessions in memory (the rate limit's verified identities)."""
         self._input_series: dict[str, InputSeries] = {}
+        self.quarantined: dict[str, str] = {}
+        """Sessions the store holds but cannot read: id → what of it (until deleted)."""
+        self.store_corrupt: str | None = None
+        """Why the store itself is damaged, once seen (a permanent fault: /readyz says it)."""
 
     def __len__(self) -> int:
         return len(self._sessions)
@@ -230,7 +236,29 @@ class SessionRegistry:
         session = self._sessions.get(session_id)
         if session is not None:
             return session.record
-        return await self._io(self.store.get_session, session_id)
+        self._refuse_quarantined(session_id)
+        try:
+            return await self._io(self.store.get_session, session_id)
+        except SessionUnreadable as unreadable:
+            raise self.quarantine(unreadable) from None
+
+    def _refuse_quarantined(self, session_id: str) -> None:
+        what = self.quarantined.get(session_id)
+        if what is not None:
+            raise SessionUnreadable(session_id, what)
+
+    def quarantine(self, unreadable: SessionUnreadable) -> SessionUnreadable:
+        """Set a session the store cannot read aside (it is served no more, the rest is);
+        ``/readyz`` and ``/metrics`` list it. Returns the error, to raise."""
+        session_id = unreadable.session_id
+        if session_id not in self.quarantined:
+            logger.error(
+                "session %s quarantined: its stored %s cannot be read", session_id, unreadable.what
+            )
+        self.quarantined[session_id] = unreadable.what
+        self.metrics.quarantined.set(len(self.quarantined))
+        self.discard(session_id, SESSION_UNREADABLE)
+        return unreadable
 
     async def get(self, session_id: str) -> LiveSession:
         """The live session ``session_id``, loaded from the store if it is not in memory."""
@@ -240,7 +268,11 @@ class SessionRegistry:
         async with self._load_lock:
             session = self._sessions.get(session_id)
             if session is None:
-                session = await self._load(session_id)
+                self._refuse_quarantined(session_id)
+                try:
+                    session = await self._load(session_id)
+                except SessionUnreadable as unreadable:
+                    raise self.quarantine(unreadable) from None
                 self._sessions[session_id] = session
                 self._tokens[session.record.token_hash] = session_id
         return session
@@ -250,7 +282,13 @@ class SessionRegistry:
         if record is None:
             raise SessionNotFound(session_id)
         load = await self._io(self.store.load, session_id)
-        return await anyio.to_thread.run_sync(functools.partial(self._rebuild, load.session, load))
+        try:
+            return await anyio.to_thread.run_sync(
+                functools.partial(self._rebuild, load.session, load)
+            )
+        except Exception as error:  # a stored config or snapshot the engine cannot take
+            logger.error("session %s: rebuild failed (%s)", session_id, type(error).__name__)
+            raise SessionUnreadable(session_id, "state") from error
 
     def _rebuild(self, record: SessionRecord, load: SessionLoad) -> LiveSession:
         """Snapshot + replay of the log after it (runs in a worker thread)."""
@@ -291,13 +329,11 @@ class SessionRegistry:
             return
 
     async def restore_all(self) -> int:
-        """Load every stored session (on start); returns how many."""
-        records = await self._io(self.store.list_sessions)
-        for record in records:
-            try:
-                await self.get(record.id)
-            except Exception:
-                logger.exception("session %s could not be restored", record.id)
+        """Load every stored session (on start); returns how many. A session the store cannot
+        read is quarantined (:meth:`quarantine`): the others are served."""
+        for session_id in await self._io(self.store.session_ids):
+            with contextlib.suppress(SessionUnreadable, SessionNotFound):  # quarantined, or gone
+                await self.get(session_id)
         return len(self._sessions)
 
     def discard(self, session_id: str, ending: Ending = SESSION_ENDED) -> None:
@@ -313,8 +349,11 @@ class SessionRegistry:
             forwarder.cancel()
 
     async def delete(self, session_id: str) -> bool:
-        """End a session in the store and in memory (and give its lease up)."""
+        """End a session in the store and in memory (and give its lease up); a quarantined
+        session is deleted whole (what could not be read goes too)."""
         deleted = await self._io(self.store.delete_session, session_id)
+        if self.quarantined.pop(session_id, None) is not None:
+            self.metrics.quarantined.set(len(self.quarantined))
         self.discard(session_id)
         if self.shared:
             await self._io(self.leases.release, session_id, self.owner)

@@ -21,6 +21,13 @@ would accept it again.
 Outages: every store raises :class:`~app.http.errors.StoreUnavailable` for its
 backend's connection and I/O errors (:func:`unavailable_on`), never a raw
 driver error, so the service answers 503 instead of 500.
+
+Corruption: a session's stored value that cannot be decoded (its config, an
+input, a snapshot, a missing field) raises
+:class:`~app.http.errors.SessionUnreadable` naming the session and what of it
+(:func:`readable`): a permanent fault of that session alone, which the registry
+quarantines. A store whose own structure is damaged (a malformed sqlite file)
+raises :class:`~app.http.errors.StoreCorrupt`. Neither quotes stored text.
 """
 
 from __future__ import annotations
@@ -36,7 +43,13 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 import orjson
 
-from app.http.errors import Conflict, LimitExceeded, SessionNotFound, StoreUnavailable
+from app.http.errors import (
+    Conflict,
+    LimitExceeded,
+    SessionNotFound,
+    SessionUnreadable,
+    StoreUnavailable,
+)
 
 JsonObject = dict[str, Any]
 _PLAIN_KINDS = frozenset("biuf")
@@ -204,7 +217,12 @@ class Store(Protocol):
         ...
 
     def list_sessions(self) -> list[SessionRecord]:
-        """Every live session, oldest first."""
+        """Every live session that can be read, oldest first (an unreadable one is left out:
+        :meth:`session_ids` has it)."""
+        ...
+
+    def session_ids(self) -> list[str]:
+        """The ids of every live session, readable or not, oldest first."""
         ...
 
     def count_sessions(self) -> int:
@@ -387,6 +405,20 @@ def history(store: Store, session_id: str, after: int, limit: int) -> History:
         entries = store.entries(session_id, after=after, limit=limit)
         return History(snapshot=None, entries=entries, last_seq=load.last_seq)
     return History(snapshot=load.snapshot, entries=load.entries[:limit], last_seq=load.last_seq)
+
+
+UNREADABLE = (ValueError, KeyError, TypeError, IndexError, AttributeError)
+"""What decoding a damaged stored value raises (``json.JSONDecodeError`` is a ValueError)."""
+
+
+@contextmanager
+def readable(session_id: str, what: str) -> Iterator[None]:
+    """Decode a session's stored ``what``: a damaged value raises :class:`SessionUnreadable`
+    (naming the session and ``what``, never quoting the stored text)."""
+    try:
+        yield
+    except UNREADABLE as error:
+        raise SessionUnreadable(session_id, what) from error
 
 
 @contextmanager

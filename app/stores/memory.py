@@ -108,6 +108,9 @@ class MemoryStore:
             records = [data.full_record() for data in self._sessions.values()]
         return sorted(records, key=lambda record: (record.created_at, record.id))
 
+    def session_ids(self) -> list[str]:
+        return [record.id for record in self.list_sessions()]
+
     def count_sessions(self) -> int:
         with self._lock:
             return len(self._sessions)

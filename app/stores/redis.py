@@ -46,7 +46,7 @@ from typing import Any, cast
 import redis
 from redis.client import Pipeline
 
-from app.http.errors import SessionNotFound
+from app.http.errors import SessionNotFound, SessionUnreadable
 from app.stores.base import (
     LogEntry,
     SequenceConflict,
@@ -57,6 +57,7 @@ from app.stores.base import (
     StoreUsage,
     dumps,
     loads,
+    readable,
     session_limit,
     tenant_session_limit,
     unavailable_on,
@@ -184,32 +185,35 @@ def _pairs(flat: list[str]) -> dict[str, str]:
     return dict(zip(flat[::2], flat[1::2], strict=True))
 
 
-def _record(fields: Mapping[str, str]) -> SessionRecord:
-    return SessionRecord(
-        id=fields["id"],
-        config=loads(fields["config"]),
-        token_hash=fields["token_hash"],
-        created_at=datetime.fromisoformat(fields["created_at"]),
-        deleted=fields["deleted"] == "1",
-        tenant=fields.get("tenant", ""),
-    )
+def _record(session_id: str, fields: Mapping[str, str]) -> SessionRecord:
+    with readable(session_id, "record"):
+        return SessionRecord(
+            id=fields["id"],
+            config=loads(fields["config"]),
+            token_hash=fields["token_hash"],
+            created_at=datetime.fromisoformat(fields["created_at"]),
+            deleted=fields["deleted"] == "1",
+            tenant=fields.get("tenant", ""),
+        )
 
 
-def _entry(stream_id: str, fields: Mapping[str, str]) -> LogEntry:
-    return LogEntry(
-        seq=int(stream_id.split("-", 1)[0]),
-        received_at=datetime.fromisoformat(fields["received_at"]),
-        input=loads(fields["input"]),
-    )
+def _entry(session_id: str, stream_id: str, fields: Mapping[str, str]) -> LogEntry:
+    with readable(session_id, f"input {stream_id}"):
+        return LogEntry(
+            seq=int(stream_id.split("-", 1)[0]),
+            received_at=datetime.fromisoformat(fields["received_at"]),
+            input=loads(fields["input"]),
+        )
 
 
-def _snapshot(text: str) -> Snapshot:
-    document = loads(text)
-    return Snapshot(
-        seq=int(document["seq"]),
-        taken_at=datetime.fromisoformat(document["taken_at"]),
-        state=document["state"],
-    )
+def _snapshot(session_id: str, text: str) -> Snapshot:
+    with readable(session_id, "snapshot"):
+        document = loads(text)
+        return Snapshot(
+            seq=int(document["seq"]),
+            taken_at=datetime.fromisoformat(document["taken_at"]),
+            state=document["state"],
+        )
 
 
 class RedisStore:
@@ -300,9 +304,9 @@ class RedisStore:
     def get_session(self, session_id: str) -> SessionRecord | None:
         with self._reachable():
             fields = cast(dict[str, str], self._redis().hgetall(self.keys.session(session_id)))
-        if not fields or fields["deleted"] != "0":
+        if not fields or fields.get("deleted") == "1":
             return None
-        return _record(fields)
+        return _record(session_id, fields)
 
     def list_sessions(self) -> list[SessionRecord]:
         client = self._redis()
@@ -312,7 +316,16 @@ class RedisStore:
             for session_id in ids:
                 pipeline.hgetall(self.keys.session(session_id))
             rows: list[dict[str, str]] = pipeline.execute()
-        return [_record(fields) for fields in rows if fields and fields["deleted"] == "0"]
+        records = []
+        for session_id, fields in zip(ids, rows, strict=True):
+            if fields and fields.get("deleted") != "1":
+                with contextlib.suppress(SessionUnreadable):  # session_ids() has it
+                    records.append(_record(session_id, fields))
+        return records
+
+    def session_ids(self) -> list[str]:
+        with self._reachable():
+            return cast(list[str], self._redis().zrange(self.keys.sessions(), 0, -1))
 
     def count_sessions(self) -> int:
         with self._reachable():
@@ -370,7 +383,7 @@ class RedisStore:
         rows: list[tuple[str, dict[str, str]]] = self._live_then(
             session_id, lambda pipeline: pipeline.xrange(key, min=start, max="+", count=limit)
         )
-        return [_entry(stream_id, fields) for stream_id, fields in rows]
+        return [_entry(session_id, stream_id, fields) for stream_id, fields in rows]
 
     def save_snapshot(self, session_id: str, snapshot: Snapshot) -> None:
         document = {
@@ -400,10 +413,12 @@ class RedisStore:
         if not reply:
             raise SessionNotFound(session_id)
         fields, snapshot, rows = reply
+        with readable(session_id, "record"):
+            record = _pairs(fields)
         return SessionLoad(
-            session=_record(_pairs(fields)),
-            snapshot=_snapshot(snapshot) if snapshot is not None else None,
-            entries=[_entry(stream_id, _pairs(entry)) for stream_id, entry in rows],
+            session=_record(session_id, record),
+            snapshot=_snapshot(session_id, snapshot) if snapshot is not None else None,
+            entries=[_entry(session_id, stream_id, _pairs(entry)) for stream_id, entry in rows],
         )
 
     def compact(self, session_id: str, through: int) -> int:

@@ -95,29 +95,29 @@ def test_the_service_wide_session_limit_says_when_to_retry() -> None:
 
 
 def test_inputs_per_second_are_the_tenants_whichever_token_sends_them() -> None:
-    """Two sessions of one tenant share its input rate; a refusal applies nothing."""
+    """Two sessions of one tenant share its input rate (3/s; inputs alternate between them until
+    one is refused: faster than 3/s on any machine); a refusal applies nothing."""
     settings = make_settings(tenant_inputs_per_second=3, rate_limit="none")
     with TestClient(create_app(settings), raise_server_exceptions=False) as client:
         sessions = [client.post("/v1/sessions", json=SESSION_CONFIG).json() for _ in range(2)]
-        answers = []
-        for index in range(4):
+        accepted = [0, 0]
+        for index in range(50):
             session = sessions[index % 2]
-            answers.append(
-                client.post(
-                    f"/v1/sessions/{session['id']}/tracks",
-                    json=track_report("radar-1", 10.0 + index, seed=index),
-                    headers=bearer(session["token"]),
-                )
+            answer = client.post(
+                f"/v1/sessions/{session['id']}/tracks",
+                json=track_report("radar-1", 10.0 + index, seed=index),
+                headers=bearer(session["token"]),
             )
-        assert [answer.status_code for answer in answers[:3]] == [200, 200, 200]
-        refused = answers[3]
-        assert refused.status_code == 429, refused.text
-        assert refused.json()["limit"] == "tenant_inputs_per_second"
-        assert "Retry-After" in refused.headers
-        summary = client.get(
-            f"/v1/sessions/{sessions[1]['id']}", headers=bearer(sessions[1]["token"])
-        )
-        assert summary.json()["seq"] == 1  # the refused input was not applied
+            if answer.status_code != 200:
+                break
+            accepted[index % 2] += 1
+        assert answer.status_code == 429, answer.text
+        assert answer.json()["limit"] == "tenant_inputs_per_second"
+        assert "Retry-After" in answer.headers
+        assert min(accepted) >= 1  # both tokens spent the one budget
+        refused = sessions[index % 2]
+        summary = client.get(f"/v1/sessions/{refused['id']}", headers=bearer(refused["token"]))
+        assert summary.json()["seq"] == accepted[index % 2]  # the refused input was not applied
 
 
 def test_work_per_minute_is_checked_before_the_work() -> None:
