@@ -81,7 +81,7 @@ def track_list(sensor: str, time_s: float, count: int, evidence: str) -> dict[st
     }
 
 
-MAX_INPUT_WORK = Settings().max_input_work
+MAX_INPUT_WORK: int = getattr(Settings(), "max_input_work", 10**15)  # (no limit before issue 28)
 
 
 def legal_items(known: int, wanted: int = LIMITS.max_tracks_per_input) -> int:
