@@ -22,6 +22,7 @@ from app.http.errors import (
     problem_answer,
 )
 from app.http.rate_limit import RateLimit, parse_rates
+from app.http.security import SecurityHeaders
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
 from app.routes import associate, docs, fusion, health, metrics, sessions, streams, viewer
@@ -137,6 +138,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             allow_methods=["GET", "POST", "DELETE"],
             allow_headers=["Authorization", "Content-Type"],
         )
+    app.add_middleware(SecurityHeaders)
     app.add_middleware(HttpMetrics, metrics=service_metrics)
     install_openapi(app)
     return app

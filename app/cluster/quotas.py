@@ -50,18 +50,26 @@ class TenantQuotas:
 
     async def charge(self, tenant: str, work: int) -> None:
         """Count one input of ``work`` units for ``tenant``, or refuse it (429, nothing counted
-        against the quota it breaks)."""
-        try:
-            if not await self.limiter.hit(self.inputs, "inputs", tenant):
-                raise await self._refusal(
-                    self.inputs, "inputs", tenant, "tenant_inputs_per_second", 1, "inputs"
-                )
-            if not await self.limiter.hit(self.work, "work", tenant, cost=work):
-                raise await self._refusal(
-                    self.work, "work", tenant, "tenant_work_per_minute", work, "work units"
-                )
-        except UNREACHABLE as error:
-            raise StoreUnavailable("redis", f"{type(error).__name__}: {error}"[:200]) from error
+        against the quota it breaks). A connection that broke (Redis restarted) is tried once
+        more on a fresh one, then the store is unavailable (503)."""
+        for attempt in range(2):
+            try:
+                await self._charge(tenant, work)
+                return
+            except UNREACHABLE as error:
+                if attempt:
+                    reason = f"{type(error).__name__}: {error}"[:200]
+                    raise StoreUnavailable("redis", reason) from error
+
+    async def _charge(self, tenant: str, work: int) -> None:
+        if not await self.limiter.hit(self.inputs, "inputs", tenant):
+            raise await self._refusal(
+                self.inputs, "inputs", tenant, "tenant_inputs_per_second", 1, "inputs"
+            )
+        if not await self.limiter.hit(self.work, "work", tenant, cost=work):
+            raise await self._refusal(
+                self.work, "work", tenant, "tenant_work_per_minute", work, "work units"
+            )
 
     async def _refusal(
         self, item: RateLimitItem, kind: str, tenant: str, limit: str, cost: int, what: str

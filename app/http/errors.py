@@ -271,6 +271,22 @@ class BodyTooSlow(ServiceError):  # noqa: N818 - HTTP vocabulary
         )
 
 
+class UnsupportedEncoding(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """A body sent with a ``Content-Encoding`` (gzip, …): bodies are read as sent, never inflated
+    (a small compressed body can inflate past every size limit)."""
+
+    status = HTTPStatus.UNSUPPORTED_MEDIA_TYPE
+    slug = "unsupported-encoding"
+    title = "Content-Encoding not supported"
+
+    def __init__(self, encoding: str) -> None:
+        super().__init__(
+            f"Content-Encoding {encoding[:40]!r} is not supported: send the body as it is "
+            "(identity)",
+            encoding=encoding[:40],
+        )
+
+
 class HeadersTooLarge(ServiceError):  # noqa: N818 - HTTP vocabulary
     """A request head beyond ``limit`` (:mod:`app.http.transport`), refused unparsed."""
 
@@ -658,6 +674,7 @@ PROBLEM_STATUSES: dict[int, str] = {
     408: "The body did not arrive within ``body_read_timeout`` (the connection is closed)",
     409: "Conflict with the session state",
     413: "Body too large",
+    415: "A ``Content-Encoding`` other than identity (bodies are never inflated)",
     422: "Invalid request (every invalid field is listed in `errors`) or a limit exceeded",
     429: "Too many requests (``rate_limit``, with ``Retry-After``) or too many sessions",
     500: "An unexpected error (a ``reference`` to the server log), a quarantined session "

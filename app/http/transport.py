@@ -88,6 +88,7 @@ def refusal_bytes(refusal: ServiceError) -> bytes:
     head = (
         f"HTTP/1.1 {status.value} {status.phrase}\r\n"
         "content-type: application/problem+json\r\n"
+        "x-content-type-options: nosniff\r\n"
         f"content-length: {len(body)}\r\n"
         "connection: close\r\n\r\n"
     )

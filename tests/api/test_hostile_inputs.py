@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import gzip
 import http.client
 import json
 import socket
@@ -205,11 +206,14 @@ def _parsed(received: bytes) -> Answer:
 
 
 def naming(limit: str, send: Callable[[Scene], list[Answer]]) -> Callable[[Scene], list[Answer]]:
-    """``send``, whose first answer must be the refusal that names ``limit``."""
+    """``send``, whose first answer must be the refusal that names ``limit`` (``""``: a 415)."""
 
     def checked(scene: Scene) -> list[Answer]:
         answers = send(scene)
-        assert json.loads(answers[0].body).get("limit") == limit, answers[0]
+        if limit:
+            assert json.loads(answers[0].body).get("limit") == limit, answers[0]
+        else:
+            assert answers[0].status == 415, answers[0]
         return answers
 
     return checked
@@ -417,6 +421,13 @@ CASES: dict[str, Callable[[Scene], list[Answer]]] = {
     "lone surrogate in the sensor id": tracks(raw_later('"radar-1"', '"\\ud800"')),
     "NUL in the sensor id": tracks(raw_later('"radar-1"', '"radar\\u0000-1"')),
     "raw control character in a string": tracks(raw_later('"radar-1"', '"radar\x01-1"')),
+    "a gzip body (Content-Encoding)": naming(
+        "",
+        tracks(gzip.compress(json.dumps(LATER).encode()), **{"Content-Encoding": "gzip"}),
+    ),
+    "plain JSON labelled gzip": naming(
+        "", tracks(json.dumps(LATER), **{"Content-Encoding": "gzip"})
+    ),
     "text/plain content type": tracks(json.dumps(LATER), **{"Content-Type": "text/plain"}),
     "empty body": tracks(b""),
     "body null": tracks("null"),
