@@ -135,6 +135,20 @@ class StaleReport(Conflict):
         return [_located(CoreStaleReport.loc, self.detail, "stale_report")]
 
 
+class IdempotencyKeyReused(Conflict):
+    """An ``Idempotency-Key`` sent again with another input than the first."""
+
+    slug = "idempotency-key-reused"
+    title = "Idempotency key reused"
+
+    def __init__(self, session_id: str, key: str) -> None:
+        super().__init__(
+            f"session {session_id!r}: Idempotency-Key {key!r} came with another input; "
+            "a key names one input (a retry sends the same input again)",
+            session=session_id,
+        )
+
+
 class RetryLater(ServiceError):  # noqa: N818 - HTTP vocabulary
     """A refusal that says when to try again: ``Retry-After`` and ``retry_after`` (seconds)."""
 

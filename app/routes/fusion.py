@@ -5,7 +5,7 @@ from __future__ import annotations
 import functools
 from typing import Annotated, Literal
 
-from fastapi import APIRouter, Path, Query
+from fastapi import APIRouter, Header, Path, Query
 from fastapi.responses import Response
 
 from api_schemas.base import FiniteFloat
@@ -31,6 +31,18 @@ EXPLAIN = (
     "add the association's score matrix: (known + reported) × reported cells, at most "
     "max_explain_cells (422 before the work beyond)"
 )
+IdempotencyKey = Annotated[
+    str | None,
+    Header(
+        alias="Idempotency-Key",
+        min_length=1,
+        max_length=128,
+        pattern=r"^[!-~]+$",
+        description="names this input: sent again with the same key (a retry after a lost "
+        "answer), the same input is not applied twice, its first answer is given again (409 if "
+        "the key came with another input); the session remembers its latest 256 keys",
+    ),
+]
 TrackId = Annotated[str, Path(min_length=1, max_length=64, description="A fused track id.")]
 OutputFrame = Annotated[
     Literal["session", "geodetic"],
@@ -61,6 +73,7 @@ async def submit_tracks(
     registry: RegistryDep,
     explain: Annotated[bool, Query(description=EXPLAIN)] = False,
     frame: OutputFrame = "session",
+    idempotency_key: IdempotencyKey = None,
 ) -> JSONTextResponse:
     """One sensor's track list → the fused result of that step (acknowledged once logged).
 
@@ -70,7 +83,9 @@ async def submit_tracks(
     # refused before anything is applied
     geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
     return JSONTextResponse(
-        await registry.submit(session, report, explain=explain, geodetic=geodetic)
+        await registry.submit(
+            session, report, explain=explain, geodetic=geodetic, idempotency_key=idempotency_key
+        )
     )
 
 
@@ -85,6 +100,7 @@ async def submit_detections(
     registry: RegistryDep,
     explain: Annotated[bool, Query(description=EXPLAIN)] = False,
     frame: OutputFrame = "session",
+    idempotency_key: IdempotencyKey = None,
 ) -> JSONTextResponse:
     """One sensor's detections → the fused result of that step.
 
@@ -98,7 +114,9 @@ async def submit_detections(
     # refused before anything is applied
     geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
     return JSONTextResponse(
-        await registry.submit(session, report, explain=explain, geodetic=geodetic)
+        await registry.submit(
+            session, report, explain=explain, geodetic=geodetic, idempotency_key=idempotency_key
+        )
     )
 
 

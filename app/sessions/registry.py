@@ -53,6 +53,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import functools
+import hashlib
 import logging
 import math
 import time
@@ -552,15 +553,24 @@ class SessionRegistry:
         *,
         explain: bool = False,
         geodetic: GeodeticOutput | None = None,
+        idempotency_key: str | None = None,
     ) -> str:
         """Apply one input (a track list, or detections for the sensor's local tracker), log
         it durably, publish its result, and return the answer to its sender (JSON text;
-        ``geodetic``: with the tracks' geodetic positions)."""
+        ``geodetic``: with the tracks' geodetic positions). An input sent again with the
+        ``idempotency_key`` of one already applied gets that first answer, and nothing is
+        applied (the session keeps its latest 256 keys' answers in memory)."""
         items = len(report.tracks) if isinstance(report, TrackReport) else len(report.detections)
         await self._compute(items, functools.partial(self.check, session, report))
         work = self.check_work(session, report, items, explain=explain)
         await self.quotas.charge(session.record.tenant, work)
-        return await self._submit(session, report, items, explain=explain, geodetic=geodetic)
+        once = None
+        if idempotency_key is not None:
+            text = f"{explain}:{geodetic is not None}:{report.model_dump_json()}"
+            once = (idempotency_key, hashlib.sha256(text.encode()).hexdigest())
+        return await self._submit(
+            session, report, items, explain=explain, geodetic=geodetic, once=once
+        )
 
     def check_work(self, session: LiveSession, report: Report, items: int, *, explain: bool) -> int:
         """The input's work units (:func:`~app.cluster.quotas.input_work`), refused (422) beyond
@@ -600,20 +610,28 @@ class SessionRegistry:
         *,
         explain: bool,
         geodetic: GeodeticOutput | None,
+        once: tuple[str, str] | None = None,
     ) -> str:
         """Under the session lock: (lease,) apply, log durably, then publish and return the result.
 
         An input that waited for the lock of a session evicted meanwhile goes to the session
-        as the store has it now: 404 if it was deleted, 503 if the store is down.
+        as the store has it now: 404 if it was deleted, 503 if the store is down. ``once``:
+        the input's idempotency key and fingerprint (its first answer is given again).
         """
         kind = "tracks" if isinstance(report, TrackReport) else "detections"
         async with session.lock:
             if not session.closed:
-                return await self._submit_locked(
+                answered = None if once is None else session.answer_of(*once)
+                if answered is not None:
+                    return answered
+                answer = await self._submit_locked(
                     session, report, items, kind, explain=explain, geodetic=geodetic
                 )
+                if once is not None:
+                    session.remember(*once, answer)
+                return answer
         return await self._submit(
-            await self.get(session.id), report, items, explain=explain, geodetic=geodetic
+            await self.get(session.id), report, items, explain=explain, geodetic=geodetic, once=once
         )
 
     async def _submit_locked(
