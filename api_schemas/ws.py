@@ -70,10 +70,24 @@ class AckMessage(WireModel):
     seq: int
 
 
+class GapMessage(WireModel):
+    """Server → subscriber: the results after ``after`` and before ``next`` were not delivered
+    (the subscriber fell behind, or an instance died between logging an input and publishing
+    its result): read ``GET …/tracks`` for the current picture (or ``GET …/events?after=``
+    for the inputs). Sent just before the result numbered ``next``."""
+
+    type: Literal["gap"]
+    ref: str | None
+    after: int
+    next: int
+
+
 ClientMessage = Annotated[TracksMessage | DetectionsMessage, Field(discriminator="type")]
-ServerMessage = Annotated[ResultMessage | ErrorMessage | AckMessage, Field(discriminator="type")]
+ServerMessage = Annotated[
+    ResultMessage | ErrorMessage | AckMessage | GapMessage, Field(discriminator="type")
+]
 
 client_message_adapter: TypeAdapter[TracksMessage | DetectionsMessage] = TypeAdapter(ClientMessage)
-server_message_adapter: TypeAdapter[ResultMessage | ErrorMessage | AckMessage] = TypeAdapter(
-    ServerMessage
+server_message_adapter: TypeAdapter[ResultMessage | ErrorMessage | AckMessage | GapMessage] = (
+    TypeAdapter(ServerMessage)
 )

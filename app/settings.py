@@ -13,6 +13,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from api_schemas.base import MAX_CLASSES
 from api_schemas.limits import MAX_FOCAL_SETS, MAX_ITEMS, MAX_SENSORS, WireLimits
+from app.cluster.lease import DEFAULT_LEASE_TTL_MS
 from app.http.errors import MAX_LISTED_ERRORS
 from app.http.rate_limit import parse_rates
 from app.http.security import hash_token
@@ -182,10 +183,11 @@ class Settings(BaseSettings):
     ws_ping_interval: float = Field(20.0, gt=0.0, description="seconds between WebSocket pings")
     ws_ping_timeout: float = Field(20.0, gt=0.0, description="a peer silent this long is dropped")
     lease_ttl_ms: int = Field(
-        10_000,
+        DEFAULT_LEASE_TTL_MS,
         ge=100,
         description="redis store: an instance that stops renewing a session's lease loses it "
-        "after this long, and another instance takes the session over",
+        "after this long, and another instance takes the session over (a stream renews it "
+        "every third of it)",
     )
     rate_limit: str = Field(
         "1000/second",

@@ -30,6 +30,7 @@ from limits.aio.strategies import SlidingWindowCounterRateLimiter
 from app.cluster import shared_redis
 from app.http.errors import LimitExceeded, StoreUnavailable
 from app.stores.base import Store
+from app.stores.redis import CONNECT_TIMEOUT_S, SOCKET_TIMEOUT_S
 
 UNREACHABLE = (redis.ConnectionError, redis.TimeoutError, ConnectionError, TimeoutError, OSError)
 
@@ -96,6 +97,8 @@ def open_quotas(store: Store, inputs_per_second: int, work_per_minute: int) -> T
             implementation="redispy",
             key_prefix=backing.keys.quotas(),
             wrap_exceptions=False,
+            socket_timeout=SOCKET_TIMEOUT_S,
+            socket_connect_timeout=CONNECT_TIMEOUT_S,
         )
     else:
         storage = MemoryStorage()

@@ -169,12 +169,14 @@ class SessionLeased(RetryLater):
     slug = "session-leased"
     title = "Session applied by another instance"
 
-    def __init__(self, session_id: str, retry_after_s: int) -> None:
+    def __init__(self, session_id: str, retry_after_ms: int) -> None:
+        retry_after_s = max(1, -(-retry_after_ms // 1000))
         super().__init__(
             f"session {session_id!r} is applied by another service instance; "
-            f"its lease lapses within {retry_after_s} s if that instance is gone",
+            f"its lease lapses within {retry_after_ms} ms if that instance is gone",
             retry_after_s,
             session=session_id,
+            retry_after_ms=retry_after_ms,
         )
 
 

@@ -62,7 +62,9 @@ async def get_readiness(request: Request) -> PlainJSONResponse:
     if registry.store_corrupt is not None:  # permanent: no ping will mend it
         components = [ComponentState(name="store", ready=False, detail=registry.store_corrupt)]
     else:
-        components = [await _state("store", anyio.to_thread.run_sync(store.ping))]
+        # abandoned at the timeout: a frozen store's ping answers nothing until it thaws
+        ping = anyio.to_thread.run_sync(store.ping, abandon_on_cancel=True)
+        components = [await _state("store", ping)]
     if registry.shared:
         components.append(await _state("fanout", registry.fanout.ping()))
     readiness = Readiness(

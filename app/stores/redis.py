@@ -25,10 +25,12 @@ a :class:`~app.stores.base.SequenceConflict`.
 
 Retention: deleting a session unlinks its record, log and snapshots;
 :meth:`RedisStore.compact` trims the log stream (``XTRIM MINID``) behind the
-latest snapshot. Outages: redis-py retries a failed command three times
-(backoff with jitter, a 5 s socket timeout), then its connection and timeout
-errors are raised as :class:`~app.http.errors.StoreUnavailable`; the next command
-after Redis is back reconnects by itself.
+latest snapshot. Outages: a command not answered within 2 s (a frozen Redis)
+fails at once, and one whose connection broke (a restarted Redis) is sent
+again twice on a new connection; then the error is raised as
+:class:`~app.http.errors.StoreUnavailable` (503). An input whose append timed
+out may still be logged once Redis thaws: the client tells from the session's
+``seq`` (README, "Clients and failures").
 
 Durability: an append returns once Redis has applied it. That is durable in
 the sense of the sqlite store only if Redis persists before answering
@@ -44,7 +46,9 @@ from datetime import UTC, datetime, timedelta
 from typing import Any, cast
 
 import redis
+from redis.backoff import ExponentialWithJitterBackoff
 from redis.client import Pipeline
+from redis.retry import Retry
 
 from app.http.errors import SessionNotFound, SessionUnreadable
 from app.stores.base import (
@@ -69,7 +73,11 @@ DEFAULT_URL = "redis://127.0.0.1:6379/0"
 _EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
 _SCAN_BATCH = 500
 CONNECT_TIMEOUT_S = 2.0
-SOCKET_TIMEOUT_S = 5.0
+SOCKET_TIMEOUT_S = 2.0
+"""A command not answered by then fails (a frozen Redis: 503 within it, not after it thaws)."""
+RECONNECT = Retry(ExponentialWithJitterBackoff(base=0.05, cap=0.5), 2, (redis.ConnectionError,))
+"""A command whose connection broke (Redis restarted) is sent again on a new one, twice at
+most; a timeout is not retried: a frozen Redis would hold the request a timeout per try."""
 UNREACHABLE = (redis.ConnectionError, redis.TimeoutError)
 """redis-py's errors of a server that does not answer (after its retries)."""
 
@@ -246,6 +254,8 @@ class RedisStore:
             decode_responses=True,
             socket_connect_timeout=CONNECT_TIMEOUT_S,
             socket_timeout=SOCKET_TIMEOUT_S,
+            retry=RECONNECT,
+            retry_on_timeout=False,
         )
         self._closed = False
         self._create = self.client.register_script(_CREATE)
