@@ -32,7 +32,9 @@ from app.http.errors import LimitExceeded, StoreUnavailable
 from app.stores.base import Store
 from app.stores.redis import CONNECT_TIMEOUT_S, SOCKET_TIMEOUT_S
 
-UNREACHABLE = (redis.ConnectionError, redis.TimeoutError, ConnectionError, TimeoutError, OSError)
+BROKEN = (redis.ConnectionError, ConnectionError)
+"""A connection that broke (Redis restarted): tried once more on a fresh one."""
+UNREACHABLE = (*BROKEN, redis.TimeoutError, TimeoutError, OSError)
 
 
 def input_work(items: int, live_tracks: int) -> int:
@@ -58,7 +60,7 @@ class TenantQuotas:
                 await self._charge(tenant, work)
                 return
             except UNREACHABLE as error:
-                if attempt:
+                if attempt or not isinstance(error, BROKEN):  # a timeout: frozen, not retried
                     reason = f"{type(error).__name__}: {error}"[:200]
                     raise StoreUnavailable("redis", reason) from error
 

@@ -20,8 +20,8 @@ from tests.api.redis_support import REDIS_URL, redis_prefix
 from tests.api.scenario import reports, session_config
 from tests.e2e.service_process import instance
 
-STEPS = 12
-KILL_AFTER = 6
+STEPS = 6
+KILL_AFTER = 3
 
 
 def test_a_client_following_the_protocol_loses_nothing_in_a_failover() -> None:
