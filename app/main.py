@@ -129,7 +129,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         read_timeout=settings.body_read_timeout,
         limits=settings.wire_limits(),
     )
-    app.add_middleware(RateLimit, rates=parse_rates(settings.rate_limit))  # before the body is read
+    app.add_middleware(  # before the body is read
+        RateLimit,
+        rates=parse_rates(settings.rate_limit),
+        body_bytes_per_second=settings.tenant_body_bytes_per_second,
+        max_body=settings.max_body_bytes,
+    )
     origins = settings.cors_origin_list()
     if origins:
         app.add_middleware(

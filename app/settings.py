@@ -67,8 +67,14 @@ class Settings(BaseSettings):
     tenant_inputs_per_second: int = Field(
         500, ge=1, description="inputs (REST and WebSocket) of one tenant's sessions per second"
     )
+    tenant_body_bytes_per_second: int = Field(
+        4 * 1024 * 1024,
+        ge=1024,
+        description="request body bytes of one tenant per second (a body counts its "
+        "Content-Length; parsing 1 MiB costs ~50 ms of CPU)",
+    )
     tenant_work_per_minute: int = Field(
-        40_000_000,
+        10_000_000,
         ge=1,
         description="work units of one tenant's inputs per minute (an input's units: its items × "
         "(the session's live fused tracks + 1))",

@@ -114,3 +114,15 @@ def test_rate_settings() -> None:
     with pytest.raises(ValueError, match="rate_limit"):
         make_settings(rate_limit="as many as you like")
     assert make_settings().rate_limit == "1000/second"
+
+
+def test_a_tenants_body_bytes_are_limited_before_the_body_is_read() -> None:
+    settings = make_settings(rate_limit="none", tenant_body_bytes_per_second=2048)
+    with TestClient(create_app(settings), raise_server_exceptions=False) as client:
+        body = b"{" + b" " * 1400 + b"}"
+        headers = {"Content-Type": "application/json"}
+        assert client.post("/v1/sessions", content=body, headers=headers).status_code == 422
+        refused = client.post("/v1/sessions", content=body, headers=headers)
+        assert refused.status_code == 429
+        assert refused.json()["limit"] == "tenant_body_bytes_per_second"
+        assert int(refused.headers["Retry-After"]) >= 1
