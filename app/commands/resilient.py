@@ -75,6 +75,7 @@ class ResilientStream:
         self.give_up_s = give_up_s
         self.next_url = 0
         self.connection: ClientConnection | None = None
+        self._opened = contextlib.ExitStack()
         self.last_seq: int | None = None
         """The session's ``seq`` as this client last knew it (an ack, or its last result)."""
 
@@ -82,23 +83,26 @@ class ResilientStream:
         """Connect to the next instance that accepts; the ``ack``'s ``seq``."""
         url = f"{self.urls[self.next_url % len(self.urls)]}/v1/sessions/{self.session}/stream"
         self.next_url += 1
-        connection = connect(
-            url,
-            additional_headers={"Authorization": f"Bearer {self.token}"},
-            open_timeout=self.answer_timeout_s,
-            max_size=None,
+        opened = contextlib.ExitStack()
+        connection = opened.enter_context(
+            connect(
+                url,
+                additional_headers={"Authorization": f"Bearer {self.token}"},
+                open_timeout=self.answer_timeout_s,
+                max_size=None,
+            )
         )
+        self.connection, self._opened = connection, opened
         ack = json.loads(connection.recv(timeout=self.answer_timeout_s))
         if ack.get("type") != "ack":
-            connection.close()
+            self._drop()
             raise ConnectionError(f"no ack: {ack.get('type')!r}")
-        self.connection = connection
         return int(ack["seq"])
 
     def _drop(self) -> None:
         if self.connection is not None:
             with contextlib.suppress(*FAILURES):
-                self.connection.close()
+                self._opened.close()
             self.connection = None
 
     def send(self, message: dict[str, Any]) -> Delivery:
