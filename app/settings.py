@@ -68,7 +68,7 @@ class Settings(BaseSettings):
         500, ge=1, description="inputs (REST and WebSocket) of one tenant's sessions per second"
     )
     tenant_body_bytes_per_second: int = Field(
-        4 * 1024 * 1024,
+        2 * 1024 * 1024,
         ge=1024,
         description="request body bytes of one tenant per second (a body counts its "
         "Content-Length; parsing 1 MiB costs ~50 ms of CPU)",

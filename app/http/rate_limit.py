@@ -14,8 +14,8 @@ rates separated by ``;`` (``"200/second"``, ``"50/second;2000/minute"``);
 upgrade counts once against its key (messages on an open WebSocket do not:
 the connection's bounded queues and TCP already pace them). The bytes of
 request bodies count too, per tenant (``tenant_body_bytes_per_second``,
-4 MiB/s: parsing a 1 MiB body costs ~50 ms of CPU, so a tenant can spend about
-a fifth of a core on parsing): a body counts its declared ``Content-Length``
+2 MiB/s: parsing a 1 MiB body costs ~50 ms of CPU, so a tenant can spend about
+a tenth of a core on parsing): a body counts its declared ``Content-Length``
 (a chunked one, ``max_body_bytes``). A request over either limit gets ``429``
 problem+json naming the limit (``limit: "rate_limit"`` or
 ``"tenant_body_bytes_per_second"``, ``rate``) with a ``Retry-After`` header,

@@ -41,7 +41,6 @@ from typing import Any
 import httptools
 from uvicorn.protocols.http.httptools_impl import HttpToolsProtocol
 
-from app.http.body_limits import DRAIN_BYTES
 from app.http.errors import (
     HeadersTooLarge,
     HeadTooSlow,
@@ -52,8 +51,11 @@ from app.http.errors import (
 from app.http.responses import dumps
 
 DRAIN_SECONDS = 2.0
-"""How long the rest of a refused head (or WebSocket frame) is read and discarded, at most
-``DRAIN_BYTES``, before the connection closes."""
+"""How long the rest of a refused head (:data:`HEAD_DRAIN_BYTES` at most) or WebSocket frame
+(``DRAIN_BYTES``) is read and discarded before the connection closes."""
+HEAD_DRAIN_BYTES = 256 * 1024
+"""The rest of a head too large read and discarded before closing (the client reads the 431
+meanwhile): a header bomb is not read whole, as an oversize body is (up to 8 MiB)."""
 
 
 LISTEN_BACKLOG = 256
@@ -214,7 +216,7 @@ class GuardedHttpProtocol(HttpToolsProtocol):
 
     def _refuse(self, answer: bytes, *, drain: bool = False) -> None:
         """Send ``answer`` (a refusal) and close; ``drain``: the client is still sending (a head too
-        large), so the rest is read and discarded first (up to ``DRAIN_BYTES``, for at most
+        large), so the rest is read and discarded first (up to ``HEAD_DRAIN_BYTES``, for at most
         ``DRAIN_SECONDS``): a socket closed with unread bytes resets, and the peer loses the
         answer."""
         self.refused = True
@@ -225,7 +227,7 @@ class GuardedHttpProtocol(HttpToolsProtocol):
             self.transport.close()
             return
         self.transport.write_eof()
-        self.draining = DRAIN_BYTES
+        self.draining = HEAD_DRAIN_BYTES
         self.loop.call_later(DRAIN_SECONDS, self.transport.close)
 
     def data_received(self, data: bytes) -> None:
