@@ -21,14 +21,25 @@ from app.http.errors import (
     install_error_handlers,
     problem_answer,
 )
-from app.http.rate_limit import RateLimit, parse_rates
+from app.http.rate_limit import RateLimit
 from app.http.security import SecurityHeaders
+from app.http.tenants import tenancy_of
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
-from app.routes import associate, docs, fusion, health, metrics, sessions, streams, viewer
+from app.routes import (
+    associate,
+    docs,
+    fusion,
+    health,
+    inputs,
+    metrics,
+    sessions,
+    streams,
+    viewer,
+)
 from app.runtime import CollectionTimes, LoopLag
 from app.sessions.registry import SessionRegistry
-from app.settings import Settings, get_settings
+from app.settings import Settings, get_settings, parse_rates
 from app.stores import open_store
 from core import __version__
 
@@ -99,7 +110,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         redoc_url=None,
     )
     app.state.settings = settings
-    app.state.tenancy = settings.tenancy()
+    app.state.tenancy = tenancy_of(settings)
     app.state.metrics = service_metrics
     install_error_handlers(app, service_metrics.internal_errors.inc)
 
@@ -117,6 +128,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(health.router)
     app.include_router(metrics.router)
     app.include_router(sessions.router)
+    app.include_router(inputs.input_routes())
     app.include_router(fusion.router)
     app.include_router(associate.router)
     app.include_router(streams.router)

@@ -6,30 +6,37 @@ Each limit is named after its setting; a breach answers a 4xx whose
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import lru_cache
 
+from limits import RateLimitItem, parse_many
 from pydantic import Field, SecretStr, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from api_schemas.base import MAX_CLASSES
 from api_schemas.limits import MAX_FOCAL_SETS, MAX_ITEMS, MAX_SENSORS, WireLimits
 from app.cluster.lease import DEFAULT_LEASE_TTL_MS
-from app.http.errors import MAX_LISTED_ERRORS
-from app.http.rate_limit import parse_rates
-from app.http.security import hash_token
-from app.http.tenants import (
-    MIN_SECRET_LENGTH,
-    Access,
-    Tenancy,
-    check_secret,
-    is_loopback,
-    parse_api_keys,
-)
-from app.http.transport import TransportLimits
+from app.errors import MAX_LISTED_ERRORS
 from app.stores.redis_keys import DEFAULT_PREFIX
+from app.tenants import MIN_SECRET_LENGTH, Access, check_secret, is_loopback, parse_api_keys
 
 DEFAULT_STORE = "sqlite:data/credal-fusion.db"
+UNLIMITED = frozenset({"", "none", "off", "0"})
+"""``CREDAL_RATE_LIMIT`` values that turn the rate limit off."""
 DEFAULTS = WireLimits()
+
+
+@dataclass(frozen=True)
+class TransportLimits:
+    """The limits the HTTP protocol checks before the application (:mod:`app.http.transport`)."""
+
+    max_header_bytes: int = 16 * 1024
+    max_header_count: int = 100
+    request_head_timeout: float = 10.0
+    max_connections: int = 1000
+    max_connections_per_client: int = 64
+
+
 TRANSPORT = TransportLimits()
 
 
@@ -230,14 +237,6 @@ class Settings(BaseSettings):
         """Whether anyone may create sessions (``access``; ``auto``: on a loopback host)."""
         return self.access == "open" or (self.access == "auto" and is_loopback(self.host))
 
-    def tenancy(self) -> Tenancy:
-        """The service's tenants (:mod:`app.http.tenants`)."""
-        keys = {} if self.api_keys is None else parse_api_keys(self.api_keys.get_secret_value())
-        admin = (
-            None if self.admin_token is None else hash_token(self.admin_token.get_secret_value())
-        )
-        return Tenancy(self.open_access(), keys, admin)
-
     def transport_limits(self) -> TransportLimits:
         """The limits the HTTP protocol checks before the application (:mod:`app.http.transport`)."""
         return TransportLimits(
@@ -266,6 +265,16 @@ class Settings(BaseSettings):
     def _rate_limit_parses(cls, value: str) -> str:
         parse_rates(value)
         return value
+
+
+def parse_rates(text: str) -> list[RateLimitItem]:
+    """The rates of a ``CREDAL_RATE_LIMIT`` value (empty: no limit); ``ValueError`` if malformed."""
+    if text.strip().lower() in UNLIMITED:
+        return []
+    try:
+        return list(parse_many(text))
+    except ValueError as error:
+        raise ValueError(f"rate limit {text!r}: {error}") from None
 
 
 @lru_cache

@@ -12,7 +12,7 @@ The counters are the ``limits`` library's sliding-window counters, kept where
 the sessions are: in Redis for the redis store (every instance charges the
 same counters, under ``P:quota``), in this process's memory otherwise (one
 process serves the store). A Redis that cannot be reached makes the charge
-raise :class:`~app.http.errors.StoreUnavailable` (503): the input could not be
+raise :class:`~app.errors.StoreUnavailable` (503): the input could not be
 logged either.
 """
 
@@ -28,7 +28,7 @@ from limits.aio.storage import MemoryStorage, RedisStorage, Storage
 from limits.aio.strategies import SlidingWindowCounterRateLimiter
 
 from app.cluster import shared_redis
-from app.http.errors import LimitExceeded, StoreUnavailable
+from app.errors import LimitExceeded, StoreUnavailable
 from app.stores.base import Store
 from app.stores.redis import CONNECT_TIMEOUT_S, SOCKET_TIMEOUT_S
 

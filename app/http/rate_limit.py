@@ -36,7 +36,7 @@ import time
 import uuid
 from collections.abc import Callable
 
-from limits import RateLimitItem, RateLimitItemPerSecond, parse_many
+from limits import RateLimitItem, RateLimitItemPerSecond
 from limits.aio.storage import MemoryStorage
 from limits.aio.strategies import SlidingWindowCounterRateLimiter
 from limits.storage import MemoryStorage as ThreadSafeMemoryStorage
@@ -47,22 +47,11 @@ from starlette.websockets import WebSocket
 
 from app.http.errors import RateLimited, problem_response
 from app.http.security import hash_token
-from app.http.tenants import address_tenant
+from app.tenants import address_tenant
 
 RATE_LIMIT = "rate_limit"
 BODY_RATE = "tenant_body_bytes_per_second"
-UNLIMITED = frozenset({"", "none", "off", "0"})
 EXEMPT_PATHS = frozenset({"/healthz"})
-
-
-def parse_rates(text: str) -> list[RateLimitItem]:
-    """The rates of a ``CREDAL_RATE_LIMIT`` value (empty: no limit); ``ValueError`` if malformed."""
-    if text.strip().lower() in UNLIMITED:
-        return []
-    try:
-        return list(parse_many(text))
-    except ValueError as error:
-        raise ValueError(f"rate limit {text!r}: {error}") from None
 
 
 def _rate_text(item: RateLimitItem) -> str:

@@ -1,101 +1,18 @@
-"""Tenants: who a request acts for, and so whose quotas it spends.
+"""The tenants of one service at its edge: who a request's key or address acts for.
 
-Two modes (``CREDAL_ACCESS``):
-
-- ``open`` — anyone may create sessions, no key needed: each client address is
-  its own tenant (an IPv6 address by its /64 network, which one host holds
-  whole). Meant for ``make run`` on loopback.
-- ``keys`` — creating a session (and ``POST /v1/associate``) needs an API key,
-  ``Authorization: Bearer <key>``: each key is a tenant (``CREDAL_API_KEYS``,
-  ``name:key`` pairs separated by commas). Without a valid key: 401.
-
-``auto`` (the default) is ``open`` when the service listens on a loopback
-address and ``keys`` otherwise, so a service reachable from a network never
-opens itself by accident. The admin token acts as the tenant ``admin``.
-
-A session belongs to the tenant that created it (``SessionRecord.tenant``):
-its token opens that session only, and every request and input sent with it
-counts against its tenant's rate limit and quotas (:mod:`app.cluster.quotas`),
-so minting more sessions never buys more requests. The tenant's live sessions
-are capped too (``tenant_max_sessions``, counted by the store at creation).
+:mod:`app.tenants` has the rules (modes, address tenants, key syntax);
+:class:`Tenancy` applies them to a request's ``Authorization`` header, with the
+keys kept hashed.
 """
 
 from __future__ import annotations
 
 import hmac
-import ipaddress
-from typing import Literal
 
-from app.http.errors import Unauthorized
+from app.errors import Unauthorized
 from app.http.security import hash_token
-
-Access = Literal["auto", "open", "keys"]
-ADMIN_TENANT = "admin"
-LOOPBACK_NAMES = frozenset({"localhost", "ip6-localhost"})
-
-
-def is_loopback(host: str) -> bool:
-    """Whether the service's listening ``host`` is a loopback address (or name)."""
-    if host in LOOPBACK_NAMES:
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
-
-
-def address_tenant(client: str | None) -> str:
-    """The tenant of a client without a key: its address (an IPv6 address by its /64)."""
-    if client is None:
-        return "address:unknown"
-    try:
-        address = ipaddress.ip_address(client)
-    except ValueError:
-        return f"address:{client}"
-    if isinstance(address, ipaddress.IPv6Address):
-        if address.ipv4_mapped is not None:
-            return f"address:{address.ipv4_mapped}"
-        return f"address:{ipaddress.ip_network(f'{address}/64', strict=False)}"
-    return f"address:{address}"
-
-
-def parse_api_keys(text: str) -> dict[str, str]:
-    """``name:key,name:key`` → key hash → tenant name (``ValueError`` naming what is wrong)."""
-    keys: dict[str, str] = {}
-    for part in (piece.strip() for piece in text.split(",")):
-        if not part:
-            continue
-        name, colon, key = part.partition(":")
-        if not colon or not name:
-            raise ValueError("each API key is 'name:key' (a tenant name, a colon, the key)")
-        check_secret(f"the API key of tenant {name!r}", key)
-        hashed = hash_token(key)
-        if hashed in keys:
-            raise ValueError(f"the API key of tenant {name!r} is another tenant's too")
-        keys[hashed] = f"key:{name}"
-    return keys
-
-
-MIN_SECRET_LENGTH = 32
-"""An admin token or API key opens much: at least 32 characters (``secrets.token_urlsafe(24)``)."""
-
-
-def check_secret(what: str, value: str) -> None:
-    """Refuse a secret that is short or not visible ASCII (``ValueError`` naming ``what``).
-
-    HTTP headers are bytes that servers read as latin-1: a secret with a
-    non-ASCII character would never match what a client sends in UTF-8, and a
-    space-only secret is no secret."""
-    if len(value) < MIN_SECRET_LENGTH:
-        raise ValueError(
-            f"{what} must have at least {MIN_SECRET_LENGTH} characters (got {len(value)}); "
-            "e.g. python -c 'import secrets; print(secrets.token_urlsafe(32))'"
-        )
-    if not all("!" <= char <= "~" for char in value):
-        raise ValueError(
-            f"{what} must be visible ASCII characters only (no spaces, no accents): "
-            "e.g. python -c 'import secrets; print(secrets.token_urlsafe(32))'"
-        )
+from app.settings import Settings
+from app.tenants import ADMIN_TENANT, address_tenant, parse_api_keys
 
 
 class Tenancy:
@@ -133,3 +50,14 @@ class Tenancy:
             "this service needs an API key: send 'Authorization: Bearer <key>' "
             "(ask its operator; keys are set with CREDAL_API_KEYS)"
         )
+
+
+def tenancy_of(settings: Settings) -> Tenancy:
+    """The service's tenants under ``settings`` (``access``, ``api_keys``, ``admin_token``)."""
+    keys = {} if settings.api_keys is None else parse_api_keys(settings.api_keys.get_secret_value())
+    admin = settings.admin_token
+    return Tenancy(
+        settings.open_access(),
+        {hash_token(key): tenant for key, tenant in keys.items()},
+        None if admin is None else hash_token(admin.get_secret_value()),
+    )

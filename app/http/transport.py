@@ -49,6 +49,7 @@ from app.http.errors import (
     problem_for,
 )
 from app.http.responses import dumps
+from app.settings import TransportLimits
 
 DRAIN_SECONDS = 2.0
 """How long the rest of a refused head (:data:`HEAD_DRAIN_BYTES` at most) or WebSocket frame
@@ -63,17 +64,6 @@ LISTEN_BACKLOG = 256
 The server accepts what is queued in one turn of its event loop: a burst of 2 000 waiting
 connections was one long turn with every request on hold. Beyond the queue, a client's
 connection attempt is retried by its kernel."""
-
-
-@dataclass(frozen=True)
-class TransportLimits:
-    """The limits of :mod:`app.http.transport` (from the settings)."""
-
-    max_header_bytes: int = 16 * 1024
-    max_header_count: int = 100
-    request_head_timeout: float = 10.0
-    max_connections: int = 1000
-    max_connections_per_client: int = 64
 
 
 @functools.lru_cache(maxsize=32)

@@ -18,16 +18,16 @@ the latest snapshot and the log after it (:func:`history`). A deleted
 session's data is freed at once; only a store that has never held its id
 would accept it again.
 
-Outages: every store raises :class:`~app.http.errors.StoreUnavailable` for its
+Outages: every store raises :class:`~app.errors.StoreUnavailable` for its
 backend's connection and I/O errors (:func:`unavailable_on`), never a raw
 driver error, so the service answers 503 instead of 500.
 
 Corruption: a session's stored value that cannot be decoded (its config, an
 input, a snapshot, a missing field) raises
-:class:`~app.http.errors.SessionUnreadable` naming the session and what of it
+:class:`~app.errors.SessionUnreadable` naming the session and what of it
 (:func:`readable`): a permanent fault of that session alone, which the registry
 quarantines. A store whose own structure is damaged (a malformed sqlite file)
-raises :class:`~app.http.errors.StoreCorrupt`. Neither quotes stored text.
+raises :class:`~app.errors.StoreCorrupt`. Neither quotes stored text.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 import orjson
 
-from app.http.errors import (
+from app.errors import (
     Conflict,
     LimitExceeded,
     SessionNotFound,
@@ -119,7 +119,7 @@ class SessionRecord:
     created_at: datetime
     deleted: bool = False
     tenant: str = ""
-    """Who created it (:mod:`app.http.tenants`): its inputs count against that tenant's
+    """Who created it (:mod:`app.tenants`): its inputs count against that tenant's
     quotas, whichever token sends them ("" for a session stored before tenants existed)."""
 
 
@@ -264,7 +264,7 @@ class Store(Protocol):
         ...
 
     def ping(self) -> None:
-        """Return if the store answers now; :class:`~app.http.errors.StoreUnavailable` if not."""
+        """Return if the store answers now; :class:`~app.errors.StoreUnavailable` if not."""
         ...
 
     def close(self) -> None:
@@ -423,7 +423,7 @@ def readable(session_id: str, what: str) -> Iterator[None]:
 
 @contextmanager
 def unavailable_on(errors: tuple[type[BaseException], ...], store: str) -> Iterator[None]:
-    """Raise :class:`~app.http.errors.StoreUnavailable` for the backend's ``errors``."""
+    """Raise :class:`~app.errors.StoreUnavailable` for the backend's ``errors``."""
     try:
         yield
     except errors as error:

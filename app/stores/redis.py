@@ -28,7 +28,7 @@ Retention: deleting a session unlinks its record, log and snapshots;
 latest snapshot. Outages: a command not answered within 2 s (a frozen Redis)
 fails at once, and one whose connection broke (a restarted Redis) is sent
 again twice on a new connection; then the error is raised as
-:class:`~app.http.errors.StoreUnavailable` (503). An input whose append timed
+:class:`~app.errors.StoreUnavailable` (503). An input whose append timed
 out may still be logged once Redis thaws: the client tells from the session's
 ``seq`` (README, "Clients and failures").
 
@@ -50,7 +50,7 @@ from redis.backoff import ExponentialWithJitterBackoff
 from redis.client import Pipeline
 from redis.retry import Retry
 
-from app.http.errors import SessionNotFound, SessionUnreadable
+from app.errors import SessionNotFound, SessionUnreadable
 from app.stores.base import (
     LogEntry,
     SequenceConflict,

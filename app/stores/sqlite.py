@@ -13,9 +13,9 @@ file stops growing once a session's retained log has its size (the WAL is
 checkpointed automatically and truncated to ``JOURNAL_SIZE_LIMIT``).
 sqlite's ``OperationalError`` (I/O error, full disk, a lock held past the
 busy timeout, a file that cannot be opened) is raised as
-:class:`~app.http.errors.StoreUnavailable`; a damaged file ("database disk
+:class:`~app.errors.StoreUnavailable`; a damaged file ("database disk
 image is malformed", "file is not a database") as
-:class:`~app.http.errors.StoreCorrupt`, a permanent fault (opening such a file
+:class:`~app.errors.StoreCorrupt`, a permanent fault (opening such a file
 succeeds: the service starts, not ready).
 
 Threads: each thread gets its own connection (sqlite3 connections are not
@@ -35,7 +35,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import Any, Literal, TypeVar
 
-from app.http.errors import SessionUnreadable, StoreCorrupt, StoreUnavailable
+from app.errors import SessionUnreadable, StoreCorrupt, StoreUnavailable
 from app.stores.base import (
     LogEntry,
     SessionExists,

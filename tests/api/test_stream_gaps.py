@@ -7,8 +7,10 @@ from __future__ import annotations
 
 from fastapi.testclient import TestClient
 
+from app.outputs import JSON
 from app.sessions.hub import Published
-from app.sessions.registry import SessionRegistry, result_message
+from app.sessions.pipeline import result_message
+from app.sessions.registry import SessionRegistry
 from tests.api.examples import SESSION_CONFIG
 from tests.api.scenario import track_report
 
@@ -27,6 +29,6 @@ def test_a_result_that_skips_seq_is_announced_by_a_gap(client: TestClient) -> No
         # results 2 and 3 never published (their instance died): the next one is seq 4
         text = first.text.replace('{"seq":1,', '{"seq":4,', 1)
         session = client.portal.call(registry.get, created["id"])  # type: ignore[union-attr]
-        client.portal.call(session.hub.publish, Published(result_message(text)))  # type: ignore[union-attr]
+        client.portal.call(session.hub.publish, Published({JSON: result_message(text)}))  # type: ignore[union-attr]
         assert subscriber.receive_json() == {"type": "gap", "ref": None, "after": 1, "next": 4}
         assert subscriber.receive_json()["result"]["seq"] == 4
