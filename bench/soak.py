@@ -55,7 +55,7 @@ import redis
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from machine import describe_machine
-from service import config, free_port, running, service_command, track_list
+from service import config, free_port, process_cpu_s, running, service_command, track_list
 
 SOAK_SECONDS = float(os.environ.get("SOAK_SECONDS", "100"))
 REDIS_URL = os.environ.get("CREDAL_SOAK_REDIS_URL", "redis://127.0.0.1:6379/0")
@@ -289,35 +289,50 @@ def attack(url: str, seconds: float) -> None:
 
 
 def crowd() -> int:
-    """Honest load alone, then beside :func:`attack`: the honest p99 and error rate compared."""
+    """Honest load alone, then beside :func:`attack`: the honest p99 and error rate compared,
+    with the CPU seconds the server and the attacker spent in each phase."""
     import multiprocessing
 
     print(describe_machine())
     rows = []
     with tempfile.TemporaryDirectory(prefix="credal-soak-") as directory:
         database = Path(directory) / "crowd.db"
-        with serving(f"sqlite:{database}", {"CREDAL_RATE_LIMIT": "1000/second"}) as (url, _):
+        settings = {"CREDAL_RATE_LIMIT": "1000/second"}
+        with serving(f"sqlite:{database}", settings) as (url, pid):
             for attacked in (False, True):
                 attacker = None
                 if attacked:
                     spawn = multiprocessing.get_context("spawn")
                     attacker = spawn.Process(target=attack, args=(url, CROWD_SECONDS))
                     attacker.start()
+                server_cpu = process_cpu_s(pid)
                 load = Load(url, time.monotonic() + CROWD_SECONDS)
                 asyncio.run(load.run())
+                server_cpu = process_cpu_s(pid) - server_cpu
+                attacker_cpu = 0.0
                 if attacker is not None:
+                    attacker_cpu = process_cpu_s(attacker.pid or 0)
                     attacker.join()
                 latencies = sorted(load.latencies)
-                p99 = latencies[int(0.99 * (len(latencies) - 1))]
-                p50 = latencies[len(latencies) // 2]
-                rows.append((attacked, len(latencies), load.failures / max(1, load.sent), p50, p99))
-    for attacked, count, errors, p50, p99 in rows:
+                rows.append(
+                    (
+                        attacked,
+                        len(latencies),
+                        load.failures / max(1, load.sent),
+                        latencies[len(latencies) // 2],
+                        latencies[int(0.99 * (len(latencies) - 1))],
+                        server_cpu,
+                        attacker_cpu,
+                    )
+                )
+    for attacked, count, errors, p50, p99, server_cpu, attacker_cpu in rows:
         who = "honest + anonymous attacker" if attacked else "honest alone"
         print(
             f"{who:28} {count:6d} inputs  errors {errors:.2%}  p50 {p50 * 1000:6.1f} ms  "
-            f"p99 {p99 * 1000:6.1f} ms"
+            f"p99 {p99 * 1000:6.1f} ms  server CPU {server_cpu:5.1f} s  "
+            f"attacker CPU {attacker_cpu:5.1f} s"
         )
-    (_, _, errors_alone, _, p99_alone), (_, _, errors_attacked, _, p99_attacked) = rows
+    (_, _, errors_alone, _, p99_alone, *_), (_, _, errors_attacked, _, p99_attacked, *_) = rows
     ok = p99_attacked <= 1.1 * p99_alone and errors_attacked <= 1.1 * errors_alone
     print(
         f"honest p99 × {p99_attacked / p99_alone:.2f}, errors {errors_alone:.2%} → "
