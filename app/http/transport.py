@@ -17,9 +17,10 @@ parser is fed the bytes beyond the limit:
 - ``max_connections_per_client`` (64): open connections of one client address
   (HTTP and WebSocket alike); one more is answered ``429`` and closed.
 - ``max_connections`` (1 000): open connections in total. At the limit a new
-  connection closes the oldest one still waiting for its request head (an idle
-  or trickling connection: it has nothing in progress); if every connection is
-  busy, the new one is answered ``503`` and closed.
+  connection closes one still waiting for its request head (an idle or
+  trickling connection: it has nothing in progress), the oldest of the address
+  holding the most connections; if every connection is busy, the new one is
+  answered ``503`` and closed.
 
 Refusals are problem+json documents written by the protocol (the application
 never runs), with ``Connection: close``. The process's descriptor limit is
@@ -89,13 +90,17 @@ def refusal_bytes(refusal: ServiceError) -> bytes:
 
 @dataclass
 class Connections:
-    """The open connections of one server: per client address, and the ones waiting for a
-    request head (oldest first: the first to close when the total is reached)."""
+    """The open connections of one server, per client address, and the ones waiting for a
+    request head (idle or trickling), per address, oldest first.
+
+    At the total limit, the connection that makes room is the oldest waiting one of the
+    address holding the most connections: a crowd of slow connections from a few addresses
+    closes its own, not a light client's idle keep-alive connection."""
 
     limits: TransportLimits
     per_client: dict[str, int] = field(default_factory=dict)
     total: int = 0
-    waiting: OrderedDict[int, asyncio.BaseTransport] = field(default_factory=OrderedDict)
+    waiting: dict[str, OrderedDict[int, asyncio.BaseTransport]] = field(default_factory=dict)
 
     def admit(self, transport: asyncio.BaseTransport, client: str) -> bytes | None:
         """Count a new connection, or give the answer refusing it (then it is not counted)."""
@@ -117,14 +122,17 @@ class Connections:
                     "the server",
                     HTTPStatus.SERVICE_UNAVAILABLE,
                 )
-            _, oldest = self.waiting.popitem(last=False)
+            heaviest = max(self.waiting, key=lambda address: self.per_client.get(address, 0))
+            _, oldest = self.waiting[heaviest].popitem(last=False)
+            if not self.waiting[heaviest]:
+                del self.waiting[heaviest]
             oldest.close()  # its connection_lost releases its count
         self.per_client[client] = self.per_client.get(client, 0) + 1
         self.total += 1
         return None
 
     def release(self, client: str, transport: asyncio.BaseTransport) -> None:
-        self.waiting.pop(id(transport), None)
+        self.busy(client, transport)
         left = self.per_client.get(client, 0) - 1
         if left > 0:
             self.per_client[client] = left
@@ -132,12 +140,17 @@ class Connections:
             self.per_client.pop(client, None)
         self.total -= 1
 
-    def wait_for_head(self, transport: asyncio.BaseTransport) -> None:
-        self.waiting[id(transport)] = transport
-        self.waiting.move_to_end(id(transport))
+    def wait_for_head(self, client: str, transport: asyncio.BaseTransport) -> None:
+        waiting = self.waiting.setdefault(client, OrderedDict())
+        waiting[id(transport)] = transport
+        waiting.move_to_end(id(transport))
 
-    def busy(self, transport: asyncio.BaseTransport) -> None:
-        self.waiting.pop(id(transport), None)
+    def busy(self, client: str, transport: asyncio.BaseTransport) -> None:
+        waiting = self.waiting.get(client)
+        if waiting is not None:
+            waiting.pop(id(transport), None)
+            if not waiting:
+                del self.waiting[client]
 
 
 class GuardedHttpProtocol(HttpToolsProtocol):
@@ -174,7 +187,7 @@ class GuardedHttpProtocol(HttpToolsProtocol):
             self._refuse(refusal)
             return
         self.counted = client
-        self.guard.wait_for_head(transport)
+        self.guard.wait_for_head(client, transport)
         self._arm_head_timer()  # the time to the first byte counts
 
     def connection_lost(self, exc: Exception | None) -> None:
@@ -267,7 +280,8 @@ class GuardedHttpProtocol(HttpToolsProtocol):
     def on_headers_complete(self) -> None:
         self.in_head = False
         self._stop_head_timer()
-        self.guard.busy(self.transport)
+        if self.counted is not None:
+            self.guard.busy(self.counted, self.transport)
         super().on_headers_complete()
 
     def on_message_complete(self) -> None:
@@ -278,12 +292,15 @@ class GuardedHttpProtocol(HttpToolsProtocol):
     def on_response_complete(self) -> None:
         super().on_response_complete()
         if not self.transport.is_closing() and self.counted is not None:
-            self.guard.wait_for_head(self.transport)  # idle: the first to go at the limit
+            self.guard.wait_for_head(
+                self.counted, self.transport
+            )  # idle: the first to go at the limit
 
     def handle_websocket_upgrade(self) -> None:
         self._stop_head_timer()
-        self.guard.busy(self.transport)
-        counted, self.counted = self.counted, None  # the WebSocket protocol releases it
+        counted, self.counted = self.counted, None
+        if counted is not None:
+            self.guard.busy(counted, self.transport)  # the WebSocket protocol releases it
         super().handle_websocket_upgrade()
         if counted is not None:
             guard, transport = self.guard, self.transport

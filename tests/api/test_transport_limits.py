@@ -149,3 +149,21 @@ def test_a_thousand_idle_connections_leave_healthz_answering() -> None:
         finally:
             for connection in held:
                 connection.close()
+
+
+def test_a_crowd_at_the_total_limit_closes_its_own_not_a_light_clients(server: LiveServer) -> None:
+    """A keep-alive connection idle between two requests, while ten addresses open twice the
+    total limit: the room is made from the addresses holding the most connections."""
+    light = connect_from(server, "127.0.0.7")
+    light.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n")
+    light.settimeout(10.0)
+    assert light.recv(65536).startswith(b"HTTP/1.1 200")
+    crowd = [connect_from(server, f"127.0.3.{index % 10 + 1}") for index in range(2 * TOTAL)]
+    try:
+        time.sleep(0.2)
+        light.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n")
+        assert light.recv(65536).startswith(b"HTTP/1.1 200")  # still open, still answered
+    finally:
+        light.close()
+        for connection in crowd:
+            connection.close()
