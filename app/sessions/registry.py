@@ -114,6 +114,7 @@ from core.errors import StaleReport as CoreStaleReport
 from core.fusion.config import FusionConfig
 from core.fusion.engine import SessionEngine
 from core.fusion.reports import FusedTrackView
+from core.tracking.track import ScanTally
 
 TINY_WORK = 64
 """Report tracks + live fused tracks up to which a step runs on the event loop.
@@ -597,6 +598,7 @@ class SessionRegistry:
         started = time.perf_counter()
         size = items + len(session.tracks)
         engine_seq = None if session.engine is None else session.engine.seq
+        tallied = _tally(session.engine, sensor)
         try:
             step = await self._compute(size, apply)
         except BaseException:
@@ -609,6 +611,7 @@ class SessionRegistry:
             raise
         series = self._series(kind)
         series.fusion_step.observe(time.perf_counter() - started)
+        self._count_detections(_tally(step.engine, sensor), tallied)
         series.engine_cpu.observe(step.engine_cpu_s)
         received_at = datetime.now(UTC)
         seq = session.seq + 1
@@ -635,6 +638,19 @@ class SessionRegistry:
         session.last_input_at = received_at
         session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
         return step
+
+    def _count_detections(self, after: ScanTally | None, before: ScanTally | None) -> None:
+        """What a detecting sensor's scan did, into ``/metrics`` (docs/algorithms.md §8.5)."""
+        if after is None:
+            return
+        before = before or ScanTally()
+        metrics = self.metrics
+        for outcome in ("joined_established", "joined_tentative", "started", "unused"):
+            metrics.detections.labels(outcome).inc(
+                getattr(after, outcome) - getattr(before, outcome)
+            )
+        for event in ("confirmed", "refuted", "ended"):
+            metrics.local_tracks.labels(event).inc(getattr(after, event) - getattr(before, event))
 
     async def _hold_lease(self, session: LiveSession) -> None:
         """Take or renew the session's lease; after a (re)take, catch up with the store's log."""
@@ -748,3 +764,9 @@ class SessionRegistry:
 def result_message(result: str, ref: str | None = None) -> str:
     """A ``result`` WebSocket message around a result's JSON text (not serialised again)."""
     return f'{{"type":"result","ref":{dumps(ref)},"result":{result}}}'
+
+
+def _tally(engine: SessionEngine | None, sensor: str) -> ScanTally | None:
+    """A detecting sensor's tally so far (:class:`~core.tracking.track.ScanTally`), or None."""
+    tracker = None if engine is None else engine.local_trackers.get(sensor)
+    return None if tracker is None else tracker.tallies.get(sensor)
