@@ -395,14 +395,8 @@ class LifeCycleConfig:
 
 @lru_cache(maxsize=64)
 def _score_model(config: LifeCycleConfig, p_detect: float) -> ScoreModel:
-    clutter, birth = config.densities
-    return ScoreModel(
-        p_detect=p_detect,
-        false_target_density=clutter,
-        new_target_density=birth,
-        false_confirmation=config.false_confirmation,
-        true_deletion=config.true_deletion,
-    )
+    clutter, _ = config.densities  # set for the dimension: β_NT is the configured one
+    return config.scan_score(p_detect, clutter)
 
 
 # ------------------------------------------------------------------ state

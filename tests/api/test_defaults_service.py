@@ -11,17 +11,7 @@ import httpx
 import numpy as np
 
 from .conftest import LiveServer
-
-LAYOUT_3D = {"dim": 6, "position": [0, 2, 4], "velocity": [1, 3, 5]}
-
-
-def _polar(offset: np.ndarray) -> dict[str, float]:
-    east, north, up = (float(x) for x in offset)
-    return {
-        "range": math.sqrt(east**2 + north**2 + up**2),
-        "azimuth_deg": math.degrees(math.atan2(east, north)),
-        "elevation_deg": math.degrees(math.atan2(up, math.hypot(east, north))),
-    }
+from .test_polar_3d import LAYOUT_3D, _polar
 
 
 def test_a_configuration_that_cannot_confirm_is_refused_with_the_reason_and_fix(
