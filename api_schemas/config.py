@@ -170,78 +170,70 @@ class PolygonFieldOfView(WireModel):
 FieldOfView = Annotated[SectorFieldOfView | PolygonFieldOfView, Field(discriminator="kind")]
 
 
-class MeasurementModel(WireModel):
-    """A detecting sensor's measurement noise.
+class CartesianMeasurement(WireModel):
+    """A detecting sensor that measures positions: ``r`` over the position components; its
+    detections are ``{"z": [...]}`` (``kind: "cartesian"`` is the default)."""
 
-    ``kind: "cartesian"`` (the default): ``r`` over the position components,
-    detections ``{"z": [...]}``. ``kind: "polar"``: a radar's range and
-    azimuth (and elevation, in 3-D) standard deviations; its detections are
-    ``{"range", "azimuth_deg", "elevation_deg"?, "range_rate"?}`` at the
-    sensor's ``site``, azimuth clockwise from north. They are tracked as
-    converted Cartesian measurements with each detection's own covariance
-    (:mod:`app.geo.polar`). With ``sigma_range_rate`` a detection's
-    ``range_rate`` updates its track's velocity after the position (a
-    sequential extended Kalman update, :mod:`core.tracking.range_rate`);
-    without it a ``range_rate`` is accepted and not used.
+    kind: Literal["cartesian"] = "cartesian"
+    r: Matrix = Field(description="R over the positions")
+
+    @model_validator(mode="after")
+    def _r_is_covariance(self) -> Self:
+        try:
+            check_covariance(self.r)
+        except ValueError as error:
+            raise_issues("CartesianMeasurement", [FieldIssue(("r",), str(error), self.r)])
+        return self
+
+
+class PolarMeasurement(WireModel):
+    """A radar's range and azimuth (and elevation, in 3-D) standard deviations.
+
+    Its detections are ``{"range", "azimuth_deg", "elevation_deg"?, "range_rate"?}`` at the
+    sensor's ``site``, azimuth clockwise from north. They are tracked as converted Cartesian
+    measurements with each detection's own covariance (:mod:`app.geo.polar`). With
+    ``sigma_range_rate`` a detection's ``range_rate`` updates its track's velocity after the
+    position (a sequential extended Kalman update, :mod:`core.tracking.range_rate`); without
+    it a ``range_rate`` is accepted and not used.
     """
 
-    kind: Literal["cartesian", "polar"] = "cartesian"
-    r: Matrix | None = Field(default=None, description="cartesian: R over the positions")
-    sigma_range: PositiveFloat | None = Field(
-        default=None, description="polar: range standard deviation (m)"
-    )
-    sigma_azimuth_deg: PositiveFloat | None = Field(
-        default=None, description="polar: azimuth standard deviation (deg)"
-    )
+    kind: Literal["polar"]
+    sigma_range: PositiveFloat = Field(description="range standard deviation (m)")
+    sigma_azimuth_deg: PositiveFloat = Field(description="azimuth standard deviation (deg)")
     sigma_elevation_deg: PositiveFloat | None = Field(
-        default=None, description="polar: elevation standard deviation (deg); required in 3-D"
+        default=None, description="elevation standard deviation (deg); required in 3-D"
     )
     sigma_range_rate: PositiveFloat | None = Field(
         default=None,
         description=(
-            "polar: range-rate standard deviation (m/s); with it, the detections' "
+            "range-rate standard deviation (m/s); with it, the detections' "
             "range_rate updates the tracks' velocities (without it, range_rate is not used)"
         ),
     )
 
-    @model_validator(mode="after")
-    def _r_is_covariance(self) -> Self:
-        polar_fields = (
-            "sigma_range",
-            "sigma_azimuth_deg",
-            "sigma_elevation_deg",
-            "sigma_range_rate",
-        )
-        if self.kind == "polar":
-            issues = [
-                FieldIssue((name,), f"a polar sensor needs {name}", None)
-                for name in polar_fields[:2]
-                if getattr(self, name) is None
-            ]
-            if self.r is not None:
-                issues.append(FieldIssue(("r",), "a polar sensor takes sigmas, not r", self.r))
-            if issues:
-                raise_issues("MeasurementModel", issues)
-            return self
-        extra = [name for name in polar_fields if getattr(self, name) is not None]
-        if extra:
-            raise_issues(
-                "MeasurementModel",
-                [FieldIssue((name,), "only a polar sensor takes sigmas", None) for name in extra],
-            )
-        if self.r is None:
-            raise_issues("MeasurementModel", [FieldIssue(("r",), "r is required", None)])
-        try:
-            check_covariance(self.r)
-        except ValueError as error:
-            raise_issues("MeasurementModel", [FieldIssue(("r",), str(error), self.r)])
-        return self
-
     @property
     def polar_sigmas(self) -> tuple[float, float]:
-        """``(σ_range m, σ_azimuth deg)`` of a polar sensor."""
-        assert self.sigma_range is not None and self.sigma_azimuth_deg is not None
+        """``(σ_range m, σ_azimuth deg)``."""
         return self.sigma_range, self.sigma_azimuth_deg
+
+
+def _measurement_kind(value: object) -> str | None:
+    """A measurement model's tag: its ``kind``, ``cartesian`` when it gives none."""
+    if isinstance(value, dict):
+        kind = value.get("kind", "cartesian")
+        return kind if isinstance(kind, str) else None
+    return getattr(value, "kind", None)
+
+
+MeasurementModel = Annotated[
+    Annotated[CartesianMeasurement, Tag("cartesian")] | Annotated[PolarMeasurement, Tag("polar")],
+    Discriminator(
+        _measurement_kind,
+        custom_error_type="measurement_kind",
+        custom_error_message="kind is 'cartesian' (the default) or 'polar'",
+    ),
+]
+"""A detecting sensor's measurement model, tagged by ``kind`` (default ``cartesian``)."""
 
 
 Latitude = Annotated[float, Field(allow_inf_nan=False, ge=-90.0, le=90.0)]
@@ -574,8 +566,7 @@ class SessionConfig(WireModel):
             sensor_ids.add(sensor.id)
             issues.extend(self._placement_issues(index, sensor))
             if (
-                sensor.measurement is not None
-                and sensor.measurement.r is not None
+                isinstance(sensor.measurement, CartesianMeasurement)
                 and len(sensor.measurement.r) != measured
             ):
                 size = len(sensor.measurement.r)
@@ -628,7 +619,7 @@ class SessionConfig(WireModel):
                 )
             )
         polar = sensor.measurement
-        if polar is not None and polar.kind == "polar":
+        if isinstance(polar, PolarMeasurement):
             if measured == 1:
                 issues.append(
                     FieldIssue(

@@ -7,9 +7,9 @@ body, so the service can answer one 422 that lists them all.
 from __future__ import annotations
 
 from api_schemas.classification import ClassEvidence
-from api_schemas.config import SessionConfig
+from api_schemas.config import PolarMeasurement, SessionConfig
 from api_schemas.issues import FieldIssue, Location
-from api_schemas.reports import Detection, DetectionReport, TrackReport
+from api_schemas.reports import DetectionReport, PolarDetection, TrackReport
 
 
 def _sensor_issues(sensor: str, config: SessionConfig) -> list[FieldIssue]:
@@ -123,12 +123,18 @@ def detection_report_issues(report: DetectionReport, config: SessionConfig) -> l
     measured = len(config.state.position)
     sensor = config.sensor(report.sensor)
     has_sensor_noise = sensor is not None and sensor.measurement is not None
-    polar_sensor = (
-        sensor is not None and sensor.measurement is not None and sensor.measurement.kind == "polar"
-    )
+    polar_sensor = sensor is not None and isinstance(sensor.measurement, PolarMeasurement)
     for index, detection in enumerate(report.detections):
-        if detection.z is None or polar_sensor:
+        if isinstance(detection, PolarDetection):
             issues.extend(_polar_issues(detection, polar_sensor, measured, report.sensor, index))
+        elif polar_sensor:
+            issues.append(
+                FieldIssue(
+                    ("detections", index, "z"),
+                    f"sensor {report.sensor!r} is polar: give range and azimuth_deg, not z",
+                    detection.z,
+                )
+            )
         elif len(detection.z) != measured:
             issues.append(
                 FieldIssue(
@@ -145,24 +151,24 @@ def detection_report_issues(report: DetectionReport, config: SessionConfig) -> l
                     None,
                 )
             )
-        issues.extend(
-            _class_issues(detection.classification, config, ("detections", index, "classification"))
-        )
+        loc = ("detections", index, "classification")
+        issues.extend(_class_issues(detection.classification, config, loc))
+        if detection.classification is not None and config.tracking.preset is None:
+            issues.append(
+                FieldIssue(
+                    loc,
+                    "class evidence on detections joins the local tracks' classification, "
+                    "which needs 'tracking.preset'",
+                    None,
+                )
+            )
     return issues
 
 
 def _polar_issues(
-    detection: Detection, polar_sensor: bool, measured: int, sensor: str, index: int
+    detection: PolarDetection, polar_sensor: bool, measured: int, sensor: str, index: int
 ) -> list[FieldIssue]:
     """A polar detection only from a polar sensor, with an elevation exactly in 3-D."""
-    if detection.z is not None:
-        return [
-            FieldIssue(
-                ("detections", index, "z"),
-                f"sensor {sensor!r} is polar: give range and azimuth_deg, not z",
-                detection.z,
-            )
-        ]
     if not polar_sensor:
         return [
             FieldIssue(

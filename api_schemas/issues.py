@@ -23,7 +23,12 @@ CORE_FIELDS: dict[str, Location] = {
     "class_likelihoods": ("classification", "likelihoods"),
 }
 """Fields of a core track (``core.fusion.reports.ReportedTrack``) and where they are on the wire."""
-DETECTION_ARRAYS = {"measurements": "z", "measurement_covariances": "r", "covariances": "r"}
+DETECTION_ARRAYS = {
+    "measurements": "z",
+    "measurement_covariances": "r",
+    "covariances": "r",
+    "class_masses": "classification",
+}
 """Arrays of a core detection report (a row per detection) and the wire field of a detection
 that holds the row."""
 

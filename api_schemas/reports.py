@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal, Self
 
-from pydantic import Field, model_validator
+from pydantic import Discriminator, Field, Tag, model_validator
 
 from api_schemas.base import FiniteFloat, Identifier, Matrix, Vector, WireModel
 from api_schemas.classification import ClassEvidence
@@ -104,65 +104,51 @@ class TrackReport(WireModel):
         return self
 
 
-class Detection(WireModel):
-    """One detection: the measured position ``z``, optionally its own noise ``r`` and class evidence.
+class CartesianDetection(WireModel):
+    """A detection of a sensor that measures positions: ``z``, optionally its own noise
+    ``r`` (default: its sensor's ``measurement.r``) and class evidence."""
 
-    A polar sensor's detection gives ``range`` (m) and ``azimuth_deg``
-    (clockwise from north at the site), ``elevation_deg`` in 3-D, optionally
-    ``range_rate`` (m/s, positive away from the site; used when the sensor
-    gives ``sigma_range_rate``) instead of ``z``.
-    """
-
-    z: Annotated[Vector, Field(min_length=1, max_length=3)] | None = None
+    z: Annotated[Vector, Field(min_length=1, max_length=3)]
     r: Matrix | None = None
-    range: Annotated[float, Field(allow_inf_nan=False, gt=0.0, le=MAX_RANGE)] | None = None
-    azimuth_deg: Annotated[float, Field(allow_inf_nan=False, ge=-360.0, le=360.0)] | None = None
-    elevation_deg: Annotated[float, Field(allow_inf_nan=False, ge=-90.0, le=90.0)] | None = None
-    range_rate: FiniteFloat | None = None
     classification: ClassEvidence | None = None
-
-    @property
-    def polar(self) -> bool:
-        """Whether this is a polar detection (``range``/``azimuth_deg``, no ``z``)."""
-        return self.z is None
 
     @model_validator(mode="after")
     def _r_matches_z(self) -> Self:
         """Square and of ``z``'s size; symmetric positive definite is checked by the report."""
-        if self.z is None:
-            polar = {"range": self.range, "azimuth_deg": self.azimuth_deg}
-            missing = [name for name, value in polar.items() if value is None]
-            if missing or self.r is not None:
-                issues = [
-                    FieldIssue((name,), f"{name} is required without z", None) for name in missing
-                ]
-                if self.r is not None:
-                    issues.append(
-                        FieldIssue(
-                            ("r",), "a polar detection takes its noise from its sensor", None
-                        )
-                    )
-                raise_issues("Detection", issues)
-            return self
-        extra = [
-            name
-            for name in ("range", "azimuth_deg", "elevation_deg", "range_rate")
-            if getattr(self, name) is not None
-        ]
-        if extra:
-            raise_issues(
-                "Detection",
-                [
-                    FieldIssue((name,), "give z or the polar fields, not both", None)
-                    for name in extra
-                ],
-            )
         if self.r is not None:
             try:
                 check_square(self.r, len(self.z))
             except ValueError as error:
-                raise_issues("Detection", [FieldIssue(("r",), str(error), self.r)])
+                raise_issues("CartesianDetection", [FieldIssue(("r",), str(error), self.r)])
         return self
+
+
+class PolarDetection(WireModel):
+    """A polar sensor's detection: ``range`` (m) and ``azimuth_deg`` (clockwise from north at
+    the site), ``elevation_deg`` in 3-D, optionally ``range_rate`` (m/s, positive away from
+    the site; used when the sensor gives ``sigma_range_rate``) and class evidence. Its noise
+    is its sensor's (``measurement`` σs)."""
+
+    range: Annotated[float, Field(allow_inf_nan=False, gt=0.0, le=MAX_RANGE)]
+    azimuth_deg: Annotated[float, Field(allow_inf_nan=False, ge=-360.0, le=360.0)]
+    elevation_deg: Annotated[float, Field(allow_inf_nan=False, ge=-90.0, le=90.0)] | None = None
+    range_rate: FiniteFloat | None = None
+    classification: ClassEvidence | None = None
+
+
+def _detection_kind(value: object) -> str:
+    """A detection's tag: ``cartesian`` when it gives ``z``, else ``polar``."""
+    if isinstance(value, dict):
+        return "cartesian" if "z" in value else "polar"
+    return "polar" if isinstance(value, PolarDetection) else "cartesian"
+
+
+Detection = Annotated[
+    Annotated[CartesianDetection, Tag("cartesian")] | Annotated[PolarDetection, Tag("polar")],
+    Discriminator(_detection_kind),
+]
+"""One detection: cartesian (``z``) or polar (``range``, ``azimuth_deg``), told apart by
+``z`` (the detections carry no tag of their own on the wire)."""
 
 
 class DetectionReport(WireModel):
@@ -182,7 +168,7 @@ class DetectionReport(WireModel):
         noisy = [
             (index, detection.r)
             for index, detection in enumerate(self.detections)
-            if detection.r is not None
+            if isinstance(detection, CartesianDetection) and detection.r is not None
         ]
         bad_noise = covariance_problems([r for _, r in noisy])
         if bad_noise:

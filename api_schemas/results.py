@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field
 
@@ -178,17 +178,61 @@ class FusedPicture(WireModel):
     tracks: list[FusedTrack]
 
 
+class PointGeometry(WireModel):
+    """A GeoJSON Point: ``[lon°, lat°, alt m]`` on WGS84 (RFC 7946 §3.1.2)."""
+
+    type: Literal["Point"]
+    coordinates: Annotated[list[FiniteFloat], Field(min_length=2, max_length=3)]
+
+
+class TrackFeatureProperties(WireModel):
+    """What a fused track's GeoJSON feature says besides its point."""
+
+    id: Identifier
+    status: TrackStatus
+    decision: Label | None
+    pignistic: dict[Label, UnitFloat] | None
+    velocity_enu: list[FiniteFloat] = Field(
+        description="east/north(/up) velocity (m/s) in the tangent plane at the track's point"
+    )
+
+
+class TrackFeature(WireModel):
+    """A fused track as a GeoJSON Feature."""
+
+    type: Literal["Feature"]
+    id: Identifier
+    geometry: PointGeometry
+    properties: TrackFeatureProperties
+
+
+class FusedFeatureCollection(WireModel):
+    """``format=geojson``: fused tracks as an ``application/geo+json`` FeatureCollection
+    (RFC 7946), with the answer's ``seq`` and ``time`` (and the step's ``sensor``) as foreign
+    members."""
+
+    type: Literal["FeatureCollection"]
+    seq: int | None = None
+    time: FiniteFloat | None = None
+    sensor: Identifier | None = None
+    features: list[TrackFeature]
+
+
 __all__ = [
     "ClassificationState",
     "FusedClassification",
+    "FusedFeatureCollection",
     "FusedPair",
     "FusedPicture",
     "FusedTrack",
     "FusedTrackDetail",
     "PairBasis",
+    "PointGeometry",
     "ScoreMatrix",
     "StepAssociation",
     "StepResult",
+    "TrackFeature",
+    "TrackFeatureProperties",
     "TrackHistoryPoint",
     "TrackSource",
     "TrackStatus",

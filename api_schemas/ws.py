@@ -2,19 +2,20 @@
 
 Every message is a JSON object with a required ``type`` tag. The client sends
 ``tracks`` and ``detections`` (the REST bodies plus ``type`` and an optional
-``ref`` echoed in the answer); the server sends ``result``, ``error`` and ``ack``.
+``ref`` echoed in the answer; the union of the registered input kinds' messages is
+``app.inputs.client_messages``); the server sends ``result``, ``error`` and ``ack``.
 """
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
 from pydantic import Field, StringConstraints, TypeAdapter
 
 from api_schemas.base import WireModel
 from api_schemas.problem import Problem
 from api_schemas.reports import DetectionReport, TrackReport
-from api_schemas.results import StepResult
+from api_schemas.results import FusedFeatureCollection, StepResult
 
 ClientRef = Annotated[str, StringConstraints(min_length=1, max_length=128)]
 
@@ -25,10 +26,6 @@ class TracksMessage(TrackReport):
     type: Literal["tracks"]
     ref: ClientRef | None = None
 
-    def report(self) -> TrackReport:
-        """The track list alone, every field of it (``frame`` too), without ``type`` and ``ref``."""
-        return TrackReport.model_construct(**_fields_of(self, TrackReport))
-
 
 class DetectionsMessage(DetectionReport):
     """Client → server: a detection batch."""
@@ -36,22 +33,14 @@ class DetectionsMessage(DetectionReport):
     type: Literal["detections"]
     ref: ClientRef | None = None
 
-    def report(self) -> DetectionReport:
-        """The detection batch alone, without ``type`` and ``ref``."""
-        return DetectionReport.model_construct(**_fields_of(self, DetectionReport))
-
-
-def _fields_of(message: WireModel, report: type[WireModel]) -> dict[str, Any]:
-    """The values of ``report``'s fields in ``message`` (validated already: not again)."""
-    return {name: getattr(message, name) for name in report.model_fields}
-
 
 class ResultMessage(WireModel):
-    """Server → client: the fused result of an input (``ref`` echoes the input's)."""
+    """Server → client: the fused result of an input (``ref`` echoes the input's), in the
+    connection's ``format`` (``json``: a ``StepResult``; ``geojson``: a FeatureCollection)."""
 
     type: Literal["result"]
     ref: str | None
-    result: StepResult
+    result: StepResult | FusedFeatureCollection
 
 
 class ErrorMessage(WireModel):
@@ -70,10 +59,8 @@ class AckMessage(WireModel):
     seq: int
 
 
-ClientMessage = Annotated[TracksMessage | DetectionsMessage, Field(discriminator="type")]
 ServerMessage = Annotated[ResultMessage | ErrorMessage | AckMessage, Field(discriminator="type")]
 
-client_message_adapter: TypeAdapter[TracksMessage | DetectionsMessage] = TypeAdapter(ClientMessage)
 server_message_adapter: TypeAdapter[ResultMessage | ErrorMessage | AckMessage] = TypeAdapter(
     ServerMessage
 )

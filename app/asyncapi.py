@@ -14,10 +14,13 @@ from pathlib import Path
 from typing import Any, Literal
 
 import yaml
-from pydantic import BaseModel
+from pydantic import BaseModel, create_model
 from pydantic.json_schema import models_json_schema
 
-from api_schemas.ws import AckMessage, DetectionsMessage, ErrorMessage, ResultMessage, TracksMessage
+from api_schemas.base import WireModel
+from api_schemas.ws import AckMessage, ErrorMessage, ResultMessage
+from app.inputs import DECODED_KINDS, INPUT_KINDS, DecodedKind
+from app.outputs import FRAMES, OUTPUT_FORMATS
 from core import __version__
 
 DEFAULT_PATH = Path("docs") / "asyncapi.yaml"
@@ -26,16 +29,7 @@ SCHEMA_REF = "#/components/schemas/{model}"
 Direction = Literal["client", "server"]
 
 MESSAGES: dict[str, tuple[type[BaseModel], Direction, str]] = {
-    "tracks": (
-        TracksMessage,
-        "client",
-        "A sensor's track list; answered by one `result` (or `error`).",
-    ),
-    "detections": (
-        DetectionsMessage,
-        "client",
-        "A sensor's detections; answered by one `result` (or `error`).",
-    ),
+    **{tag: (kind.message_model, "client", kind.summary) for tag, kind in INPUT_KINDS.items()},
     "result": (
         ResultMessage,
         "server",
@@ -52,10 +46,51 @@ MESSAGES: dict[str, tuple[type[BaseModel], Direction, str]] = {
         "Sent once when the connection is ready, with the session's latest `seq`.",
     ),
 }
-"""Message name (its ``type`` tag) → model, who sends it, what it means."""
+"""Message name (its ``type`` tag) → model, who sends it, what it means; a decoded kind
+(:data:`~app.inputs.DECODED_KINDS`) adds its answer here and its binary message below."""
+
+
+def decoded_answer(kind: DecodedKind[Any]) -> type[BaseModel]:
+    """The server's ``<tag>_result`` message answering a decoded kind's binary message."""
+    tag = f"{kind.tag}_result"
+    name = "".join(part.title() for part in tag.split("_")) + "Message"
+    model: type[BaseModel] = create_model(
+        name,
+        __base__=WireModel,
+        __doc__=f"Server → client: the answer to a `{kind.tag}` binary message.",
+        type=(Literal[tag], ...),  # type: ignore[arg-type]
+        ref=(str | None, ...),
+        result=(kind.answer_model, ...),
+    )
+    return model
+
+
+for _kind in DECODED_KINDS.values():
+    MESSAGES[f"{_kind.tag}_result"] = (
+        decoded_answer(_kind),
+        "server",
+        f"The answer to a `{_kind.tag}` binary message.",
+    )
+
+
+def _binary_message(kind: DecodedKind[Any]) -> dict[str, Any]:
+    return {
+        "name": kind.tag,
+        "title": f"{kind.tag} (binary)",
+        "summary": kind.summary,
+        "contentType": kind.media_type,
+        "payload": {"type": "string", "format": "binary"},
+        "x-direction": "client",
+        "x-query": kind.parameters.model_json_schema(),
+    }
+
 
 DESCRIPTION = """\
-Every message is one JSON object (a text frame) with a required `type` tag.
+Every message is one JSON object (a text frame) with a required `type` tag, but the
+binary messages of the decoded kinds (bytes of a surveillance format, listed below with
+their content type; a binary frame whose first byte is not `{` or `[`), each answered by
+one `<kind>_result` (or `error`); the connection's query gives that kind's parameters
+(its `x-query`; `?decode=` names the kind when several are registered).
 
 `stream`: the client sends `tracks` and `detections` messages (the REST bodies
 plus `type` and an optional `ref`); the server answers each with exactly one
@@ -93,13 +128,14 @@ it closes with code 1013, reason `store unavailable`: subscribe again once
 `GET /readyz` answers 200. An input sent on `stream` while the store is down
 gets an `error` with the 503 `store-unavailable` problem and is not applied.
 
-Both channels take the query parameter `frame` on connect
-(`…/stream?frame=geodetic`, `…/subscribe?frame=geodetic`), as the REST inputs
-and reads do: with `geodetic`, every fused track of every `result` sent on the
-connection carries `geodetic: {lat, lon, alt}` (WGS84) beside its
-session-frame `state`. The session needs an `origin`; without one, or for a
-value other than `session` and `geodetic`, the upgrade is refused with the 422
-problem naming `query/frame`.
+Both channels take the query parameters `format` and `frame` on connect
+(`…/stream?frame=geodetic`, `…/subscribe?format=geojson`), as the REST inputs
+and reads do: with `frame=geodetic`, every fused track of every `result` sent on
+the connection carries `geodetic: {lat, lon, alt}` (WGS84) beside its
+session-frame `state`; with `format=geojson` every `result` is a GeoJSON
+FeatureCollection (with `seq`, `time`, `sensor`). Both need the session's
+`origin`; without one, or for an unknown value, the upgrade is refused with the
+422 problem naming `query/frame` or `query/format`.
 
 Both channels need the session's bearer token (or the admin token) in the
 `Authorization` header of the upgrade request, or, from a browser (which
@@ -137,17 +173,25 @@ FRAME_QUERY: dict[str, Any] = {
     "properties": {
         "frame": {
             "type": "string",
-            "enum": ["session", "geodetic"],
+            "enum": list(FRAMES),
             "default": "session",
             "description": (
                 "geodetic: every fused track of every `result` on this connection carries "
                 "`geodetic: {lat, lon, alt}` (WGS84; the session needs an `origin`, else the "
                 "upgrade is refused with 422 at `query/frame`)"
             ),
-        }
+        },
+        "format": {
+            "type": "string",
+            "enum": list(OUTPUT_FORMATS),
+            "default": "json",
+            "description": "every `result` on this connection in this output format: "
+            + "; ".join(f"{name}: {f.description}" for name, f in OUTPUT_FORMATS.items()),
+        },
     },
 }
-"""The query parameters of both channels' upgrade request (the REST routes' ``?frame``)."""
+"""The query parameters of both channels' upgrade request (the REST routes' ``format`` and
+``frame``)."""
 
 
 def _channel(address: str, description: str, names: Sequence[str]) -> dict[str, Any]:
@@ -173,7 +217,9 @@ def payload_schemas() -> dict[str, Any]:
 
 def build_asyncapi() -> dict[str, Any]:
     """The AsyncAPI 3.0 document as plain data."""
-    stream_messages = ["tracks", "detections", "result", "error", "ack"]
+    inputs = [*INPUT_KINDS, *DECODED_KINDS]
+    answers = [f"{tag}_result" for tag in DECODED_KINDS]
+    stream_messages = [*inputs, "result", *answers, "error", "ack"]
     subscribe_messages = ["result", "error", "ack"]
     return {
         "asyncapi": "3.0.0",
@@ -205,12 +251,14 @@ def build_asyncapi() -> dict[str, Any]:
             "send_inputs": {
                 "action": "send",
                 "channel": {"$ref": "#/channels/stream"},
-                "messages": _refs(["tracks", "detections"], "#/channels/stream/messages"),
+                "messages": _refs(inputs, "#/channels/stream/messages"),
             },
             "receive_step_results": {
                 "action": "receive",
                 "channel": {"$ref": "#/channels/stream"},
-                "messages": _refs(["result", "error", "ack"], "#/channels/stream/messages"),
+                "messages": _refs(
+                    ["result", *answers, "error", "ack"], "#/channels/stream/messages"
+                ),
             },
             "receive_subscription": {
                 "action": "receive",
@@ -219,7 +267,10 @@ def build_asyncapi() -> dict[str, Any]:
             },
         },
         "components": {
-            "messages": {name: _message(name) for name in MESSAGES},
+            "messages": {
+                **{name: _message(name) for name in MESSAGES},
+                **{tag: _binary_message(kind) for tag, kind in DECODED_KINDS.items()},
+            },
             "schemas": payload_schemas(),
             "securitySchemes": {"bearer": {"type": "http", "scheme": "bearer"}},
         },

@@ -15,13 +15,23 @@ from fastapi.routing import APIRoute
 
 from app.http.body_limits import BodyLimits
 from app.http.errors import StoreUnavailable, install_error_handlers
-from app.http.rate_limit import RateLimit, parse_rates
+from app.http.rate_limit import RateLimit
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
-from app.routes import associate, docs, fusion, health, metrics, sessions, streams, viewer
+from app.routes import (
+    associate,
+    docs,
+    fusion,
+    health,
+    inputs,
+    metrics,
+    sessions,
+    streams,
+    viewer,
+)
 from app.runtime import CollectionTimes, LoopLag
 from app.sessions.registry import SessionRegistry
-from app.settings import Settings, get_settings
+from app.settings import Settings, get_settings, parse_rates
 from app.stores import open_store
 from core import __version__
 
@@ -94,6 +104,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(health.router)
     app.include_router(metrics.router)
     app.include_router(sessions.router)
+    app.include_router(inputs.input_routes())
     app.include_router(fusion.router)
     app.include_router(associate.router)
     app.include_router(streams.router)

@@ -2,7 +2,8 @@
 
 Error answers are documented as ``application/problem+json`` (FastAPI would
 say ``application/json``), and FastAPI's default 422 ``HTTPValidationError``
-schema is replaced by :class:`~api_schemas.problem.Problem`.
+schema is replaced by :class:`~api_schemas.problem.Problem`; every output
+format's models are listed (answers in each format's media type refer to them).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from fastapi.openapi.utils import get_openapi
 
 from api_schemas.problem import Problem
 from app.http.errors import PROBLEM_MEDIA_TYPE
+from app.outputs import OUTPUT_FORMATS
 
 DEFAULT_PATH = Path("openapi.json")
 
@@ -49,6 +51,21 @@ def _problem_media_types(schema: dict[str, Any]) -> dict[str, Any]:
     return schema
 
 
+def _output_models(schema: dict[str, Any]) -> dict[str, Any]:
+    """Every output format's models (:mod:`app.outputs`) under ``components/schemas``: the
+    routes list each format's media type with its model (``output_responses``)."""
+    schemas = schema.setdefault("components", {}).setdefault("schemas", {})
+    for output in OUTPUT_FORMATS.values():
+        for model in (output.step_model, output.picture_model):
+            if model.__name__ not in schemas:
+                found = model.model_json_schema(
+                    ref_template="#/components/schemas/{model}", mode="serialization"
+                )
+                schemas.update(found.pop("$defs", {}))
+                schemas[model.__name__] = found
+    return schema
+
+
 def install_openapi(app: FastAPI) -> None:
     """Make ``app.openapi()`` return the service's document (cached after the first call)."""
 
@@ -60,7 +77,7 @@ def install_openapi(app: FastAPI) -> None:
                 description=app.description,
                 routes=app.routes,
             )
-            app.openapi_schema = _problem_media_types(schema)
+            app.openapi_schema = _output_models(_problem_media_types(schema))
         return app.openapi_schema
 
     app.openapi = openapi  # type: ignore[method-assign]

@@ -8,16 +8,18 @@ from __future__ import annotations
 
 from functools import lru_cache
 
+from limits import RateLimitItem, parse_many
 from pydantic import Field, SecretStr, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from api_schemas.base import MAX_CLASSES
 from api_schemas.limits import MAX_FOCAL_SETS, MAX_ITEMS, MAX_SENSORS, WireLimits
-from app.http.errors import MAX_LISTED_ERRORS
-from app.http.rate_limit import parse_rates
+from app.errors import MAX_LISTED_ERRORS
 from app.stores.redis_keys import DEFAULT_PREFIX
 
 DEFAULT_STORE = "sqlite:data/credal-fusion.db"
+UNLIMITED = frozenset({"", "none", "off", "0"})
+"""``CREDAL_RATE_LIMIT`` values that turn the rate limit off."""
 MIN_ADMIN_TOKEN_LENGTH = 32
 """An admin token opens every session: at least 32 characters (``secrets.token_urlsafe(24)``)."""
 DEFAULTS = WireLimits()
@@ -156,6 +158,16 @@ class Settings(BaseSettings):
     def _rate_limit_parses(cls, value: str) -> str:
         parse_rates(value)
         return value
+
+
+def parse_rates(text: str) -> list[RateLimitItem]:
+    """The rates of a ``CREDAL_RATE_LIMIT`` value (empty: no limit); ``ValueError`` if malformed."""
+    if text.strip().lower() in UNLIMITED:
+        return []
+    try:
+        return list(parse_many(text))
+    except ValueError as error:
+        raise ValueError(f"rate limit {text!r}: {error}") from None
 
 
 @lru_cache

@@ -31,7 +31,9 @@ import numpy as np
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport, TrackReport
 from app.geo.geodesy import LocalFrame
-from app.sessions.translate import core_detection_report, fusion_config, session_frame_report
+from app.inputs.detections import core_detection_report
+from app.inputs.tracks import session_frame_report
+from app.sessions.translate import fusion_config
 from core.fusion.engine import SessionEngine
 
 TARGETS = 1000

@@ -51,7 +51,7 @@ from starlette.websockets import WebSocketDisconnect
 from websockets.asyncio.client import ClientConnection, connect
 
 from api_schemas.reports import TrackReport
-from api_schemas.ws import client_message_adapter
+from app.inputs import client_messages
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -126,7 +126,7 @@ def bare_app() -> Any:
         await websocket.accept()
         try:
             while True:
-                message = client_message_adapter.validate_json(await websocket.receive_text())
+                message = client_messages().validate_json(await websocket.receive_text())
                 await websocket.send_text(message.model_dump_json())
         except WebSocketDisconnect:
             return

@@ -90,6 +90,47 @@ def test_importing_all_of_core_loads_neither_the_service_nor_the_evaluation() ->
     assert not {"filterpy", "yaml", "tqdm"} & tops
 
 
+WEB_FREE = (
+    "app/errors.py",
+    "app/settings.py",
+    "app/inputs",
+    "app/sessions",
+    "app/stores",
+    "app/cluster",
+    "app/geo",
+    "app/outputs",
+)
+"""The service's domain: errors, settings, input kinds, sessions, stores, cluster, geodesy
+and output writers know nothing of HTTP (the edge, ``app/http`` and ``app/routes``, maps
+their errors to problems)."""
+
+
+def full_imports(path: Path) -> set[str]:
+    """The dotted names of the modules a source file imports (every import statement)."""
+    names: set[str] = set()
+    for statement in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(statement, ast.Import):
+            names.update(alias.name for alias in statement.names)
+        elif isinstance(statement, ast.ImportFrom) and statement.level == 0 and statement.module:
+            names.add(statement.module)
+    return names
+
+
+def test_the_domain_imports_neither_a_web_framework_nor_the_http_edge() -> None:
+    paths = [ROOT / part for part in WEB_FREE]
+    files = [
+        file for path in paths for file in (sorted(path.rglob("*.py")) if path.is_dir() else [path])
+    ]
+    assert len(files) > 10
+    for file in files:
+        web = {
+            name
+            for name in full_imports(file)
+            if name.partition(".")[0] in {"fastapi", "starlette"} or name.startswith("app.http")
+        }
+        assert not web, f"{file.relative_to(ROOT)} imports {sorted(web)}"
+
+
 def test_the_service_runtime_dependencies_cover_its_imports_and_nothing_of_the_figures() -> None:
     runtime = {requirement_name(r) for r in PROJECT["dependencies"]}
     assert not runtime & NEVER_AT_RUNTIME

@@ -138,7 +138,7 @@ class ResultFanout(Protocol):
         ...
 
     async def ping(self) -> None:
-        """Return if results can be published now; :class:`~app.http.errors.StoreUnavailable` if not."""
+        """Return if results can be published now; :class:`~app.errors.StoreUnavailable` if not."""
         ...
 
     async def aclose(self) -> None:

@@ -2,8 +2,8 @@
 
 An event file (``EVENTS.jsonl``) is one JSON object per line: first
 ``{"type": "session", "config": {...}}`` (the resolved session config), then
-every accepted input in order, ``{"type": "tracks" | "detections", "seq": n,
-"report": {...}}`` (the items of ``GET /v1/sessions/{sid}/events``). When the
+every accepted input in order, ``{"type": <input kind>, "seq": n,
+"report": {...}}`` (a tag of :mod:`app.inputs`: ``tracks``, ``detections``) (the items of ``GET /v1/sessions/{sid}/events``). When the
 server had compacted the session's older inputs behind a snapshot, the
 session line is followed by ``{"type": "snapshot", "seq": n, "state": {...}}``
 and the inputs after ``n``: a local replay restores it, then continues.
@@ -26,20 +26,16 @@ import httpx
 from pydantic import BaseModel, ValidationError
 
 from api_schemas.config import SessionConfig
-from api_schemas.reports import DetectionReport, TrackReport
 from app.commands.errors import CommandError, pydantic_line
 from app.commands.progress import shown as progress
 from app.commands.runner import Input, raise_for_problem, run_locally, run_on_server
-from app.http.responses import dumps
+from app.inputs import INPUT_KINDS
+from app.outputs.text import dumps
 
 Body = dict[str, Any]
 
 
-EVENT_LINE = '{"type": "tracks" | "detections", "seq": n, "report": {...}}'
-REPORT_MODELS: dict[str, type[TrackReport] | type[DetectionReport]] = {
-    "tracks": TrackReport,
-    "detections": DetectionReport,
-}
+EVENT_LINE = '{"type": <input kind>, "seq": n, "report": {...}}'
 
 
 def read_events(lines: TextIO) -> tuple[Body, list[Input]]:
@@ -62,8 +58,8 @@ def read_events(lines: TextIO) -> tuple[Body, list[Input]]:
         kind = event.get("type") if isinstance(event, dict) else None
         if kind == "session":
             config = _checked(number, event, "config", SessionConfig)
-        elif kind in REPORT_MODELS:
-            inputs.append((kind, _checked(number, event, "report", REPORT_MODELS[kind])))
+        elif kind in INPUT_KINDS:
+            inputs.append((kind, _checked(number, event, "report", INPUT_KINDS[kind].report_model)))
         elif kind == "snapshot" and not inputs:
             inputs.append((kind, {"seq": event["seq"], "state": event["state"]}))
         else:

@@ -10,53 +10,47 @@ from __future__ import annotations
 import contextlib
 import json
 from collections.abc import Callable, Iterable, Iterator
+from datetime import UTC, datetime
 from typing import Any
 
 import httpx
 
-from api_schemas.config import SessionConfig
-from api_schemas.reports import DetectionReport, TrackReport
+from api_schemas.limits import MAX_SENSORS
 from app.commands.errors import http_failure
-from app.sessions.live import engine_from_snapshot
-from app.sessions.translate import (
-    core_detection_report,
-    fusion_config,
-    session_frame_report,
-    step_json,
-)
-from core.fusion.engine import SessionEngine
+from app.inputs import parse_input
+from app.outputs.json_results import step_json
+from app.sessions.live import new_session, restore_snapshot
+from app.stores import SessionRecord, Snapshot
 
 Body = dict[str, Any]
 Input = tuple[str, Body]
-"""``("tracks" | "detections", report)``, or ``("snapshot", {"seq": n, "state": {...}})``
+"""``(input kind tag, report)`` (:mod:`app.inputs`), or ``("snapshot", {"seq": n, "state": {...}})``
 first, for a history whose older inputs were compacted behind a snapshot."""
 
 
 def run_locally(config: Body, inputs: Iterable[Input]) -> Iterator[Body]:
-    """The results of ``inputs`` applied by an engine in this process (as the server would).
+    """The results of ``inputs`` applied by an engine in this process (as the server would:
+    each input parsed by its kind and checked against the session's config first).
 
     A leading ``snapshot`` input restores the session's state at its ``seq``
     (nothing is yielded for it); the inputs after it continue from there.
     """
-    session = SessionConfig.model_validate(config)
-    engine = SessionEngine(fusion_config(session))
-    seq = 0
+    record = SessionRecord(id="local", config=config, token_hash="", created_at=datetime.now(UTC))
+    session = new_session(record)
     for kind, body in inputs:
         if kind == "snapshot":
-            if seq:
+            if session.seq:
                 raise ValueError("a snapshot can only start a history")
-            _, restored = engine_from_snapshot(session, body["state"], engine.config)
-            engine = restored if restored is not None else engine
-            seq = int(body["seq"])
+            state = Snapshot(seq=int(body["seq"]), taken_at=record.created_at, state=body["state"])
+            restore_snapshot(session, state)
             continue
-        seq += 1
-        if kind == "tracks":
-            step = engine.apply(session_frame_report(TrackReport.model_validate(body), session))
-        else:
-            step = engine.apply_detections(
-                core_detection_report(DetectionReport.model_validate(body), session)
-            )
-        yield json.loads(step_json(step, seq))
+        submitted = parse_input(kind, body)
+        submitted.check(session.config)
+        engine, _ = session.engine_for(submitted.sensor, MAX_SENSORS)
+        applied = submitted.apply(engine, session.config, explain=False)  # a refusal ends the run
+        session.engine = engine
+        session.seq += 1
+        yield json.loads(step_json(applied.step, session.seq))
 
 
 def run_on_server(

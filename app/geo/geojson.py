@@ -38,10 +38,11 @@ def _columns(states: Sequence[State], indices: tuple[int, ...]) -> np.ndarray:
 @dataclass(frozen=True)
 class GeodeticOutput:
     """``?frame=geodetic``: the session's origin frame and which state components are the
-    position; :meth:`points` gives each state's ``geodetic: {lat, lon, alt}``."""
+    position (and the velocity); :meth:`points` gives each state's ``geodetic: {lat, lon, alt}``."""
 
     frame: LocalFrame
     position: tuple[int, ...]
+    velocity: tuple[int, ...] = ()
 
     def points(self, states: Sequence[State]) -> list[dict[str, float]]:
         """``{lat, lon, alt}`` of each state's position, in one vectorised conversion."""
@@ -57,12 +58,10 @@ def with_geodetic(tracks: Sequence[PlainTrack], geodetic: GeodeticOutput) -> lis
     return [{**track, "geodetic": point} for track, point in zip(tracks, points, strict=True)]
 
 
-def feature_collection(
-    tracks: Sequence[PlainTrack], geodetic: GeodeticOutput, velocity_indices: tuple[int, ...]
-) -> dict[str, Any]:
+def feature_collection(tracks: Sequence[PlainTrack], geodetic: GeodeticOutput) -> dict[str, Any]:
     """A FeatureCollection of the tracks' positions (module docstring)."""
     states = [track["state"] for track in tracks]
-    frame = geodetic.frame
+    frame, velocity_indices = geodetic.frame, geodetic.velocity
     positions = frame.to_geodetic(_columns(states, geodetic.position))
     velocities = _columns(states, velocity_indices)
     local = np.einsum("tij,tj->ti", frame.rotation_to(positions[:, 0], positions[:, 1]), velocities)

@@ -1,7 +1,8 @@
-"""Every error answer of the service, as RFC 9457 ``application/problem+json``.
+"""Every error answer of the service, as RFC 9457 ``application/problem+json``: the edge.
 
-The service raises :class:`ServiceError` subclasses (or lets request
-validation, core ``InvalidInput`` and Starlette HTTP errors happen);
+The service raises the errors of :mod:`app.errors` (its one tree, free of
+HTTP frameworks; re-exported here for the edge's code), or lets request
+validation, core ``InvalidInput`` and Starlette HTTP errors happen;
 :func:`install_error_handlers` maps each to a problem document with a
 machine-readable ``type`` (``urn:credal-fusion:problem:<slug>``), a ``title``,
 the ``status``, a human ``detail`` and the request path as ``instance``.
@@ -17,7 +18,7 @@ import logging
 import uuid
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from http import HTTPStatus
-from typing import Any, ClassVar
+from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -26,14 +27,56 @@ from pydantic import ValidationError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from api_schemas.issues import FieldIssue, wire_location
-from api_schemas.keys import allowed_keys
+from api_schemas.issues import wire_location
+from api_schemas.keys import allowed_keys, body_path
 from api_schemas.limits import LIMIT_EXCEEDED
 from api_schemas.problem import FieldError, Problem
+from app.errors import (
+    MAX_LISTED_ERRORS,
+    BodyTooLarge,
+    BodyTooSlow,
+    Conflict,
+    Forbidden,
+    InvalidFields,
+    LimitExceeded,
+    RateLimited,
+    RetryLater,
+    ServiceError,
+    SessionLeased,
+    SessionNotFound,
+    StaleReport,
+    StoreUnavailable,
+    TrackNotFound,
+    Unauthorized,
+    located,
+    pointer,
+)
 from app.http.requests import body_model
 from app.http.responses import dumps
 from core.errors import InvalidInput
-from core.errors import StaleReport as CoreStaleReport
+
+__all__ = [
+    "MAX_LISTED_ERRORS",
+    "BodyTooLarge",
+    "BodyTooSlow",
+    "Conflict",
+    "Forbidden",
+    "InvalidFields",
+    "LimitExceeded",
+    "RateLimited",
+    "RetryLater",
+    "ServiceError",
+    "SessionLeased",
+    "SessionNotFound",
+    "StaleReport",
+    "StoreUnavailable",
+    "TrackNotFound",
+    "Unauthorized",
+    "install_error_handlers",
+    "problem_for",
+    "problem_response",
+    "problem_responses",
+]
 
 PROBLEM_MEDIA_TYPE = "application/problem+json"
 PROBLEM_TYPE_PREFIX = "urn:credal-fusion:problem:"
@@ -51,242 +94,6 @@ class ProblemResponse(JSONResponse):
     """A JSON response with the problem+json media type."""
 
     media_type = PROBLEM_MEDIA_TYPE
-
-
-class ServiceError(Exception):
-    """Base of the errors the service raises on purpose; each knows its status and slug."""
-
-    status: ClassVar[int] = HTTPStatus.INTERNAL_SERVER_ERROR
-    slug: ClassVar[str] = "internal-error"
-    title: ClassVar[str] = "Internal server error"
-
-    def __init__(self, detail: str, **extensions: Any) -> None:
-        super().__init__(detail)
-        self.detail = detail
-        self.extensions = extensions
-
-    @property
-    def status_code(self) -> int:
-        """The HTTP status of this error."""
-        return int(self.status)
-
-    def headers(self) -> dict[str, str]:
-        """Extra response headers."""
-        return {}
-
-    def field_errors(self) -> list[FieldError] | None:
-        """The fields at fault (422s list them; other statuses may)."""
-        return None
-
-
-class SessionNotFound(ServiceError):  # noqa: N818 - HTTP vocabulary
-    """No live session has this id."""
-
-    status = HTTPStatus.NOT_FOUND
-    slug = "session-not-found"
-    title = "Session not found"
-
-    def __init__(self, session_id: str) -> None:
-        super().__init__(f"no session {session_id!r}", session=session_id)
-
-
-class Unauthorized(ServiceError):  # noqa: N818 - HTTP vocabulary
-    """No usable bearer token was given."""
-
-    status = HTTPStatus.UNAUTHORIZED
-    slug = "unauthorized"
-    title = "Missing or malformed bearer token"
-
-    def headers(self) -> dict[str, str]:
-        return {"WWW-Authenticate": 'Bearer realm="credal-fusion"'}
-
-
-class Forbidden(ServiceError):  # noqa: N818 - HTTP vocabulary
-    """The bearer token does not open this resource."""
-
-    status = HTTPStatus.FORBIDDEN
-    slug = "forbidden"
-    title = "Token does not grant access"
-
-
-class Conflict(ServiceError):  # noqa: N818 - HTTP vocabulary
-    """The request conflicts with the session's state (for instance a duplicate sequence number)."""
-
-    status = HTTPStatus.CONFLICT
-    slug = "conflict"
-    title = "Conflict with the session state"
-
-
-class StaleReport(Conflict):
-    """A report older than the session accepts for its sensor; says both times."""
-
-    slug = "stale-report"
-    title = "Stale report"
-
-    def __init__(self, sensor: str, time: float, last_time: float) -> None:
-        super().__init__(
-            f"report of sensor {sensor!r} at time {time!r} is not newer than its last accepted report at time {last_time!r}",
-            sensor=sensor,
-            time=time,
-            last_time=last_time,
-        )
-
-    def field_errors(self) -> list[FieldError] | None:
-        return [_located(CoreStaleReport.loc, self.detail, "stale_report")]
-
-
-class RetryLater(ServiceError):  # noqa: N818 - HTTP vocabulary
-    """A refusal that says when to try again: ``Retry-After`` and ``retry_after`` (seconds)."""
-
-    retry_after_s: int
-
-    def __init__(self, detail: str, retry_after_s: int, **extensions: Any) -> None:
-        super().__init__(detail, **extensions, retry_after=retry_after_s)
-        self.retry_after_s = retry_after_s
-
-    def headers(self) -> dict[str, str]:
-        return {"Retry-After": str(self.retry_after_s)}
-
-
-class SessionLeased(RetryLater):
-    """Another service instance holds the session's lease (it applies the session's inputs)."""
-
-    status = HTTPStatus.SERVICE_UNAVAILABLE
-    slug = "session-leased"
-    title = "Session applied by another instance"
-
-    def __init__(self, session_id: str, retry_after_s: int) -> None:
-        super().__init__(
-            f"session {session_id!r} is applied by another service instance; "
-            f"its lease lapses within {retry_after_s} s if that instance is gone",
-            retry_after_s,
-            session=session_id,
-        )
-
-
-class StoreUnavailable(RetryLater):
-    """The session store cannot be reached (or cannot write): nothing was stored, retry later.
-
-    Raised by the stores for their backend's connection and I/O errors, so an
-    outage answers 503 with ``Retry-After`` and is never mistaken for a bug.
-    """
-
-    status = HTTPStatus.SERVICE_UNAVAILABLE
-    slug = "store-unavailable"
-    title = "Session store unavailable"
-    retry_after_s = 2
-
-    def __init__(self, store: str, reason: str) -> None:
-        super().__init__(
-            f"the {store} store is unavailable ({reason}); nothing was stored, retry later",
-            type(self).retry_after_s,
-            store=store,
-        )
-
-
-class RateLimited(RetryLater):
-    """More requests than ``limit`` allows ``who`` (:mod:`app.http.rate_limit`)."""
-
-    status = HTTPStatus.TOO_MANY_REQUESTS
-    slug = "rate-limited"
-    title = "Too many requests"
-
-    def __init__(self, limit: str, rate: str, who: str, retry_after_s: int) -> None:
-        super().__init__(
-            f"rate limit {limit} = {rate} exceeded for {who}; retry after {retry_after_s} s",
-            retry_after_s,
-            limit=limit,
-            rate=rate,
-        )
-
-
-class BodyTooLarge(ServiceError):  # noqa: N818 - HTTP vocabulary
-    """A request body beyond ``limit`` bytes (:mod:`app.http.body_limits`), refused unparsed."""
-
-    status = HTTPStatus.REQUEST_ENTITY_TOO_LARGE
-    slug = "body-too-large"
-    title = "Body too large"
-
-    def __init__(self, limit: str, maximum: int, declared: int | None) -> None:
-        got = "" if declared is None else f" (Content-Length {declared})"
-        super().__init__(
-            f"request body exceeds limit {limit} = {maximum} bytes{got}",
-            limit=limit,
-            maximum=maximum,
-        )
-
-
-class BodyTooSlow(ServiceError):  # noqa: N818 - HTTP vocabulary
-    """A request body not received within ``limit`` seconds (:mod:`app.http.body_limits`)."""
-
-    status = HTTPStatus.REQUEST_TIMEOUT
-    slug = "body-too-slow"
-    title = "Request body too slow"
-
-    def __init__(self, limit: str, maximum: float, received: int) -> None:
-        super().__init__(
-            f"the request body was not received within limit {limit} = "
-            f"{maximum} s ({received} bytes received)",
-            limit=limit,
-            maximum=maximum,
-        )
-
-
-class TrackNotFound(ServiceError):  # noqa: N818 - HTTP vocabulary
-    """The session has no live fused track with this id."""
-
-    status = HTTPStatus.NOT_FOUND
-    slug = "track-not-found"
-    title = "Track not found"
-
-    def __init__(self, session_id: str, track_id: str) -> None:
-        super().__init__(
-            f"session {session_id!r} has no live fused track {track_id!r}",
-            session=session_id,
-            track=track_id,
-        )
-
-
-class LimitExceeded(ServiceError):  # noqa: N818 - HTTP vocabulary
-    """A configured limit was exceeded; ``limit`` names the setting (``CREDAL_<LIMIT>``)."""
-
-    status = HTTPStatus.UNPROCESSABLE_ENTITY
-    slug = "limit-exceeded"
-    title = "Limit exceeded"
-
-    def __init__(
-        self,
-        limit: str,
-        maximum: float,
-        actual: float | None = None,
-        *,
-        what: str | None = None,
-        status: int | None = None,
-        loc: Sequence[str | int] = (),
-    ) -> None:
-        subject = what or limit
-        detail = f"{subject}: limit {limit} is {maximum}" + (
-            "" if actual is None else f", got {actual}"
-        )
-        super().__init__(detail, limit=limit, maximum=maximum, actual=actual)
-        self._status = int(status) if status is not None else int(type(self).status)
-        self.loc = tuple(loc)
-
-    def field_errors(self) -> list[FieldError] | None:
-        return [_located(self.loc, self.detail, LIMIT_EXCEEDED)]
-
-    @property
-    def status_code(self) -> int:
-        return self._status
-
-
-def _pointer(loc: Sequence[str | int], error_type: str) -> str:
-    """A JSON pointer (as a URI fragment) into the body; ``#`` for the whole body."""
-    if error_type == "json_invalid":
-        return "#"
-    parts = list(loc[1:]) if loc and loc[0] == "body" else list(loc)
-    escaped = [str(part).replace("~", "~0").replace("/", "~1") for part in parts]
-    return "#/" + "/".join(escaped) if escaped else "#"
 
 
 LIBRARY_PREFIXES = ("Value error, ", "Assertion failed, ")
@@ -329,31 +136,20 @@ def field_errors(errors: Iterable[Mapping[str, Any]], root: object = None) -> li
 
     ``root`` is the type the body was validated as (it names the keys an object allows).
     """
-    return [
-        FieldError(
-            loc=list(error.get("loc", ())),
-            pointer=_pointer(list(error.get("loc", ())), str(error.get("type", ""))),
-            detail=_detail(error, root),
-            type=str(error.get("type", "value_error")),
+    found = []
+    for error in errors:
+        loc = list(error.get("loc", ()))
+        if root is not None:
+            loc = body_path(root, loc)  # where the value is in the body: no union tags
+        found.append(
+            FieldError(
+                loc=loc,
+                pointer=pointer(loc, str(error.get("type", ""))),
+                detail=_detail(error, root),
+                type=str(error.get("type", "value_error")),
+            )
         )
-        for error in errors
-    ]
-
-
-def request_validation_error(
-    issues: Sequence[FieldIssue], *, prefix: str = "body"
-) -> RequestValidationError:
-    """A request validation error for ``issues`` found after parsing (locations under ``prefix``)."""
-    return RequestValidationError(
-        [
-            {"loc": (prefix, *issue.loc), "msg": issue.message, "type": issue.kind}
-            for issue in issues
-        ]
-    )
-
-
-MAX_LISTED_ERRORS = 50
-"""Default of ``max_listed_errors``: a 422 lists at most this many errors (``error_count`` has all)."""
+    return found
 
 
 def _validation_detail(errors: list[FieldError], total: int) -> str:
@@ -396,11 +192,6 @@ def _validation_problem(
     )
 
 
-def _located(loc: Sequence[str | int], detail: str, kind: str) -> FieldError:
-    full = ["body", *loc] if loc else []
-    return FieldError(loc=full, pointer=_pointer(full, kind), detail=detail, type=kind)
-
-
 def problem_for(
     error: Exception,
     instance: str | None = None,
@@ -413,7 +204,7 @@ def problem_for(
     ``listed`` caps the listed validation errors; ``root`` is the type the body was
     validated as (it names the keys an object allows).
     """
-    if isinstance(error, RequestValidationError | ValidationError):
+    if isinstance(error, RequestValidationError | ValidationError | InvalidFields):
         return _validation_problem(list(error.errors()), instance, listed, root)
     if isinstance(error, ServiceError):
         return Problem(
@@ -433,7 +224,7 @@ def problem_for(
             status=HTTPStatus.UNPROCESSABLE_ENTITY,
             detail=str(error),
             instance=instance,
-            errors=[_located(wire_location(error.loc), str(error), "invalid_input")],
+            errors=[located(wire_location(error.loc), str(error), "invalid_input")],
         )
     if isinstance(error, StarletteHTTPException):
         status = HTTPStatus(error.status_code)

@@ -33,7 +33,7 @@ import time
 import uuid
 from collections.abc import Callable
 
-from limits import RateLimitItem, RateLimitItemPerSecond, parse_many
+from limits import RateLimitItem, RateLimitItemPerSecond
 from limits.aio.storage import MemoryStorage
 from limits.aio.strategies import SlidingWindowCounterRateLimiter
 from limits.storage import MemoryStorage as ThreadSafeMemoryStorage
@@ -46,18 +46,7 @@ from app.http.errors import RateLimited, problem_response
 from app.http.security import hash_token
 
 RATE_LIMIT = "rate_limit"
-UNLIMITED = frozenset({"", "none", "off", "0"})
 EXEMPT_PATHS = frozenset({"/healthz"})
-
-
-def parse_rates(text: str) -> list[RateLimitItem]:
-    """The rates of a ``CREDAL_RATE_LIMIT`` value (empty: no limit); ``ValueError`` if malformed."""
-    if text.strip().lower() in UNLIMITED:
-        return []
-    try:
-        return list(parse_many(text))
-    except ValueError as error:
-        raise ValueError(f"rate limit {text!r}: {error}") from None
 
 
 def _rate_text(item: RateLimitItem) -> str:

@@ -1,108 +1,79 @@
-"""Inputs and the fused picture of a session: ``/v1/sessions/{sid}/tracks`` and ``…/detections``."""
+"""The fused picture of a session: ``GET /v1/sessions/{sid}/tracks`` and ``…/tracks/{tid}``
+(its inputs: :mod:`app.routes.inputs`), and the output parameters every answer of fused tracks
+takes: ``format`` (a registered output format, :mod:`app.outputs`) and ``frame``."""
 
 from __future__ import annotations
 
-import functools
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Path, Query
-from fastapi.responses import Response
 
 from api_schemas.base import FiniteFloat
 from api_schemas.config import SessionConfig
-from api_schemas.issues import FieldIssue
-from api_schemas.reports import DetectionReport, TrackReport
-from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
-from app.geo.geojson import GEOJSON_MEDIA_TYPE, GeodeticOutput, with_geodetic
-from app.http.deps import CurrentSessionDep, LiveSessionDep, RegistryDep
-from app.http.errors import (
-    TrackNotFound,
-    problem_responses,
-    request_validation_error,
-)
+from api_schemas.results import FusedTrackDetail
+from app.errors import TrackNotFound
+from app.geo.geojson import with_geodetic
+from app.http.deps import CurrentSessionDep, RegistryDep
+from app.http.errors import problem_responses
 from app.http.requests import WireRoute
 from app.http.responses import JSONTextResponse
-from app.sessions.translate import picture_geojson, picture_json, session_geodetic, wire_json
+from app.outputs import FRAMES, OUTPUT_FORMATS, Output, output_for
+from app.outputs.json_results import wire_json
+from app.sessions.translate import session_geodetic
 
 router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
 
+SCHEMA_REF = "#/components/schemas/{model}"
 TrackId = Annotated[str, Path(min_length=1, max_length=64, description="A fused track id.")]
 OutputFrame = Annotated[
-    Literal["session", "geodetic"],
-    Query(description="geodetic: add geodetic {lat, lon, alt} to each fused track (needs origin)"),
+    str,
+    Query(
+        description="geodetic: add geodetic {lat, lon, alt} to each fused track (needs origin)",
+        json_schema_extra={"enum": list(FRAMES)},
+    ),
+]
+OutputFormat = Annotated[
+    str,
+    Query(
+        description="; ".join(f"{name}: {f.description}" for name, f in OUTPUT_FORMATS.items()),
+        json_schema_extra={"enum": list(OUTPUT_FORMATS)},
+    ),
 ]
 
 
-def geodetic_output(config: SessionConfig, parameter: str) -> GeodeticOutput:
-    """The session's origin frame, for geodetic positions, or a 422 at the query
-    ``parameter``: the session has none."""
-    geodetic = session_geodetic(config)
-    if geodetic is None:
-        raise request_validation_error(
-            [FieldIssue((parameter,), "the session has no origin: geodetic output needs one")],
-            prefix="query",
-        )
-    return geodetic
+def output_of(config: SessionConfig, format: str = "json", frame: str = "session") -> Output:
+    """The output asked (``format``, ``frame``) of a session with ``config`` (422 at the query
+    parameter it cannot have: :func:`app.outputs.output_for`)."""
+    return output_for(session_geodetic(config), format, frame)
 
 
-@router.post(
-    "/{sid}/tracks",
-    response_model=StepResult,
-    responses=problem_responses(401, 403, 404, 409, 408, 413, 422, 503),
-)
-async def submit_tracks(
-    report: TrackReport,
-    session: LiveSessionDep,
-    registry: RegistryDep,
-    explain: Annotated[
-        bool, Query(description="add the association method's score matrix")
-    ] = False,
-    frame: OutputFrame = "session",
-) -> JSONTextResponse:
-    """One sensor's track list → the fused result of that step (acknowledged once logged).
-
-    409 ``stale-report`` (with ``time`` and ``last_time``) for a report not
-    newer than the sensor's previous one.
-    """
-    # refused before anything is applied
-    geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
-    return JSONTextResponse(
-        await registry.submit(session, report, explain=explain, geodetic=geodetic)
+def output_responses(
+    answer: Literal["step", "picture"], *statuses: int
+) -> dict[int | str, dict[str, Any]]:
+    """OpenAPI ``responses``: the problems, and the 200 answer under every registered format's
+    media type. The answer's shape depends on ``format`` (a query parameter, which OpenAPI
+    cannot tie a schema to), so each media type lists the formats' models as ``oneOf``, the
+    route's ``response_model`` first: a generated client reads every format."""
+    models = [
+        output.step_model if answer == "step" else output.picture_model
+        for output in OUTPUT_FORMATS.values()
+    ]
+    schema = {"oneOf": [{"$ref": SCHEMA_REF.format(model=model.__name__)} for model in models]}
+    content = {output.media_type: {"schema": schema} for output in OUTPUT_FORMATS.values()}
+    described = ", ".join(
+        f"{name}: {model.__name__} ({output.media_type})"
+        for (name, output), model in zip(OUTPUT_FORMATS.items(), models, strict=True)
     )
-
-
-@router.post(
-    "/{sid}/detections",
-    response_model=StepResult,
-    responses=problem_responses(401, 403, 404, 409, 408, 413, 422, 503),
-)
-async def submit_detections(
-    report: DetectionReport,
-    session: LiveSessionDep,
-    registry: RegistryDep,
-    explain: Annotated[bool, Query(description="add the association score matrix")] = False,
-    frame: OutputFrame = "session",
-) -> JSONTextResponse:
-    """One sensor's detections → the fused result of that step.
-
-    The session's local tracker for that sensor (configured by its
-    ``measurement`` model and ``tracking``) updates its tracks; its confirmed
-    tracks updated by this scan enter the fusion step like a track list.
-    409 ``stale-report`` when the batch is not newer than the sensor's
-    previous input (scans may come at any increasing times, on no grid);
-    422 for a sensor without a measurement model.
-    """
-    # refused before anything is applied
-    geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
-    return JSONTextResponse(
-        await registry.submit(session, report, explain=explain, geodetic=geodetic)
-    )
+    return {
+        **problem_responses(*statuses),
+        200: {"description": f"The answer in the format asked ({described})", "content": content},
+    }
 
 
 @router.get(
     "/{sid}/tracks",
-    response_model=FusedPicture,
-    responses=problem_responses(401, 403, 404, 422, 503),
+    response_model=None,  # the formats' models: output_responses
+    responses=output_responses("picture", 401, 403, 404, 422, 503),
 )
 async def list_fused_tracks(
     session: CurrentSessionDep,
@@ -112,11 +83,8 @@ async def list_fused_tracks(
         Query(description="predict the tracks to this time (default: the fusion time)"),
     ] = None,
     frame: OutputFrame = "session",
-    format: Annotated[
-        Literal["json", "geojson"],
-        Query(description="geojson: an application/geo+json FeatureCollection (needs origin)"),
-    ] = "json",
-) -> Response:
+    format: OutputFormat = "json",
+) -> JSONTextResponse:
     """The live fused tracks (not terminated), optionally predicted to ``time``.
 
     ``frame=geodetic`` adds ``geodetic: {lat, lon, alt}`` to each track;
@@ -124,18 +92,9 @@ async def list_fused_tracks(
     (``[lon, lat, alt]``; id, status, decision, BetP and ENU velocity as
     properties). Both need the session's ``origin`` (else 422).
     """
-    config = session.config
-    if format == "geojson":
-        geodetic = geodetic_output(config, "format")
-        velocity = tuple(config.state.velocity)
-        text = await registry.picture(
-            session, time, lambda _seq, _time, views: picture_geojson(views, geodetic, velocity)
-        )
-        return JSONTextResponse(text, media_type=GEOJSON_MEDIA_TYPE)
-    if frame == "geodetic":
-        write = functools.partial(picture_json, geodetic=geodetic_output(config, "frame"))
-        return JSONTextResponse(await registry.picture(session, time, write))
-    return JSONTextResponse(await registry.picture(session, time))
+    output = output_of(session.config, format, frame)
+    text = await registry.picture(session, time, output)
+    return JSONTextResponse(text, media_type=output.media_type)
 
 
 @router.get(
@@ -155,7 +114,7 @@ async def get_fused_track(
     each history point (needs the session's ``origin``, else 422); their
     ``state`` stays in the session frame.
     """
-    geodetic = geodetic_output(session.config, "frame") if frame == "geodetic" else None
+    geodetic = output_of(session.config, "json", frame).geodetic
     detail = await registry.track_detail(session, tid)
     if detail is None:
         raise TrackNotFound(session.id, tid)

@@ -34,7 +34,7 @@ from app.http.requests import WireRoute
 from app.http.responses import JSONTextResponse, dumps, itemwise
 from app.http.security import hash_token, issue_token
 from app.runtime import collection_paused
-from app.sessions.live import LiveSession
+from app.sessions.live import LiveSession, new_session
 from app.sessions.log import event_json
 from app.stores import SessionRecord, Store
 from app.stores.base import history
@@ -60,7 +60,6 @@ def create_session(
     metrics: MetricsDep,
 ) -> JSONTextResponse:
     """Create a session from a config; returns its id, its token (shown only here) and the resolved config."""
-    registry.check_config(config)
     token = issue_token()
     record = SessionRecord(
         id=uuid.uuid4().hex,
@@ -68,11 +67,15 @@ def create_session(
         token_hash=hash_token(token),
         created_at=datetime.now(UTC),
     )
+    session = new_session(record, config)  # converted once; a config the engine refuses: 422
     # counted and created in one step of the store: instances sharing it keep the limit
     store.create_session(record, max_sessions=settings.max_sessions)
-    registry.add(record)
+    registry.add(session)
     metrics.sessions.set(store.count_sessions())
-    created = SessionCreated(id=record.id, token=token, config=config, created_at=record.created_at)
+    # the validated config as it is (constructing the answer would validate it once more)
+    created = SessionCreated.model_construct(
+        id=record.id, token=token, config=config, created_at=record.created_at
+    )
     # written here, in the worker thread: the resolved config of 64 fields of view is ~1 MB
     return JSONTextResponse(created.model_dump_json(), status_code=HTTPStatus.CREATED)
 

@@ -21,11 +21,13 @@ closes a subscription with 1000 "session ended" when the session is deleted
 or expires, and with 1013 "store unavailable" when the store (or its
 pub/sub connection) fails: subscribe again once ``/readyz`` is ready.
 
-Both channels take the query parameter ``frame`` on connect, as the REST
-inputs and reads do: ``geodetic`` adds ``geodetic: {lat, lon, alt}`` to every
-fused track of every ``result`` sent on that connection (the session needs an
-``origin``; otherwise, or for another value, the upgrade is refused with the
-422 problem naming ``query/frame``).
+Both channels take the query parameters ``format`` and ``frame`` on connect,
+as the REST inputs and reads do (:func:`app.outputs.output_for`): every
+``result`` sent on that connection is written in that output (``frame=geodetic``
+adds ``geodetic: {lat, lon, alt}`` to every fused track, ``format=geojson``
+makes each result a FeatureCollection); the session needs an ``origin`` for
+either, and an unknown value or a geodetic output without one refuses the
+upgrade with the 422 problem naming ``query/frame`` or ``query/format``.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from __future__ import annotations
 import functools
 import json
 import logging
+from typing import Any
 
 import anyio
 import orjson
@@ -43,10 +46,9 @@ from starlette.websockets import WebSocketDisconnect
 
 from api_schemas.issues import FieldIssue
 from api_schemas.problem import Problem
-from api_schemas.ws import DetectionsMessage, TracksMessage, client_message_adapter
-from app.geo.geojson import GeodeticOutput, with_geodetic
 from app.http.deps import open_record
 from app.http.errors import (
+    InvalidFields,
     LimitExceeded,
     ServiceError,
     StoreUnavailable,
@@ -54,16 +56,18 @@ from app.http.errors import (
     error_message,
     problem_for,
     problem_response,
-    request_validation_error,
 )
 from app.http.rate_limit import MessageRate
 from app.http.requests import OFFLOAD_BYTES, WireRoute, json_error, parse_json
-from app.http.responses import dumps, itemwise
-from app.routes.fusion import geodetic_output
+from app.inputs import DECODED_KINDS, INPUT_KINDS, client_messages, message_input
+from app.outputs import JSON, Output
+from app.outputs.text import dumps
+from app.routes.fusion import output_of
 from app.runtime import collection_paused, without_collection
 from app.sessions.hub import STORE_UNAVAILABLE, Ending, Published
 from app.sessions.live import LiveSession
-from app.sessions.registry import SessionRegistry, result_message
+from app.sessions.pipeline import result_message
+from app.sessions.registry import SessionRegistry
 
 router = APIRouter(prefix="/v1/sessions", route_class=WireRoute)
 logger = logging.getLogger("credal_fusion.streams")
@@ -73,7 +77,6 @@ OUTBOX_SIZE = 16
 POLICY_VIOLATION = 1008
 BEARER_SUBPROTOCOL = "bearer"
 """Browsers offer the token as the subprotocols ``["bearer", token]``; the server accepts ``bearer``."""
-MESSAGE_TAGS = ("tracks", "detections")
 DISCONNECTED = (WebSocketDisconnect, OSError, anyio.ClosedResourceError, anyio.BrokenResourceError)
 """What a peer that went away raises on our side (uvicorn's ClientDisconnected is an OSError)."""
 
@@ -101,30 +104,22 @@ def _subprotocol(websocket: WebSocket) -> str | None:
     return BEARER_SUBPROTOCOL if offered.split(",")[0].strip() == BEARER_SUBPROTOCOL else None
 
 
-OUTPUT_FRAMES = ("session", "geodetic")
+def _output(websocket: WebSocket, session: LiveSession) -> Output:
+    """The output the connection asks for (``?format=…&frame=…``, as the REST routes take)."""
+    query = websocket.query_params
+    return output_of(session.config, query.get("format", "json"), query.get("frame", "session"))
 
 
-def _output_frame(websocket: WebSocket, session: LiveSession) -> GeodeticOutput | None:
-    """The session's geodetic output when the connection asks ``?frame=geodetic``, else None."""
-    frame = websocket.query_params.get("frame", "session")
-    if frame not in OUTPUT_FRAMES:
-        raise request_validation_error(
-            [FieldIssue(("frame",), f"frame is one of {list(OUTPUT_FRAMES)}", frame)],
-            prefix="query",
-        )
-    return geodetic_output(session.config, "frame") if frame == "geodetic" else None
-
-
-async def _open(websocket: WebSocket, sid: str) -> tuple[LiveSession, GeodeticOutput | None] | None:
-    """The session (and the output frame the connection asks for) if the upgrade request may
-    open it; otherwise refuse the upgrade."""
+async def _open(websocket: WebSocket, sid: str) -> tuple[LiveSession, Output] | None:
+    """The session (and the output the connection asks for) if the upgrade request may open
+    it; otherwise refuse the upgrade."""
     app = websocket.app
     registry: SessionRegistry = app.state.registry
     try:
         token = _bearer(websocket)
         record = open_record(sid, await registry.record(sid), token, app.state.settings)
         session = await registry.current(await registry.get(record.id))
-        return session, _output_frame(websocket, session)
+        return session, _output(websocket, session)
     except (ServiceError, RequestValidationError) as error:
         path = websocket.url.path
         if "websocket.http.response" in websocket.scope.get("extensions", {}):
@@ -135,30 +130,28 @@ async def _open(websocket: WebSocket, sid: str) -> tuple[LiveSession, GeodeticOu
         return None
 
 
-async def _in_frame(published: Published, geodetic: GeodeticOutput | None) -> str:
-    """A published result's message in a subscriber's frame: written beside the step (a
-    geodetic subscriber of this instance was there before it), else converted here (a
-    result forwarded from another instance through Redis): parsing a 10 MB result holds the
-    GIL ~300 ms, a cost the geodetic text written beside the step avoids."""
-    if geodetic is None:
-        return published.text
-    if published.geodetic is not None:
-        return published.geodetic
-    convert = functools.partial(geodetic_message, published.text, geodetic)
+async def _in_output(published: Published, output: Output) -> str:
+    """A published result's message in a subscriber's output: written beside the step (a
+    subscriber of this instance was there before it), else converted here (a result forwarded
+    from another instance through Redis): parsing a 10 MB result holds the GIL ~300 ms, a cost
+    the text written beside the step avoids."""
+    written = published.texts.get(output)
+    if written is not None:
+        return written
+    convert = functools.partial(converted_message, published.text, output)
     if len(published.text) > OFFLOAD_BYTES:
         return await anyio.to_thread.run_sync(without_collection(convert))
     return convert()
 
 
-def geodetic_message(message: str, geodetic: GeodeticOutput) -> str:
-    """A hub message with ``geodetic`` added to its result's tracks (other messages as they
-    are), written a track at a time."""
+def converted_message(message: str, output: Output) -> str:
+    """A hub message (the contract's JSON) with its result written as ``output`` (other
+    messages as they are), a track at a time."""
     document = orjson.loads(message)
     if document.get("type") != "result":
         return message
-    result = document["result"]
-    result["tracks"] = with_geodetic(result["tracks"], geodetic)
-    return itemwise(document)
+    result = output.from_plain(document["result"])
+    return f'{{"type":"result","ref":{dumps(document["ref"])},"result":{result}}}'
 
 
 def _ack(session: LiveSession) -> str:
@@ -171,17 +164,14 @@ def _ref_of(document: object) -> str | None:
     return ref if isinstance(ref, str) and 0 < len(ref) <= 128 else None
 
 
-MESSAGE_TYPES = {"tracks": TracksMessage, "detections": DetectionsMessage}
-
-
 def _message_problem(error: ValidationError, path: str, document: object, listed: int) -> Problem:
     """A validation problem located in the message (the union's tag is left out of the path)."""
     errors = []
-    allowed = " or ".join(repr(tag) for tag in MESSAGE_TAGS)
+    allowed = " or ".join(repr(tag) for tag in INPUT_KINDS)
     for entry in error.errors():
         loc = list(entry.get("loc", ()))
         message = entry.get("msg", "")
-        if loc and loc[0] in MESSAGE_TAGS:
+        if loc and loc[0] in INPUT_KINDS:
             loc = loc[1:]
         elif entry.get("type") == "union_tag_not_found":  # pydantic: "Unable to extract tag …"
             loc, message = ["type"], f"Field required: every message has a 'type', {allowed}"
@@ -190,7 +180,8 @@ def _message_problem(error: ValidationError, path: str, document: object, listed
             loc, message = ["type"], f"{tag!r} is not a message type: 'type' is {allowed}"
         errors.append({**entry, "loc": tuple(loc), "msg": message})
     kind = document.get("type") if isinstance(document, dict) else None
-    root = MESSAGE_TYPES.get(kind) if isinstance(kind, str) else None
+    found = INPUT_KINDS.get(kind) if isinstance(kind, str) else None
+    root = None if found is None else found.message_model
     return problem_for(RequestValidationError(errors), path, listed=listed, root=root)
 
 
@@ -198,14 +189,14 @@ def _refusal(error: ServiceError, path: str) -> str:
     return error_message(problem_for(error, path), None)
 
 
-def _client_message(text: str, path: str, listed: int) -> TracksMessage | DetectionsMessage | str:
+def _client_message(text: str, path: str, listed: int) -> Any:
     """``text`` parsed and validated as a client message, or the ``error`` message answering it."""
     try:
         document = parse_json(text)
     except json.JSONDecodeError as error:
         return error_message(problem_for(json_error(error.msg, error.pos, ()), path), None)
     try:
-        return client_message_adapter.validate_python(document)
+        return client_messages().validate_python(document)
     except ValidationError as error:
         problem = _message_problem(error, path, document, listed)
         return error_message(problem, _ref_of(document))
@@ -216,10 +207,10 @@ async def _answer(
     registry: SessionRegistry,
     text: str,
     path: str,
-    geodetic: GeodeticOutput | None = None,
+    output: Output = JSON,
 ) -> str:
-    """The one answer (``result`` or ``error``) to one client message (``geodetic``: with the
-    tracks' geodetic positions). A message larger than ``OFFLOAD_BYTES`` is parsed and
+    """The one answer (``result`` or ``error``) to one client message (its result written as
+    ``output``). A message larger than ``OFFLOAD_BYTES`` is parsed and
     validated in a worker thread, as a REST body is."""
     read = functools.partial(_client_message, text, path, registry.settings.max_listed_errors)
     if len(text) > OFFLOAD_BYTES:
@@ -232,10 +223,55 @@ async def _answer(
     try:
         if session.closed:  # evicted (store down, or a failed step): the registry reloads it
             session = await registry.get(session.id)
-        result = await registry.submit(session, message.report(), geodetic=geodetic)
+        result = await registry.submit(session, message_input(message), output=output)
     except Exception as error:  # every failure is answered; the connection stays open
         return error_message(problem_for(error, path), message.ref)
     return result_message(result, message.ref)
+
+
+def _looks_like_json(data: bytes) -> bool:
+    """Whether a binary message is JSON text (as a text message is read) rather than the bytes
+    of a decoded kind (ASTERIX: its first byte is a category, never ``{`` or ``[`` here)."""
+    start = data.lstrip()[:1]
+    return not DECODED_KINDS or start in (b"{", b"[") or not data
+
+
+async def _decoded_answer(
+    websocket: WebSocket,
+    session: LiveSession,
+    data: bytes,
+    path: str,
+    output: Output,
+) -> str:
+    """The answer to a binary message: bytes of a decoded kind (``?decode=TAG``, default the
+    first registered), with that kind's parameters in the connection's query."""
+    registry: SessionRegistry = websocket.app.state.registry
+    query = websocket.query_params
+    tag = query.get("decode", next(iter(DECODED_KINDS)))
+    try:
+        kind = DECODED_KINDS.get(tag)
+        if kind is None:
+            raise InvalidFields(
+                [FieldIssue(("decode",), f"decode is one of {list(DECODED_KINDS)}", tag)],
+                prefix="query",
+            )
+        fields = {name: query[name] for name in kind.parameters.model_fields if name in query}
+        try:
+            parameters = kind.parameters.model_validate(fields)
+        except ValidationError as error:
+            raise InvalidFields(
+                [
+                    FieldIssue(tuple(entry["loc"]), entry["msg"], None, entry["type"])
+                    for entry in error.errors()
+                ],
+                prefix="query",
+            ) from None
+        if session.closed:
+            session = await registry.get(session.id)
+        answer = await registry.submit_decoded(session, kind, data, parameters, output=output)
+    except Exception as error:  # every failure is answered; the connection stays open
+        return error_message(problem_for(error, path), None)
+    return f'{{"type":"{kind.tag}_result","ref":null,"result":{answer}}}'
 
 
 @router.websocket("/{sid}/stream")
@@ -244,7 +280,7 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
     opened = await _open(websocket, sid)
     if opened is None:
         return
-    session, geodetic = opened
+    session, output = opened
     registry: SessionRegistry = websocket.app.state.registry
     path = websocket.url.path
     await websocket.accept(subprotocol=_subprotocol(websocket))
@@ -261,12 +297,16 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
                 if incoming["type"] == "websocket.disconnect":
                     return
                 text = incoming.get("text")
+                data = b""
                 if text is None:
-                    text = bytes(incoming.get("bytes") or b"").decode("utf-8", errors="replace")
-                if len(text) > settings.max_body_bytes:
+                    data = bytes(incoming.get("bytes") or b"")
+                    if _looks_like_json(data):
+                        text, data = data.decode("utf-8", errors="replace"), b""
+                size = len(data) if text is None else len(text)
+                if size > settings.max_body_bytes:
                     answer = _refusal(
                         LimitExceeded(
-                            "max_body_bytes", settings.max_body_bytes, len(text), what="message"
+                            "max_body_bytes", settings.max_body_bytes, size, what="message"
                         ),
                         path,
                     )
@@ -280,8 +320,10 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
                         ),
                         path,
                     )
+                elif text is None:
+                    answer = await _decoded_answer(websocket, session, data, path, output)
                 else:
-                    answer = await _answer(session, registry, text, path, geodetic)
+                    answer = await _answer(session, registry, text, path, output)
                 await send.send(answer)
 
     async def writer() -> None:
@@ -303,12 +345,12 @@ async def subscribe_session(websocket: WebSocket, sid: str) -> None:
     opened = await _open(websocket, sid)
     if opened is None:
         return
-    session, geodetic = opened
+    session, output = opened
     registry: SessionRegistry = websocket.app.state.registry
     await websocket.accept(subprotocol=_subprotocol(websocket))
     try:
         # in place before the ack: nothing missed
-        subscriber = await registry.subscribe(session, geodetic=geodetic is not None)
+        subscriber = await registry.subscribe(session, output)
     except StoreUnavailable:
         await websocket.close(code=STORE_UNAVAILABLE.code, reason=STORE_UNAVAILABLE.reason)
         return
@@ -316,7 +358,7 @@ async def subscribe_session(websocket: WebSocket, sid: str) -> None:
 
     async def pump() -> None:
         while not isinstance(published := await subscriber.next(), Ending):
-            await websocket.send_text(await _in_frame(published, geodetic))
+            await websocket.send_text(await _in_output(published, output))
         await websocket.close(code=published.code, reason=published.reason)
 
     try:

@@ -6,10 +6,10 @@ slow subscriber skips ahead to the latest state (the ``seq`` numbers show the
 gap) and a fast one receives every result in order. Everything runs on the
 event loop thread.
 
-A result is published as a :class:`Published`: its message text, and the same
-message with the tracks' geodetic positions when a subscriber of this
-instance asked for them (``?frame=geodetic``) before the step was applied
-(written beside the step, in its worker thread).
+A result is published as a :class:`Published`: its message text in each
+output (:class:`~app.outputs.base.Output`) a subscriber of this instance asked
+for (``?format=…&frame=…``) before the step was applied (written beside the
+step, in its worker thread), and always as the contract's JSON.
 
 A subscription ends with an :class:`Ending`, the WebSocket close code and
 reason its subscriber is told: the session ended (1000), or the store is
@@ -20,7 +20,10 @@ the store is back).
 from __future__ import annotations
 
 import asyncio
+from collections.abc import Mapping
 from dataclasses import dataclass
+
+from app.outputs import JSON, Output
 
 SUBSCRIBER_QUEUE = 64
 """Results kept for a subscriber that has not read them yet."""
@@ -42,19 +45,23 @@ SESSION_RELOADED = Ending(1013, "session reloaded from the store")
 
 @dataclass(frozen=True)
 class Published:
-    """A ``result`` message: its text, and with geodetic positions if written (else ``None``)."""
+    """A ``result`` message in each output it was written in (:data:`~app.outputs.JSON` always)."""
 
-    text: str
-    geodetic: str | None = None
+    texts: Mapping[Output, str]
+
+    @property
+    def text(self) -> str:
+        """The message with the contract's JSON result in the session frame."""
+        return self.texts[JSON]
 
 
 class Subscriber:
-    """One subscriber's queue of results, closed by an :class:`Ending`; ``geodetic``: it wants
-    the tracks' geodetic positions."""
+    """One subscriber's queue of results, closed by an :class:`Ending`; ``output``: how it wants
+    them written."""
 
-    def __init__(self, capacity: int = SUBSCRIBER_QUEUE, *, geodetic: bool = False) -> None:
+    def __init__(self, capacity: int = SUBSCRIBER_QUEUE, *, output: Output = JSON) -> None:
         self.queue: asyncio.Queue[Published | Ending] = asyncio.Queue(maxsize=capacity)
-        self.geodetic = geodetic
+        self.output = output
         self.dropped = 0
         self.closed = False
 
@@ -80,15 +87,15 @@ class Hub:
     def __init__(self) -> None:
         self._subscribers: set[Subscriber] = set()
 
-    def subscribe(self, capacity: int = SUBSCRIBER_QUEUE, *, geodetic: bool = False) -> Subscriber:
+    def subscribe(self, capacity: int = SUBSCRIBER_QUEUE, *, output: Output = JSON) -> Subscriber:
         """A new subscriber that receives every message published from now on."""
-        subscriber = Subscriber(capacity, geodetic=geodetic)
+        subscriber = Subscriber(capacity, output=output)
         self._subscribers.add(subscriber)
         return subscriber
 
-    def wants_geodetic(self) -> bool:
-        """Whether a subscriber wants geodetic positions (then the steps write them too)."""
-        return any(subscriber.geodetic for subscriber in self._subscribers)
+    def outputs(self) -> set[Output]:
+        """The outputs the subscribers want (the steps write each of them too)."""
+        return {subscriber.output for subscriber in self._subscribers}
 
     def unsubscribe(self, subscriber: Subscriber) -> None:
         """Stop delivering to ``subscriber``."""

@@ -13,11 +13,12 @@ from datetime import datetime
 
 from api_schemas.config import SessionConfig
 from api_schemas.limits import CEILINGS, limits_of
+from app.errors import LimitExceeded
 from app.sessions.hub import Hub
 from app.sessions.translate import PlainObject, class_frame, fusion_config
 from app.stores import SessionRecord, Snapshot
 from core.belief import Frame
-from core.fusion.config import FusionConfig
+from core.fusion.config import SensorSpec
 from core.fusion.engine import SessionEngine
 from core.fusion.track import FusedTrack
 
@@ -32,7 +33,6 @@ class LiveSession:
     """Its identity and token hash; the raw config is not kept here (``config`` holds it
     validated: a config of 64 polygon fields of view is 64 000 lists as JSON data)."""
     config: SessionConfig
-    fusion: FusionConfig | None
     frame: Frame | None
     engine: SessionEngine | None
     seq: int = 0
@@ -58,9 +58,9 @@ class LiveSession:
     @property
     def joined_sensors(self) -> list[str]:
         """Sensors that joined an open session, in order of arrival."""
-        if not self.open_sensors or self.fusion is None:
+        if not self.open_sensors or self.engine is None:
             return []
-        return [sensor.id for sensor in self.fusion.sensors]
+        return [sensor.id for sensor in self.engine.config.sensors]
 
     @property
     def time(self) -> float | None:
@@ -91,6 +91,21 @@ class LiveSession:
         """When the session last received an input (or was created)."""
         return self.last_input_at or self.record.created_at
 
+    def engine_for(self, sensor: str, max_sensors: int) -> tuple[SessionEngine, bool]:
+        """The engine to apply an input of ``sensor`` to, and whether ``sensor`` joined it just
+        now: an open session seeing a sensor first (at most ``max_sensors``) joins it to its
+        engine in place (:meth:`SessionEngine.join`: no export and restore; the caller undoes
+        it with ``engine.leave`` if the input is refused), or builds its first engine."""
+        if self.engine is not None and (not self.open_sensors or sensor in self.joined_sensors):
+            return self.engine, False
+        joined = self.joined_sensors
+        if len(joined) >= max_sensors:
+            raise LimitExceeded("max_sensors", max_sensors, len(joined) + 1, what="sensors")
+        if self.engine is None:  # the first input of an open session
+            return SessionEngine(fusion_config(self.config, [sensor])), False
+        self.engine.join(SensorSpec(id=sensor))
+        return self.engine, True
+
     def snapshot_state(self) -> PlainObject:
         """What a snapshot keeps: the engine export and the service's counters."""
         return {
@@ -102,38 +117,42 @@ class LiveSession:
         }
 
 
-def new_session(record: SessionRecord) -> LiveSession:
-    with limits_of(CEILINGS):  # a stored config stays readable if the limits were lowered
-        config = SessionConfig.model_validate(record.config)
-    fusion = fusion_config(config) if config.sensors else None
+def new_session(record: SessionRecord, config: SessionConfig | None = None) -> LiveSession:
+    """The session of ``record`` before any input, its config converted once: ``config`` is
+    the record's, validated already (a creation), else validated here (a stored record). A
+    config the engine refuses is a 422 located at the field (:func:`fusion_config`); an open
+    session (no sensor named) is checked with one sensor, its engine built at its first input."""
+    if config is None:
+        with limits_of(CEILINGS):  # a stored config stays readable if the limits were lowered
+            config = SessionConfig.model_validate(record.config)
+    if config.sensors:
+        engine: SessionEngine | None = SessionEngine(fusion_config(config))
+    else:
+        fusion_config(config, ["probe"])  # the check alone: no engine before a sensor speaks
+        engine = None
     return LiveSession(
         record=dataclasses.replace(record, config={}),
         config=config,
-        fusion=fusion,
         frame=class_frame(config.classes),
-        engine=None if fusion is None else SessionEngine(fusion),
+        engine=engine,
     )
 
 
-def engine_from_snapshot(
-    config: SessionConfig, state: PlainObject, fusion: FusionConfig | None
-) -> tuple[FusionConfig | None, SessionEngine | None]:
-    """The fusion config and engine a snapshot's ``state`` holds (``fusion``: the config's own)."""
+def engine_from_snapshot(config: SessionConfig, state: PlainObject) -> SessionEngine | None:
+    """The engine a snapshot's ``state`` holds (``None`` before the first input)."""
     if state.get("format") != SNAPSHOT_FORMAT:
         raise ValueError(f"unknown snapshot format {state.get('format')!r}")
-    joined = [str(sensor) for sensor in state["joined_sensors"]]
-    if not config.sensors and joined:
-        fusion = fusion_config(config, joined)
     if state["engine"] is None:
-        return fusion, None
-    assert fusion is not None
-    return fusion, SessionEngine.restore(fusion, state["engine"])
+        return None
+    joined = [str(sensor) for sensor in state["joined_sensors"]]
+    return SessionEngine.restore(
+        fusion_config(config, [] if config.sensors else joined), state["engine"]
+    )
 
 
 def restore_snapshot(session: LiveSession, snapshot: Snapshot) -> None:
     state = snapshot.state
-    fusion, engine = engine_from_snapshot(session.config, state, session.fusion)
-    session.fusion = fusion
+    engine = engine_from_snapshot(session.config, state)
     if engine is not None:
         session.engine = engine
     session.seq = snapshot.seq

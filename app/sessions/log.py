@@ -1,4 +1,4 @@
-"""The log form of accepted inputs: ``{"type": "tracks"|"detections", "report": {...}}``.
+"""The log form of accepted inputs: ``{"type": <input kind's tag>, "report": {...}}``.
 
 The store keeps this JSON per sequence number; ``GET …/events`` and replay
 turn it back into the typed events of :mod:`api_schemas.events`.
@@ -7,29 +7,28 @@ turn it back into the typed events of :mod:`api_schemas.events`.
 from __future__ import annotations
 
 from datetime import datetime
-from typing import Any
 
 from pydantic import TypeAdapter
 
-from api_schemas.events import DetectionsEvent, TracksEvent
+from api_schemas.base import WireModel
 from api_schemas.limits import CEILINGS, limits_of
-from api_schemas.reports import DetectionReport, TrackReport
-from app.http.responses import dumps, itemwise
+from app.inputs import INPUT_KINDS, Input
+from app.outputs.text import dumps, itemwise
 from app.stores import LogEntry
 
 TIMESTAMP: TypeAdapter[datetime] = TypeAdapter(datetime)
 
 
-def log_input(report: TrackReport | DetectionReport) -> dict[str, Any]:
-    """The JSON logged for an accepted input."""
-    kind = "tracks" if isinstance(report, TrackReport) else "detections"
-    return {"type": kind, "report": report.model_dump(mode="json", exclude_none=True)}
-
-
-def event_from_entry(entry: LogEntry) -> TracksEvent | DetectionsEvent:
+def event_from_entry(entry: LogEntry) -> WireModel:
     """A logged input as its typed event (read under the hard ceilings, not today's limits)."""
     with limits_of(CEILINGS):
         return _event(entry)
+
+
+def logged_input(entry: LogEntry) -> Input:
+    """A logged input, to be applied again (replay, catch-up)."""
+    event = event_from_entry(entry)
+    return Input(INPUT_KINDS[entry.input["type"]], event.report)  # type: ignore[attr-defined]
 
 
 def event_json(entry: LogEntry) -> str:
@@ -42,21 +41,13 @@ def event_json(entry: LogEntry) -> str:
     )
 
 
-EVENTS: dict[str, type[TracksEvent] | type[DetectionsEvent]] = {
-    "tracks": TracksEvent,
-    "detections": DetectionsEvent,
-}
-"""A logged input's ``type`` → the event it is read as."""
-
-
-def _event(entry: LogEntry) -> TracksEvent | DetectionsEvent:
-    kind = entry.input["type"]
-    event = EVENTS.get(kind)
-    if event is None:
-        raise ValueError(f"log entry {entry.seq}: unknown input type {kind!r}")
-    return event.model_validate(
+def _event(entry: LogEntry) -> WireModel:
+    kind = INPUT_KINDS.get(entry.input["type"])
+    if kind is None:
+        raise ValueError(f"log entry {entry.seq}: unknown input type {entry.input['type']!r}")
+    return kind.event_model.model_validate(
         {
-            "type": kind,
+            "type": kind.tag,
             "seq": entry.seq,
             "received_at": entry.received_at,
             "report": entry.input["report"],

@@ -15,19 +15,18 @@ dataclasses, no intermediate lists); every non-finite score of a matrix is
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
-import orjson
 
 from api_schemas.associate import AssociateRequest
 from api_schemas.association import AssociationOptions
 from api_schemas.classification import ClassEvidence
 from api_schemas.config import (
-    MeasurementModel,
+    CartesianMeasurement,
+    PolarMeasurement,
     PolygonFieldOfView,
     SectorFieldOfView,
     SensorConfig,
@@ -36,32 +35,20 @@ from api_schemas.config import (
     TwoPointInitiation,
 )
 from api_schemas.issues import FieldIssue
-from api_schemas.reports import DetectionReport, SensorTrack, TrackReport
+from api_schemas.reports import SensorTrack
+from app.errors import InvalidFields
 from app.geo.geodesy import (
     LocalFrame,
-    geodetic_to_session,
     heading_rotation,
-    rotate_covariances,
-    sensor_to_session,
 )
-from app.geo.geojson import GeodeticOutput, feature_collection
-from app.geo.polar import polar_to_cartesian
-from app.http.errors import request_validation_error
-from app.http.responses import itemwise
+from app.geo.geojson import GeodeticOutput
+from app.outputs.json_results import finite_or_none
 from core.association import AssociationResult
 from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, TotalConflict
-from core.fusion.classes import ClassAssessment, accumulate_likelihoods
+from core.fusion.classes import accumulate_likelihoods
 from core.fusion.config import FusionConfig, SensorSpec
 from core.fusion.motion import MotionKind, MotionModel, StateLayout
-from core.fusion.reports import (
-    AssociationView,
-    FusedTrackView,
-    ReportedTrack,
-    StepResult,
-)
-from core.fusion.reports import DetectionReport as CoreDetectionReport
-from core.fusion.reports import TrackReport as CoreTrackReport
 from core.fusion.state import StateFusion
 from core.geometry import FieldOfView, PolygonView, Sector
 from core.lifecycle import LifeCycleConfig
@@ -118,9 +105,7 @@ def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> Sens
         site, heading = sensor_site(sensor, session_origin(config))
         fov = None if sensor.fov is None else field_of_view(sensor.fov, site, heading)
     except InvalidInput as error:
-        raise request_validation_error(
-            [FieldIssue(("sensors", index, "fov"), str(error), None)]
-        ) from None
+        raise InvalidFields([FieldIssue(("sensors", index, "fov"), str(error), None)]) from None
     tracker = local_tracker_config(config, sensor, fov)
     if tracker is not None:
         confirmable(tracker, sensor, index)
@@ -143,7 +128,7 @@ def confirmable(tracker: LocalTrackerConfig, sensor: SensorConfig, index: int) -
     a polar sensor's R shrinks near its site and an estimated β_FT follows the data.
     """
     clutter = tracker.physics(sensor.id)[1]
-    if clutter is None or sensor.measurement is None or sensor.measurement.r is None:
+    if clutter is None or not isinstance(sensor.measurement, CartesianMeasurement):
         return
     r = np.asarray(tracker.model_bank().measurement.noise_covariance, dtype=np.float64)
     q = r.shape[0]
@@ -165,7 +150,7 @@ def confirmable(tracker: LocalTrackerConfig, sensor: SensorConfig, index: int) -
         "scan (false alarms per scan divided by the covered area), or leave it out to have "
         "it estimated from the sensor's detections"
     )
-    raise request_validation_error([FieldIssue(location, message, clutter)])
+    raise InvalidFields([FieldIssue(location, message, clutter)])
 
 
 def local_tracker_config(
@@ -177,10 +162,11 @@ def local_tracker_config(
     tracking = config.tracking
     interval = tracking.time_interval
     axes = len(config.state.position)
+    noise = sensor.measurement
     r = (
-        polar_reference_noise(sensor.measurement, fov, axes)
-        if sensor.measurement.r is None
-        else tuple(tuple(float(x) for x in row) for row in sensor.measurement.r)
+        polar_reference_noise(noise, fov, axes)
+        if isinstance(noise, PolarMeasurement)
+        else tuple(tuple(float(x) for x in row) for row in noise.r)
     )
     bank = None
     if tracking.preset is None:
@@ -232,7 +218,7 @@ def range_rate_model(
     """A polar sensor's range-rate model (its site, ``sigma_range_rate``), or None without σ:
     the detections' ``range_rate`` then stays unused."""
     noise = sensor.measurement
-    if noise is None or noise.kind != "polar" or noise.sigma_range_rate is None:
+    if not isinstance(noise, PolarMeasurement) or noise.sigma_range_rate is None:
         return None
     site, _ = sensor_site(sensor, session_origin(config))
     return RangeRateModel(tuple(float(x) for x in site[:axes]), noise.sigma_range_rate)
@@ -243,7 +229,7 @@ POLAR_REFERENCE_RANGE = 50_000.0
 
 
 def polar_reference_noise(
-    noise: MeasurementModel, fov: FieldOfView | None, axes: int
+    noise: PolarMeasurement, fov: FieldOfView | None, axes: int
 ) -> tuple[tuple[float, ...], ...]:
     """The R a polar sensor's tracker uses where a detection's own covariance is not passed.
 
@@ -346,7 +332,7 @@ def fusion_config(config: SessionConfig, extra_sensors: Iterable[str] = ()) -> F
     try:
         region = None if config.region is None else field_of_view(config.region)
     except InvalidInput as error:
-        raise request_validation_error([FieldIssue(("region",), str(error), None)]) from None
+        raise InvalidFields([FieldIssue(("region",), str(error), None)]) from None
     assert region is None or isinstance(region, PolygonView)
     return FusionConfig(
         region=region,
@@ -379,33 +365,6 @@ def class_likelihoods(evidence: ClassEvidence, frame: Frame) -> np.ndarray:
     return np.array([values.get(label, 1.0) for label in frame.labels], dtype=np.float64)
 
 
-def reported_track(track: SensorTrack, frame: Frame | None) -> ReportedTrack:
-    """One sensor track for the engine."""
-    evidence = track.classification
-    mass = likelihoods = None
-    if evidence is not None and frame is not None:
-        if evidence.mass is not None:
-            mass = class_mass(evidence, frame)
-        else:
-            likelihoods = class_likelihoods(evidence, frame)
-    return ReportedTrack(
-        id=track.id,
-        state=np.asarray(track.state, dtype=np.float64),
-        covariance=np.asarray(track.covariance, dtype=np.float64),
-        class_mass=mass,
-        class_likelihoods=likelihoods,
-    )
-
-
-def core_track_report(report: TrackReport, frame: Frame | None) -> CoreTrackReport:
-    """A sensor's track list for the engine."""
-    return CoreTrackReport(
-        sensor=report.sensor,
-        time=report.time,
-        tracks=tuple(reported_track(track, frame) for track in report.tracks),
-    )
-
-
 def session_origin(config: SessionConfig) -> LocalFrame | None:
     """The session's ENU frame at its WGS84 ``origin`` (``None`` without one)."""
     origin = config.origin
@@ -416,7 +375,11 @@ def session_geodetic(config: SessionConfig) -> GeodeticOutput | None:
     """Geodetic positions of the session's tracks (``?frame=geodetic``; ``None`` without an
     ``origin``)."""
     frame = session_origin(config)
-    return None if frame is None else GeodeticOutput(frame, tuple(config.state.position))
+    return (
+        None
+        if frame is None
+        else GeodeticOutput(frame, tuple(config.state.position), tuple(config.state.velocity))
+    )
 
 
 def sensor_site(sensor: SensorConfig | None, origin: LocalFrame | None) -> tuple[np.ndarray, float]:
@@ -434,314 +397,25 @@ def sensor_site(sensor: SensorConfig | None, origin: LocalFrame | None) -> tuple
     return origin.from_geodetic(site.lat, site.lon, altitude)[0], site.heading_deg
 
 
-def session_frame_report(report: TrackReport, config: SessionConfig) -> CoreTrackReport:
-    """A track list for the engine in the session frame, whatever its ``frame``.
-
-    ``"sensor"``: turned by the sensor's heading and moved to its site;
-    ``"geodetic"``: lat/lon/alt to session ENU, velocities and covariance
-    turned between the tangent planes (:mod:`app.geo.geodesy`). States and
-    covariances of the whole report are converted in one vectorised pass.
-    """
-    core = core_track_report(report, class_frame(config.classes))
-    if report.frame == "session" or not core.tracks:
-        return core
-    dim = config.state.dim
-    states = np.array([track.state for track in core.tracks]).reshape(-1, dim)
-    covariances = np.array([track.covariance for track in core.tracks]).reshape(-1, dim, dim)
-    position, velocity = tuple(config.state.position), tuple(config.state.velocity)
-    if report.frame == "sensor":
-        site, heading = sensor_site(config.sensor(report.sensor), session_origin(config))
-        states, covariances = sensor_to_session(
-            states, covariances, position, velocity, site, heading
-        )
-    else:
-        frame = session_origin(config)
-        assert frame is not None  # checked against the config before
-        states, covariances = geodetic_to_session(frame, states, covariances, position, velocity)
-    tracks = tuple(
-        dataclasses.replace(track, state=state, covariance=covariance)
-        for track, state, covariance in zip(core.tracks, states, covariances, strict=True)
-    )
-    return dataclasses.replace(core, tracks=tracks)
-
-
-def site_axes(sensor: SensorConfig, origin: LocalFrame | None, dimension: int) -> np.ndarray | None:
-    """Rotation (d × d) from the ENU axes at a geodetic site to the session's at ``origin``
-    (``None`` at a session-frame ``position``: the sensor measures in the session's axes)."""
-    site = sensor.site
-    if site is None or site.lat is None or site.lon is None or origin is None:
-        return None
-    rotation: np.ndarray = origin.rotation_from(site.lat, site.lon)[0][:dimension, :dimension]
-    return rotation
-
-
-def polar_detection_report(
-    report: DetectionReport, config: SessionConfig, sensor: SensorConfig
-) -> CoreDetectionReport:
-    """A polar sensor's detections as converted positions, each with its own covariance.
-
-    Azimuth and elevation are measured in the site's own ENU axes: at a
-    geodetic site the converted offsets and covariances are turned into the
-    session's axes (``R_origin R_siteᵀ``, exact: :mod:`app.geo.geodesy`); the
-    tilt between the two planes is 0.009° per km from the origin.
-    """
-    noise = sensor.measurement
-    assert noise is not None
-    dim = len(config.state.position)
-    origin = session_origin(config)  # once, for the site and its axes
-    site, _ = sensor_site(sensor, origin)
-    detections = report.detections
-    ranges = np.array([d.range for d in detections], dtype=np.float64)
-    azimuths = np.array([d.azimuth_deg for d in detections], dtype=np.float64)
-    elevations = (
-        np.array([d.elevation_deg for d in detections], dtype=np.float64) if dim == 3 else None
-    )
-    offsets, covariances = polar_to_cartesian(
-        ranges,
-        azimuths,
-        noise.polar_sigmas,
-        np.zeros(dim),
-        elevations,
-        noise.sigma_elevation_deg,
-    )
-    offsets, covariances = offsets.reshape(-1, dim), covariances.reshape(-1, dim, dim)
-    turn = site_axes(sensor, origin, dim)
-    if turn is not None:
-        offsets = offsets @ turn.T
-        covariances = rotate_covariances(np.broadcast_to(turn, covariances.shape), covariances)
-    range_rates = None
-    if noise.sigma_range_rate is not None and any(d.range_rate is not None for d in detections):
-        range_rates = np.array(
-            [math.nan if d.range_rate is None else d.range_rate for d in detections],
-            dtype=np.float64,
-        )
-    return CoreDetectionReport(
-        report.sensor, report.time, offsets + site[:dim], covariances, range_rates
-    )
-
-
-# ------------------------------------------------------------------ outputs
-def core_detection_report(report: DetectionReport, config: SessionConfig) -> CoreDetectionReport:
-    """Wire detections as the core's: measurements (m × q) and, when any detection gives its
-    own ``r``, one R per detection (the sensor's ``measurement.r`` for the others)."""
-    polar = config.sensor(report.sensor)
-    if polar is not None and polar.measurement is not None and polar.measurement.kind == "polar":
-        return polar_detection_report(report, config, polar)
-    dim = len(report.detections[0].z or ()) if report.detections else 2
-    measurements = np.array([d.z for d in report.detections], dtype=np.float64).reshape(-1, dim)
-    if all(detection.r is None for detection in report.detections):
-        return CoreDetectionReport(report.sensor, report.time, measurements, None)
-    sensor = next((s for s in config.sensors if s.id == report.sensor), None)
-    default = None if sensor is None or sensor.measurement is None else sensor.measurement.r
-    covariances = np.array(
-        [detection.r if detection.r is not None else default for detection in report.detections],
-        dtype=np.float64,
-    )
-    return CoreDetectionReport(report.sensor, report.time, measurements, covariances)
-
-
-def finite_or_none(value: float | None) -> float | None:
-    """``value`` if it is a finite number, else ``None``."""
-    return value if value is not None and math.isfinite(value) else None
-
-
-def _check_finite(views: Sequence[FusedTrackView]) -> None:
-    """Raise ``ValueError`` naming the first track with a non-finite state or covariance.
-
-    One test over every track of the step (the arrays are small: per-track
-    calls would cost more than the test); the culprit is looked for only then.
-    """
-    if not views:
-        return
-    states = np.concatenate([view.state for view in views])
-    covariances = np.concatenate([view.covariance.ravel() for view in views])
-    if np.isfinite(states).all() and np.isfinite(covariances).all():
-        return
-    for view in views:
-        for what, values in (("state", view.state), ("covariance", view.covariance)):
-            if not np.isfinite(values).all():
-                raise ValueError(f"fused track {view.id!r}: non-finite {what}")
-
-
-def _class_fast(assessment: ClassAssessment | None) -> PlainObject | None:
-    """A track's classification in the contract's shape; a non-finite conflict raises.
-
-    Under total conflict every distribution is ``None`` (only the state and the
-    conflict are known).
-    """
-    if assessment is None:
-        return None
-    conflict = float(assessment.conflict)
-    if not math.isfinite(conflict):
-        raise ValueError("non-finite class conflict")
-    mass = assessment.mass
-    if mass is None:
-        return {
-            "state": assessment.state.value,
-            "mass": None,
-            "pignistic": None,
-            "belief": None,
-            "plausibility": None,
-            "conflict": assessment.conflict,
-            "decision": None,
-            "decision_state": assessment.decision_state.value,
-            "summarized": assessment.summarized,
-        }
-    labels = mass.frame.labels
-    return {
-        "state": assessment.state.value,
-        "mass": [{"set": list(subset), "mass": value} for subset, value in mass.focal_sets()],
-        "pignistic": dict(zip(labels, assessment.pignistic.tolist(), strict=True)),
-        "belief": dict(zip(labels, assessment.belief.tolist(), strict=True)),
-        "plausibility": dict(zip(labels, assessment.plausibility.tolist(), strict=True)),
-        "conflict": assessment.conflict,
-        "decision": assessment.decision,
-        "decision_state": assessment.decision_state.value,
-        "summarized": assessment.summarized,
-    }
-
-
-def _track_fast(view: FusedTrackView) -> PlainObject:
-    score = float(view.score)
-    if not math.isfinite(score):
-        raise ValueError(f"fused track {view.id!r}: non-finite score")
-    return {
-        "id": view.id,
-        "status": view.status.value,
-        "state": np.ascontiguousarray(view.state, dtype=np.float64),  # finite: _check_finite
-        "covariance": np.ascontiguousarray(view.covariance, dtype=np.float64),
-        "sources": view.sources,  # frozen dataclasses (sensor, track, time): the wire names
-        "classification": _class_fast(view.classification),
-        "score": score,
-        "reason": view.reason.value,
-    }
-
-
-def _association_plain(association: AssociationView) -> PlainObject:
-    matrix = association.matrix
-    return {
-        "method": association.method,
-        "pairs": [
-            {"fused": fused, "track": track, "score": finite_or_none(score), "basis": basis}
-            for fused, track, score, basis in association.pairs
-        ],
-        "new": list(association.new),
-        "missed": list(association.missed),
-        "matrix": None
-        if matrix is None
-        else {
-            "rows": list(matrix[0]),
-            "cols": list(matrix[1]),
-            "values": [[finite_or_none(value) for value in row] for row in matrix[2].tolist()],
-        },
-    }
-
-
-def step_json(step: StepResult, seq: int, geodetic: GeodeticOutput | None = None) -> str:
-    """A step result in the contract's shape (``StepResult``), numbered ``seq`` (the
-    session's input number), as compact JSON text (hot path); ``geodetic``: with each
-    track's ``geodetic`` position (``?frame=geodetic``).
-
-    Refuses (``ValueError``) a non-finite time, state, covariance or score instead
-    of writing ``null``; a pair's or a matrix cell's non-finite score is ``null``.
-    """
-    if not math.isfinite(step.time):
-        raise ValueError("non-finite step time")
-    document = {
-        "seq": seq,
-        "time": step.time,
-        "sensor": step.sensor,
-        "tracks": track_items(step.tracks, geodetic),
-        "association": _association_plain(step.association),
-    }
-    return itemwise(document, wire_json)  # no single C call for a 10 MB answer
-
-
-def picture_json(
-    seq: int,
-    time: float | None,
-    views: Sequence[FusedTrackView],
-    geodetic: GeodeticOutput | None = None,
-) -> str:
-    """The live fused tracks at ``time`` (a ``FusedPicture``) as compact JSON text."""
-    document = {"seq": seq, "time": time, "tracks": track_items(views, geodetic)}
-    return itemwise(document, wire_json)
-
-
-def picture_geojson(
-    views: Sequence[FusedTrackView], geodetic: GeodeticOutput, velocity: tuple[int, ...]
-) -> str:
-    """The live fused tracks as a GeoJSON FeatureCollection (``?format=geojson``), written
-    a feature at a time."""
-    _check_finite(views)
-    tracks = [
-        {
-            "id": view.id,
-            "status": view.status.value,
-            "state": view.state,
-            "classification": _decision(view.classification),
-        }
-        for view in views
-    ]
-    return itemwise(feature_collection(tracks, geodetic, velocity))
-
-
-def _decision(assessment: ClassAssessment | None) -> PlainObject | None:
-    """What a GeoJSON feature says of a track's class: its decision and BetP."""
-    if assessment is None or assessment.mass is None:
-        return None
-    labels = assessment.mass.frame.labels
-    return {
-        "decision": assessment.decision,
-        "pignistic": dict(zip(labels, assessment.pignistic.tolist(), strict=True)),
-    }
-
-
-def track_items(
-    views: Sequence[FusedTrackView], geodetic: GeodeticOutput | None = None
-) -> Iterator[PlainObject]:
-    """Fused tracks in the contract's shape (``FusedTrack``), for :func:`wire_json`, made one
-    at a time as they are written (:func:`~app.http.responses.itemwise`): states and
-    covariances stay numpy arrays, sources ``Source`` dataclasses (orjson writes both in C).
-    Refuses (``ValueError``, before the first) a non-finite state, covariance or score."""
-    _check_finite(views)
-    if geodetic is None:
-        return (_track_fast(view) for view in views)
-    points = geodetic.points([view.state for view in views])
-    return (
-        {**_track_fast(view), "geodetic": point} for view, point in zip(views, points, strict=True)
-    )
-
-
-def track_fields(views: Sequence[FusedTrackView]) -> list[PlainObject]:
-    """:func:`track_items` as a list."""
-    return list(track_items(views))
-
-
-def wire_json(document: object) -> str:
-    """Compact JSON text of a document holding :func:`track_fields` output."""
-    return orjson.dumps(document, option=orjson.OPT_SERIALIZE_NUMPY).decode()
-
-
 # ------------------------------------------------------- stateless associate
+def evidence_mass(evidence: ClassEvidence | None, frame: Frame) -> MassFunction:
+    """Reported class evidence as one mass function on ``frame``: focal sets as given,
+    likelihoods by [MTT] eq 10 (GBT); vacuous without evidence or when they contradict
+    themselves totally."""
+    vacuous = MassFunction.vacuous(frame)
+    if evidence is None:
+        return vacuous
+    if evidence.mass is not None:
+        return class_mass(evidence, frame)
+    try:
+        return accumulate_likelihoods(None, frame, class_likelihoods(evidence, frame))[0]
+    except TotalConflict:
+        return vacuous
+
+
 def evidence_masses(tracks: Sequence[SensorTrack], frame: Frame) -> list[MassFunction]:
     """Class masses of one side of ``POST /v1/associate`` (vacuous where a track has none)."""
-    vacuous = MassFunction.vacuous(frame)
-    masses = []
-    for track in tracks:
-        evidence = track.classification
-        if evidence is None:
-            masses.append(vacuous)
-        elif evidence.mass is not None:
-            masses.append(class_mass(evidence, frame))
-        else:
-            try:
-                masses.append(
-                    accumulate_likelihoods(None, frame, class_likelihoods(evidence, frame))[0]
-                )
-            except TotalConflict:
-                masses.append(vacuous)
-    return masses
+    return [evidence_mass(track.classification, frame) for track in tracks]
 
 
 def side_arrays(tracks: Sequence[SensorTrack], dim: int) -> tuple[np.ndarray, np.ndarray]:

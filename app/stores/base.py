@@ -18,7 +18,7 @@ the latest snapshot and the log after it (:func:`history`). A deleted
 session's data is freed at once; only a store that has never held its id
 would accept it again.
 
-Outages: every store raises :class:`~app.http.errors.StoreUnavailable` for its
+Outages: every store raises :class:`~app.errors.StoreUnavailable` for its
 backend's connection and I/O errors (:func:`unavailable_on`), never a raw
 driver error, so the service answers 503 instead of 500.
 """
@@ -36,7 +36,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 import orjson
 
-from app.http.errors import Conflict, LimitExceeded, SessionNotFound, StoreUnavailable
+from app.errors import Conflict, LimitExceeded, SessionNotFound, StoreUnavailable
 
 JsonObject = dict[str, Any]
 _PLAIN_KINDS = frozenset("biuf")
@@ -215,7 +215,7 @@ class Store(Protocol):
         ...
 
     def ping(self) -> None:
-        """Return if the store answers now; :class:`~app.http.errors.StoreUnavailable` if not."""
+        """Return if the store answers now; :class:`~app.errors.StoreUnavailable` if not."""
         ...
 
     def close(self) -> None:
@@ -360,7 +360,7 @@ def history(store: Store, session_id: str, after: int, limit: int) -> History:
 
 @contextmanager
 def unavailable_on(errors: tuple[type[BaseException], ...], store: str) -> Iterator[None]:
-    """Raise :class:`~app.http.errors.StoreUnavailable` for the backend's ``errors``."""
+    """Raise :class:`~app.errors.StoreUnavailable` for the backend's ``errors``."""
     try:
         yield
     except errors as error:

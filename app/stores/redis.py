@@ -27,7 +27,7 @@ Retention: deleting a session unlinks its record, log and snapshots;
 :meth:`RedisStore.compact` trims the log stream (``XTRIM MINID``) behind the
 latest snapshot. Outages: redis-py retries a failed command three times
 (backoff with jitter, a 5 s socket timeout), then its connection and timeout
-errors are raised as :class:`~app.http.errors.StoreUnavailable`; the next command
+errors are raised as :class:`~app.errors.StoreUnavailable`; the next command
 after Redis is back reconnects by itself.
 
 Durability: an append returns once Redis has applied it. That is durable in
@@ -46,7 +46,7 @@ from typing import Any, cast
 import redis
 from redis.client import Pipeline
 
-from app.http.errors import SessionNotFound
+from app.errors import SessionNotFound
 from app.stores.base import (
     LogEntry,
     SequenceConflict,

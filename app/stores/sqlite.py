@@ -13,7 +13,7 @@ file stops growing once a session's retained log has its size (the WAL is
 checkpointed automatically and truncated to ``JOURNAL_SIZE_LIMIT``).
 sqlite's ``OperationalError`` (I/O error, full disk, a lock held past the
 busy timeout, a file that cannot be opened) is raised as
-:class:`~app.http.errors.StoreUnavailable`.
+:class:`~app.errors.StoreUnavailable`.
 
 Threads: each thread gets its own connection (sqlite3 connections are not
 shared across threads); writes are serialised by a process lock and

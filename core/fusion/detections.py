@@ -106,7 +106,7 @@ def local_track_report(
 ) -> tuple[ReportedTrack, ...]:
     """The confirmed local tracks of a scan, on the session's layout, with their class mass."""
     order = list(local_order(layout))
-    preset = tracker.config.tracking_preset()
+    preset = tracker.preset
     headings = preset is not None and preset.velocity_convention == "heading"
     updated = set(step.updated)
     reported = []

@@ -48,6 +48,7 @@ use the position components, so the densities of
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import Counter
 from collections.abc import Iterator
@@ -128,6 +129,29 @@ class SessionEngine:
         )
         self._rows = FusedRows(self._table)
 
+    # ------------------------------------------------------------ sensors
+    def join(self, sensor: SensorSpec) -> None:
+        """A sensor joins the session (an open session seeing it first), after the others:
+        its slot in the estimate table, its local tracker; nothing else changes."""
+        config = dataclasses.replace(self.config, sensors=(*self.config.sensors, sensor))
+        self._table.add_slot(sensor.id)
+        self._set_config(config)
+        if sensor.tracker is not None:
+            self.local_trackers[sensor.id] = LocalTracker(sensor.tracker)
+
+    def leave(self, sensor: str) -> None:
+        """Undo :meth:`join` of ``sensor``, the last to join, before any of its inputs applied."""
+        self._table.drop_slot(sensor)
+        kept = tuple(spec for spec in self.config.sensors if spec.id != sensor)
+        self._set_config(dataclasses.replace(self.config, sensors=kept))
+        self.local_trackers.pop(sensor, None)
+
+    def _set_config(self, config: FusionConfig) -> None:
+        self.config = config
+        self._coverage = config.coverage
+        self._reliabilities = {spec.id: spec.reliability for spec in config.sensors}
+        self._rows.sorted_slots = sorted(self._table.slots.items())
+
     # ------------------------------------------------------------ the step
     def apply(self, report: TrackReport, *, explain: bool = False) -> StepResult:
         """Apply one sensor's track list; returns the step's fused result.
@@ -176,7 +200,11 @@ class SessionEngine:
         check_detection_magnitudes(report)
         with self._transaction(tracker):
             scan = tracker.step(
-                report.time, report.measurements, report.covariances, range_rates=report.range_rates
+                report.time,
+                report.measurements,
+                report.covariances,
+                range_rates=report.range_rates,
+                class_masses=report.class_masses,
             )
             tracks = local_track_report(
                 tracker, scan, self.config.motion.layout, self.config.classes

@@ -38,14 +38,17 @@ class TrackReport:
 @dataclass(frozen=True)
 class DetectionReport:
     """A sensor's detections at one time: measurements ``z`` (m × q) and, optionally,
-    each detection's own noise covariance (m × q × q; default: the sensor's R) and
-    range-rate (m,; NaN: none; for a sensor whose tracker has a range-rate model)."""
+    each detection's own noise covariance (m × q × q; default: the sensor's R),
+    range-rate (m,; NaN: none; for a sensor whose tracker has a range-rate model) and
+    class evidence (m masses on the session's class frame; None: none), combined into
+    the class mass of the local track it updates or starts."""
 
     sensor: str
     time: float
     measurements: FloatArray
     covariances: FloatArray | None = None
     range_rates: FloatArray | None = None
+    class_masses: tuple[MassFunction | None, ...] | None = None
 
 
 @dataclass(frozen=True)

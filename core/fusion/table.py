@@ -133,6 +133,29 @@ class EstimateTable:
             kept.keep(rows)
         self._rows = len(rows)
 
+    def add_slot(self, sensor: str) -> None:
+        """A slot for a sensor that joins, after the others: no row has its estimate yet."""
+        if sensor in self.slots:
+            raise InvalidInput(f"sensor {sensor!r} has a slot already")
+        self._resize_slots({**self.slots, sensor: len(self.slots)})
+
+    def drop_slot(self, sensor: str) -> None:
+        """Take back the slot :meth:`add_slot` just added (no row has an estimate in it)."""
+        if list(self.slots)[-1:] != [sensor] or self.present[: self._rows, -1].any():
+            raise InvalidInput(f"sensor {sensor!r} is not the last, empty slot")
+        self._resize_slots({name: slot for name, slot in self.slots.items() if name != sensor})
+
+    def _resize_slots(self, slots: dict[str, int]) -> None:
+        """The same rows with ``slots`` (the old ones first, in order); computed results go
+        (recomputed on demand, with the same bits)."""
+        rows, kept = self._rows, min(len(slots), len(self.slots))
+        estimates = [(name, getattr(self, name)[:rows, :kept]) for name in _ESTIMATE_ARRAYS]
+        self.slots = slots
+        self._allocate(len(self.present))
+        for name, values in estimates:
+            getattr(self, name)[:rows, :kept] = values
+        self._kept = []
+
     def checkpoint(self) -> tuple[int, tuple[FloatArray, ...]]:
         """The estimates as they are (copies), for :meth:`rollback`."""
         rows = self._rows

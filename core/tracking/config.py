@@ -323,11 +323,12 @@ class LocalTrackerConfig:
             )
         )
 
-    def model_bank(self) -> ModelBank:
-        """The bank the tracker runs, with ``measurement_noise`` applied."""
+    def model_bank(self, found: TrackingPreset | None = None) -> ModelBank:
+        """The bank the tracker runs, with ``measurement_noise`` applied (``found``: the
+        :meth:`tracking_preset` built already)."""
         chosen = self.bank
         if chosen is None:
-            found = self.tracking_preset()
+            found = found or self.tracking_preset()
             assert found is not None
             chosen = found.bank
         if self.measurement_noise is None:

@@ -47,6 +47,7 @@ the tracker as it was.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
 
@@ -57,7 +58,12 @@ from scipy.stats import chi2
 from core.arrays import BoolArray, FloatArray, IntArray
 from core.belief import MassFunction
 from core.classification import CredalClassification
-from core.classification.batched import BatchedCredalClassifier, CredalBatch, dense_to_mass
+from core.classification.batched import (
+    BatchedCredalClassifier,
+    CredalBatch,
+    dense_to_mass,
+    mass_to_dense,
+)
 from core.distance.estimates import check_covariances
 from core.errors import TrackingError
 from core.lifecycle import (
@@ -161,7 +167,9 @@ class LocalTracker:
     def __init__(self, config: LocalTrackerConfig) -> None:
         self.config = config
         found: TrackingPreset | None = config.tracking_preset()
-        self.bank = config.model_bank()
+        self.preset = found
+        """The tracking preset (None with an explicit bank), built once per tracker."""
+        self.bank = config.model_bank(found)
         self.predictor = IMMPredictor(self.bank)
         self._noise = self.bank.measurement.noise_covariance
         self._q = self.bank.measurement.dim
@@ -222,6 +230,7 @@ class LocalTracker:
         measurement_covariances: ArrayLike | None = None,
         sensor: str | None = None,
         range_rates: ArrayLike | None = None,
+        class_masses: Sequence[MassFunction | None] | None = None,
     ) -> TrackerStep:
         """Process one scan of ``sensor`` (default: the first configured sensor).
 
@@ -237,6 +246,11 @@ class LocalTracker:
         range_rates : array (m,), optional
             Each detection's range-rate (NaN: none), for a tracker configured
             with a ``range_rate`` model (:mod:`core.tracking.range_rate`).
+        class_masses : sequence of MassFunction or None, optional
+            Each detection's own class evidence (None: none), on the classifier's
+            class frame: combined into the class mass of the track it updates or
+            starts, as one more step of its accumulation ([MTT] eq 11; a tracker
+            without classification, or accumulating on behaviours, refuses it).
 
         Raises
         ------
@@ -246,10 +260,53 @@ class LocalTracker:
         """
         before = self.checkpoint()
         try:
+            self._evidence = self._class_evidence(class_masses)
             return self._step(time, measurements, measurement_covariances, sensor, range_rates)
         except BaseException:
             self.rollback(before)
             raise
+        finally:
+            self.__dict__.pop("_evidence", None)
+
+    def _class_evidence(
+        self, class_masses: Sequence[MassFunction | None] | None
+    ) -> tuple[FloatArray, BoolArray] | None:
+        """The detections' class masses as dense rows on the accumulation frame, and which
+        detections have one (``None`` without any)."""
+        if class_masses is None or all(mass is None for mass in class_masses):
+            return None
+        classifier = self.classifier
+        if classifier is None or classifier.accumulation != "classes":
+            raise TrackingError(
+                "class evidence on detections needs the tracker's classification on classes",
+                loc=("class_masses",),
+            )
+        dense = np.zeros((len(class_masses), classifier.frame.full + 1))
+        given = np.zeros(len(class_masses), dtype=bool)
+        for index, mass in enumerate(class_masses):
+            if mass is None:
+                continue
+            if mass.frame != classifier.frame:
+                raise TrackingError(
+                    f"class evidence of detection {index} is not on the class frame",
+                    loc=("class_masses", index),
+                )
+            dense[index], given[index] = mass_to_dense(mass), True
+        return dense, given
+
+    def _combine_evidence(self, rows: IntArray, detections: IntArray) -> None:
+        """Combine the class evidence of ``detections`` into the class masses of ``rows``
+        (the tracks they updated or started), one more accumulation step each."""
+        evidence = getattr(self, "_evidence", None)
+        if evidence is None or self.classifier is None or self._classes is None:
+            return
+        dense, given = evidence
+        has = given[detections]
+        if not has.any():
+            return
+        rows, detections = rows[has], detections[has]
+        combined = self.classifier.combine(self._classes.select(rows), dense[detections])
+        self._classes = self._classes.replace(rows, combined)
 
     def checkpoint(self) -> dict[str, Any]:
         """The state as it is, for :meth:`rollback` (references: no array is changed in place)."""
@@ -313,6 +370,7 @@ class LocalTracker:
                 ),
             )
         self._update(prediction, candidates, association)
+        self._combine_evidence(candidates[association.rows], association.cols)
         hit = association.update.detected
         detected, gain = hits(len(status), candidates[hit], association.hit_gain[hit])
         life, newly_confirmed = advance(
@@ -670,6 +728,7 @@ class LocalTracker:
         self._state = _concatenate(self._state, state)
         if self.classifier is not None and self._classes is not None:
             self._classes = self._classes.concatenate(self.classifier.initial(count))
+            self._combine_evidence(np.arange(len(self._rows) - count, len(self._rows)), detections)
 
     # ------------------------------------------------------------ output
     def _track_id(self, number: int) -> str:

@@ -9,6 +9,7 @@ import pytest
 import yaml
 
 from app.asyncapi import MESSAGES, render_asyncapi
+from app.inputs import DECODED_KINDS, INPUT_KINDS
 from tests.api.examples import STEP_RESULT, TRACK_REPORT
 
 COMMITTED = Path(__file__).resolve().parents[2] / "docs" / "asyncapi.yaml"
@@ -36,13 +37,16 @@ def test_committed_asyncapi_matches_the_models() -> None:
 
 def test_document_shape(document: dict[str, Any]) -> None:
     assert document["asyncapi"] == "3.0.0"
+    answers = {f"{tag}_result" for tag in DECODED_KINDS}
     assert set(document["channels"]["stream"]["messages"]) == {
-        "tracks",
-        "detections",
+        *INPUT_KINDS,
+        *DECODED_KINDS,
+        *answers,
         "result",
         "error",
         "ack",
     }
+    assert {"tracks", "detections"} <= set(INPUT_KINDS)
     assert document["channels"]["stream"]["address"] == "/v1/sessions/{sid}/stream"
     assert document["channels"]["subscribe"]["address"] == "/v1/sessions/{sid}/subscribe"
     for operation in document["operations"].values():

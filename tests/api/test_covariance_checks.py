@@ -21,7 +21,7 @@ from pydantic import ValidationError
 from api_schemas.associate import AssociateRequest
 from api_schemas.linalg import SYMMETRY_TOLERANCE, check_covariance, covariance_problems
 from api_schemas.reports import DetectionReport, SensorTrack, TrackReport
-from api_schemas.ws import client_message_adapter
+from app.inputs import client_messages
 from tests.api.examples import TRACK_REPORT
 
 NOT_DEFINITE = [[1, 2, 0, 0], [2, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
@@ -167,7 +167,7 @@ def test_associate_names_bad_covariances_on_each_side() -> None:
 def test_websocket_messages_are_checked_too() -> None:
     message = track_list(5, {4: NOT_DEFINITE}) | {"type": "tracks"}
     with pytest.raises(ValidationError) as caught:
-        client_message_adapter.validate_json(json.dumps(message))
+        client_messages().validate_json(json.dumps(message))
     assert located(caught.value) == [(("tracks", "tracks", 4, "covariance"), DEFINITE_MESSAGE)]
 
 

@@ -3,14 +3,22 @@
 from __future__ import annotations
 
 from datetime import UTC, datetime
+from typing import Any
 
 from fastapi.testclient import TestClient
 
 from api_schemas.events import EventLog
 from api_schemas.reports import DetectionReport, TrackReport
-from app.sessions.log import event_from_entry, log_input
+from app.inputs import Input, input_kind
+from app.sessions.log import event_from_entry
 from app.stores import Store
 from tests.api.examples import DETECTION_REPORT, SESSION_CONFIG, TRACK_REPORT
+
+
+def log_input(report: TrackReport | DetectionReport) -> dict[str, Any]:
+    """The log form of a report (its kind's, as the registry logs it)."""
+    tag = "tracks" if type(report) is TrackReport else "detections"
+    return Input(input_kind(tag), report).logged()
 
 
 def test_events_round_trip_through_the_log(client: TestClient) -> None:

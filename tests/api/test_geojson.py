@@ -27,7 +27,7 @@ def test_feature_collection_positions_and_velocities() -> None:
         track("F1", [20_000.0, 100.0, -35_000.0, 0.0, 9_000.0, 0.0]),
         track("F2", [0.0, 0.0, 0.0, 50.0, 0.0, -2.0]),
     ]
-    collection = feature_collection(tracks, GeodeticOutput(frame, (0, 2, 4)), (1, 3, 5))
+    collection = feature_collection(tracks, GeodeticOutput(frame, (0, 2, 4), (1, 3, 5)))
     assert collection["type"] == "FeatureCollection"
     features = collection["features"]
     assert [feature["id"] for feature in features] == ["F1", "F2"]

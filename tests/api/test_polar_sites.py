@@ -16,7 +16,7 @@ import numpy as np
 
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport
-from app.sessions.translate import core_detection_report
+from app.inputs.detections import core_detection_report
 
 from .proj_oracle import proj_enu
 

@@ -8,8 +8,8 @@ import pytest
 from fastapi.testclient import TestClient
 from starlette.testclient import WebSocketDenialResponse
 
-from app.http.rate_limit import parse_rates
 from app.main import create_app
+from app.settings import parse_rates
 from tests.api.conftest import make_settings
 from tests.api.examples import SESSION_CONFIG
 

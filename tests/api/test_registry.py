@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import threading
 from datetime import UTC, datetime, timedelta
@@ -11,9 +12,11 @@ from typing import Any
 
 import pytest
 
-from api_schemas.reports import TrackReport
+from app.inputs import parse_input
 from app.metrics import ServiceMetrics
+from app.outputs import JSON
 from app.sessions.hub import SESSION_ENDED, Hub, Published
+from app.sessions.live import new_session as live_session
 from app.sessions.registry import SessionRegistry
 from app.stores import MemoryStore, SessionRecord
 from app.stores.base import StoreUsage
@@ -34,15 +37,14 @@ def new_session(target: SessionRegistry, config: dict[str, Any], sid: str = "s1"
         id=sid, config=config, token_hash="sha256:0", created_at=datetime.now(UTC)
     )
     target.store.create_session(record)
-    target.add(record)
+    target.add(live_session(record))
     return record
 
 
 async def feed(target: SessionRegistry, sid: str, bodies: list[dict[str, Any]]) -> list[Any]:
     session = await target.get(sid)
     return [
-        json.loads(await target.submit(session, TrackReport.model_validate(body)))
-        for body in bodies
+        json.loads(await target.submit(session, parse_input("tracks", body))) for body in bodies
     ]
 
 
@@ -116,13 +118,13 @@ def test_slow_subscriber_gets_the_latest_results_never_a_backlog() -> None:
         hub = Hub()
         slow = hub.subscribe(capacity=4)
         for seq in range(1, 101):
-            hub.publish(Published(f"result {seq}"))
+            hub.publish(Published({JSON: f"result {seq}"}))
         assert slow.queue.qsize() == 4 and slow.dropped == 96
         assert [await slow.next() for _ in range(4)] == [
-            Published(f"result {n}") for n in range(97, 101)
+            Published({JSON: f"result {n}"}) for n in range(97, 101)
         ]
-        hub.publish(Published("result 101"))
-        assert await slow.next() == Published("result 101")
+        hub.publish(Published({JSON: "result 101"}))
+        assert await slow.next() == Published({JSON: "result 101"})
         hub.close()
         assert await slow.next() == SESSION_ENDED and len(hub) == 0
 
@@ -139,7 +141,7 @@ def test_subscriber_receives_published_results() -> None:
         received = []
         for _ in range(3):
             published = await subscriber.next()
-            assert isinstance(published, Published) and published.geodetic is None
+            assert isinstance(published, Published) and set(published.texts) == {JSON}
             received.append(json.loads(published.text)["result"])
         assert received == results
 
@@ -176,3 +178,32 @@ def test_only_the_memory_store_is_called_on_the_event_loop(tmp_path: Path) -> No
     assert MemoryStore.blocking is False
     assert SqliteStore(tmp_path / "s.db").blocking is True
     assert RedisStore.blocking is True
+
+
+def test_sensors_joining_an_open_session_equal_the_same_sensors_configured() -> None:
+    """A sensor joins an open session in place (no export and restore of the engine): step
+    for step the results equal those of a session that names the same sensors in the order
+    they joined (default reliability and P_D); an input the engine refuses joins no sensor."""
+
+    async def scenario() -> None:
+        target = registry()
+        sensors = ["radar-1", "radar-2", "radar-3"]
+        named = session_config(sensors)
+        for sensor in named["sensors"]:
+            sensor.pop("reliability"), sensor.pop("p_detect")  # the defaults, as a joined one
+        new_session(target, named, "named")
+        new_session(target, session_config(sensors) | {"sensors": []}, "open")
+        bodies = reports(9, sensors)
+        refused = bodies[1] | {"tracks": [dict(bodies[1]["tracks"][0], state=[1e300] * 4)]}
+        session = await target.get("open")
+        with contextlib.suppress(Exception):
+            await feed(target, "open", [bodies[0], refused])
+        assert session.sensor_ids() == ["radar-1"] and session.seq == 1
+        expected = await feed(target, "named", bodies)
+        assert await feed(target, "open", bodies[1:]) == expected[1:]
+        assert session.sensor_ids() == sensors
+        target.discard("open")
+        rebuilt = await target.get("open")
+        assert await target.picture(rebuilt, None) == await target.picture(session, None)
+
+    asyncio.run(scenario())

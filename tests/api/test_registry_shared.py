@@ -11,8 +11,8 @@ from typing import Any
 
 import pytest
 
-from api_schemas.reports import TrackReport
 from app.http.errors import SessionLeased
+from app.inputs import parse_input
 from app.metrics import ServiceMetrics
 from app.sessions.registry import SessionRegistry
 from app.stores import RedisStore, SessionRecord
@@ -98,7 +98,7 @@ def test_a_held_lease_refuses_the_other_instance_until_released() -> None:
             assert await feed(a, SID, bodies[:1]) == expected[:1]
             session = await b.get(SID)
             with pytest.raises(SessionLeased) as refused:
-                await b.submit(session, TrackReport.model_validate(bodies[1]))
+                await b.submit(session, parse_input("tracks", bodies[1]))
             assert refused.value.headers() == {"Retry-After": "1"}
             assert session.seq == 1  # loaded after A's input; the refused one changed nothing
             await a.aclose()  # shutdown releases the lease at once

@@ -1,8 +1,9 @@
 """The one writer of results and the response models say the same thing.
 
-:func:`app.sessions.translate.step_json` and ``track_fields`` are the only
+:func:`app.outputs.json_results.step_json` and ``track_fields`` are the only
 writers of the result shape; ``api_schemas.results`` states it for openapi.
-Their outputs, over step results with every kind of content (class masses
+Every registered output format (:mod:`app.outputs`) is checked the same way
+against its own models, in every frame. Their outputs, over step results with every kind of content (class masses
 defined, totally conflicting, tied, summarized; likelihood evidence;
 tentative, confirmed, phantom and terminated tracks; continuity and
 association pairs; explanation matrices; detections; geodetic positions),
@@ -29,20 +30,15 @@ from websockets.sync.client import connect
 
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport, TrackReport
-from api_schemas.results import FusedPicture, FusedTrackDetail, StepResult
-from app.geo.geojson import GeodeticOutput
+from api_schemas.results import FusedFeatureCollection, FusedPicture, FusedTrackDetail, StepResult
 from app.http.responses import dumps, itemwise
-from app.routes.streams import geodetic_message
-from app.sessions.registry import result_message
-from app.sessions.translate import (
-    core_detection_report,
-    fusion_config,
-    picture_json,
-    session_frame_report,
-    session_origin,
-    step_json,
-    wire_json,
-)
+from app.inputs.detections import core_detection_report
+from app.inputs.tracks import session_frame_report
+from app.outputs import FRAMES, OUTPUT_FORMATS, Output, output_for
+from app.outputs.json_results import step_json, wire_json
+from app.routes.streams import converted_message
+from app.sessions.pipeline import result_message
+from app.sessions.translate import fusion_config, session_geodetic
 from core.fusion.engine import SessionEngine
 from core.fusion.reports import StepResult as CoreStepResult
 from tests.api.conftest import LiveServer
@@ -184,8 +180,24 @@ def engine_steps(
             yield session, engine, engine.apply(report_, explain=explain)
 
 
-OPTIONAL_FIELDS = {("FusedTrack", "geodetic"), ("TrackHistoryPoint", "geodetic")}
-"""Fields the writer leaves out by design (``geodetic``: only with ``frame=geodetic``)."""
+OPTIONAL_FIELDS = {
+    ("FusedTrack", "geodetic"),
+    ("TrackHistoryPoint", "geodetic"),
+    ("FusedFeatureCollection", "sensor"),
+}
+"""Fields the writer leaves out by design (``geodetic``: only with ``frame=geodetic``; a
+picture has no ``sensor``)."""
+
+
+def outputs_of(session: SessionConfig) -> list[Output]:
+    """Every registered output format in every frame the session can be written in."""
+    geodetic = session_geodetic(session)
+    return [
+        output_for(geodetic, name, frame)
+        for name, output_format in OUTPUT_FORMATS.items()
+        for frame in FRAMES
+        if geodetic is not None or not (output_format.needs_geodetic or frame == "geodetic")
+    ]
 
 
 def written_in_full(parsed: object, document: object) -> None:
@@ -259,14 +271,14 @@ def test_every_written_result_is_the_response_models() -> None:
             # written item by item, the text is still orjson's compact text of the whole
             assert orjson.dumps(orjson.loads(text)).decode() == text
             seen.step(round_trip(StepResult, text))
-            origin = session_origin(session)
-            if origin is not None:
-                geodetic = GeodeticOutput(origin, tuple(session.state.position))
-                seen.step(round_trip(StepResult, step_json(step, seq, geodetic)))
-                shown = picture_json(seq, step.time, engine.picture(), geodetic)
-                seen.tracks(round_trip(FusedPicture, shown)["tracks"])
-            picture = picture_json(seq, step.time, engine.picture())
-            seen.tracks(round_trip(FusedPicture, picture)["tracks"])
+            for output in outputs_of(session):
+                written = round_trip(output.format.step_model, output.step(step, seq))
+                picture = output.picture(seq, step.time, engine.picture())
+                shown = round_trip(output.format.picture_model, picture)
+                seen.values["format", output.format.name] += 1
+                if output.format.name == "json":
+                    seen.step(written)
+                    seen.tracks(shown["tracks"])
     assert seen.kinds("status") >= {"tentative", "confirmed", "phantom", "terminated"}
     assert seen.kinds("class state") == {"defined", "total_conflict"}
     assert seen.kinds("decision") == {"decided", "tied", "undefined"}
@@ -274,6 +286,7 @@ def test_every_written_result_is_the_response_models() -> None:
     assert seen.kinds("matrix") == {True, False}
     assert seen.kinds("basis") == {"continuity", "association"}
     assert seen.kinds("geodetic") == {True, False}
+    assert seen.kinds("format") == set(OUTPUT_FORMATS)
 
 
 def test_itemwise_is_one_call_of_its_writer_byte_for_byte() -> None:
@@ -302,20 +315,38 @@ def test_the_wire_answers_are_the_response_models(live_server: LiveServer) -> No
         bodies = class_reports(8)
         for index, body in enumerate(bodies[:4]):
             params = {"explain": "true", "frame": "geodetic"} if index % 2 else {}
+            if index == 2:
+                params = {"format": "geojson"}
             answer = client.post(
                 f"/v1/sessions/{sid}/tracks", json=body, params=params, headers=headers
             )
             assert answer.status_code == 200, answer.text
+            if index == 2:
+                assert answer.headers["content-type"].startswith("application/geo+json")
+                round_trip(FusedFeatureCollection, answer.text)
+                continue
             seen.step(round_trip(StepResult, answer.text))
         url = live_server.url.replace("http://", "ws://") + f"/v1/sessions/{sid}/stream"
-        for query, part in (("", bodies[4:6]), ("?frame=geodetic", bodies[6:])):
+        parts = (
+            ("", bodies[4:6]),
+            ("?frame=geodetic", bodies[6:7]),
+            ("?format=geojson", bodies[7:]),
+        )
+        for query, part in parts:
             with connect(url + query, additional_headers=headers) as stream:
                 json.loads(stream.recv())  # ack
                 for body in part:
                     stream.send(json.dumps(body | {"type": "tracks"}))
                     message = json.loads(stream.recv())
                     assert message["type"] == "result", message
-                    seen.step(round_trip(StepResult, json.dumps(message["result"])))
+                    if "geojson" in query:
+                        round_trip(FusedFeatureCollection, json.dumps(message["result"]))
+                    else:
+                        seen.step(round_trip(StepResult, json.dumps(message["result"])))
+        geojson = client.get(
+            f"/v1/sessions/{sid}/tracks", params={"format": "geojson"}, headers=headers
+        )
+        assert round_trip(FusedFeatureCollection, geojson.text)["seq"] == len(bodies)
         for params in ({}, {"frame": "geodetic"}, {"time": "9.5"}):
             answer = client.get(f"/v1/sessions/{sid}/tracks", params=params, headers=headers)
             assert answer.status_code == 200, answer.text
@@ -372,18 +403,15 @@ def test_step_json_writes_arrays_in_their_logical_order() -> None:
     assert written == skewed.T.tolist()
 
 
-def test_a_result_converted_to_geodetic_after_the_fact_equals_the_one_written_with_it() -> None:
-    """A geodetic subscriber fed through Redis converts the published text; one of this
-    instance gets the text written beside the step: both say the same."""
-    converted = 0
+def test_a_result_converted_after_the_fact_equals_the_one_written_with_it() -> None:
+    """A subscriber fed through Redis converts the published JSON text to its output; one of
+    this instance gets the text written beside the step: both say the same, in every output."""
+    converted: Counter[str] = Counter()
     for config, bodies, detections in SCENES:
         for seq, (session, _, step) in enumerate(engine_steps(config, bodies, detections), start=1):
-            origin = session_origin(session)
-            if origin is None:
-                continue
-            geodetic = GeodeticOutput(origin, tuple(session.state.position))
-            after = geodetic_message(result_message(step_json(step, seq)), geodetic)
-            beside = result_message(step_json(step, seq, geodetic))
-            assert json.loads(after) == json.loads(beside)
-            converted += bool(step.tracks)
-    assert converted > 0
+            for output in outputs_of(session):
+                after = converted_message(result_message(step_json(step, seq), "r"), output)
+                beside = result_message(output.step(step, seq), "r")
+                assert json.loads(after) == json.loads(beside)
+                converted[output.format.name] += bool(step.tracks)
+    assert set(converted) == set(OUTPUT_FORMATS) and min(converted.values()) > 0

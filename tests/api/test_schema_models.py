@@ -12,7 +12,8 @@ from api_schemas.config import SessionConfig
 from api_schemas.consistency import detection_report_issues, track_report_issues
 from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import StepResult
-from api_schemas.ws import client_message_adapter, server_message_adapter
+from api_schemas.ws import server_message_adapter
+from app.inputs import client_messages
 from tests.api.examples import (
     DETECTION_REPORT,
     LIKELIHOOD_EVIDENCE,
@@ -83,9 +84,9 @@ def test_associate_rejects_mixed_dimensions() -> None:
 
 def test_websocket_messages_need_their_tag() -> None:
     message = {"type": "tracks", "ref": "r1", **TRACK_REPORT}
-    assert client_message_adapter.validate_python(message).ref == "r1"
+    assert client_messages().validate_python(message).ref == "r1"
     untagged = {key: value for key, value in message.items() if key != "type"}
     with pytest.raises(ValidationError):
-        client_message_adapter.validate_python(untagged)
+        client_messages().validate_python(untagged)
     ack = server_message_adapter.validate_python({"type": "ack", "ref": None, "seq": 0})
     assert ack.type == "ack"

@@ -1,4 +1,5 @@
-"""Over a real WebSocket: ``?frame=geodetic`` on ``stream`` and ``subscribe``.
+"""Over a real WebSocket: ``?frame=geodetic`` (and ``?format=geojson``) on ``stream`` and
+``subscribe``.
 
 A polar radar at a geodetic site streams its detections; every fused track of
 every ``result`` sent on a ``?frame=geodetic`` connection carries its WGS84
@@ -99,10 +100,13 @@ def test_stream_and_subscribe_answer_in_geodetic(store_server: LiveServer) -> No
         ) as geodetic_subscriber,
         connect(_url(live_server, sid, "subscribe"), additional_headers=headers) as plain,
         connect(
+            _url(live_server, sid, "subscribe", "?format=geojson"), additional_headers=headers
+        ) as features,
+        connect(
             _url(live_server, sid, "stream", "?frame=geodetic"), additional_headers=headers
         ) as stream,
     ):
-        for connection in (geodetic_subscriber, plain, stream):
+        for connection in (geodetic_subscriber, plain, features, stream):
             assert _receive(connection)["type"] == "ack"
         answers = []
         for scan in range(6):
@@ -112,8 +116,17 @@ def test_stream_and_subscribe_answer_in_geodetic(store_server: LiveServer) -> No
             answers.append(_receive(stream))
         subscribed = [_receive(geodetic_subscriber) for _ in answers]
         unconverted = [_receive(plain) for _ in answers]
+        collections = [_receive(features)["result"] for _ in answers]
     assert [answer["ref"] for answer in answers] == [f"s{scan}" for scan in range(6)]
     assert answers[-1]["result"]["tracks"], answers[-1]  # the radar's target is fused
+    for answer, collection in zip(answers, collections, strict=True):
+        assert collection["type"] == "FeatureCollection"
+        assert collection["seq"] == answer["result"]["seq"]
+        points = [(f["id"], f["geometry"]["coordinates"]) for f in collection["features"]]
+        tracks = answer["result"]["tracks"]
+        assert [track_id for track_id, _ in points] == [track["id"] for track in tracks]
+        for (_, (lon, lat, alt)), track in zip(points, tracks, strict=True):
+            assert [lat, lon, alt] == [track["geodetic"][key] for key in ("lat", "lon", "alt")]
     for answer, received, bare in zip(answers, subscribed, unconverted, strict=True):
         assert answer["type"] == received["type"] == bare["type"] == "result"
         _check_geodetic(answer["result"]["tracks"])

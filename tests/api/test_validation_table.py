@@ -219,6 +219,12 @@ ROWS = [
     ),
     # --- detections
     BadBody(
+        "a polar detection without its azimuth (the union's tag is not in the path)",
+        "/detections",
+        ("body", "detections", 0, "azimuth_deg"),
+        lambda body: body["detections"].__setitem__(0, {"range": 500.0}),
+    ),
+    BadBody(
         "z has 3 components for 2 positions",
         "/detections",
         ("body", "detections", 0, "z"),
@@ -300,21 +306,33 @@ ROWS = [
         set_sensor("fov", {"kind": "cone"}),
     ),
     BadBody(
+        "a polar measurement without its azimuth sigma (the union's tag is not in the path)",
+        "/sessions",
+        ("body", "sensors", 0, "measurement", "sigma_azimuth_deg"),
+        set_sensor("measurement", {"kind": "polar", "sigma_range": 20.0}),
+    ),
+    BadBody(
+        "a cartesian measurement (the default kind) without r",
+        "/sessions",
+        ("body", "sensors", 0, "measurement", "r"),
+        set_sensor("measurement", {"sigma_range": 20.0}),
+    ),
+    BadBody(
         "polygon vertices not an array",
         "/sessions",
-        ("body", "sensors", 0, "fov", "polygon", "vertices"),
+        ("body", "sensors", 0, "fov", "vertices"),
         set_sensor("fov", {"kind": "polygon", "vertices": "0,0 1,0 1,1"}),
     ),
     BadBody(
         "a polygon vertex of three numbers",
         "/sessions",
-        ("body", "sensors", 0, "fov", "polygon", "vertices", 2),
+        ("body", "sensors", 0, "fov", "vertices", 2),
         set_sensor("fov", {"kind": "polygon", "vertices": [[0, 0], [1, 0], [1, 1, 1]]}),
     ),
     BadBody(
         "a polygon vertex as text",
         "/sessions",
-        ("body", "sensors", 0, "fov", "polygon", "vertices", 1, 0),
+        ("body", "sensors", 0, "fov", "vertices", 1, 0),
         set_sensor("fov", {"kind": "polygon", "vertices": [[0, 0], ["1", 0], [1, 1]]}),
     ),
     BadBody(

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any, get_args
+from typing import Annotated, Any, get_args, get_origin
 
 import pytest
 
@@ -38,7 +38,7 @@ from api_schemas.results import (
     StatusReason,
     TrackStatus,
 )
-from app.sessions.translate import core_detection_report
+from app.inputs.detections import core_detection_report
 from core.association import DEFAULT_DISTANCE, LOCAL_TRACKING_DEFAULT, TRACK_TO_TRACK_DEFAULT
 from core.association.associate import METHODS
 from core.association.denoeux import DEFAULT_GATE_PROBABILITY
@@ -120,7 +120,25 @@ MEASUREMENTS: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {
 }
 
 
-@pytest.mark.parametrize("kind", sorted(field_values(MeasurementModel, "kind")))
+def union_models(annotation: Any) -> list[Any]:
+    """The models of a (tagged) union annotation, ``Annotated`` wrappers taken off."""
+    while get_origin(annotation) is Annotated:
+        annotation = get_args(annotation)[0]
+    if isinstance(annotation, type):
+        return [annotation]
+    return [model for member in get_args(annotation) for model in union_models(member)]
+
+
+MEASUREMENT_KINDS = {
+    kind for model in union_models(MeasurementModel) for kind in field_values(model, "kind")
+}
+
+
+def test_measurement_kinds_are_a_tagged_union() -> None:
+    assert {"cartesian", "polar"} == MEASUREMENT_KINDS
+
+
+@pytest.mark.parametrize("kind", sorted(MEASUREMENT_KINDS))
 def test_every_measurement_kind_becomes_the_cores_cartesian_position(kind: str) -> None:
     """The core knows one measurement, a position (and its noise): every wire kind is turned
     into it (a polar detection at 500 m, azimuth atan(3/4) from north, is at (300, 400))."""

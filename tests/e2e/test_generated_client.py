@@ -133,3 +133,34 @@ def test_generated_client_drives_the_rest_flow(
     assert sdk["delete_session"].sync_detailed(sid=created.id, client=owner).status_code == 204
     gone = sdk["get_session"].sync_detailed(sid=created.id, client=admin)
     assert gone.status_code == 404
+
+
+def test_generated_client_reads_every_output_format(
+    sdk: dict[str, ModuleType], live_server: LiveServer
+) -> None:
+    """``format=geojson`` answers are read as FusedFeatureCollection (the JSON ones as before):
+    every format's model is in the 200 answer of the inputs and of the fused picture."""
+    models: Any = sdk["models"]
+    client_module: Any = sdk["client"]
+    anonymous = client_module.Client(base_url=live_server.url, raise_on_unexpected_status=True)
+    config = session_config() | {"origin": {"lat": 48.85, "lon": 2.35, "alt": 35.0}}
+    created = sdk["create_session"].sync(
+        client=anonymous, body=models.SessionConfig.from_dict(config)
+    )
+    owner = client_module.AuthenticatedClient(base_url=live_server.url, token=created.token)
+    geojson = models.ListFusedTracksFormat("geojson")
+    for body in reports(4):
+        step = sdk["submit_tracks"].sync(
+            sid=created.id,
+            client=owner,
+            body=models.TrackReport.from_dict(body),
+            format_=models.SubmitTracksFormat("geojson"),
+        )
+        assert isinstance(step, models.FusedFeatureCollection), step
+        assert step.sensor == body["sensor"] and step.time == body["time"]
+    picture = sdk["list_fused_tracks"].sync(sid=created.id, client=owner)
+    features = sdk["list_fused_tracks"].sync(sid=created.id, client=owner, format_=geojson)
+    assert isinstance(picture, models.FusedPicture)
+    assert isinstance(features, models.FusedFeatureCollection) and features.seq == picture.seq
+    assert [feature.id for feature in features.features] == [track.id for track in picture.tracks]
+    assert all(feature.geometry.coordinates[1] > 48.0 for feature in features.features)

@@ -1,0 +1,97 @@
+"""The inputs of a session: ``POST /v1/sessions/{sid}/{tag}`` for every input kind registered
+in :mod:`app.inputs` (a JSON report as the body, or the bytes of a decoded kind), built with
+the application: the routes iterate the registry, as the WebSocket, the log and replay do."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Query, Request
+
+from api_schemas.base import WireModel
+from app.http.deps import LiveSessionDep, RegistryDep
+from app.http.errors import problem_responses
+from app.http.requests import WireRoute
+from app.http.responses import JSONTextResponse
+from app.inputs import DECODED_KINDS, INPUT_KINDS, DecodedKind, Input, InputKind
+from app.routes.fusion import OutputFormat, OutputFrame, output_of, output_responses
+
+Explain = Annotated[bool, Query(description="add the association method's score matrix")]
+
+
+def _submit_route(router: APIRouter, kind: InputKind[Any]) -> None:
+    """``POST /v1/sessions/{sid}/{tag}`` for the input kind ``kind`` (its report as the body)."""
+
+    async def submit(
+        report: WireModel,
+        session: LiveSessionDep,
+        registry: RegistryDep,
+        explain: Explain = False,
+        frame: OutputFrame = "session",
+        format: OutputFormat = "json",
+    ) -> JSONTextResponse:
+        output = output_of(session.config, format, frame)  # refused before anything is applied
+        submitted = Input(kind, report)
+        return JSONTextResponse(
+            await registry.submit(session, submitted, explain=explain, output=output),
+            media_type=output.media_type,
+        )
+
+    submit.__annotations__["report"] = kind.report_model
+    submit.__name__ = submit.__qualname__ = f"submit_{kind.tag}"
+    submit.__doc__ = kind.description
+    router.add_api_route(
+        f"/{{sid}}/{kind.tag}",
+        submit,
+        methods=["POST"],
+        response_model=None,  # the formats' models: output_responses
+        responses=output_responses("step", 401, 403, 404, 409, 408, 413, 422, 503),
+        name=submit.__name__,
+    )
+
+
+def _decoded_route(router: APIRouter, kind: DecodedKind[Any]) -> None:
+    """``POST /v1/sessions/{sid}/{tag}`` for a kind whose body is bytes (``kind.media_type``)
+    with its query ``parameters``; the answer is ``kind.answer_model``."""
+
+    async def submit(
+        request: Request,
+        parameters: WireModel,
+        session: LiveSessionDep,
+        registry: RegistryDep,
+        explain: Explain = False,
+        frame: OutputFrame = "session",
+        format: OutputFormat = "json",
+    ) -> JSONTextResponse:
+        output = output_of(session.config, format, frame)
+        data = await request.body()
+        return JSONTextResponse(
+            await registry.submit_decoded(
+                session, kind, data, parameters, explain=explain, output=output
+            )
+        )
+
+    submit.__annotations__["parameters"] = Annotated[kind.parameters, Query()]
+    submit.__name__ = submit.__qualname__ = f"submit_{kind.tag}"
+    submit.__doc__ = kind.description
+    body = {"schema": {"type": "string", "format": "binary"}}
+    router.add_api_route(
+        f"/{{sid}}/{kind.tag}",
+        submit,
+        methods=["POST"],
+        response_model=kind.answer_model,
+        responses=problem_responses(401, 403, 404, 409, 408, 413, 422, 503),
+        name=submit.__name__,
+        openapi_extra={"requestBody": {"required": True, "content": {kind.media_type: body}}},
+    )
+
+
+def input_routes() -> APIRouter:
+    """``POST /v1/sessions/{sid}/{tag}`` for every registered input kind (:mod:`app.inputs`),
+    built when the application is."""
+    router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
+    for kind in INPUT_KINDS.values():
+        _submit_route(router, kind)
+    for decoded in DECODED_KINDS.values():
+        _decoded_route(router, decoded)
+    return router

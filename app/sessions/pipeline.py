@@ -1,0 +1,340 @@
+"""The input pipeline of the live sessions: check, apply, log durably, publish, snapshot.
+
+One input (:meth:`InputPipeline.submit`):
+
+1. checks that need only the config (limits, sensor, dimensions, labels: its kind's);
+2. under the session's lock, the engine applies it (in a worker thread unless the work
+   is tiny); a refusal changes nothing;
+3. the input is appended to the store — durably for sqlite — and only then is
+   the result returned and published. Steps 2–3 are shielded from
+   cancellation (a client that goes away cannot leave the engine ahead of the
+   log); if the append fails anyway, the session is evicted from memory and
+   rebuilt from the store on its next use;
+4. every ``snapshot_every`` inputs the engine state is snapshotted, and the
+   log is compacted to the ``log_retention`` inputs behind that snapshot.
+
+With a shared store the pipeline takes the session's lease first and publishes through
+Redis (:class:`~app.cluster.link.ClusterLink`).
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from typing import TYPE_CHECKING, Any
+
+import anyio
+from prometheus_client import Counter, Histogram
+
+from app.errors import SessionNotFound, StoreUnavailable
+from app.inputs import DecodedKind, Input, SessionView
+from app.outputs import JSON, Output
+from app.outputs.text import dumps
+from app.sessions.hub import SESSION_RELOADED, STORE_UNAVAILABLE, Published
+from app.sessions.live import LiveSession
+from app.sessions.log import logged_input
+from app.sessions.translate import PlainObject
+from app.sessions.work import compute
+from app.stores import LogEntry, SequenceConflict, Snapshot
+from core.fusion.engine import SessionEngine
+from core.tracking.track import ScanTally
+
+if TYPE_CHECKING:
+    from app.sessions.registry import SessionRegistry
+
+DECODED_BYTES_PER_ITEM = 32
+"""Bytes of an encoded body (ASTERIX) per item, for :data:`~app.sessions.work.TINY_WORK`:
+a plot is ~30 bytes."""
+
+logger = logging.getLogger("credal_fusion.sessions")
+
+
+@dataclass
+class Step:
+    """An applied (not yet logged) input: the engine that holds it, its result written in every
+    output asked (by its sender, or a subscriber of this instance; :data:`~app.outputs.JSON`
+    always), the input as it is logged (all built beside the step, off the event loop) and
+    the CPU time of the engine step alone (the thread's)."""
+
+    engine: SessionEngine
+    written: dict[Output, str]
+    logged: PlainObject
+    engine_cpu_s: float
+
+    @property
+    def result(self) -> str:
+        """The result as the contract's JSON in the session frame."""
+        return self.written[JSON]
+
+
+@dataclass(frozen=True)
+class InputSeries:
+    """The metrics of one kind of input (``tracks``, ``detections``)."""
+
+    inputs: Counter
+    fusion_step: Histogram
+    engine_cpu: Histogram
+
+
+class InputPipeline:
+    """Applies, logs and publishes the inputs of the registry's sessions (module docstring)."""
+
+    def __init__(self, registry: SessionRegistry) -> None:
+        self.registry = registry
+        self._input_series: dict[str, InputSeries] = {}
+
+    async def submit(
+        self,
+        session: LiveSession,
+        submitted: Input,
+        *,
+        explain: bool = False,
+        output: Output = JSON,
+    ) -> str:
+        """Apply one input (of any kind: :mod:`app.inputs`), log it durably, publish its
+        result, and return the answer to its sender (text of ``output``). It is checked
+        against the session's config first."""
+        items = submitted.items
+        await compute(items, functools.partial(submitted.check, session.config))
+        return await self._submit(session, submitted, items, explain=explain, output=output)
+
+    async def submit_decoded(
+        self,
+        session: LiveSession,
+        kind: DecodedKind[Any],
+        data: bytes,
+        parameters: Any,
+        *,
+        explain: bool = False,
+        output: Output = JSON,
+    ) -> str:
+        """Decode ``data`` (a kind of :data:`~app.inputs.DECODED_KINDS`) into inputs, checked
+        against the session's config, then submit each in order; the kind's answer (JSON text).
+        Malformed data or an input the session cannot take refuses the whole body first."""
+        view = SessionView(session.config, session.last_time)
+        decode = functools.partial(kind.decode, data, parameters, view)
+        decoded = await compute(len(data) // DECODED_BYTES_PER_ITEM, decode)
+        results = [
+            await self.submit(session, item, explain=explain, output=output)
+            for item in decoded.inputs
+        ]
+        return kind.answer(decoded, results)
+
+    async def _submit(
+        self,
+        session: LiveSession,
+        submitted: Input,
+        items: int,
+        *,
+        explain: bool,
+        output: Output,
+    ) -> str:
+        """Under the session lock: (lease,) apply, log durably, then publish and return the result.
+
+        An input that waited for the lock of a session evicted meanwhile goes to the session
+        as the store has it now: 404 if it was deleted, 503 if the store is down.
+        """
+        async with session.lock:
+            if not session.closed:
+                return await self._submit_locked(
+                    session, submitted, items, explain=explain, output=output
+                )
+        return await self._submit(
+            await self.registry.get(session.id), submitted, items, explain=explain, output=output
+        )
+
+    async def _submit_locked(
+        self,
+        session: LiveSession,
+        submitted: Input,
+        items: int,
+        *,
+        explain: bool,
+        output: Output,
+    ) -> str:
+        """:meth:`_submit` once the session's lock is held."""
+        kind, sensor = submitted.kind.tag, submitted.sensor
+        # this instance's subscribers are written for beside the step (with a shared store
+        # they are fed the JSON text through Redis and convert it)
+        outputs = {output} if self.registry.shared else {output, *session.hub.outputs()}
+        apply = functools.partial(
+            self.apply, session, submitted, explain=explain, outputs=frozenset(outputs)
+        )
+        with anyio.CancelScope(shield=True):
+            if self.registry.shared:
+                await self.registry.cluster.hold_lease(session)
+            try:
+                step = await self._apply_and_log(session, apply, sensor, items, kind)
+            except SequenceConflict:
+                if not self.registry.shared:
+                    raise
+                # overtaken by another instance: rebuild from the store, apply once more
+                await self.registry.cluster.refresh(session)
+                step = await self._apply_and_log(session, apply, sensor, items, kind)
+            self._series(kind).inputs.inc()
+            if (
+                self.registry.shared
+            ):  # local subscribers too receive it through Redis (the text only)
+                await self.registry.cluster.publish(session, result_message(step.result))
+            elif len(session.hub):
+                session.hub.publish(
+                    Published({kind: result_message(text) for kind, text in step.written.items()})
+                )
+            session.since_snapshot += 1
+            if session.since_snapshot >= self.registry.settings.snapshot_every:
+                await self._snapshot(session)
+        return step.written[output]
+
+    def apply(
+        self,
+        session: LiveSession,
+        submitted: Input,
+        *,
+        explain: bool,
+        outputs: frozenset[Output] = frozenset((JSON,)),
+    ) -> Step:
+        """Apply an input to the session's engine (or a copy with a new sensor), write its
+        result in ``outputs`` (and JSON); logs nothing."""
+        engine, joined = session.engine_for(submitted.sensor, self.registry.settings.max_sensors)
+        try:
+            applied = submitted.apply(engine, session.config, explain=explain)
+        except BaseException:
+            if joined:
+                engine.leave(submitted.sensor)  # a refused input joins no sensor
+            raise
+        step, seq = applied.step, session.seq + 1
+        return Step(
+            engine=engine,
+            written={output: output.step(step, seq) for output in outputs | {JSON}},  # once, here
+            logged=submitted.logged(),
+            engine_cpu_s=applied.engine_cpu_s,
+        )
+
+    def replay(self, session: LiveSession, entries: list[LogEntry]) -> None:
+        """Apply logged inputs to the session in order (a worker thread, under its lock)."""
+        record = session.record
+        for entry in entries:
+            try:
+                step = self.apply(session, logged_input(entry), explain=False)
+            except Exception:
+                logger.exception("session %s: replay of input %d failed", record.id, entry.seq)
+            else:
+                session.engine = step.engine
+            sensor = str(entry.input.get("report", {}).get("sensor", ""))
+            session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
+            session.seq = entry.seq
+            session.last_input_at = entry.received_at
+
+    async def _apply_and_log(
+        self,
+        session: LiveSession,
+        apply: Callable[[], Step],
+        sensor: str,
+        items: int,
+        kind: str,
+    ) -> Step:
+        """``apply()`` the input, append it to the log, then move the session on (else it is
+        rebuilt)."""
+        started = time.perf_counter()
+        size = items + len(session.tracks)
+        engine_seq = None if session.engine is None else session.engine.seq
+        tallied = _tally(session.engine, sensor)
+        try:
+            step = await compute(size, apply)
+        except BaseException:
+            if session.engine is not None and session.engine.seq != engine_seq:
+                # the last defence: steps are transactions, so a refused input that changed
+                # the engine is a bug; rebuild the session from its log
+                logger.error("session %s: a refused input changed the engine", session.id)
+                self.registry.metrics.rebuilds.labels("refused_after_change").inc()
+                self.registry.discard(session.id, SESSION_RELOADED)
+            raise
+        series = self._series(kind)
+        series.fusion_step.observe(time.perf_counter() - started)
+        series.engine_cpu.observe(step.engine_cpu_s)
+        self._count_detections(_tally(step.engine, sensor), tallied)
+        received_at = datetime.now(UTC)
+        seq = session.seq + 1
+        try:
+            await self.registry.io(
+                self.registry.store.append, session.id, seq, step.logged, received_at, size=size
+            )
+        except SequenceConflict:
+            if not self.registry.shared:
+                self.registry.metrics.rebuilds.labels("unlogged").inc()
+                self.registry.discard(session.id, SESSION_RELOADED)
+            raise  # shared: the caller rebuilds the engine in place from the store
+        except SessionNotFound:
+            self.registry.discard(session.id)  # deleted (through another instance)
+            raise
+        except StoreUnavailable:
+            self.registry.discard(
+                session.id, STORE_UNAVAILABLE
+            )  # not logged: rebuilt when it is back
+            raise
+        except BaseException:
+            self.registry.metrics.rebuilds.labels("unlogged").inc()
+            # the engine holds an unlogged step: rebuild on next use
+            self.registry.discard(session.id, SESSION_RELOADED)
+            raise
+        session.engine = step.engine
+        session.seq = seq
+        session.last_input_at = received_at
+        session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
+        return step
+
+    def _count_detections(self, after: ScanTally | None, before: ScanTally | None) -> None:
+        """What a detecting sensor's scan did, into ``/metrics`` (docs/algorithms.md §8.5)."""
+        if after is None:
+            return
+        before = before or ScanTally()
+        metrics = self.registry.metrics
+        for outcome in ("joined_established", "joined_tentative", "started", "unused"):
+            metrics.detections.labels(outcome).inc(
+                getattr(after, outcome) - getattr(before, outcome)
+            )
+        for event in ("confirmed", "refuted", "ended"):
+            metrics.local_tracks.labels(event).inc(getattr(after, event) - getattr(before, event))
+
+    async def _snapshot(self, session: LiveSession) -> None:
+        """Snapshot the engine, then compact the log to ``log_retention`` inputs behind it."""
+        size = len(session.tracks)
+        state = await compute(size, session.snapshot_state)
+        snapshot = Snapshot(seq=session.seq, taken_at=datetime.now(UTC), state=state)
+        try:
+            await self.registry.io(
+                self.registry.store.save_snapshot, session.id, snapshot, size=size
+            )
+            session.since_snapshot = 0
+            through = snapshot.seq - self.registry.settings.log_retention
+            if through > 0:
+                await self.registry.io(self.registry.store.compact, session.id, through)
+        except Exception:
+            logger.exception("session %s: snapshot at seq %d failed", session.id, session.seq)
+
+    def _series(self, kind: str) -> InputSeries:
+        """The metrics of inputs of ``kind`` (``labels()`` once per kind, not per input)."""
+        series = self._input_series.get(kind)
+        if series is None:
+            metrics = self.registry.metrics
+            series = self._input_series[kind] = InputSeries(
+                inputs=metrics.inputs.labels(kind),
+                fusion_step=metrics.fusion_step.labels(kind),
+                engine_cpu=metrics.engine_cpu.labels(kind),
+            )
+        return series
+
+
+def result_message(result: str, ref: str | None = None) -> str:
+    """A ``result`` WebSocket message around a result's JSON text (not serialised again)."""
+    return f'{{"type":"result","ref":{dumps(ref)},"result":{result}}}'
+
+
+def _tally(engine: SessionEngine | None, sensor: str) -> ScanTally | None:
+    """A detecting sensor's tally so far (:class:`~core.tracking.track.ScanTally`), or None."""
+    tracker = None if engine is None else engine.local_trackers.get(sensor)
+    return None if tracker is None else tracker.tallies.get(sensor)
