@@ -482,6 +482,22 @@ class TrackingConfig(WireModel):
         ),
     )
     initiation: Initiation = Field(default_factory=SinglePointInitiation)
+    class_behaviours: (
+        Annotated[
+            dict[Label, Annotated[list[Label], Field(max_length=10)]], Field(max_length=MAX_CLASSES)
+        ]
+        | None
+    ) = Field(
+        default=None,
+        description=(
+            "the session's own classes with detecting sensors: each class of `classes` and the "
+            "preset's behaviours it allows (aircraft: b1 no manoeuvre, b2 up to 2g, b3 up to "
+            "4g; pedestrian: static, walking, running); a track showing a behaviour is then "
+            "any of the classes that allow it. null (the default): the preset's own classes "
+            "(aircraft: liner [b1], bomber [b1, b2], fighter [b1, b2, b3]; pedestrian: "
+            "rambler [static, walking], sportsman [walking, running])"
+        ),
+    )
 
     @model_validator(mode="after")
     def _profile_fills(self) -> Self:
@@ -577,6 +593,7 @@ class SessionConfig(WireModel):
                         sensor.measurement.r,
                     )
                 )
+        issues.extend(self._class_behaviour_issues())
         if self.region is not None and self.region.frame != "session":
             issues.append(
                 FieldIssue(
@@ -596,6 +613,25 @@ class SessionConfig(WireModel):
         if issues:
             raise_issues("SessionConfig", issues)
         return self
+
+    def _class_behaviour_issues(self) -> list[FieldIssue]:
+        """``tracking.class_behaviours`` names exactly the session's classes, with a preset."""
+        allowed = self.tracking.class_behaviours
+        if allowed is None:
+            return []
+        where = ("tracking", "class_behaviours")
+        if self.tracking.preset is None:
+            return [FieldIssue(where, "class_behaviours needs a tracking preset", None)]
+        if set(allowed) != set(self.classes):
+            return [
+                FieldIssue(
+                    where,
+                    f"class_behaviours must name exactly the session's classes {self.classes}, "
+                    f"got {list(allowed)}",
+                    list(allowed),
+                )
+            ]
+        return []
 
     def _placement_issues(self, index: int, sensor: SensorConfig) -> list[FieldIssue]:
         """A geodetic site needs the origin; a polar sensor in 3-D its elevation σ."""

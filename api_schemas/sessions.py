@@ -19,7 +19,7 @@ class SessionCreated(WireModel):
 
 class DetectionTally(WireModel):
     """What a detecting sensor's detections did in its local tracker, summed over its scans
-    (docs/algorithms.md §8.5): the answer to "why is nothing tracked"."""
+    (docs/algorithms.md §8.8): the answer to "why is nothing tracked"."""
 
     detections: int = Field(description="detections received")
     joined_established: int = Field(description="detections that updated a confirmed track")

@@ -152,7 +152,7 @@ class ServiceMetrics:
             detections=Counter(
                 "credal_detections",
                 "Detections by what they did in their sensor's local tracker, over every "
-                "session (docs/algorithms.md §8.5; per session and sensor: GET "
+                "session (docs/algorithms.md §8.8; per session and sensor: GET "
                 "/v1/sessions/{sid}): joined_established, joined_tentative, started, unused.",
                 ("outcome",),
                 registry=registry,

@@ -63,12 +63,9 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import datetime  # noqa: E402
 import math  # noqa: E402
-import socket  # noqa: E402
 import sys  # noqa: E402
-import threading  # noqa: E402
 import time  # noqa: E402
-from collections.abc import Callable, Iterator  # noqa: E402
-from contextlib import contextmanager  # noqa: E402
+from collections.abc import Callable  # noqa: E402
 from dataclasses import dataclass, field  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
@@ -121,13 +118,12 @@ from core.tracking.models import (  # noqa: E402
     constant_velocity,
 )
 from core.tracking.tracker import LocalTracker  # noqa: E402
+from evaluation.service import live_service  # noqa: E402
 
 START = datetime.datetime(2026, 1, 1)
 SIGMA = 1.0  # m, measurement noise per axis
 Q = 0.05  # m²/s³, Stone Soup ConstantVelocity noise_diff_coeff
 DT = 1.0  # s
-SERVER_START_TIMEOUT_S = 20.0
-"""The in-thread service must answer by then (else the bench stops, not hangs)."""
 P_DETECT = 0.9
 CUTOFF = 10.0 * SIGMA
 SIAP_MAX_TARGETS = 15
@@ -529,48 +525,6 @@ def _positions(detections: set[Any]) -> np.ndarray:
     return np.array([np.asarray(d.state_vector, dtype=float).ravel() for d in ordered]).reshape(
         -1, 2
     )
-
-
-@contextmanager
-def live_service() -> Iterator[str]:
-    """The application on uvicorn in a thread, memory store, a free loopback port."""
-    import uvicorn
-
-    from app.http.keepalive import server_options
-    from app.main import create_app
-    from app.settings import Settings
-
-    settings = Settings.model_validate(
-        {
-            "store": "memory",
-            "admin_token": "peers-bench-admin-token-0123456789",
-            "max_body_bytes": 8 * 1024 * 1024,
-        }
-    )
-    listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-    listener.bind(("127.0.0.1", 0))
-    port = listener.getsockname()[1]
-    server = uvicorn.Server(
-        uvicorn.Config(
-            create_app(settings),
-            log_level="warning",
-            access_log=False,
-            **server_options(settings),  # as `credal-fusion serve` runs it
-        )
-    )
-    thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
-    thread.start()
-    deadline = time.monotonic() + SERVER_START_TIMEOUT_S
-    while not server.started:
-        if not thread.is_alive() or time.monotonic() > deadline:
-            raise RuntimeError("uvicorn did not start")
-        time.sleep(0.01)
-    try:
-        yield f"http://127.0.0.1:{port}"
-    finally:
-        server.should_exit = True
-        thread.join(timeout=SERVER_START_TIMEOUT_S)
-        listener.close()
 
 
 def rest_run(

@@ -93,6 +93,11 @@ CATALOGUE: dict[str, FigureEntry] = {
             "GOSPA, SIAP, id switches and per-scan time vs Stone Soup GNN and JPDA",
         ),
         FigureEntry(
+            "real-traffic",
+            "issue 22 (bench/traffic.py)",
+            "20 recorded flights, three 3-D radars and ADS-B through the service: map and coverage",
+        ),
+        FigureEntry(
             "hz-scale",
             "[HZ] Fig 3",
             "scale factor of the Euclidean, Mahalanobis and modified distances vs |P|",

@@ -38,7 +38,7 @@ import numpy as np
 from core.arrays import FloatArray
 from core.metrics import time_to_decision
 from core.simulation import crossing_scenario
-from core.tracking.config import DEFAULT_IMM_DISTANCE, LocalTrackerConfig
+from core.tracking.config import DEFAULT_IMM_DISTANCE, PAPER_CLASSIFICATION, LocalTrackerConfig
 from core.tracking.presets import aircraft
 from evaluation.tracking import TrackedRun, track_scenario, tracking_scores
 
@@ -150,6 +150,7 @@ def _config(variance: float, imm_distance: str) -> LocalTrackerConfig:
         measurement_noise=((variance, 0.0), (0.0, variance)),
         imm_distance=imm_distance,
         fields_of_view={"radar": None},
+        classification=PAPER_CLASSIFICATION,  # [MTT]'s own experiment
     )
 
 

@@ -1506,6 +1506,102 @@ def _peer_table(study: PeerScene) -> str:
     return "\n".join(lines)
 
 
+# ------------------------------------------------------------------ real traffic
+def draw_real_traffic(reduced: bool, echo: Echo) -> Figure:
+    """Issue 22: the real-traffic scene through the service, fused and radar-n alone."""
+    import httpx
+    import pymap3d
+
+    from evaluation.service import live_service
+    from evaluation.traffic import (
+        KINDS,
+        ORIGIN,
+        assess,
+        decided_shares,
+        load_flights,
+        run_service,
+        simulate,
+    )
+
+    flights = load_flights()
+    if reduced:
+        flights = [f for f in flights if f.present(0.0) and f.present(120.0)]
+    scene = simulate(seed=1, duration=120.0 if reduced else 1800.0, flights=flights)
+    echo(
+        f"real-traffic: seed {scene.seed}, {len(flights)} aircraft ({len(scene.equipped)} with "
+        f"ADS-B), {scene.duration:.0f} s, defaults plus physics"
+    )
+    with live_service() as url, httpx.Client(base_url=url, timeout=120) as client:
+        fused_run = run_service(client, scene)
+        alone_run = run_service(client, scene, ["radar-n"])
+    fused, alone = assess(scene, fused_run), assess(scene, alone_run)
+    for label, score in (("fused", fused), ("radar-n alone", alone)):
+        shares = ", ".join(
+            f"{kind} {100 * decided_shares(score, kind)[0]:.0f} % decided, "
+            f"{100 * decided_shares(score, kind)[1]:.0f} % fighter/bomber"
+            for kind in KINDS
+        )
+        echo(
+            f"real-traffic {label}: coverage min {100 * score.min_coverage:.1f} %, mean "
+            f"{100 * score.mean_coverage:.1f} %; extra ids {score.total_extra_ids}, false tracks "
+            f"{score.false_tracks}; RMSE {score.rmse():.0f} m; status changes "
+            f"{score.status_changes:.1f} per track-hour; {shares}"
+        )
+    figure = Figure(figsize=(12, 6.2), layout="constrained")
+    plan, bars = figure.subplots(1, 2, width_ratios=(1.6, 1))
+    for flight in flights:
+        inside = (flight.times >= 0.0) & (flight.times <= scene.duration)
+        lat, lon = flight.geodetic[inside, 0], flight.geodetic[inside, 1]
+        plan.plot(lon, lat, color="0.6", lw=3, alpha=0.5, zorder=1)
+    ids = sorted({t["id"] for _, tracks in fused_run.pictures for t in tracks})
+    colour = {track_id: f"C{k % 10}" for k, track_id in enumerate(ids)}
+    points: dict[str, list[tuple[float, float]]] = {}
+    for _, tracks in fused_run.pictures:
+        for track in tracks:
+            if track["status"] == "confirmed":
+                east, north, up = (track["state"][i] for i in (0, 2, 4))
+                lat_, lon_, _ = pymap3d.enu2geodetic(east, north, up, *ORIGIN)
+                points.setdefault(track["id"], []).append((float(lon_), float(lat_)))
+    for track_id, where in points.items():
+        xy = np.array(where)
+        plan.plot(xy[:, 0], xy[:, 1], ".", ms=2.5, color=colour[track_id], zorder=2)
+    for radar in scene.radars:
+        plan.plot(radar.lon, radar.lat, "k^", ms=8, zorder=3)
+        plan.annotate(
+            f"{radar.id} ({radar.period:g} s)",
+            (radar.lon, radar.lat),
+            fontsize=7,
+            xytext=(4, 4),
+            textcoords="offset points",
+        )
+    plan.set_xlabel("longitude (°)")
+    plan.set_ylabel("latitude (°)")
+    plan.set_aspect(1.0 / math.cos(math.radians(ORIGIN[0])))
+    plan.set_title(
+        "truth (grey) and the fused confirmed tracks every 10 s (one colour per id)",
+        fontsize=9,
+        loc="left",
+    )
+    names = sorted(fused.coverage)
+    rows = np.arange(len(names))
+    bars.barh(rows + 0.2, [100 * fused.coverage[n] for n in names], 0.4, label="fused")
+    bars.barh(
+        rows - 0.2, [100 * alone.coverage.get(n, 0.0) for n in names], 0.4, label="radar-n alone"
+    )
+    bars.set_yticks(rows, [f"{n}{' *' if n in scene.equipped else ''}" for n in names], fontsize=7)
+    bars.axvline(95.0, color="k", lw=0.8, ls="--")
+    bars.set_xlabel("% of the pictures where a sensor of the run could see it")
+    bars.set_title("coverage per aircraft (* ADS-B)", fontsize=9, loc="left")
+    bars.legend(fontsize=7, loc="lower left")
+    return _titled(
+        figure,
+        "real-traffic",
+        f"Issue 22: {len(flights)} recorded flights (traffic's quickstart sample), three 3-D "
+        "radars and ADS-B, through the service with the defaults",
+        reduced,
+    )
+
+
 DRAWINGS: dict[str, Callable[[bool, Echo], Figure]] = {
     "t2t-four": draw_t2t_four,
     "t2t-two-class": draw_t2t_two_class,
@@ -1520,6 +1616,7 @@ DRAWINGS: dict[str, Callable[[bool, Echo], Figure]] = {
     "mtt-scenes": draw_mtt_scenes,
     "hz-scale": draw_hz_scale,
     "peers": draw_peers,
+    "real-traffic": draw_real_traffic,
 }
 """Figure name → its drawing: one per entry of :data:`~evaluation.catalogue.CATALOGUE`."""
 

@@ -138,7 +138,7 @@ def summary(session: LiveSession) -> SessionSummary:
 
 
 def detection_tally(session: LiveSession, sensor: str) -> DetectionTally | None:
-    """A detecting sensor's tally and clutter density (docs/algorithms.md §8.5)."""
+    """A detecting sensor's tally and clutter density (docs/algorithms.md §8.8)."""
     tracker = None if session.engine is None else session.engine.local_trackers.get(sensor)
     if tracker is None:
         return None

@@ -288,7 +288,7 @@ class InputPipeline:
         return step
 
     def _count_detections(self, after: ScanTally | None, before: ScanTally | None) -> None:
-        """What a detecting sensor's scan did, into ``/metrics`` (docs/algorithms.md §8.5)."""
+        """What a detecting sensor's scan did, into ``/metrics`` (docs/algorithms.md §8.8)."""
         if after is None:
             return
         before = before or ScanTally()

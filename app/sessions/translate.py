@@ -54,7 +54,7 @@ from core.geometry import FieldOfView, PolygonView, Sector
 from core.lifecycle import LifeCycleConfig
 from core.tracking.config import DEFAULT_IMM_DISTANCE, ClassificationOptions, LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
-from core.tracking.presets import MIN_MANOEUVRE_DENSITY, preset
+from core.tracking.presets import MIN_MANOEUVRE_DENSITY, preset, with_classes
 from core.tracking.range_rate import RangeRateModel
 
 PlainObject = dict[str, Any]
@@ -208,8 +208,25 @@ def local_tracker_config(
         range_rate=range_rate_model(config, sensor, axes),
         fields_of_view={sensor.id: fov},
         classification=ClassificationOptions() if config.classes else None,
+        class_behaviours=class_behaviours(config),
         id_prefix=f"{sensor.id}:",
     )
+
+
+def class_behaviours(config: SessionConfig) -> dict[str, tuple[str, ...]] | None:
+    """The session's own classes and the behaviours each allows, in the class frame's order;
+    one the preset refuses is a validation error at ``tracking/class_behaviours``."""
+    allowed = config.tracking.class_behaviours
+    if allowed is None or config.tracking.preset is None:
+        return None
+    ordered = {label: tuple(allowed[label]) for label in config.classes}
+    try:
+        with_classes(preset(config.tracking.preset), ordered)
+    except InvalidInput as error:
+        raise InvalidFields(
+            [FieldIssue(("tracking", "class_behaviours"), str(error), allowed)]
+        ) from None
+    return ordered
 
 
 def range_rate_model(

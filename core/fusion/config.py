@@ -125,6 +125,7 @@ class FusionConfig:
             raise InvalidInput(
                 f"sensor {sensor.id!r}: its tracking preset classifies into "
                 f"{list(preset_classes.labels)}, the session's classes are {list(self.classes.labels)}"
+                " (tracking.class_behaviours maps the session's own classes to its behaviours)"
             )
 
     @property

@@ -91,6 +91,7 @@ from core.lifecycle import (
     advance,
     hand_over,
     initiated,
+    reason_code,
 )
 from core.numerics import MAX_TIME, check_magnitudes
 from core.pipeline.evidence import coasting_misses, coverage_codes, hits, seen_by
@@ -100,6 +101,12 @@ from core.pipeline.rows import TrackRows, ended
 from core.tracking.tracker import LocalTracker
 
 EXPORT_VERSION = 1
+OVERDUE_REVISITS = 2.5
+"""A source is overdue on a fused track after this many of its revisits without updating it:
+one ordinary miss (P_D 0.9: one scan in ten) never makes a track coast (§8.6)."""
+STALE_REVISITS = 5.0
+"""After this many revisits of every source of a fused track without an update, any sensor's
+silence about it is a miss (§8.2: a track whose sources all stopped reporting still ends)."""
 LIVE = (TrackStatus.TENTATIVE, TrackStatus.CONFIRMED, TrackStatus.COASTING)
 _LIVE_CODES = tuple(STATUS_CODES[status] for status in LIVE)
 
@@ -113,6 +120,8 @@ class SessionEngine:
         self.time: float | None = None
         self.next_number = 1
         self.last_report: dict[str, float] = {}
+        self.revisits: dict[str, float] = {}
+        """Each source's revisit, learned from the intervals between its reports (§8.6)."""
         self.tracks: list[FusedTrack] = []
         """The fused tracks, ``tracks[k].row == k`` (their estimates and lives: ``_rows``)."""
         self.local_trackers: dict[str, LocalTracker] = {
@@ -221,7 +230,7 @@ class SessionEngine:
         exception they come back, so the export is bit-identical to before.
         """
         seq, time, next_number = self.seq, self.time, self.next_number
-        last_report, tracks = dict(self.last_report), self.tracks
+        last_report, tracks, revisits = dict(self.last_report), self.tracks, dict(self.revisits)
         checkpoint, rows = self._table.checkpoint(), self._rows.rows
         saved = None if tracker is None else tracker.checkpoint()
         fields = [track.checkpoint() for track in tracks]
@@ -231,6 +240,7 @@ class SessionEngine:
         except BaseException:
             self.seq, self.time, self.next_number = seq, time, next_number
             self.last_report, self.tracks, self._rows.rows = last_report, tracks, rows
+            self.revisits = revisits
             for track, kept in zip(tracks, fields, strict=True):
                 track.rollback(kept)
             self._table.rollback(checkpoint)
@@ -262,6 +272,7 @@ class SessionEngine:
         created = self._start(np.asarray(decision.new, dtype=np.int64), report, incoming)
 
         self.time = t if self.time is None else max(self.time, t)
+        self._learn_revisit(report.sensor, t)
         self.last_report[report.sensor] = t
         self.seq += 1
         terminated, confirmed = self._life_cycle(
@@ -443,6 +454,7 @@ class SessionEngine:
             seen[at], hidden[at] = seen_by(
                 sensor.fov, states[:, position], live_status, management.occlusion_radius
             )
+            seen[at] &= self._silence_counts(live, sensor.id)
             missed = np.flatnonzero(coasting_misses(live_status, seen[at], detected[at]))
             if len(missed):
                 gate_log_det[at[missed]] = self._gate_log_dets(live[missed], covariances[missed])
@@ -463,10 +475,80 @@ class SessionEngine:
                 sensors=self._table.present[candidates].sum(axis=1),
             ),
         )
+        after = self._status_by_sources(life, after, candidates)
         self._rows.rows = self._rows.rows.living(
             after if every else _replaced_life(before, candidates, after)
         )
         return candidates[ended(life, after)], candidates[confirmed]
+
+    # -------------------------------------------- sources' silence and status (§8.2, §8.6)
+    def _learn_revisit(self, sensor: str, t: float) -> None:
+        """A source's revisit: the interval between its last two reports (from its second
+        report on; an engine restored from an export without revisits learns each one
+        again at that source's next report)."""
+        last = self.last_report.get(sensor)
+        if last is not None:
+            self.revisits[sensor] = t - last
+
+    def _current(self, rows: IntArray, revisits: float = OVERDUE_REVISITS) -> BoolArray:
+        """(rows, sensors): the sensor carries the track and has updated it within
+        ``revisits`` of its revisit; a sensor whose revisit is not known yet (one report
+        so far) is current on the tracks of its latest report."""
+        assert self.time is not None
+        table = self._table
+        sensors = list(table.slots)  # slot order
+        revisit = np.array([self.revisits.get(s, math.nan) for s in sensors])
+        latest = np.array([self.last_report.get(s, math.inf) for s in sensors])
+        times = table.times[rows]
+        within = np.where(
+            np.isfinite(revisit),
+            self.time - times <= revisits * np.nan_to_num(revisit),
+            times >= latest,
+        )
+        return np.asarray(table.present[rows] & within, dtype=bool)
+
+    def _silence_counts(self, rows: IntArray, sensor: str) -> BoolArray:
+        """Where ``sensor``'s silence about the tracks ``rows`` is a miss (§8.2).
+
+        Only when no other source keeps the track up to date, and only if ``sensor``
+        has carried the track: a source that never reported a target — a cooperative
+        source's unequipped aircraft, a radar that has not picked it up — says
+        nothing about it. Once every source of the track has left it for
+        :data:`STALE_REVISITS` of its revisits (a source that stopped reporting at
+        all), any sensor's silence counts again, so that the track still ends.
+        """
+        slot = self._table.slot(sensor)
+        current = self._current(rows)
+        others = np.delete(current, slot, axis=1).any(axis=1)
+        stale = ~self._current(rows, STALE_REVISITS).any(axis=1)
+        carried = self._table.present[rows, slot]
+        return np.asarray((carried | stale) & ~others, dtype=bool)
+
+    def _status_by_sources(self, before: LifeState, after: LifeState, rows: IntArray) -> LifeState:
+        """An established track is ``confirmed`` while one of its sources keeps it up to
+        date at that source's revisit, ``coasting`` (``missed``) only when it is overdue
+        for every one (§8.6); tentative, phantom and terminated tracks are as
+        :func:`~core.lifecycle.advance` left them."""
+        status = after.status
+        established_rows = (status == CONFIRMED) | (status == COASTING)
+        if not established_rows.any():
+            return after
+        current = self._current(rows).any(axis=1)
+        new = np.where(established_rows, np.where(current, CONFIRMED, COASTING), status)
+        moved = new != status
+        if not moved.any():
+            return after
+        kept = before.status == CONFIRMED  # a confirmed track never left: its reason stays
+        reason = np.where(
+            moved,
+            np.where(
+                new == CONFIRMED,
+                np.where(kept, before.reason, reason_code(StatusReason.REACQUIRED)),
+                reason_code(StatusReason.MISSED),
+            ),
+            after.reason,
+        )
+        return dataclasses.replace(after, status=new, reason=reason)
 
     def _gate_log_dets(self, rows: IntArray, predicted: FloatArray) -> FloatArray:
         """log|S| of each row's gate: its predicted covariance plus its newest estimate's,
@@ -699,6 +781,7 @@ class SessionEngine:
             "time": self.time,
             "next_number": self.next_number,
             "last_report": dict(sorted(self.last_report.items())),
+            "revisits": dict(sorted(self.revisits.items())),
             "tracks": [track.to_plain(self._kinematics(track)) for track in self.tracks],
             "local_trackers": {
                 sensor: tracker.export() for sensor, tracker in sorted(self.local_trackers.items())
@@ -728,6 +811,8 @@ class SessionEngine:
         engine.time = None if state["time"] is None else float(state["time"])
         engine.next_number = int(state["next_number"])
         engine.last_report = {str(k): float(v) for k, v in state["last_report"].items()}
+        # exports before issue 22 have no revisits: they are learned again from the next reports
+        engine.revisits = {str(k): float(v) for k, v in state.get("revisits", {}).items()}
         plain_tracks = state["tracks"]
         empty = [plain["id"] for plain in plain_tracks if not plain["estimates"]]
         if empty:

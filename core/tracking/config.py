@@ -87,12 +87,13 @@ from typing import Any, Literal
 import numpy as np
 
 from core.classification.behaviours import LIKELIHOOD_SCALES, LikelihoodScale
+from core.classification.calibration import SIGNIFICANCE
 from core.classification.credal import ACCUMULATIONS, DISCOUNTS, Accumulation, Discount
 from core.errors import TrackingError
 from core.geometry import Coverage, FieldOfView, PolygonView
 from core.lifecycle import LifeCycleConfig, ScoreModel
 from core.tracking.models import LinearMeasurementModel, ModelBank
-from core.tracking.presets import TrackingPreset, preset
+from core.tracking.presets import TrackingPreset, preset, with_classes
 from core.tracking.range_rate import RangeRateModel
 
 ImmDistance = Literal["closest_model", "combined", "gated_combined"]
@@ -122,12 +123,16 @@ class ClassificationOptions:
     discount : "none" | "instantaneous" | "cumulative"
     reliability : λ, or None for the default of ``discount``
     accumulation : "classes" | "behaviours"
+    significance : κ of the mode likelihoods' noise calibration
+        (:mod:`core.classification.calibration`, docs/algorithms.md §5); None: the raw
+        likelihoods of [MTT] eq 18
     """
 
     likelihood_scale: LikelihoodScale = "max"
     discount: Discount = "none"
     reliability: float | None = None
     accumulation: Accumulation = "classes"
+    significance: float | None = SIGNIFICANCE
 
     def __post_init__(self) -> None:
         if self.likelihood_scale not in LIKELIHOOD_SCALES:
@@ -138,6 +143,15 @@ class ClassificationOptions:
             raise TrackingError(f"accumulation must be one of {ACCUMULATIONS}")
         if self.reliability is not None and not (0.0 <= self.reliability <= 1.0):
             raise TrackingError(f"reliability must be in [0, 1], got {self.reliability!r}")
+        if self.significance is not None and not (
+            math.isfinite(self.significance) and self.significance >= 0.0
+        ):
+            raise TrackingError(f"significance must be >= 0 or None, got {self.significance!r}")
+
+
+PAPER_CLASSIFICATION = ClassificationOptions(significance=None)
+"""[MTT]'s classification as printed: the raw mode likelihoods (the papers' experiments ask
+for it; the default calibrates them to the sensor's noise, §8.5)."""
 
 
 @dataclass(frozen=True)
@@ -206,6 +220,9 @@ class LocalTrackerConfig:
     region : the surveillance region (default: union of the sensors' ranges).
     classification : credal options, or None for no classification; ignored
         when the bank has no classes.
+    class_behaviours : the session's own classes, each with the preset's behaviours it
+        allows (in the class frame's order; :func:`core.tracking.presets.with_classes`);
+        None: the preset's classes.
     id_prefix : track ids are ``f"{id_prefix}{n}"``, n = 1, 2, ...
     """
 
@@ -238,6 +255,7 @@ class LocalTrackerConfig:
     )
     region: PolygonView | None = None
     classification: ClassificationOptions | None = field(default_factory=ClassificationOptions)
+    class_behaviours: Mapping[str, tuple[str, ...]] | None = None
     id_prefix: str = "L"
 
     def __post_init__(self) -> None:
@@ -311,16 +329,18 @@ class LocalTrackerConfig:
         return p_detect, self.life_cycle.false_target_density if clutter is None else clutter
 
     def tracking_preset(self) -> TrackingPreset | None:
-        """The preset, or None when an explicit bank replaces it."""
+        """The preset (with the session's own classes, ``class_behaviours``), or None when
+        an explicit bank replaces it."""
+        if self.bank is not None:
+            return None
+        found = preset(
+            self.preset,
+            time_interval=self.time_interval,
+            axes=self.axes,
+            **dict(self.preset_options),
+        )
         return (
-            None
-            if self.bank is not None
-            else preset(
-                self.preset,
-                time_interval=self.time_interval,
-                axes=self.axes,
-                **dict(self.preset_options),
-            )
+            found if self.class_behaviours is None else with_classes(found, self.class_behaviours)
         )
 
     def model_bank(self, found: TrackingPreset | None = None) -> ModelBank:

@@ -36,8 +36,8 @@ of the fused layer when the session's tracks come from this preset).
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
@@ -230,6 +230,34 @@ PRESETS: dict[str, Callable[..., TrackingPreset]] = {
     "aircraft": aircraft,
     "pedestrian": pedestrian,
 }
+
+
+def with_classes(chosen: TrackingPreset, allowed: Mapping[str, Iterable[str]]) -> TrackingPreset:
+    """The preset with a session's own classes: ``allowed`` gives each class (in the frame's
+    order) the behaviours it allows, and Γ(b) is the set of classes that allow b ([MTT]
+    eq 23: the preset's own Γ is liner {b1}, bomber {b1, b2}, fighter {b1, b2, b3}).
+
+    Raises
+    ------
+    ModelConfigError
+        A behaviour the preset does not have, or one that no class allows (a track showing
+        it would contradict every class).
+    """
+    behaviours = chosen.behaviours.frame.labels
+    unknown = sorted({b for bs in allowed.values() for b in bs} - set(behaviours))
+    if unknown:
+        raise ModelConfigError(
+            f"behaviours {unknown} are not the {chosen.name} preset's; it has {list(behaviours)}"
+        )
+    images = {b: [c for c, bs in allowed.items() if b in set(bs)] for b in behaviours}
+    orphans = [b for b, classes in images.items() if not classes]
+    if orphans:
+        raise ModelConfigError(
+            f"no class allows the behaviours {orphans}: every behaviour of the "
+            f"{chosen.name} preset ({list(behaviours)}) needs a class that allows it"
+        )
+    relation = Relation.from_mapping(chosen.behaviours.frame, Frame(list(allowed)), images)
+    return replace(chosen, relation=relation)
 
 
 def preset(name: str, **options: float) -> TrackingPreset:

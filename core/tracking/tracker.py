@@ -64,9 +64,14 @@ from core.classification.batched import (
     dense_to_mass,
     mass_to_dense,
 )
+from core.classification.calibration import (
+    noise_calibrated_log_likelihoods,
+    sharp_predictions,
+)
 from core.distance.estimates import check_covariances
 from core.errors import TrackingError
 from core.lifecycle import (
+    CONFIRMED,
     PHANTOM,
     REASON_CODES,
     REASONS,
@@ -182,8 +187,10 @@ class LocalTracker:
             config, self.bank, config.score, velocities=set(self._conventions) == {VELOCITY}
         )
         self.classifier: BatchedCredalClassifier | None = None
+        self._significance: float | None = None
         if found is not None and config.classification is not None:
             chosen = config.classification
+            self._significance = chosen.significance
             self.classifier = BatchedCredalClassifier(
                 found.behaviours,
                 found.relation,
@@ -593,11 +600,32 @@ class LocalTracker:
         self._state = _replaced(prediction.as_state(), candidates, update.state)
         if self.classifier is not None and self._classes is not None and len(candidates):
             every = len(candidates) == len(self._rows)
+            log_likelihoods, detected = update.log_likelihoods, update.detected
+            significance = self._significance
+            if significance is not None:  # §8.5: what the sensor's noise alone gives is no evidence
+                log_likelihoods = noise_calibrated_log_likelihoods(
+                    log_likelihoods,
+                    update.innovations,
+                    update.innovation_covariances,
+                    significance,
+                )
+                # and only a track confirmed and detected at its previous scan, whose best
+                # model predicted sharply, compares the models over one manoeuvre (a
+                # tentative track's velocity is a guess, a coasting one spans a gap)
+                h = self.bank.measurement.matrix
+                predicted = h @ prediction.covariances[candidates] @ h.T
+                detected = (
+                    detected
+                    & (self._rows.life.status[candidates] == CONFIRMED)
+                    & sharp_predictions(
+                        update.log_likelihoods, update.innovation_covariances, predicted
+                    )
+                )
             classified = self.classifier.update(
                 self._classes if every else self._classes.select(candidates),
                 update.log_mode_probabilities,
-                update.log_likelihoods,
-                update.detected,
+                log_likelihoods,
+                detected,
             )
             self._classes = classified if every else self._classes.replace(candidates, classified)
 

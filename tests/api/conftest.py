@@ -2,24 +2,19 @@
 
 from __future__ import annotations
 
-import socket
-import threading
-import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 
 import pytest
-import uvicorn
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
-from app.http.keepalive import server_options
 from app.main import create_app
 from app.settings import Settings
+from evaluation.service import serving as serve_in_thread
 
 ADMIN_TOKEN = "admin-token-for-tests-0123456789"
-SERVER_START_TIMEOUT_S = 20.0
 
 
 def make_settings(**overrides: object) -> Settings:
@@ -51,28 +46,9 @@ class LiveServer:
 @contextmanager
 def serving(settings: Settings, app: FastAPI | None = None) -> Iterator[LiveServer]:
     """The application (built from ``settings`` unless given) served by uvicorn on a free
-    loopback port, in a background thread."""
-    listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-    listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-    listener.bind(("127.0.0.1", 0))
-    port = listener.getsockname()[1]
-    config = uvicorn.Config(
-        app or create_app(settings), log_level="warning", lifespan="on", **server_options(settings)
-    )
-    server = uvicorn.Server(config)
-    thread = threading.Thread(target=server.run, kwargs={"sockets": [listener]}, daemon=True)
-    thread.start()
-    deadline = time.monotonic() + SERVER_START_TIMEOUT_S
-    while not server.started:
-        if not thread.is_alive() or time.monotonic() > deadline:
-            raise RuntimeError("uvicorn did not start")
-        time.sleep(0.01)
-    try:
-        yield LiveServer(url=f"http://127.0.0.1:{port}", settings=settings)
-    finally:
-        server.should_exit = True
-        thread.join(timeout=SERVER_START_TIMEOUT_S)
-        listener.close()
+    loopback port, in a background thread (:func:`evaluation.service.serving`)."""
+    with serve_in_thread(settings, app) as url:
+        yield LiveServer(url=url, settings=settings)
 
 
 @pytest.fixture

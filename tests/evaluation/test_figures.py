@@ -43,6 +43,7 @@ def test_the_registry_names_the_papers_figures() -> None:
         "mtt-scenes",
         "hz-scale",
         "peers",
+        "real-traffic",
     }
     assert all(spec.name == name and spec.paper for name, spec in FIGURES.items())
     assert set(DRAWINGS) == set(CATALOGUE) == set(FIGURES)  # a drawing for every name

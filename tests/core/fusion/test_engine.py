@@ -152,14 +152,41 @@ def test_a_target_outside_a_sensors_view_is_not_penalised_by_its_reports() -> No
     engine = SessionEngine(make_config(["s1", "s2"], fovs={"s2": fov}))
     engine.apply(report("s1", 0.0, ("a", [50.0, 0, 0, 0]), ("b", [250.0, 0, 0, 0])))
     engine.apply(report("s1", 1.0, ("a", [50.0, 0, 0, 0]), ("b", [250.0, 0, 0, 0])))
+    engine.apply(report("s2", 1.2, ("x", [50.0, 0, 0, 0]), ("y", [250.0, 0, 0, 0])))
     before = {track.id: track.score for track in engine.tracks}
-    step = engine.apply(report("s2", 1.5))  # s2 reports nothing
+    # s2 reports nothing at 4.0, when s1 (revisit 1 s, last report at 1.0) is overdue on both
+    # (§8.2: only then is s2's silence about a track it carried a miss)
+    step = engine.apply(report("s2", 4.0))
     after = {track.id: track.score for track in engine.tracks}
     outside, inside = "F1", "F2"  # a at x = 50 (outside s2's view), b at x = 250 (inside)
     assert after[outside] == before[outside]
     # Control: the target inside s2's view is penalised by ln(1 − P_D) = ln 0.1.
     assert after[inside] == pytest.approx(before[inside] + np.log(0.1))
     assert set(step.association.missed) == {outside, inside}
+
+
+def test_a_source_says_nothing_about_what_it_never_carried() -> None:
+    """A cooperative source (ADS-B: no field of view, reports only equipped aircraft) never
+    reports the radar-only target: its lists are no miss for that track (§8.2), which keeps
+    its score and id through 60 lists, while the equipped target's track is kept too."""
+    engine = SessionEngine(make_config(["radar", "adsb"]))
+    scores = []
+    for step in range(60):
+        t = float(step)
+        if step % 4 == 0:  # the radar every 4 s sees both
+            engine.apply(
+                report("radar", t, ("r1", moving(0.0, t)), ("r2", moving(0.0, t, speed=-10.0)))
+            )
+        result = engine.apply(report("adsb", t + 0.5, ("icao", moving(0.0, t + 0.5))))
+        radar_only = [view for view in result.tracks if view.sources[0].sensor == "radar"]
+        radar_only = [v for v in radar_only if {s.sensor for s in v.sources} == {"radar"}]
+        if radar_only:
+            scores.append(radar_only[0].score)
+    ids = {track.id: {s for s in track.estimates} for track in engine.tracks}
+    assert ids == {"F1": {"radar", "adsb"}, "F2": {"radar"}}
+    # between radar scans the radar-only track's score never moves: three ADS-B lists say nothing
+    assert len(scores) == 60
+    assert all(scores[k] == scores[k - 1] for k in range(1, 60) if k % 4)
 
 
 def blind_zone_engine() -> SessionEngine:
@@ -327,8 +354,9 @@ def test_a_track_hidden_behind_another_is_not_penalised(radius: float, penalised
     a, b = [0.0, 0.0, 50.0, 0.0], [0.0, 0.0, 100.0, 0.0]
     engine.apply(report("s1", 0.0, ("a", a), ("b", b)))
     engine.apply(report("s1", 1.0, ("a", a), ("b", b)))
+    engine.apply(report("s2", 1.2, ("x", a), ("y", b)))  # s2 has carried both
     before = {track.id: track.score for track in engine.tracks}
-    engine.apply(report("s2", 1.5, ("x", a)))  # s2 sees A only
+    engine.apply(report("s2", 4.0, ("x", a)))  # s2 sees A only; s1 is overdue on both
     after = {track.id: track.score for track in engine.tracks}
     assert (after["F2"] < before["F2"]) is penalised
 
@@ -387,15 +415,44 @@ def test_a_coasting_track_gates_alike_after_a_restore_that_reorders_its_estimate
         return TrackReport(sensor, t, (reported,) if tracks else ())
 
     uninterrupted = SessionEngine(config)
-    uninterrupted.apply(report("s2", 1.0, 1.0))
-    uninterrupted.apply(report("s1", 1.0, 5.0))
+    for t, sensor in ((0.0, "s2"), (0.0, "s1"), (0.5, "s3"), (1.0, "s2"), (1.0, "s1")):
+        uninterrupted.apply(report(sensor, t, 1.0 if sensor == "s2" else 5.0))
     restored = SessionEngine.restore(
         config, json.loads(json.dumps(uninterrupted.export(), sort_keys=True))
     )
     assert list(restored.tracks[0].estimates) != list(uninterrupted.tracks[0].estimates)
     for engine in (uninterrupted, restored):
-        engine.apply(report("s3", 2.0, 1.0, tracks=False))  # s3 misses it: the track coasts
-    assert uninterrupted.tracks[0].status is TrackStatus.COASTING
+        # s3, which carried it, misses it when s1 and s2 (revisit 1 s) are overdue: a
+        # coasting miss, whose gate is the newest estimates' (§8.2)
+        engine.apply(report("s3", 5.0, 1.0, tracks=False))
+    assert uninterrupted.tracks[0].empty_gate_probability < 1.0
     assert json.dumps(restored.export(), sort_keys=True) == json.dumps(
         uninterrupted.export(), sort_keys=True
     )
+
+
+def test_status_follows_the_sources_revisits_not_every_report() -> None:
+    """§8.6: s1 reports target A every 4 s (its scan at 12 s misses A), s2 reports target B
+    every second. Once confirmed, A's track is confirmed at every step until s1 is overdue
+    — 2.5 revisits (10 s) after its last report of A, at 20 s — then coasting; B's
+    reports never touch A's status. s1 stops after 20 s: after 5 revisits (20 s) without
+    any source of A, s2's silence counts (§8.2) and the track ends."""
+    engine = SessionEngine(make_config(["s1", "s2"]))
+    statuses: list[tuple[float, TrackStatus]] = []
+    for step in range(60):
+        t = float(step)
+        if step % 4 == 0 and step <= 20:
+            a = () if step == 12 else (("a", moving(0.0, t)),)
+            engine.apply(report("s1", t, *a))
+        result = engine.apply(report("s2", t + 0.5, ("b", moving(5000.0, t + 0.5))))
+        statuses += [(t + 0.5, view.status) for view in result.tracks if view.id == "F1"]
+    confirmed = next(k for k, (_, status) in enumerate(statuses) if status is TrackStatus.CONFIRMED)
+    assert statuses[confirmed][0] < 5.0
+    for when, status in statuses[confirmed:]:
+        if when <= 20.0 + 10.0:  # A's last hit at 20 s (s1's revisit 4 s)
+            assert status is TrackStatus.CONFIRMED, when
+        elif when < 20.0 + 20.0:
+            assert status is TrackStatus.COASTING, when
+    # stale after 40 s: s2's lists count misses (P_D 0.9: ln 0.1 each) until the score ends it
+    assert statuses[-1][1] is TrackStatus.TERMINATED
+    assert 40.0 < statuses[-1][0] < 50.0

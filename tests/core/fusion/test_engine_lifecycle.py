@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 
 from core.fusion.config import SensorSpec
-from core.fusion.engine import SessionEngine
+from core.fusion.engine import OVERDUE_REVISITS, SessionEngine
 from core.fusion.reports import ReportedTrack, StepResult, TrackReport
 from core.lifecycle import LifeCycleConfig, StatusReason, TrackStatus
 
@@ -129,7 +129,10 @@ def test_a_confirmed_track_the_sensor_keeps_missing_coasts_and_is_terminated(
     for k in range(1, misses + 1):
         status, why, value = status_of(steps[LAST_HIT + k])
         assert value == pytest.approx(score + k * miss, rel=1e-9)
-        if k < misses:
+        if k < misses and k <= OVERDUE_REVISITS:
+            # s1 (revisit 1 s) is not overdue yet: still confirmed (§8.6), the miss counted
+            assert (status, why) == (TrackStatus.CONFIRMED, StatusReason.SCORE_CONFIRMED)
+        elif k < misses:
             assert (status, why) == (TrackStatus.COASTING, StatusReason.MISSED)
         else:
             assert (status, why) == (TrackStatus.TERMINATED, reason)
@@ -152,5 +155,6 @@ def test_the_empty_gate_probability_follows_the_reference_product() -> None:
     for k in range(1, 11):
         engine.apply(TrackReport("s1", float(LAST_HIT + k), ()))
         (track,) = engine.tracks
-        assert track.status is TrackStatus.COASTING
+        overdue = k > OVERDUE_REVISITS  # s1's revisit is 1 s
+        assert track.status is (TrackStatus.COASTING if overdue else TrackStatus.CONFIRMED)
         assert track.empty_gate_probability == pytest.approx(probabilities[k - 1], rel=1e-9)

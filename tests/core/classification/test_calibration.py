@@ -1,0 +1,108 @@
+"""The noise calibration of the mode likelihoods (§8.5, core/classification/calibration.py)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from core.classification.calibration import noise_calibrated_log_likelihoods, sharp_predictions
+from core.lifecycle import LifeCycleConfig
+from core.simulation.nearby import crossing_scenario
+from core.tracking.config import ClassificationOptions, LocalTrackerConfig
+from core.tracking.tracker import LocalTracker
+from evaluation.tracking import track_scenario
+
+
+def gaussian_log_likelihood(nu: np.ndarray, s: np.ndarray) -> float:
+    return float(
+        -0.5
+        * (nu @ np.linalg.solve(s, nu) + np.linalg.slogdet(s)[1] + len(nu) * math.log(2 * math.pi))
+    )
+
+
+def test_a_model_within_the_noise_band_of_the_best_is_as_plausible_and_one_outside_keeps_its_excess() -> (
+    None
+):
+    """Worked by hand, κ = 3, S = I (q = 2): model 0 fits exactly (ν = 0).
+    Model 1 is 1 σ away: d = 1, τ = 3 − 0.5 = 2.5 > its deficit 0.5 → tied with model 0.
+    Model 2 is 3 σ away: d = 3, τ = 9 − 4.5 = 4.5, deficit 4.5 → tied, just.
+    Model 3 is 8 σ away: d = 8, τ = max(0, 24 − 32) = 0: its deficit 32 stays."""
+    s = np.eye(2)
+    nus = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 3.0], [8.0, 0.0]])
+    raw = np.array([[gaussian_log_likelihood(nu, s) for nu in nus]])
+    calibrated = noise_calibrated_log_likelihoods(
+        raw, nus[None], np.broadcast_to(s, (1, 4, 2, 2)), significance=3.0
+    )
+    best = raw[0, 0]
+    np.testing.assert_allclose(calibrated[0], [best, best, best, best - 32.0], atol=1e-12)
+    # a row without a detection (NaN) is left as it is
+    nan_row = noise_calibrated_log_likelihoods(
+        np.full((1, 4), np.nan), np.full((1, 4, 2), np.nan), np.broadcast_to(s, (1, 4, 2, 2))
+    )
+    assert np.all(np.isnan(nan_row))
+
+
+def straight_airliner_betp(options: ClassificationOptions, seed: int = 3) -> np.ndarray:
+    """A 230 m/s straight-and-level aircraft seen every 4 s for 6 minutes by a radar 80 km
+    away across its path: converted noise 350 m cross-range (0.25°), 40 m in range, 420 m
+    in height (0.3°); BetP of its track at every scan from the 4th on."""
+    rng = np.random.default_rng(seed)
+    r = np.diag([350.0**2, 40.0**2, 420.0**2])
+    tracker = LocalTracker(
+        LocalTrackerConfig(
+            axes=3,
+            time_interval=4.0,
+            measurement_noise=tuple(tuple(row) for row in r.tolist()),
+            life_cycle=LifeCycleConfig(termination_probability=0.0),
+            classification=options,
+        )
+    )
+    betps = []
+    for k in range(90):
+        t = 4.0 * k
+        truth = np.array([230.0 * t, 0.0, 9000.0])
+        step = tracker.step(t, (truth + rng.multivariate_normal(np.zeros(3), r))[None])
+        confirmed = [track for track in step.tracks if track.status.value == "confirmed"]
+        if k >= 3 and confirmed:
+            assert confirmed[0].pignistic is not None
+            betps.append(confirmed[0].pignistic)
+    return np.array(betps)
+
+
+def test_an_airliner_under_radar_noise_is_not_called_a_fighter() -> None:
+    calibrated = straight_airliner_betp(ClassificationOptions())
+    assert len(calibrated) > 40
+    # every scan leaves the three classes tied: undecided, never fighter or bomber
+    np.testing.assert_allclose(calibrated, 1.0 / 3.0, atol=1e-9)
+    # control: [MTT]'s raw likelihoods read the same noise as manoeuvres
+    raw = straight_airliner_betp(ClassificationOptions(significance=None))
+    assert raw[-1][2] > raw[-1][0] + 0.05
+
+
+def test_the_papers_fighter_is_still_recognised_with_the_calibration() -> None:
+    """[MTT] Fig 17–18's crossing scene (0.2 m², 1 s) with the default (calibrated)
+    classification: the fighter is decided fighter, the unknown aircraft stays in doubt."""
+    variance = 0.2
+    scenario = crossing_scenario(seed=0, measurement_variance=variance)
+    config = LocalTrackerConfig(
+        measurement_noise=((variance, 0.0), (0.0, variance)), fields_of_view={"radar": None}
+    )
+    run = track_scenario(scenario, config)
+    fighter, other = run.track_of(1, 40, 59), run.track_of(2, 40, 59)
+    assert fighter is not None and other is not None and fighter != other
+    assert run.pignistic_of(fighter, scenario.n_steps, 3)[-1][2] > 0.99
+    np.testing.assert_allclose(run.pignistic_of(other, scenario.n_steps, 3)[-1], 1 / 3, atol=1e-9)
+
+
+def test_a_step_is_evidence_only_where_the_best_model_predicted_sharply() -> None:
+    """Worked by hand, q = 3, sharpness 2: R = I; the best model (the larger likelihood)
+    predicted with H P Hᵀ = 3.9 I (σ just under twice the detection's: kept) in the first row and 9 I
+    (three times: dropped) in the second; the other model's spread does not matter; a row
+    without a detection is dropped."""
+    eye = np.eye(3)
+    predicted = np.array([[3.9 * eye, 100 * eye], [100 * eye, 9 * eye], [eye, eye]])
+    innovation = predicted + eye
+    log_likelihoods = np.array([[0.0, -1.0], [-1.0, 0.0], [np.nan, np.nan]])
+    kept = sharp_predictions(log_likelihoods, innovation, predicted, sharpness=2.0)
+    np.testing.assert_array_equal(kept, [True, False, False])
