@@ -33,6 +33,7 @@ from api_schemas.base import (
 from api_schemas.issues import FieldIssue, raise_issues
 from api_schemas.limits import MAX_SENSORS, bounded
 from api_schemas.linalg import check_covariance
+from core.numerics import MAX_MAGNITUDE
 
 MAX_STATE_DIM = 64
 
@@ -93,6 +94,7 @@ class MotionModel(WireModel):
     model: Literal["constant_velocity", "constant_position"] = "constant_velocity"
     q: PositiveFloat | None = Field(
         default=None,
+        le=MAX_MAGNITUDE,  # q·Δt³ stays finite for every Δt of legal times (core.numerics)
         description=(
             "spectral density of the continuous white-noise acceleration (m²/s³): per axis "
             "Q = q [[Δt³/3, Δt²/2], [Δt²/2, Δt]] (constant_position: Q = q Δt), the same "

@@ -59,8 +59,22 @@ class AckMessage(WireModel):
     seq: int
 
 
-ServerMessage = Annotated[ResultMessage | ErrorMessage | AckMessage, Field(discriminator="type")]
+class GapMessage(WireModel):
+    """Server → subscriber: the results after ``after`` and before ``next`` were not delivered
+    (the subscriber fell behind, or an instance died between logging an input and publishing
+    its result): read ``GET …/tracks`` for the current picture (or ``GET …/events?after=``
+    for the inputs). Sent just before the result numbered ``next``."""
 
-server_message_adapter: TypeAdapter[ResultMessage | ErrorMessage | AckMessage] = TypeAdapter(
-    ServerMessage
+    type: Literal["gap"]
+    ref: str | None
+    after: int
+    next: int
+
+
+ServerMessage = Annotated[
+    ResultMessage | ErrorMessage | AckMessage | GapMessage, Field(discriminator="type")
+]
+
+server_message_adapter: TypeAdapter[ResultMessage | ErrorMessage | AckMessage | GapMessage] = (
+    TypeAdapter(ServerMessage)
 )

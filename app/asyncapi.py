@@ -18,7 +18,7 @@ from pydantic import BaseModel, create_model
 from pydantic.json_schema import models_json_schema
 
 from api_schemas.base import WireModel
-from api_schemas.ws import AckMessage, ErrorMessage, ResultMessage
+from api_schemas.ws import AckMessage, ErrorMessage, GapMessage, ResultMessage
 from app.inputs import DECODED_KINDS, INPUT_KINDS, DecodedKind
 from app.outputs import FRAMES, OUTPUT_FORMATS
 from core import __version__
@@ -44,6 +44,12 @@ MESSAGES: dict[str, tuple[type[BaseModel], Direction, str]] = {
         AckMessage,
         "server",
         "Sent once when the connection is ready, with the session's latest `seq`.",
+    ),
+    "gap": (
+        GapMessage,
+        "server",
+        "`subscribe` only: the results after `after` and before `next` were not delivered; "
+        "read `GET …/tracks` for the current picture.",
     ),
 }
 """Message name (its ``type`` tag) → model, who sends it, what it means; a decoded kind
@@ -118,15 +124,38 @@ A `detections` message runs the sensor's local tracker (the sensor needs a
 `POST …/detections`.
 
 `subscribe`: after the `ack` (its `seq` is the session's latest input), the
-server sends every later `result` of the session, in order, with `ref` null.
-A subscriber that cannot keep up is not queued without bound: it keeps the
-latest 64 results and skips older ones (`seq` shows the gap). Messages sent by
-the client on this channel are ignored. When the session ends (deleted or
+server sends every later `result` of the session, in order, with `ref` null:
+every `seq`, or an explicit `gap` message (`after`, `next`) just before a
+result that does not follow the last one sent. A gap comes from a subscriber
+that cannot keep up (it keeps the latest 64 results and skips older ones: it
+is never queued without bound) or from an instance that died between logging
+an input and publishing its result; on a `gap`, read `GET …/tracks` for the
+current picture. Messages sent by the client on this channel are ignored. When the session ends (deleted or
 expired) the server closes the connection with code 1000, reason `session
 ended`; when the session store (or, with Redis, its pub/sub connection) fails
 it closes with code 1013, reason `store unavailable`: subscribe again once
 `GET /readyz` answers 200. An input sent on `stream` while the store is down
 gets an `error` with the 503 `store-unavailable` problem and is not applied.
+
+Clients and failures (the reference client is `app/commands/resilient.py`):
+
+- `seq` numbers the session's applied inputs, one by one; the `ack` of a
+  connection carries the session's latest. An input is applied once its
+  `result` arrives, and only then.
+- A 503 (`store-unavailable` or `session-leased`), an `error` carrying one, or
+  a connection that closed (1013 `store unavailable`, `session taken over`, a
+  dead instance) means: the inputs not yet answered may or may not have been
+  applied. Wait `Retry-After` seconds (a leased session: the lease's time left,
+  at most `CREDAL_LEASE_TTL_MS`, 3 s by default; another instance takes a dead
+  instance's sessions over within it), reconnect (any instance), and read the
+  new `ack.seq`. A sender that keeps one input in flight at a time knows: if
+  `ack.seq` is its last answered `seq` + 1, its pending input was applied
+  (do not resend it); if it equals its last answered `seq`, it was lost: send
+  it again. Over REST, an `Idempotency-Key` makes a resend safe while the
+  instance that answered it lives.
+- While a `stream` is open, its instance renews the session's lease every
+  third of the TTL; if another instance took the session over meanwhile, the
+  stream closes with 1013 `session taken over`: reconnect.
 
 Both channels take the query parameters `format` and `frame` on connect
 (`…/stream?frame=geodetic`, `…/subscribe?format=geojson`), as the REST inputs
@@ -141,7 +170,7 @@ Both channels need the session's bearer token (or the admin token) in the
 `Authorization` header of the upgrade request, or, from a browser (which
 cannot set headers on an upgrade), offered as the two subprotocols `bearer`
 and the token (the server accepts `bearer`); a refused upgrade gets the
-REST route's problem+json answer (401, 403, 404 or 429). With the redis
+REST route's problem+json answer (401, 404 or 429). With the redis
 store, `subscribe` on any instance receives the results applied on any
 other. The server sends
 WebSocket pings every `CREDAL_WS_PING_INTERVAL` seconds; a peer that does not
@@ -220,7 +249,7 @@ def build_asyncapi() -> dict[str, Any]:
     inputs = [*INPUT_KINDS, *DECODED_KINDS]
     answers = [f"{tag}_result" for tag in DECODED_KINDS]
     stream_messages = [*inputs, "result", *answers, "error", "ack"]
-    subscribe_messages = ["result", "error", "ack"]
+    subscribe_messages = ["result", "error", "ack", "gap"]
     return {
         "asyncapi": "3.0.0",
         "info": {

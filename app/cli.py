@@ -23,6 +23,7 @@ def _serve(args: argparse.Namespace) -> int:
     import uvicorn
 
     from app.http.keepalive import server_options
+    from app.http.transport import raise_descriptor_limit
     from app.main import create_app
     from app.runtime import tune_garbage_collector
     from app.settings import get_settings
@@ -43,6 +44,7 @@ def _serve(args: argparse.Namespace) -> int:
     )
     application = create_app(settings)
     tune_garbage_collector()
+    raise_descriptor_limit()  # the connection limits decide, not the descriptor limit
     uvicorn.run(
         application,
         host=settings.host,
@@ -58,7 +60,7 @@ def _check_store(url: str, redis_prefix: str) -> None:
     """Open the store once before serving: a store that cannot be used is one line, not a
     traceback from the application's start-up. A Redis server that is only unreachable
     now (not up yet) is a warning: the service starts, ``/readyz`` answers 503 until it is."""
-    from app.http.errors import StoreUnavailable
+    from app.http.errors import StoreCorrupt, StoreUnavailable
     from app.stores import open_store, parse_store_url
 
     try:
@@ -67,6 +69,8 @@ def _check_store(url: str, redis_prefix: str) -> None:
             store.count_sessions()
         finally:
             store.close()
+    except StoreCorrupt as error:  # serves, not ready (/readyz says why): the operator decides
+        print(f"credal-fusion serve: warning: {error.detail}; serving anyway", flush=True)
     except StoreUnavailable as error:
         if parse_store_url(url).kind != "redis":  # a file that cannot be opened: not an outage
             raise _unusable(url, error) from error

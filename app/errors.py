@@ -106,6 +106,20 @@ class StaleReport(Conflict):
         return [located(CoreStaleReport.loc, self.detail, "stale_report")]
 
 
+class IdempotencyKeyReused(Conflict):
+    """An ``Idempotency-Key`` sent again with another input than the first."""
+
+    slug = "idempotency-key-reused"
+    title = "Idempotency key reused"
+
+    def __init__(self, session_id: str, key: str) -> None:
+        super().__init__(
+            f"session {session_id!r}: Idempotency-Key {key!r} came with another input; "
+            "a key names one input (a retry sends the same input again)",
+            session=session_id,
+        )
+
+
 class RetryLater(ServiceError):  # noqa: N818 - HTTP vocabulary
     """A refusal that says when to try again: ``Retry-After`` and ``retry_after`` (seconds)."""
 
@@ -126,12 +140,14 @@ class SessionLeased(RetryLater):
     slug = "session-leased"
     title = "Session applied by another instance"
 
-    def __init__(self, session_id: str, retry_after_s: int) -> None:
+    def __init__(self, session_id: str, retry_after_ms: int) -> None:
+        retry_after_s = max(1, -(-retry_after_ms // 1000))
         super().__init__(
             f"session {session_id!r} is applied by another service instance; "
-            f"its lease lapses within {retry_after_s} s if that instance is gone",
+            f"its lease lapses within {retry_after_ms} ms if that instance is gone",
             retry_after_s,
             session=session_id,
+            retry_after_ms=retry_after_ms,
         )
 
 
@@ -151,6 +167,45 @@ class StoreUnavailable(RetryLater):
         super().__init__(
             f"the {store} store is unavailable ({reason}); nothing was stored, retry later",
             type(self).retry_after_s,
+            store=store,
+        )
+
+
+class SessionUnreadable(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """The store holds a session it cannot read (corrupt data): the session is quarantined.
+
+    A permanent fault, so no ``Retry-After``: the operator repairs or deletes the
+    session (``DELETE`` with the admin token). The answer names the session and
+    what of it could not be read, never the stored text.
+    """
+
+    status = HTTPStatus.INTERNAL_SERVER_ERROR
+    slug = "session-unreadable"
+    title = "Session unreadable"
+
+    def __init__(self, session_id: str, what: str) -> None:
+        super().__init__(
+            f"session {session_id!r} is quarantined: its stored {what} cannot be read (corrupt "
+            "data, a permanent fault: retrying will not help; the operator repairs or deletes "
+            "it). Other sessions are served.",
+            session=session_id,
+            unreadable=what,
+        )
+        self.session_id = session_id
+        self.what = what
+
+
+class StoreCorrupt(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """The store's own structure is damaged (e.g. a malformed sqlite file): a permanent fault."""
+
+    status = HTTPStatus.INTERNAL_SERVER_ERROR
+    slug = "store-corrupt"
+    title = "Session store corrupt"
+
+    def __init__(self, store: str, reason: str) -> None:
+        super().__init__(
+            f"the {store} store is damaged ({reason}): a permanent fault, retrying will not "
+            "help; the operator restores it from a backup",
             store=store,
         )
 
@@ -203,6 +258,71 @@ class BodyTooSlow(ServiceError):  # noqa: N818 - HTTP vocabulary
         )
 
 
+class UnsupportedEncoding(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """A body sent with a ``Content-Encoding`` (gzip, …): bodies are read as sent, never inflated
+    (a small compressed body can inflate past every size limit)."""
+
+    status = HTTPStatus.UNSUPPORTED_MEDIA_TYPE
+    slug = "unsupported-encoding"
+    title = "Content-Encoding not supported"
+
+    def __init__(self, encoding: str) -> None:
+        super().__init__(
+            f"Content-Encoding {encoding[:40]!r} is not supported: send the body as it is "
+            "(identity)",
+            encoding=encoding[:40],
+        )
+
+
+class HeadersTooLarge(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """A request head beyond ``limit`` (:mod:`app.http.transport`), refused unparsed."""
+
+    status = HTTPStatus.REQUEST_HEADER_FIELDS_TOO_LARGE
+    slug = "headers-too-large"
+    title = "Request headers too large"
+
+    def __init__(self, what: str, limit: str, maximum: int) -> None:
+        super().__init__(
+            f"request {what} exceed limit {limit} = {maximum}", limit=limit, maximum=maximum
+        )
+
+
+class HeadTooSlow(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """A request head not received within ``request_head_timeout`` (:mod:`app.http.transport`)."""
+
+    status = HTTPStatus.REQUEST_TIMEOUT
+    slug = "head-too-slow"
+    title = "Request head too slow"
+
+    def __init__(self, limit: str, maximum: float) -> None:
+        super().__init__(
+            f"the request head was not received within limit {limit} = {maximum} s",
+            limit=limit,
+            maximum=maximum,
+        )
+
+
+class TooManyConnections(ServiceError):  # noqa: N818 - HTTP vocabulary
+    """A connection beyond ``max_connections_per_client`` (429) or ``max_connections`` (503)."""
+
+    status = HTTPStatus.SERVICE_UNAVAILABLE
+    slug = "too-many-connections"
+    title = "Too many connections"
+
+    def __init__(self, limit: str, maximum: int, who: str, status: int) -> None:
+        super().__init__(
+            f"{who} has {maximum} open connections: limit {limit} = {maximum}; "
+            "close one, or reuse one (keep-alive)",
+            limit=limit,
+            maximum=maximum,
+        )
+        self._status = status
+
+    @property
+    def status_code(self) -> int:
+        return self._status
+
+
 class TrackNotFound(ServiceError):  # noqa: N818 - HTTP vocabulary
     """The session has no live fused track with this id."""
 
@@ -234,14 +354,22 @@ class LimitExceeded(ServiceError):  # noqa: N818 - HTTP vocabulary
         what: str | None = None,
         status: int | None = None,
         loc: Sequence[str | int] = (),
+        retry_after_s: int | None = None,
     ) -> None:
         subject = what or limit
         detail = f"{subject}: limit {limit} is {maximum}" + (
             "" if actual is None else f", got {actual}"
         )
-        super().__init__(detail, limit=limit, maximum=maximum, actual=actual)
+        extensions: dict[str, Any] = {"limit": limit, "maximum": maximum, "actual": actual}
+        if retry_after_s is not None:
+            extensions["retry_after"] = retry_after_s
+        super().__init__(detail, **extensions)
         self._status = int(status) if status is not None else int(type(self).status)
         self.loc = tuple(loc)
+        self.retry_after_s = retry_after_s
+
+    def headers(self) -> dict[str, str]:
+        return {} if self.retry_after_s is None else {"Retry-After": str(self.retry_after_s)}
 
     def field_errors(self) -> list[FieldError] | None:
         return [located(self.loc, self.detail, LIMIT_EXCEEDED)]

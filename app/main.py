@@ -9,13 +9,21 @@ import sys
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
-from fastapi import FastAPI
+from fastapi import FastAPI, Request, Response
 from fastapi.middleware.cors import CORSMiddleware
 from fastapi.routing import APIRoute
 
 from app.http.body_limits import BodyLimits
-from app.http.errors import StoreUnavailable, install_error_handlers
+from app.http.errors import (
+    SessionUnreadable,
+    StoreCorrupt,
+    StoreUnavailable,
+    install_error_handlers,
+    problem_answer,
+)
 from app.http.rate_limit import RateLimit
+from app.http.security import SecurityHeaders
+from app.http.tenants import tenancy_of
 from app.metrics import HttpMetrics, ServiceMetrics
 from app.openapi import install_openapi
 from app.routes import (
@@ -78,6 +86,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         except StoreUnavailable as error:
             logger.warning("serving without the store for now: %s", error.detail)
             tasks.append(asyncio.create_task(registry.restore_when_available(), name="restore"))
+        except StoreCorrupt as error:  # permanent: serve, say so (/readyz), never retry
+            registry.store_corrupt = error.detail
+            logger.error("serving with a damaged store: %s", error.detail)
         try:
             yield
         finally:
@@ -99,8 +110,21 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         redoc_url=None,
     )
     app.state.settings = settings
+    app.state.tenancy = tenancy_of(settings)
     app.state.metrics = service_metrics
     install_error_handlers(app, service_metrics.internal_errors.inc)
+
+    async def unreadable(request: Request, error: Exception) -> Response:
+        """A session found unreadable (wherever it was read) is quarantined, then answered."""
+        registry: SessionRegistry = request.app.state.registry
+        if isinstance(error, SessionUnreadable):
+            registry.quarantine(error)
+        elif isinstance(error, StoreCorrupt):
+            registry.store_corrupt = error.detail
+        return problem_answer(request, error)
+
+    app.add_exception_handler(SessionUnreadable, unreadable)
+    app.add_exception_handler(StoreCorrupt, unreadable)
     app.include_router(health.router)
     app.include_router(metrics.router)
     app.include_router(sessions.router)
@@ -117,7 +141,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         read_timeout=settings.body_read_timeout,
         limits=settings.wire_limits(),
     )
-    app.add_middleware(RateLimit, rates=parse_rates(settings.rate_limit))  # before the body is read
+    app.add_middleware(  # before the body is read
+        RateLimit,
+        rates=parse_rates(settings.rate_limit),
+        body_bytes_per_second=settings.tenant_body_bytes_per_second,
+        max_body=settings.max_body_bytes,
+    )
     origins = settings.cors_origin_list()
     if origins:
         app.add_middleware(
@@ -126,6 +155,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             allow_methods=["GET", "POST", "DELETE"],
             allow_headers=["Authorization", "Content-Type"],
         )
+    app.add_middleware(SecurityHeaders)
     app.add_middleware(HttpMetrics, metrics=service_metrics)
     install_openapi(app)
     return app

@@ -69,6 +69,7 @@ class ServiceMetrics:
     engine_cpu: Histogram
     store_bytes: Gauge
     store_inputs: Gauge
+    quarantined: Gauge
     rebuilds: Counter
     internal_errors: Counter
     loop_lag: Histogram
@@ -100,6 +101,11 @@ class ServiceMetrics:
                 "credal_inputs",
                 "Accepted inputs by kind (tracks, detections).",
                 ("kind",),
+                registry=registry,
+            ),
+            quarantined=Gauge(
+                "credal_sessions_quarantined",
+                "Sessions the store holds but cannot read (set aside; GET /readyz lists them).",
                 registry=registry,
             ),
             store_bytes=Gauge(

@@ -6,6 +6,7 @@ Each limit is named after its setting; a breach answers a 4xx whose
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import lru_cache
 
 from limits import RateLimitItem, parse_many
@@ -14,15 +15,29 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from api_schemas.base import MAX_CLASSES
 from api_schemas.limits import MAX_FOCAL_SETS, MAX_ITEMS, MAX_SENSORS, WireLimits
+from app.cluster.lease import DEFAULT_LEASE_TTL_MS
 from app.errors import MAX_LISTED_ERRORS
 from app.stores.redis_keys import DEFAULT_PREFIX
+from app.tenants import MIN_SECRET_LENGTH, Access, check_secret, is_loopback, parse_api_keys
 
 DEFAULT_STORE = "sqlite:data/credal-fusion.db"
 UNLIMITED = frozenset({"", "none", "off", "0"})
 """``CREDAL_RATE_LIMIT`` values that turn the rate limit off."""
-MIN_ADMIN_TOKEN_LENGTH = 32
-"""An admin token opens every session: at least 32 characters (``secrets.token_urlsafe(24)``)."""
 DEFAULTS = WireLimits()
+
+
+@dataclass(frozen=True)
+class TransportLimits:
+    """The limits the HTTP protocol checks before the application (:mod:`app.http.transport`)."""
+
+    max_header_bytes: int = 16 * 1024
+    max_header_count: int = 100
+    request_head_timeout: float = 10.0
+    max_connections: int = 1000
+    max_connections_per_client: int = 64
+
+
+TRANSPORT = TransportLimits()
 
 
 class Settings(BaseSettings):
@@ -41,7 +56,35 @@ class Settings(BaseSettings):
     admin_token: SecretStr | None = Field(
         None,
         description=f"opens every session and the admin routes; at least "
-        f"{MIN_ADMIN_TOKEN_LENGTH} characters",
+        f"{MIN_SECRET_LENGTH} visible ASCII characters",
+    )
+    access: Access = Field(
+        "auto",
+        description="who may create sessions: 'open' (anyone; each client address is a tenant), "
+        "'keys' (an API key of CREDAL_API_KEYS), 'auto': open on a loopback host, keys otherwise",
+    )
+    api_keys: SecretStr | None = Field(
+        None,
+        description="the tenants' API keys, 'name:key,name:key' (each key at least "
+        f"{MIN_SECRET_LENGTH} visible ASCII characters)",
+    )
+    tenant_max_sessions: int = Field(
+        100, ge=1, description="live sessions of one tenant (429 beyond, with Retry-After)"
+    )
+    tenant_inputs_per_second: int = Field(
+        500, ge=1, description="inputs (REST and WebSocket) of one tenant's sessions per second"
+    )
+    tenant_body_bytes_per_second: int = Field(
+        2 * 1024 * 1024,
+        ge=1024,
+        description="request body bytes of one tenant per second (a body counts its "
+        "Content-Length; parsing 1 MiB costs ~50 ms of CPU)",
+    )
+    tenant_work_per_minute: int = Field(
+        10_000_000,
+        ge=1,
+        description="work units of one tenant's inputs per minute (an input's units: its items × "
+        "(the session's live fused tracks + 1))",
     )
     cors_origins: str = Field(
         "",
@@ -53,6 +96,34 @@ class Settings(BaseSettings):
         gt=0.0,
         description="seconds a client may take to send a request body; slower: 408 "
         "(a client trickling bytes cannot hold a connection and a buffer forever)",
+    )
+    max_header_bytes: int = Field(
+        TRANSPORT.max_header_bytes,
+        ge=1024,
+        description="request line and headers of one request; more: 431 and the connection closed",
+    )
+    max_header_count: int = Field(
+        TRANSPORT.max_header_count, ge=8, description="header lines of one request (431)"
+    )
+    request_head_timeout: float = Field(
+        TRANSPORT.request_head_timeout,
+        gt=0.0,
+        description="seconds from a connection (or a request's first byte) to the end of its "
+        "headers; slower: 408 and the connection closed (slowloris)",
+    )
+    keep_alive_timeout: float = Field(
+        5.0, gt=0.0, description="seconds an idle keep-alive connection stays open"
+    )
+    max_connections: int = Field(
+        TRANSPORT.max_connections,
+        ge=1,
+        description="open connections in all; at the limit a new one closes the oldest "
+        "connection still waiting for a request head, or gets 503 if none is",
+    )
+    max_connections_per_client: int = Field(
+        TRANSPORT.max_connections_per_client,
+        ge=1,
+        description="open connections (HTTP and WebSocket) of one client address; one more: 429",
     )
     access_log: bool = Field(
         True,
@@ -89,6 +160,19 @@ class Settings(BaseSettings):
         description="known × incoming pairs of one POST /v1/associate whose tracks carry class "
         "evidence (each pair combines two class masses)",
     )
+    max_input_work: int = Field(
+        1_000_000,
+        ge=1,
+        description="work units of one input: its tracks or detections × (the tracks they may be "
+        "compared with + 1), i.e. the session's live fused tracks (and, for detections, the "
+        "sensor's local tracks); 2 000 tracks on a session of 499: ~1 s of CPU",
+    )
+    max_explain_cells: int = Field(
+        250_000,
+        ge=1,
+        description="cells of the score matrix ?explain=true adds: (known tracks + reported "
+        "tracks) × reported tracks (one cell is ~20 bytes of JSON)",
+    )
     max_listed_errors: int = Field(
         MAX_LISTED_ERRORS,
         ge=1,
@@ -112,10 +196,11 @@ class Settings(BaseSettings):
     ws_ping_interval: float = Field(20.0, gt=0.0, description="seconds between WebSocket pings")
     ws_ping_timeout: float = Field(20.0, gt=0.0, description="a peer silent this long is dropped")
     lease_ttl_ms: int = Field(
-        10_000,
+        DEFAULT_LEASE_TTL_MS,
         ge=100,
         description="redis store: an instance that stops renewing a session's lease loses it "
-        "after this long, and another instance takes the session over",
+        "after this long, and another instance takes the session over (a stream renews it "
+        "every third of it)",
     )
     rate_limit: str = Field(
         "1000/second",
@@ -131,14 +216,36 @@ class Settings(BaseSettings):
 
     @field_validator("admin_token")
     @classmethod
-    def _admin_token_is_long(cls, value: SecretStr | None) -> SecretStr | None:
-        if value is not None and len(value.get_secret_value()) < MIN_ADMIN_TOKEN_LENGTH:
-            raise ValueError(
-                f"CREDAL_ADMIN_TOKEN must have at least {MIN_ADMIN_TOKEN_LENGTH} characters "
-                f"(got {len(value.get_secret_value())}); e.g. "
-                "python -c 'import secrets; print(secrets.token_urlsafe(32))'"
-            )
+    def _admin_token_is_a_secret(cls, value: SecretStr | None) -> SecretStr | None:
+        if value is not None:
+            check_secret("CREDAL_ADMIN_TOKEN", value.get_secret_value())
         return value
+
+    @field_validator("api_keys", mode="before")
+    @classmethod
+    def _empty_api_keys_is_none(cls, value: object) -> object:
+        return None if value == "" else value
+
+    @field_validator("api_keys")
+    @classmethod
+    def _api_keys_parse(cls, value: SecretStr | None) -> SecretStr | None:
+        if value is not None:
+            parse_api_keys(value.get_secret_value())
+        return value
+
+    def open_access(self) -> bool:
+        """Whether anyone may create sessions (``access``; ``auto``: on a loopback host)."""
+        return self.access == "open" or (self.access == "auto" and is_loopback(self.host))
+
+    def transport_limits(self) -> TransportLimits:
+        """The limits the HTTP protocol checks before the application (:mod:`app.http.transport`)."""
+        return TransportLimits(
+            max_header_bytes=self.max_header_bytes,
+            max_header_count=self.max_header_count,
+            request_head_timeout=self.request_head_timeout,
+            max_connections=self.max_connections,
+            max_connections_per_client=self.max_connections_per_client,
+        )
 
     def wire_limits(self) -> WireLimits:
         """The limits the wire models check before validating a list's items."""

@@ -1,6 +1,8 @@
 """Bounded work: the heaviest legal input of each route, with ``/healthz`` polled meanwhile.
 
-Run with ``python bench/bounds.py`` (``make bench`` runs it too). The service
+Run with ``python bench/bounds.py`` (``make bench`` runs it too; ``--crowd``: only
+the transport rows of an anonymous crowd, a 64 MB header and 3 000 slowloris
+connections). The service
 runs as a subprocess with its default limits (memory store); for each route
 this process sends the largest input those limits allow while a thread polls
 ``/healthz`` every 5 ms on its own connection. Prints, per route: the answer's
@@ -15,8 +17,10 @@ the tests (``tests/api/test_bounds.py``) assert the answers and sizes.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import multiprocessing
+import socket
 import statistics
 import sys
 import time
@@ -32,7 +36,7 @@ from websockets.sync.client import connect
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from service import free_port, server, service_command
+from service import free_port, running, server, service_command
 
 from api_schemas.limits import WireLimits
 from app.settings import Settings
@@ -75,6 +79,14 @@ def track_list(sensor: str, time_s: float, count: int, evidence: str) -> dict[st
         "time": time_s,
         "tracks": [track(index, rng, evidence) for index in range(count)],
     }
+
+
+MAX_INPUT_WORK: int = getattr(Settings(), "max_input_work", 10**15)  # (no limit before issue 28)
+
+
+def legal_items(known: int, wanted: int = LIMITS.max_tracks_per_input) -> int:
+    """The most items an input may carry to a session of ``known`` tracks (``max_input_work``)."""
+    return min(wanted, MAX_INPUT_WORK // (known + 1))
 
 
 def fitting(count: int, build: Callable[[int], dict[str, Any]], max_bytes: int) -> dict[str, Any]:
@@ -241,15 +253,20 @@ def geodetic_and_stream_rows(url: str, c: httpx.Client, max_bytes: int) -> list[
     """The heaviest likelihood inputs and reads in the geodetic frame and over WebSockets."""
     rows = []
     sid, headers = session(c, 3, classes=True, origin=True)
-    first, second, third = (
-        fitting(
-            LIMITS.max_tracks_per_input,
-            lambda n, s=sensor: track_list(s, 1.0, n, "likelihoods"),
-            max_bytes,
-        )
-        for sensor in ("s0", "s1", "s2")
+    first = fitting(
+        LIMITS.max_tracks_per_input, lambda n: track_list("s0", 1.0, n, "likelihoods"), max_bytes
     )
-    tracks = len(first["tracks"])
+    second = fitting(
+        legal_items(len(first["tracks"])),
+        lambda n: track_list("s1", 1.0, n, "likelihoods"),
+        max_bytes,
+    )
+    third = fitting(
+        legal_items(len(first["tracks"]) + len(second["tracks"])),
+        lambda n: track_list("s2", 1.0, n, "likelihoods"),
+        max_bytes,
+    )
+    tracks = len(second["tracks"])
     c.post(f"/v1/sessions/{sid}/tracks", json=first, headers=headers).raise_for_status()
     rows.append(
         measure(
@@ -299,17 +316,205 @@ def geodetic_and_stream_rows(url: str, c: httpx.Client, max_bytes: int) -> list[
     rows.append(
         measure(
             url,
-            f"WS stream ({tracks}, likelihoods) + geodetic subscriber",
+            f"WS stream ({len(third['tracks'])}, likelihoods) + geodetic subscriber",
             stream_and_subscribe,
         )
     )
     return rows
 
 
+def raw_port(url: str) -> int:
+    return int(url.rsplit(":", 1)[1])
+
+
+def huge_header(url: str, megabytes: int) -> tuple[int, int]:
+    """One request whose header is ``megabytes`` MB, written until the server answers or closes."""
+    head = b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Pad: "
+    piece = b"a" * 65536
+    received = b""
+    with socket.create_connection(("127.0.0.1", raw_port(url)), timeout=120) as connection:
+        with contextlib.suppress(OSError):
+            connection.sendall(head)
+            for _ in range(megabytes * 16):
+                connection.sendall(piece)
+            connection.sendall(b"\r\n\r\n")
+        with contextlib.suppress(OSError):
+            while chunk := connection.recv(65536):
+                received += chunk
+                if b"\r\n\r\n" in received:
+                    break
+    status = int(received.split(b" ", 2)[1]) if received else 0
+    return status, len(received)
+
+
+def slowloris(url: str, count: int, addresses: int, hold_s: float) -> tuple[int, int]:
+    """``count`` connections from ``addresses`` loopback addresses, each trickling a request
+    head one byte every 0.5 s for ``hold_s``; (200, how many the server still held)."""
+    connections = []
+    for index in range(count):
+        source = f"127.0.{index % addresses // 250 + 10}.{index % addresses % 250 + 1}"
+        with contextlib.suppress(OSError):
+            connections.append(
+                socket.create_connection(
+                    ("127.0.0.1", raw_port(url)), timeout=5, source_address=(source, 0)
+                )
+            )
+    head = b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Slow: " + b"a" * 1000
+    deadline = time.monotonic() + hold_s
+    sent = 0
+    while time.monotonic() < deadline:
+        for connection in connections:
+            with contextlib.suppress(OSError):
+                connection.send(head[sent : sent + 1])
+        sent += 1
+        time.sleep(0.5)
+    held = 0
+    for connection in connections:
+        connection.setblocking(False)
+        try:
+            connection.recv(65536)  # an answer (a refusal) or the end: not held
+        except BlockingIOError:
+            held += 1  # nothing to read: still open, waiting
+        except OSError:
+            pass
+        connection.close()
+    return 200, held
+
+
+def explained(url: str, client: httpx.Client, known: int, items: int) -> dict[str, Any]:
+    """``items`` tracks with ``?explain=true`` to a session holding ``known`` tracks."""
+    sid, headers = session(client, 2, classes=False)
+    first = track_list("s0", 1.0, known, "none")
+    client.post(f"/v1/sessions/{sid}/tracks", json=first, headers=headers).raise_for_status()
+    second = track_list("s1", 1.0, items, "none")
+    return measure(
+        url,
+        f"POST tracks ({items} on {known}, explain=true)",
+        lambda c: c.post(
+            f"/v1/sessions/{sid}/tracks", params={"explain": "true"}, json=second, headers=headers
+        ),
+    )
+
+
+def crowd_rows(url: str) -> list[dict[str, Any]]:
+    """What an anonymous client can spend (issue 28): headers, slowloris, explain. A slowloris
+    row's answer is how many of its connections the server still held."""
+    with httpx.Client(base_url=url, timeout=300) as client:
+        rows = [
+            explained(url, client, 2000, 2000),
+            explained(url, client, 353, 353),  # (353 + 353) × 353 ≤ max_explain_cells
+        ]
+    rows.append(measure(url, "a 64 MB header", lambda _: huge_header(url, 64)))
+    for addresses in (1, 300):
+        row = measure(
+            url,
+            f"3 000 slowloris connections from {addresses} address(es), 10 s",
+            lambda _, a=addresses: slowloris(url, 3000, a, 10.0),
+        )
+        row["note"] = f"{row.pop('answer_bytes')} connections still held"
+        row["answer_bytes"] = 0
+        rows.append(row)
+    return rows
+
+
+SMALL_CONFIG = {"state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]}}
+
+
+def from_address(url: str, address: str) -> httpx.Client:
+    """A client whose connections come from ``address`` (any 127.x.y.z is loopback on Linux)."""
+    transport = httpx.HTTPTransport(local_address=address)
+    return httpx.Client(base_url=url, transport=transport, timeout=60.0)
+
+
+def anonymous_flood(url: str) -> str:
+    """One anonymous address creates sessions until refused; then another address tries one."""
+    created: list[dict[str, Any]] = []
+    with from_address(url, "127.0.0.9") as attacker, from_address(url, "127.0.0.10") as other:
+        refusal = None
+        started = time.perf_counter()
+        for _ in range(2000):
+            answer = attacker.post("/v1/sessions", json=SMALL_CONFIG)
+            if answer.status_code != 201:
+                refusal = answer
+                break
+            created.append(answer.json())
+        elapsed = time.perf_counter() - started
+        honest = other.post("/v1/sessions", json=SMALL_CONFIG)
+        if honest.status_code == 201:
+            created.append(honest.json())
+        for session in created:
+            attacker.delete(
+                f"/v1/sessions/{session['id']}",
+                headers={"Authorization": f"Bearer {session['token']}"},
+            )
+    refused = "never" if refusal is None else str(refusal.status_code)
+    retry = None if refusal is None else refusal.headers.get("Retry-After")
+    return (
+        f"one anonymous address created {len(created) - (honest.status_code == 201)} sessions in "
+        f"{elapsed:.1f} s, then {refused} (Retry-After: {retry}); another address then got "
+        f"{honest.status_code}"
+    )
+
+
+def minted_tokens(url: str, tokens: int = 15, seconds: float = 3.0) -> str:
+    """``tokens`` sessions of one address, each token hammering its session from its own
+    thread: how many requests per second were served (the rate limit is 20/s)."""
+    import threading
+
+    sessions = []
+    with httpx.Client(base_url=url, timeout=60.0) as client:
+        while len(sessions) < tokens:
+            answer = client.post("/v1/sessions", json=SMALL_CONFIG)
+            if answer.status_code == 201:
+                sessions.append(answer.json())
+            else:
+                time.sleep(0.2)
+        time.sleep(1.5)  # a fresh window
+    served = [0] * tokens
+    stop = time.perf_counter() + seconds
+
+    def hammer(index: int) -> None:
+        session = sessions[index]
+        headers = {"Authorization": f"Bearer {session['token']}"}
+        with httpx.Client(base_url=url, timeout=60.0) as client:
+            while time.perf_counter() < stop:
+                served[index] += (
+                    client.get(f"/v1/sessions/{session['id']}", headers=headers).status_code == 200
+                )
+
+    threads = [threading.Thread(target=hammer, args=(index,)) for index in range(tokens)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    return f"{tokens} fresh tokens of one address were served {sum(served) / seconds:.0f} requests/s (rate limit 20/s)"
+
+
+def identity_lines() -> list[str]:
+    """Issue 28's session flood and token minting, on their own servers (default settings, and
+    CREDAL_RATE_LIMIT=20/second for the minting)."""
+    lines = []
+    port = free_port()
+    with server(service_command(port), port) as url:
+        lines.append(anonymous_flood(url))
+    port = free_port()
+    with running(service_command(port), port, {"CREDAL_RATE_LIMIT": "20/second"}):
+        lines.append(minted_tokens(f"http://127.0.0.1:{port}"))
+    return lines
+
+
 def main() -> int:
     max_bytes = Settings().max_body_bytes
     port = free_port()
     rows = []
+    crowd_only = "--crowd" in sys.argv[1:]
+    if crowd_only:
+        with server(service_command(port), port) as url:
+            rows.append(baseline := idle(url))
+            rows += crowd_rows(url)
+        print_rows(rows, baseline)
+        print("\n".join(identity_lines()))
+        return 0
     with server(service_command(port), port) as url, httpx.Client(base_url=url, timeout=300) as c:
 
         def config_with(polygons: int) -> dict[str, Any]:
@@ -348,8 +553,10 @@ def main() -> int:
             sid, headers = session(c, 2, classes=evidence != "none")
             count = LIMITS.max_tracks_per_input
             first = fitting(count, lambda n, e=evidence: track_list("s0", 1.0, n, e), max_bytes)
-            second = fitting(count, lambda n, e=evidence: track_list("s1", 1.0, n, e), max_bytes)
             tracks = len(first["tracks"])
+            second = fitting(
+                legal_items(tracks), lambda n, e=evidence: track_list("s1", 1.0, n, e), max_bytes
+            )
             rows.append(
                 measure(
                     url,
@@ -362,7 +569,7 @@ def main() -> int:
             rows.append(
                 measure(
                     url,
-                    f"POST tracks ({tracks}, {evidence}, 2nd sensor)",
+                    f"POST tracks ({len(second['tracks'])} on {tracks}, {evidence}, 2nd sensor)",
                     lambda client, b=second, s=sid, h=headers: client.post(
                         f"/v1/sessions/{s}/tracks", json=b, headers=h
                     ),
@@ -427,6 +634,13 @@ def main() -> int:
                 )
             )
 
+        rows += crowd_rows(url)
+    print_rows(rows, baseline)
+    print("\n".join(identity_lines()))
+    return 0
+
+
+def print_rows(rows: list[dict[str, Any]], baseline: dict[str, Any]) -> None:
     width = max(len(row["route"]) for row in rows)
     idle_max = max(baseline["healthz_max_ms"], 0.1)
     print(
@@ -439,7 +653,7 @@ def main() -> int:
             f"{row['request_ms']:10.0f}  {row['loop_lag_ms']:13.0f}  {row['gc_ms']:7.0f}  "
             f"{row['healthz_max_ms']:14.1f}  "
             f"{row['healthz_max_ms'] / idle_max:10.1f}  {row['healthz_p50_ms']:6.1f}  "
-            f"{row['healthz_failures']:8}"
+            f"{row['healthz_failures']:8}  {row.get('note', '')}"
         )
     worst = max(row["healthz_max_ms"] for row in rows)
     worst_lag = max(row["loop_lag_ms"] for row in rows)
@@ -451,7 +665,6 @@ def main() -> int:
         f"(target {TARGET_LOOP_LAG_MS:.0f} ms; the server's credal_event_loop_lag_seconds "
         "histogram, read before and after each route: the bound of the highest bucket reached)"
     )
-    return 0
 
 
 if __name__ == "__main__":

@@ -14,11 +14,19 @@ told and that nothing is lost; this script only times it, a few rounds:
   until ``/healthz`` answers (the process is alive), then, once Redis starts,
   the time until ``/readyz`` says ready and a session can be created.
 
+- *frozen*: Redis stopped (SIGSTOP) under a live session: how long an input
+  and ``/readyz`` take to answer 503 (the store's 2 s command timeout);
+- *failover*: two instances on one Redis, the one a sensor streams to killed
+  (SIGKILL): how long until the reference client (``app/commands/resilient.py``)
+  has its next input applied through the other (the 3 s lease), and after how
+  many tries.
+
 Never asserts a time: the shared machine's load moves every number.
 """
 
 from __future__ import annotations
 
+import signal
 import statistics
 import sys
 import tempfile
@@ -111,9 +119,73 @@ def down_at_start(directory: Path) -> dict[str, float]:
         server.stop()
 
 
+def frozen(directory: Path) -> dict[str, float]:
+    """Redis frozen (SIGSTOP) under a live session: how long an input and /readyz take to say so."""
+    bodies = reports(2)
+    server = PrivateRedis(directory)
+    server.start()
+    try:
+        with instance(server.url) as (url, _), httpx.Client(base_url=url, timeout=30) as client:
+            created = client.post("/v1/sessions", json=session_config()).json()
+            headers = {"Authorization": f"Bearer {created['token']}"}
+            path = f"/v1/sessions/{created['id']}/tracks"
+            client.post(path, json=bodies[0], headers=headers).raise_for_status()
+            assert server.process is not None
+            server.process.send_signal(signal.SIGSTOP)
+            try:
+                started = time.monotonic()
+                status = client.post(path, json=bodies[1], headers=headers).status_code
+                answered = time.monotonic() - started
+                started = time.monotonic()
+                ready = client.get("/readyz").status_code
+                readiness = time.monotonic() - started
+            finally:
+                server.process.send_signal(signal.SIGCONT)
+            if status != 503 or ready != 503:
+                raise RuntimeError(f"frozen Redis not told: input {status}, /readyz {ready}")
+            return {
+                "frozen: input answered 503 after": answered,
+                "frozen: /readyz 503 after": readiness,
+            }
+    finally:
+        server.stop()
+
+
+def failover(directory: Path) -> dict[str, float]:
+    """Two instances on one Redis; the one a sensor streams to is killed (SIGKILL): how long until
+    the reference client's next input is applied through the other, and after how many tries."""
+    from app.commands.resilient import ResilientStream
+
+    bodies = reports(4)
+    server = PrivateRedis(directory)
+    server.start()
+    try:
+        with instance(server.url) as (url_a, process_a), instance(server.url) as (url_b, _):
+            created = httpx.post(f"{url_a}/v1/sessions", json=session_config(), timeout=30).json()
+            client = ResilientStream([url_a, url_b], created["id"], created["token"])
+            try:
+                for body in bodies[:3]:
+                    client.send({"type": "tracks", **body})
+                process_a.send_signal(signal.SIGKILL)
+                process_a.wait()
+                killed_at = time.monotonic()
+                delivery = client.send({"type": "tracks", **bodies[3]})
+                taken_over = time.monotonic() - killed_at
+            finally:
+                client.close()
+            if delivery.seq != 4:
+                raise RuntimeError(f"input applied as seq {delivery.seq}, not 4")
+            return {
+                "failover: next input applied after the kill": taken_over,
+                "failover: tries before it": float(delivery.retries),
+            }
+    finally:
+        server.stop()
+
+
 def main() -> int:
     rows: dict[str, list[float]] = {}
-    for scenario in (killed, down_at_start):
+    for scenario in (killed, down_at_start, frozen, failover):
         for _ in range(ROUNDS):
             with tempfile.TemporaryDirectory(prefix="credal-outage-") as directory:
                 for name, seconds in scenario(Path(directory)).items():

@@ -23,6 +23,15 @@ samples, then checks the two rules and exits 1 if one fails:
   retained log rises and falls by one snapshot period; it must not creep up).
 
 Speed is not measured here (``bench/service.py`` does that).
+
+``--crowd`` (``make soak`` runs it after the stores): on the sqlite store, the
+same honest load for :data:`CROWD_SECONDS` alone, then as long again with an
+anonymous attacker process beside it (:func:`attack`, from other loopback
+addresses: slowloris connections, 16 MB headers, a session flood, floods of
+the heaviest legal inputs and of explained ones). The honest sensors' p99
+latency and error rate must stay within 10 % of their run alone (exit 1
+otherwise). Both processes share the machine's cores with the server: the
+attacker's own CPU is in the comparison too.
 """
 
 from __future__ import annotations
@@ -46,7 +55,7 @@ import redis
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from machine import describe_machine
-from service import config, free_port, running, service_command, track_list
+from service import config, free_port, process_cpu_s, running, service_command, track_list
 
 SOAK_SECONDS = float(os.environ.get("SOAK_SECONDS", "100"))
 REDIS_URL = os.environ.get("CREDAL_SOAK_REDIS_URL", "redis://127.0.0.1:6379/0")
@@ -106,6 +115,8 @@ class Load:
         self.deadline = deadline
         self.sent = 0
         self.failures = 0
+        self.latencies: list[float] = []
+        """Seconds of each long session's input (the honest sensors)."""
 
     async def long_session(self, client: httpx.AsyncClient, number: int) -> None:
         sensors = [f"s{number}-{k}" for k in range(SENSORS)]
@@ -123,7 +134,9 @@ class Load:
         started = time.monotonic()
         while time.monotonic() < self.deadline:
             body = track_list(sensor, 1.0 + step / REPORTS_PER_S + k / (SENSORS * 100), TRACKS)
+            sent_at = time.perf_counter()
             answer = await client.post(path, json=body, headers=headers)
+            self.latencies.append(time.perf_counter() - sent_at)
             self.sent += 1
             self.failures += answer.status_code != 200
             step += 1
@@ -221,7 +234,116 @@ def report(name: str, samples: list[Sample]) -> bool:
     return ok
 
 
+CROWD_SECONDS = float(os.environ.get("CROWD_SECONDS", "60"))
+ATTACKER = "127.0.0.77"
+"""The attacker's main address (any 127.x.y.z is loopback on Linux); its slowloris
+connections also come from 50 others."""
+
+
+def attack(url: str, seconds: float) -> None:
+    """An anonymous client spending what it can for ``seconds`` (run in its own process)."""
+    import contextlib
+    import socket
+
+    port = int(url.rsplit(":", 1)[1])
+    deadline = time.monotonic() + seconds
+    transport = httpx.HTTPTransport(local_address=ATTACKER)
+    heavy = track_list("a", 1.0, 2000)
+    header = b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Pad: " + b"a" * (16 << 20) + b"\r\n\r\n"
+    held: list[socket.socket] = []
+    tokens: list[tuple[str, dict[str, str]]] = []
+    with httpx.Client(base_url=url, transport=transport, timeout=30) as client:
+        round_number = 0
+        while time.monotonic() < deadline:
+            round_number += 1
+            for index in range(20):  # slowloris: a trickle on every held connection
+                source = f"127.0.9.{(round_number * 20 + index) % 50 + 1}"
+                with contextlib.suppress(OSError):
+                    held.append(socket.create_connection(("127.0.0.1", port), 5, (source, 0)))
+            for connection in list(held):
+                try:
+                    connection.send(b"G")
+                except OSError:
+                    held.remove(connection)
+                    connection.close()
+            with (
+                contextlib.suppress(OSError),
+                socket.create_connection(("127.0.0.1", port), 5, (ATTACKER, 0)) as bomb,
+            ):
+                bomb.sendall(header)
+            created = client.post("/v1/sessions", json=config(["a"]))
+            if created.status_code == 201:
+                body = created.json()
+                tokens.append((body["id"], {"Authorization": f"Bearer {body['token']}"}))
+            for sid, headers in tokens[-5:]:
+                client.post(f"/v1/sessions/{sid}/tracks", json=heavy, headers=headers)
+                client.post(
+                    f"/v1/sessions/{sid}/tracks",
+                    params={"explain": "true"},
+                    json=heavy,
+                    headers=headers,
+                )
+            time.sleep(0.05)
+    for connection in held:
+        connection.close()
+
+
+def crowd() -> int:
+    """Honest load alone, then beside :func:`attack`: the honest p99 and error rate compared,
+    with the CPU seconds the server and the attacker spent in each phase."""
+    import multiprocessing
+
+    print(describe_machine())
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="credal-soak-") as directory:
+        database = Path(directory) / "crowd.db"
+        settings = {"CREDAL_RATE_LIMIT": "1000/second"}
+        with serving(f"sqlite:{database}", settings) as (url, pid):
+            for attacked in (False, True):
+                attacker = None
+                if attacked:
+                    spawn = multiprocessing.get_context("spawn")
+                    attacker = spawn.Process(target=attack, args=(url, CROWD_SECONDS))
+                    attacker.start()
+                server_cpu = process_cpu_s(pid)
+                load = Load(url, time.monotonic() + CROWD_SECONDS)
+                asyncio.run(load.run())
+                server_cpu = process_cpu_s(pid) - server_cpu
+                attacker_cpu = 0.0
+                if attacker is not None:
+                    attacker_cpu = process_cpu_s(attacker.pid or 0)
+                    attacker.join()
+                latencies = sorted(load.latencies)
+                rows.append(
+                    (
+                        attacked,
+                        len(latencies),
+                        load.failures / max(1, load.sent),
+                        latencies[len(latencies) // 2],
+                        latencies[int(0.99 * (len(latencies) - 1))],
+                        server_cpu,
+                        attacker_cpu,
+                    )
+                )
+    for attacked, count, errors, p50, p99, server_cpu, attacker_cpu in rows:
+        who = "honest + anonymous attacker" if attacked else "honest alone"
+        print(
+            f"{who:28} {count:6d} inputs  errors {errors:.2%}  p50 {p50 * 1000:6.1f} ms  "
+            f"p99 {p99 * 1000:6.1f} ms  server CPU {server_cpu:5.1f} s  "
+            f"attacker CPU {attacker_cpu:5.1f} s"
+        )
+    (_, _, errors_alone, _, p99_alone, *_), (_, _, errors_attacked, _, p99_attacked, *_) = rows
+    ok = p99_attacked <= 1.1 * p99_alone and errors_attacked <= 1.1 * errors_alone
+    print(
+        f"honest p99 × {p99_attacked / p99_alone:.2f}, errors {errors_alone:.2%} → "
+        f"{errors_attacked:.2%}: {'ok' if ok else 'FAILED'} (within 10 %)"
+    )
+    return 0 if ok else 1
+
+
 def main() -> int:
+    if "--crowd" in sys.argv[1:]:
+        return crowd()
     print(describe_machine())
     print(
         f"soak: {LONG_SESSIONS} sessions × {SENSORS} sensors × {TRACKS} tracks at "

@@ -45,7 +45,7 @@ from redis.asyncio.client import PubSub
 
 from app.cluster import shared_redis
 from app.stores.base import Store, unavailable_on
-from app.stores.redis import CONNECT_TIMEOUT_S, UNREACHABLE
+from app.stores.redis import CONNECT_TIMEOUT_S, SOCKET_TIMEOUT_S, UNREACHABLE
 from app.stores.redis_keys import DEFAULT_PREFIX, RedisKeys
 
 DEFAULT_MAX_PENDING = 64
@@ -270,10 +270,18 @@ class RedisFanout:
         self.client: redis.asyncio.Redis = redis.asyncio.Redis.from_url(
             url, decode_responses=True, socket_connect_timeout=CONNECT_TIMEOUT_S
         )
+        """Subscriptions' connections: they wait for messages as long as it takes."""
+        self.publisher: redis.asyncio.Redis = redis.asyncio.Redis.from_url(
+            url,
+            decode_responses=True,
+            socket_connect_timeout=CONNECT_TIMEOUT_S,
+            socket_timeout=SOCKET_TIMEOUT_S,
+        )
+        """Publishing and pings: a frozen Redis fails them within the store's timeout."""
         self._subscriptions: set[_RedisSubscription] = set()
 
     async def publish(self, session_id: str, result_json: str) -> int:
-        return int(await self.client.publish(self.keys.results(session_id), result_json))
+        return int(await self.publisher.publish(self.keys.results(session_id), result_json))
 
     def subscribe(self, session_id: str) -> Subscription:
         subscription = _RedisSubscription(
@@ -288,12 +296,13 @@ class RedisFanout:
 
     async def ping(self) -> None:
         with unavailable_on(UNREACHABLE, "redis"):
-            await self.client.ping()
+            await self.publisher.ping()
 
     async def aclose(self) -> None:
         for subscription in list(self._subscriptions):
             await subscription.aclose()
         await self.client.aclose()
+        await self.publisher.aclose()
 
 
 def open_fanout(store: Store, max_pending: int = DEFAULT_MAX_PENDING) -> ResultFanout:

@@ -23,9 +23,14 @@ once per process, then for each input of session ``sid``::
     apply, publish the result (app.cluster.fanout)
 
 ``acquire`` by the holder renews (it is re-entrant), so calling it before
-every input is enough while inputs keep coming; a session streaming over a
-WebSocket renews every ``ttl / 3`` in its writer task and gives up the
-session when ``renew`` answers ``False``. ``release`` when the session is
+every input is enough while inputs keep coming; while a ``stream`` WebSocket
+is open on a session, its connection renews the lease every ``ttl / 3``
+(:meth:`~app.sessions.registry.SessionRegistry.keep_lease`) and closes with
+1013 when ``renew`` answers ``False`` (another instance took the session
+over: the client reconnects). An idle session's lease lapses after the TTL,
+so the session may move to whichever instance its next input reaches. With
+the default TTL of 3 s, a dead instance's sessions are taken over within 3 s;
+a refused instance's ``Retry-After`` is the lease's time left. ``release`` when the session is
 deleted or the instance shuts down, so another takes over at once instead of
 after the TTL.
 
@@ -55,7 +60,7 @@ from app.stores.base import Store, unavailable_on
 from app.stores.redis import UNREACHABLE
 from app.stores.redis_keys import RedisKeys
 
-DEFAULT_LEASE_TTL_MS = 10_000
+DEFAULT_LEASE_TTL_MS = 3_000
 
 # KEYS: lease. ARGV: owner, ttl_ms. Takes a free lease, or renews the owner's own.
 _ACQUIRE = """
@@ -116,6 +121,10 @@ class SessionLeases(Protocol):
         """The owner holding the lease now, if any."""
         ...
 
+    def remaining_ms(self, session_id: str) -> int:
+        """How long the lease has left unless renewed (0: free)."""
+        ...
+
 
 class RedisLeases:
     """Leases as Redis strings ``P:{sid}:lease`` = owner, with a PX expiry.
@@ -154,6 +163,11 @@ class RedisLeases:
         with unavailable_on(UNREACHABLE, "redis"):
             value = self.client.get(self.keys.lease(session_id))
         return str(value) if value is not None else None
+
+    def remaining_ms(self, session_id: str) -> int:
+        with unavailable_on(UNREACHABLE, "redis"):
+            left = int(self.client.pttl(self.keys.lease(session_id)))
+        return max(0, left)
 
 
 class LocalLeases:
@@ -199,6 +213,11 @@ class LocalLeases:
     def holder(self, session_id: str) -> str | None:
         with self._lock:
             return self._current(session_id)
+
+    def remaining_ms(self, session_id: str) -> int:
+        with self._lock:
+            held = self._held.get(session_id)
+            return 0 if held is None else max(0, int((held[1] - time.monotonic()) * 1000))
 
 
 def open_leases(store: Store) -> SessionLeases:

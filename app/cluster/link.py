@@ -23,7 +23,6 @@ import asyncio
 import contextlib
 import functools
 import logging
-import math
 import time
 from typing import TYPE_CHECKING
 
@@ -66,12 +65,27 @@ class ClusterLink:
         held = now < session.lease_deadline
         if not await self.registry.io(self.leases.acquire, session.id, self.owner, ttl_ms):
             session.lease_deadline = 0.0
-            raise SessionLeased(session.id, math.ceil(ttl_ms / 1000))
+            left_ms = await self.registry.io(self.leases.remaining_ms, session.id)
+            raise SessionLeased(session.id, left_ms)  # Retry-After: the lease's time left
         session.lease_deadline = now + 0.8 * ttl_ms / 1000  # a margin for clock and round trips
         if not held:
             last = await self.registry.io(self.registry.store.last_seq, session.id)
             if last != session.seq:
                 await self.catch_up(session, last)
+
+    async def keep_lease(self, session: LiveSession) -> bool:
+        """Renew the session's lease if this instance holds it (a stream does, every third of
+        the TTL); ``False`` if another instance holds it now. Not holding it (no input yet,
+        or a single-process store) is not losing it."""
+        if not self.registry.shared or session.lease_deadline == 0.0:
+            return True
+        ttl_ms = self.registry.settings.lease_ttl_ms
+        now = time.monotonic()
+        if not await self.registry.io(self.leases.renew, session.id, self.owner, ttl_ms):
+            session.lease_deadline = 0.0
+            return await self.registry.io(self.leases.holder, session.id) in (None, self.owner)
+        session.lease_deadline = now + 0.8 * ttl_ms / 1000
+        return True
 
     async def current(self, session: LiveSession) -> LiveSession:
         """The session at the store's latest ``seq`` (several instances): 404 if it was deleted

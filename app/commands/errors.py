@@ -16,11 +16,12 @@ MAX_DETAIL_CHARS = 300
 HINTS = {
     401: "pass the session's token with --token (printed when the session was created)",
     403: "check --token: it must be this session's token (or the admin token)",
-    404: "check --session and --server: the session may have ended (idle timeout or DELETE)",
+    404: "check --session, --token and --server: the session may have ended (idle timeout or "
+    "DELETE), or the token is not its own (a token that does not open a session gets 404)",
     409: "the session refused this input in its current state (see the detail)",
     413: "the body is over the server's limit (CREDAL_MAX_BODY_BYTES and the other limits)",
     422: "the body was refused: the detail names the field",
-    429: "too many requests for this token: wait and try again, or raise CREDAL_RATE_LIMIT",
+    429: "too many requests for this tenant: wait and try again (or raise its limits)",
     503: "the server is not ready (store unavailable or session leased): try again shortly",
 }
 

@@ -3,7 +3,8 @@
 Every limit is a setting (``app/settings.py``) checked before the work it bounds:
 
 - ``max_body_bytes`` (1 MiB) and ``body_read_timeout`` (10 s): by
-  :class:`BodyLimits`, before anything parses the body (413, 408);
+  :class:`BodyLimits`, before anything parses the body (413, 408); a body with a
+  ``Content-Encoding`` (gzip…) is refused unread (415): nothing is ever inflated;
 - ``max_tracks_per_input`` (2 000, also per side of ``/v1/associate``),
   ``max_sensors`` (64), ``max_classes`` (20), ``max_focal_sets`` (64 per class
   mass): by the wire models on each raw list, before its items are validated
@@ -27,7 +28,13 @@ import anyio
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from api_schemas.limits import ACTIVE_LIMITS, WireLimits
-from app.http.errors import BodyTooLarge, BodyTooSlow, ServiceError, problem_response
+from app.http.errors import (
+    BodyTooLarge,
+    BodyTooSlow,
+    ServiceError,
+    UnsupportedEncoding,
+    problem_response,
+)
 
 BODY_LIMIT = "max_body_bytes"
 READ_TIMEOUT = "body_read_timeout"
@@ -64,7 +71,13 @@ class BodyLimits:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        declared_text = dict(scope["headers"]).get(b"content-length")
+        headers = dict(scope["headers"])
+        encoding = headers.get(b"content-encoding", b"").strip().lower()
+        if encoding not in (b"", b"identity"):
+            refusal = UnsupportedEncoding(encoding.decode("latin-1"))
+            await _answer(scope, receive, send, refusal, close=True)
+            return
+        declared_text = headers.get(b"content-length")
         declared = (
             int(declared_text) if declared_text is not None and declared_text.isdigit() else None
         )

@@ -10,8 +10,9 @@ from fastapi.security.base import SecurityBase
 from fastapi.security.utils import get_authorization_scheme_param
 from starlette.requests import HTTPConnection
 
-from app.http.errors import Forbidden, SessionNotFound, Unauthorized
+from app.http.errors import Forbidden, SessionNotFound, SessionUnreadable, Unauthorized
 from app.http.security import Principal, is_admin_token, token_matches
+from app.http.tenants import Tenancy
 from app.metrics import ServiceMetrics
 from app.sessions.live import LiveSession
 from app.sessions.registry import SessionRegistry
@@ -101,14 +102,14 @@ def open_record(
 ) -> SessionRecord:
     """The session ``sid`` if ``token`` opens it: its own token or the admin token.
 
-    404 for an unknown session, 403 for a token that is neither this
-    session's nor the admin's (another session's token included).
+    404 alike for an unknown session and for a token that does not open it (another
+    session's token included): a token cannot tell which sessions exist.
     """
-    if record is None:
-        raise SessionNotFound(sid)
-    if token_matches(token, record.token_hash) or is_admin_token(token, _admin_token(settings)):
+    if record is not None and (
+        token_matches(token, record.token_hash) or is_admin_token(token, _admin_token(settings))
+    ):
         return record
-    raise Forbidden(f"this token does not open session {sid!r}")
+    raise SessionNotFound(sid)
 
 
 async def authorize_session(sid: SessionId, token: BearerToken, request: Request) -> SessionRecord:
@@ -123,8 +124,31 @@ async def authorize_session(sid: SessionId, token: BearerToken, request: Request
     return open_record(sid, record, token, _settings_of(request))
 
 
+async def creator_tenant(request: Request) -> str:
+    """The tenant a session-creating request acts for (its API key's; in open mode without a
+    key, its address's): 401 without a valid key in ``keys`` mode (:mod:`app.http.tenants`)."""
+    tenancy: Tenancy = request.app.state.tenancy
+    client = request.client.host if request.client is not None else None
+    return tenancy.creator(request.headers.get("authorization"), client)
+
+
+TenantDep = Annotated[str, Depends(creator_tenant)]
+
+
+async def deletable_session(sid: SessionId, token: BearerToken, request: Request) -> str:
+    """The id of a session the token may delete: :func:`authorize_session`, or a quarantined
+    session (unreadable: its token cannot be checked) with the admin token."""
+    try:
+        return (await authorize_session(sid, token, request)).id
+    except SessionUnreadable:
+        if is_admin_token(token, _admin_token(_settings_of(request))):
+            return sid
+        raise
+
+
 AdminDep = Annotated[Principal, Depends(require_admin)]
 AuthorizedSession = Annotated[SessionRecord, Depends(authorize_session)]
+DeletableSession = Annotated[str, Depends(deletable_session)]
 
 
 async def live_session(sid: SessionId, token: BearerToken, request: Request) -> LiveSession:

@@ -37,6 +37,9 @@ from app.errors import (
     BodyTooSlow,
     Conflict,
     Forbidden,
+    HeadersTooLarge,
+    HeadTooSlow,
+    IdempotencyKeyReused,
     InvalidFields,
     LimitExceeded,
     RateLimited,
@@ -44,10 +47,14 @@ from app.errors import (
     ServiceError,
     SessionLeased,
     SessionNotFound,
+    SessionUnreadable,
     StaleReport,
+    StoreCorrupt,
     StoreUnavailable,
+    TooManyConnections,
     TrackNotFound,
     Unauthorized,
+    UnsupportedEncoding,
     located,
     pointer,
 )
@@ -61,6 +68,9 @@ __all__ = [
     "BodyTooSlow",
     "Conflict",
     "Forbidden",
+    "HeadTooSlow",
+    "HeadersTooLarge",
+    "IdempotencyKeyReused",
     "InvalidFields",
     "LimitExceeded",
     "RateLimited",
@@ -68,10 +78,14 @@ __all__ = [
     "ServiceError",
     "SessionLeased",
     "SessionNotFound",
+    "SessionUnreadable",
     "StaleReport",
+    "StoreCorrupt",
     "StoreUnavailable",
+    "TooManyConnections",
     "TrackNotFound",
     "Unauthorized",
+    "UnsupportedEncoding",
     "install_error_handlers",
     "problem_for",
     "problem_response",
@@ -353,8 +367,12 @@ PROBLEM_STATUSES: dict[int, str] = {
     408: "The body did not arrive within ``body_read_timeout`` (the connection is closed)",
     409: "Conflict with the session state",
     413: "Body too large",
+    415: "A ``Content-Encoding`` other than identity (bodies are never inflated)",
     422: "Invalid request (every invalid field is listed in `errors`) or a limit exceeded",
     429: "Too many requests (``rate_limit``, with ``Retry-After``) or too many sessions",
+    500: "An unexpected error (a ``reference`` to the server log), a quarantined session "
+    "(``session-unreadable``: its stored data cannot be read) or a damaged store "
+    "(``store-corrupt``): permanent, no ``Retry-After``",
     503: "The session store is unavailable, or another service instance applies this "
     "session's inputs (both with ``Retry-After``)",
 }
@@ -363,9 +381,11 @@ PROBLEM_STATUSES: dict[int, str] = {
 def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
     """OpenAPI ``responses`` entries documenting problem+json answers for ``statuses``.
 
-    Every route may answer 429 (the rate limit, :mod:`app.http.rate_limit`), so it is always listed.
+    Every route may answer 429 (the rate limit, :mod:`app.http.rate_limit`) and 500, so they
+    are always listed.
     """
+    always = {int(HTTPStatus.TOO_MANY_REQUESTS), int(HTTPStatus.INTERNAL_SERVER_ERROR)}
     return {
         status: {"model": Problem, "description": PROBLEM_STATUSES[status]}
-        for status in sorted({*statuses, int(HTTPStatus.TOO_MANY_REQUESTS)})
+        for status in sorted({*statuses, *always})
     }

@@ -42,6 +42,7 @@ loop, and compressing one 10 MB result held it ~200 ms (``bench/bounds.py``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from uvicorn.protocols.websockets.websockets_sansio_impl import WebSocketsSansIOProtocol
@@ -50,10 +51,9 @@ from websockets.frames import Frame, Opcode
 
 from app.http.body_limits import DRAIN_BYTES
 from app.http.errors import LimitExceeded, error_message, problem_for
+from app.http.transport import DRAIN_SECONDS, LISTEN_BACKLOG, guarded_http
 from app.settings import Settings
 
-DRAIN_SECONDS = 2.0
-"""How long the rest of a refused oversize frame is read (and discarded) before closing."""
 WS_FRAME_FACTOR = 4
 """uvicorn accepts WebSocket messages up to 4 × ``max_body_bytes``: the application answers
 those above ``max_body_bytes`` with an ``error``; beyond, the protocol closes with 1009."""
@@ -70,6 +70,14 @@ class PatientWebSocketProtocol(WebSocketsSansIOProtocol):
         self.ever_ponged = False
         self.draining: int | None = None
         """Bytes of a refused oversize frame still to read and discard before closing."""
+        self.release_connection: Callable[[], None] | None = None
+        """Gives the connection's count back (:mod:`app.http.transport`), set on upgrade."""
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        release, self.release_connection = self.release_connection, None
+        if release is not None:
+            release()
+        super().connection_lost(exc)
 
     def data_received(self, data: bytes) -> None:
         self.received_at = self.loop.time()
@@ -141,6 +149,9 @@ def oversize_error(ws_max_size: int, too_big: PayloadTooBig, path: str | None) -
 def server_options(settings: Settings) -> dict[str, Any]:
     """uvicorn's options that the service's settings decide (the CLI and the tests use them)."""
     return {
+        "http": guarded_http(settings.transport_limits()),
+        "backlog": LISTEN_BACKLOG,
+        "timeout_keep_alive": settings.keep_alive_timeout,
         "ws": PatientWebSocketProtocol,
         "ws_max_size": WS_FRAME_FACTOR * settings.max_body_bytes,
         "ws_ping_interval": settings.ws_ping_interval,

@@ -1,21 +1,25 @@
-"""Rate limits: per verified session token, or per client address for every other request.
+"""Rate limits: per tenant (:mod:`app.http.tenants`), decided from the request's token.
 
-Whom a request counts against is decided before its body is read, and only a
-token the service *verified* earns its own budget: the token of a live
-session held by this instance (the registry keeps their hashes) or the admin
+Whom a request counts against is decided before its body is read: the
+tenant of the token the service *verified* — the token of a live session
+held by this instance (its session's tenant: every token of a tenant shares
+one budget, so minting sessions never multiplies it), an API key or the admin
 token. A request with no token, an unknown or forged token (``Bearer
-fake<i>``), or to an unauthenticated route (``POST /v1/sessions``, ``POST
-/v1/associate``) counts against its client address, so inventing tokens
-never buys more requests.
+fake<i>``), or to an unauthenticated route counts against its client
+address's tenant.
 
 ``CREDAL_RATE_LIMIT`` takes the ``limits`` library's notation: one or more
 rates separated by ``;`` (``"200/second"``, ``"50/second;2000/minute"``);
 ``"none"`` turns the limit off. Every HTTP request and every WebSocket
 upgrade counts once against its key (messages on an open WebSocket do not:
-the connection's bounded queues and TCP already pace them). A request over
-the limit gets ``429`` problem+json naming the limit (``limit:
-"rate_limit"``, ``rate``) with a ``Retry-After`` header, before its body is
-read. ``/healthz`` is never limited: a liveness probe must not be refused.
+the connection's bounded queues and TCP already pace them). The bytes of
+request bodies count too, per tenant (``tenant_body_bytes_per_second``,
+2 MiB/s: parsing a 1 MiB body costs ~50 ms of CPU, so a tenant can spend about
+a tenth of a core on parsing): a body counts its declared ``Content-Length``
+(a chunked one, ``max_body_bytes``). A request over either limit gets ``429``
+problem+json naming the limit (``limit: "rate_limit"`` or
+``"tenant_body_bytes_per_second"``, ``rate``) with a ``Retry-After`` header,
+before its body is read. ``/healthz`` is never limited: a liveness probe must not be refused.
 
 The counters are the library's sliding-window counters in this process's
 memory, its asyncio flavour (the threaded one starts a timer thread every
@@ -27,7 +31,6 @@ Tokens are keyed by a hash, never kept in clear.
 
 from __future__ import annotations
 
-import hmac
 import math
 import time
 import uuid
@@ -44,8 +47,10 @@ from starlette.websockets import WebSocket
 
 from app.http.errors import RateLimited, problem_response
 from app.http.security import hash_token
+from app.tenants import address_tenant
 
 RATE_LIMIT = "rate_limit"
+BODY_RATE = "tenant_body_bytes_per_second"
 EXEMPT_PATHS = frozenset({"/healthz"})
 
 
@@ -53,77 +58,104 @@ def _rate_text(item: RateLimitItem) -> str:
     return f"{item.amount} per {item.multiples} {item.GRANULARITY.name}"
 
 
-def client_key(scope: Scope, verified: Callable[[str], bool]) -> str:
-    """Whom a request counts against: its token's hash if ``verified`` knows it, else its address."""
+def client_key(scope: Scope, tenant_of: Callable[[str], str | None]) -> str:
+    """Whom a request counts against: the tenant of its token (a live session's, an API key,
+    the admin token) if ``tenant_of`` knows it, else its client address's tenant."""
     for name, value in scope.get("headers", ()):
         if name == b"authorization":
             scheme, _, token = value.partition(b" ")
             token = token.strip()
             if scheme.lower() == b"bearer" and token:
-                token_hash = hash_token(token.decode("latin-1"))
-                if verified(token_hash):
-                    return "token:" + token_hash
+                tenant = tenant_of(token.decode("latin-1"))
+                if tenant is not None:
+                    return "tenant:" + tenant
             break
     client = scope.get("client")
-    return f"address:{client[0] if client else 'unknown'}"
+    return "tenant:" + address_tenant(client[0] if client else None)
 
 
-def verifier(scope: Scope) -> Callable[[str], bool]:
-    """Whether a token hash is a live session's (held here) or the admin token's."""
+def tenant_finder(scope: Scope) -> Callable[[str], str | None]:
+    """The tenant of a token: a live session's (held here), an API key's, the admin's."""
     state = getattr(scope.get("app"), "state", None)
-    settings = getattr(state, "settings", None)
-    admin = getattr(settings, "admin_token", None)
-    admin_hash = hash_token(admin.get_secret_value()) if admin is not None else None
+    tenancy = getattr(state, "tenancy", None)
 
-    def verified(token_hash: str) -> bool:
-        if admin_hash is not None and hmac.compare_digest(token_hash, admin_hash):
-            return True
+    def tenant_of(token: str) -> str | None:
+        hashed = hash_token(token)
+        if tenancy is not None and (tenant := tenancy.of_hash(hashed)) is not None:
+            return str(tenant)
         registry = getattr(state, "registry", None)  # set by the lifespan
-        return registry is not None and bool(registry.knows_token(token_hash))
+        found = None if registry is None else registry.tenant_of_token(hashed)
+        return None if found is None else str(found)
 
-    return verified
+    return tenant_of
 
 
 class RateLimit:
-    """ASGI middleware: refuse requests beyond ``rates`` per key with 429 and ``Retry-After``."""
+    """ASGI middleware: refuse requests beyond ``rates`` per key, and request bodies beyond
+    ``body_bytes_per_second`` per key, with 429 and ``Retry-After``, before the body is read."""
 
-    def __init__(self, app: ASGIApp, rates: list[RateLimitItem]) -> None:
+    def __init__(
+        self, app: ASGIApp, rates: list[RateLimitItem], body_bytes_per_second: int, max_body: int
+    ) -> None:
         self.app = app
         self.rates = rates
+        self.body_rate = RateLimitItemPerSecond(body_bytes_per_second)
+        self.max_body = max_body
         self.limiter = SlidingWindowCounterRateLimiter(MemoryStorage())
-        self._verified: Callable[[str], bool] | None = None
+        self._tenant_of: Callable[[str], str | None] | None = None
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if (
-            not self.rates
-            or scope["type"] not in ("http", "websocket")
-            or scope.get("path") in EXEMPT_PATHS
-        ):
+        if scope["type"] not in ("http", "websocket") or scope.get("path") in EXEMPT_PATHS:
             await self.app(scope, receive, send)
             return
-        if self._verified is None:  # the application's registry and settings, once
-            self._verified = verifier(scope)
-        key = client_key(scope, self._verified)
+        if self._tenant_of is None:  # the application's registry and tenants, once
+            self._tenant_of = tenant_finder(scope)
+        key = client_key(scope, self._tenant_of)
         for item in self.rates:
             if not await self.limiter.hit(item, key):
-                await self._refuse(scope, receive, send, item, key)
+                await self._refuse(scope, receive, send, item, key, RATE_LIMIT)
                 return
+        size = body_size(scope, self.max_body)
+        if size and not await self.limiter.hit(self.body_rate, "bytes", key, cost=size):
+            await self._refuse(scope, receive, send, self.body_rate, key, BODY_RATE)
+            return
         await self.app(scope, receive, send)
 
     async def _refuse(
-        self, scope: Scope, receive: Receive, send: Send, item: RateLimitItem, key: str
+        self,
+        scope: Scope,
+        receive: Receive,
+        send: Send,
+        item: RateLimitItem,
+        key: str,
+        limit: str,
     ) -> None:
-        reset = (await self.limiter.get_window_stats(item, key)).reset_time
+        identifiers = (key,) if limit == RATE_LIMIT else ("bytes", key)
+        reset = (await self.limiter.get_window_stats(item, *identifiers)).reset_time
         retry_after = max(1, math.ceil(reset - time.time()))
-        rate = _rate_text(item)
-        who = "this token" if key.startswith("token:") else "this client address"
-        response = problem_response(
-            RateLimited(RATE_LIMIT, rate, who, retry_after), scope.get("path")
-        )
+        rate = _rate_text(item) + (" bytes" if limit == BODY_RATE else "")
+        who = key.removeprefix("tenant:")
+        who = "this client address" if who.startswith("address:") else f"tenant {who!r}"
+        response = problem_response(RateLimited(limit, rate, who, retry_after), scope.get("path"))
         if scope["type"] == "websocket":
             await _deny_websocket(scope, receive, send, response)
             return
         await response(scope, receive, send)
+
+
+def body_size(scope: Scope, max_body: int) -> int:
+    """What a request's body counts against the tenant's bytes: its ``Content-Length`` (at most
+    ``max_body``: more is refused unread anyway), ``max_body`` for a body of unknown length
+    (chunked), 0 without a body."""
+    if scope["type"] != "http":
+        return 0
+    chunked = False
+    for name, value in scope.get("headers", ()):
+        if name == b"content-length":
+            return min(int(value), max_body) if value.isdigit() else 0
+        if name == b"transfer-encoding":
+            chunked = True
+    return max_body if chunked else 0
 
 
 async def _deny_websocket(scope: Scope, receive: Receive, send: Send, response: Response) -> None:

@@ -15,6 +15,9 @@ import hmac
 import secrets
 from dataclasses import dataclass
 
+from starlette.datastructures import MutableHeaders
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
 TOKEN_BYTES = 32
 HASH_PREFIX = "sha256:"
 
@@ -50,3 +53,28 @@ class Principal:
 
     admin: bool
     session_id: str | None = None
+
+
+class SecurityHeaders:
+    """ASGI middleware: every answer says ``X-Content-Type-Options: nosniff`` (a browser never
+    guesses a type), and every API answer (``/v1/…``) ``Cache-Control: no-store``: a session's
+    token (in its creation's answer) and its data are never kept by a cache."""
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        private = str(scope.get("path", "")).startswith("/v1/")
+
+        async def with_headers(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                headers = MutableHeaders(scope=message)
+                headers["X-Content-Type-Options"] = "nosniff"
+                if private:
+                    headers["Cache-Control"] = "no-store"
+            await send(message)
+
+        await self.app(scope, receive, with_headers)

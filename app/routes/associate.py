@@ -8,7 +8,7 @@ import anyio
 from fastapi import APIRouter
 
 from api_schemas.associate import AssociateRequest, AssociateResponse
-from app.http.deps import SettingsDep
+from app.http.deps import RegistryDep, SettingsDep, TenantDep
 from app.http.errors import LimitExceeded, problem_responses
 from app.http.requests import WireRoute
 from app.http.responses import JSONTextResponse, dumps
@@ -54,15 +54,22 @@ def run_association(request: AssociateRequest) -> PlainObject:
 
 
 @router.post(
-    "/v1/associate", response_model=AssociateResponse, responses=problem_responses(408, 413, 422)
+    "/v1/associate",
+    response_model=AssociateResponse,
+    responses=problem_responses(401, 408, 413, 422, 503),
 )
-async def associate_tracks(request: AssociateRequest, settings: SettingsDep) -> JSONTextResponse:
-    """Two track lists and a method → the assignment with its score matrix (no session, no token).
+async def associate_tracks(
+    request: AssociateRequest, tenant: TenantDep, settings: SettingsDep, registry: RegistryDep
+) -> JSONTextResponse:
+    """Two track lists and a method → the assignment with its score matrix (no session).
 
+    Needs an API key in ``keys`` mode (as creating a session does); its known ×
+    incoming pairs count against the tenant's ``tenant_work_per_minute``.
     422 ``limit-exceeded`` when known × incoming exceeds ``max_associate_pairs``
     (``max_associate_class_pairs`` when the tracks carry class evidence).
     """
     check_pairs(request, settings)
+    await registry.quotas.charge(tenant, len(request.known) * len(request.incoming))
     work = functools.partial(run_association, request)
     if len(request.known) * len(request.incoming) <= TINY_PROBLEM:
         return JSONTextResponse(dumps(work()))

@@ -20,6 +20,7 @@ from app.http.responses import JSONTextResponse
 from app.outputs import FRAMES, OUTPUT_FORMATS, Output, output_for
 from app.outputs.json_results import wire_json
 from app.sessions.translate import session_geodetic
+from core.numerics import MAX_TIME
 
 router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
 
@@ -80,7 +81,12 @@ async def list_fused_tracks(
     registry: RegistryDep,
     time: Annotated[
         FiniteFloat | None,
-        Query(description="predict the tracks to this time (default: the fusion time)"),
+        Query(
+            ge=-MAX_TIME,
+            le=MAX_TIME,
+            description="predict the tracks to this time (default: the fusion time); at most "
+            "1e12 s in magnitude, as the inputs' times",
+        ),
     ] = None,
     frame: OutputFrame = "session",
     format: OutputFormat = "json",

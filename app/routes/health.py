@@ -26,8 +26,9 @@ from core import __version__
 router = APIRouter(tags=["health"], route_class=WireRoute)
 
 Component = Literal["store", "fanout"]
-PING_TIMEOUT_S = 3.0
-"""A store that has not answered a ping by then is not ready."""
+PING_TIMEOUT_S = 2.0
+"""A store that has not answered a ping by then is not ready (the Redis store's command
+timeout: a frozen Redis is told within it)."""
 
 
 @router.get("/healthz", operation_id="get_health")
@@ -59,17 +60,36 @@ async def get_readiness(request: Request) -> PlainJSONResponse:
     """Whether the service can take inputs now: the store (and its pub/sub) answers; no token."""
     registry: SessionRegistry = request.app.state.registry
     store = registry.store
-    components = [await _state("store", anyio.to_thread.run_sync(store.ping))]
+    pings: list[tuple[Component, Awaitable[None]]] = []
+    if registry.store_corrupt is None:  # else permanent: no ping will mend it
+        # abandoned at the timeout: a frozen store's ping answers nothing until it thaws
+        pings.append(("store", anyio.to_thread.run_sync(store.ping, abandon_on_cancel=True)))
     if registry.shared:
-        components.append(await _state("fanout", registry.fanout.ping()))
+        pings.append(("fanout", registry.fanout.ping()))
+    states: dict[str, ComponentState] = {}
+
+    async def check(name: Component, ping: Awaitable[None]) -> None:
+        states[name] = await _state(name, ping)
+
+    async with anyio.create_task_group() as tasks:  # at the same time: one timeout in all
+        for name, ping in pings:
+            tasks.start_soon(check, name, ping)
+    components = [states[name] for name, _ in pings]
+    if registry.store_corrupt is not None:
+        components.insert(
+            0, ComponentState(name="store", ready=False, detail=registry.store_corrupt)
+        )
     readiness = Readiness(
         ready=all(component.ready for component in components),
         store=store.kind,
         components=components,
         leases_held=registry.leases_held(),
+        quarantined=sorted(registry.quarantined),
     )
     return PlainJSONResponse(
         readiness.model_dump(mode="json"),
         status_code=HTTPStatus.OK if readiness.ready else HTTPStatus.SERVICE_UNAVAILABLE,
-        headers={} if readiness.ready else {"Retry-After": str(StoreUnavailable.retry_after_s)},
+        headers={}
+        if readiness.ready or registry.store_corrupt is not None  # permanent: no retry time
+        else {"Retry-After": str(StoreUnavailable.retry_after_s)},
     )

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Query, Request
+from fastapi import APIRouter, Header, Query, Request
 
 from api_schemas.base import WireModel
 from app.http.deps import LiveSessionDep, RegistryDep
@@ -16,7 +16,25 @@ from app.http.responses import JSONTextResponse
 from app.inputs import DECODED_KINDS, INPUT_KINDS, DecodedKind, Input, InputKind
 from app.routes.fusion import OutputFormat, OutputFrame, output_of, output_responses
 
-Explain = Annotated[bool, Query(description="add the association method's score matrix")]
+Explain = Annotated[
+    bool,
+    Query(
+        description="add the association's score matrix: (known + reported) × reported cells, "
+        "at most max_explain_cells (422 before the work beyond)"
+    ),
+]
+IdempotencyKey = Annotated[
+    str | None,
+    Header(
+        alias="Idempotency-Key",
+        min_length=1,
+        max_length=128,
+        pattern=r"^[!-~]+$",
+        description="names this input: sent again with the same key (a retry after a lost "
+        "answer), the same input is not applied twice, its first answer is given again (409 if "
+        "the key came with another input); the session remembers its latest 256 keys",
+    ),
+]
 
 
 def _submit_route(router: APIRouter, kind: InputKind[Any]) -> None:
@@ -29,13 +47,14 @@ def _submit_route(router: APIRouter, kind: InputKind[Any]) -> None:
         explain: Explain = False,
         frame: OutputFrame = "session",
         format: OutputFormat = "json",
+        idempotency_key: IdempotencyKey = None,
     ) -> JSONTextResponse:
         output = output_of(session.config, format, frame)  # refused before anything is applied
         submitted = Input(kind, report)
-        return JSONTextResponse(
-            await registry.submit(session, submitted, explain=explain, output=output),
-            media_type=output.media_type,
+        answer = await registry.submit(
+            session, submitted, explain=explain, output=output, idempotency_key=idempotency_key
         )
+        return JSONTextResponse(answer, media_type=output.media_type)
 
     submit.__annotations__["report"] = kind.report_model
     submit.__name__ = submit.__qualname__ = f"submit_{kind.tag}"

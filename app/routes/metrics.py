@@ -5,7 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter, Response
 
 from app.http.deps import MetricsDep, StoreDep
-from app.http.errors import StoreUnavailable, problem_responses
+from app.http.errors import StoreCorrupt, StoreUnavailable, problem_responses
 from app.http.requests import WireRoute
 
 router = APIRouter(tags=["health"], route_class=WireRoute)
@@ -26,8 +26,8 @@ def get_metrics(metrics: MetricsDep, store: StoreDep) -> Response:
     """Prometheus metrics of the service (text exposition format)."""
     try:
         usage = store.usage()
-    except StoreUnavailable:
-        pass  # the gauges keep their last values; /readyz says the store is down
+    except (StoreUnavailable, StoreCorrupt):
+        pass  # the gauges keep their last values; /readyz says why
     else:
         metrics.store_bytes.set(usage.bytes)
         metrics.store_inputs.set(usage.inputs)

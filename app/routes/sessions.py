@@ -24,10 +24,12 @@ from app.http.deps import (
     AdminDep,
     AuthorizedSession,
     CurrentSessionDep,
+    DeletableSession,
     MetricsDep,
     RegistryDep,
     SettingsDep,
     StoreDep,
+    TenantDep,
 )
 from app.http.errors import problem_responses
 from app.http.requests import WireRoute
@@ -50,26 +52,37 @@ MAX_SEQ = 2**53
     "",
     status_code=HTTPStatus.CREATED,
     response_model=SessionCreated,
-    responses=problem_responses(400, 408, 413, 422, 429, 503),
+    responses=problem_responses(400, 401, 408, 413, 422, 429, 503),
 )
 def create_session(
     config: SessionConfig,
+    tenant: TenantDep,
     settings: SettingsDep,
     store: StoreDep,
     registry: RegistryDep,
     metrics: MetricsDep,
 ) -> JSONTextResponse:
-    """Create a session from a config; returns its id, its token (shown only here) and the resolved config."""
+    """Create a session from a config; returns its id, its token (shown only here) and the resolved config.
+
+    The session belongs to the tenant of the request (its API key's; in open mode
+    without a key, its client address's): 401 without a valid key in ``keys`` mode,
+    429 with ``Retry-After`` beyond ``tenant_max_sessions`` or ``max_sessions``.
+    """
     token = issue_token()
     record = SessionRecord(
         id=uuid.uuid4().hex,
         config=config.model_dump(mode="json"),
         token_hash=hash_token(token),
         created_at=datetime.now(UTC),
+        tenant=tenant,
     )
     session = new_session(record, config)  # converted once; a config the engine refuses: 422
-    # counted and created in one step of the store: instances sharing it keep the limit
-    store.create_session(record, max_sessions=settings.max_sessions)
+    # counted and created in one step of the store: instances sharing it keep the limits
+    store.create_session(
+        record,
+        max_sessions=settings.max_sessions,
+        max_tenant_sessions=settings.tenant_max_sessions,
+    )
     registry.add(session)
     metrics.sessions.set(store.count_sessions())
     # the validated config as it is (constructing the answer would validate it once more)
@@ -101,9 +114,12 @@ def list_sessions(_admin: AdminDep, store: StoreDep) -> SessionList:
     response_class=Response,
     responses=problem_responses(401, 403, 404, 503),
 )
-async def delete_session(session: AuthorizedSession, registry: RegistryDep) -> Response:
-    """End a session: it no longer accepts inputs nor answers (its token stops working)."""
-    await registry.delete(session.id)
+async def delete_session(session: DeletableSession, registry: RegistryDep) -> Response:
+    """End a session: it no longer accepts inputs nor answers (its token stops working).
+
+    A quarantined session (``GET /readyz`` lists them: the store cannot read it)
+    is deleted with the admin token."""
+    await registry.delete(session)
     return Response(status_code=HTTPStatus.NO_CONTENT)
 
 

@@ -35,6 +35,7 @@ from __future__ import annotations
 import functools
 import json
 import logging
+import re
 from typing import Any
 
 import anyio
@@ -152,6 +153,28 @@ def converted_message(message: str, output: Output) -> str:
         return message
     result = output.from_plain(document["result"])
     return f'{{"type":"result","ref":{dumps(document["ref"])},"result":{result}}}'
+
+
+def message_bytes(text: str, limit: int) -> int:
+    """A text message's size in UTF-8 bytes (what ``max_body_bytes`` counts: a character is 1 to
+    4 bytes); past ``limit`` in characters already, that length (a lower bound) is enough."""
+    return len(text) if len(text) > limit else len(text.encode("utf-8", "surrogatepass"))
+
+
+RESULT_SEQ = re.compile(r'"result":\{"seq":(\d+)')
+TAKEN_OVER = Ending(1013, "session taken over")
+"""A stream's session now applied by another instance (its lease lost): reconnect."""
+
+
+def result_seq(message: str) -> int | None:
+    """The ``seq`` of a ``result`` message (written by ``result_message``: ``seq`` first)."""
+    found = RESULT_SEQ.search(message, 0, 200)
+    return None if found is None else int(found.group(1))
+
+
+def gap_message(after: int, next_seq: int) -> str:
+    """The ``gap`` message: results after ``after`` and before ``next_seq`` were not sent."""
+    return dumps({"type": "gap", "ref": None, "after": after, "next": next_seq})
 
 
 def _ack(session: LiveSession) -> str:
@@ -302,11 +325,11 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
                     data = bytes(incoming.get("bytes") or b"")
                     if _looks_like_json(data):
                         text, data = data.decode("utf-8", errors="replace"), b""
-                size = len(data) if text is None else len(text)
+                size = len(data) if text is None else message_bytes(text, settings.max_body_bytes)
                 if size > settings.max_body_bytes:
                     answer = _refusal(
                         LimitExceeded(
-                            "max_body_bytes", settings.max_body_bytes, size, what="message"
+                            "max_body_bytes", settings.max_body_bytes, size, what="message (bytes)"
                         ),
                         path,
                     )
@@ -331,10 +354,27 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
             async for answer in receive:
                 await websocket.send_text(answer)
 
+    async def lease_keeper() -> None:
+        """Renew the session's lease every third of its TTL while the stream is open; close
+        with 1013 when another instance took the session over (the client reconnects)."""
+        period = settings.lease_ttl_ms / 3000
+        while True:
+            await anyio.sleep(period)
+            try:
+                kept = await registry.keep_lease(session)
+            except StoreUnavailable:
+                continue  # the inputs say it too; the lease lapses or is kept
+            if not kept:
+                await websocket.close(code=TAKEN_OVER.code, reason=TAKEN_OVER.reason)
+                return
+
     try:
         async with anyio.create_task_group() as tasks:
             tasks.start_soon(writer)
+            if registry.shared:
+                tasks.start_soon(lease_keeper)
             await reader()
+            tasks.cancel_scope.cancel()
     except* DISCONNECTED:
         pass
 
@@ -354,10 +394,18 @@ async def subscribe_session(websocket: WebSocket, sid: str) -> None:
     except StoreUnavailable:
         await websocket.close(code=STORE_UNAVAILABLE.code, reason=STORE_UNAVAILABLE.reason)
         return
+    last = session.seq
     await websocket.send_text(_ack(session))
 
     async def pump() -> None:
+        """Every result, in order; a ``gap`` message before one that does not follow."""
+        nonlocal last
         while not isinstance(published := await subscriber.next(), Ending):
+            seq = result_seq(published.text)
+            if seq is not None:
+                if seq > last + 1:
+                    await websocket.send_text(gap_message(last, seq))
+                last = max(last, seq)
             await websocket.send_text(await _in_output(published, output))
         await websocket.close(code=published.code, reason=published.reason)
 

@@ -39,6 +39,8 @@ class Ending:
 
 SESSION_ENDED = Ending(1000, "session ended")
 STORE_UNAVAILABLE = Ending(1013, "store unavailable")
+SESSION_UNREADABLE = Ending(1011, "session unreadable (quarantined)")
+"""The store holds data of the session it cannot read: a permanent fault, do not retry."""
 SESSION_RELOADED = Ending(1013, "session reloaded from the store")
 """The session was evicted from memory after a failed step; subscribe again."""
 

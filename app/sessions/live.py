@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from datetime import datetime
 
 from api_schemas.config import SessionConfig
 from api_schemas.limits import CEILINGS, limits_of
-from app.errors import LimitExceeded
+from app.errors import IdempotencyKeyReused, LimitExceeded
 from app.sessions.hub import Hub
 from app.sessions.translate import PlainObject, class_frame, fusion_config
 from app.stores import SessionRecord, Snapshot
@@ -23,6 +24,8 @@ from core.fusion.engine import SessionEngine
 from core.fusion.track import FusedTrack
 
 SNAPSHOT_FORMAT = 1
+IDEMPOTENCY_KEYS = 256
+"""Answers kept per session for retried inputs (``Idempotency-Key``)."""
 
 
 @dataclass
@@ -44,6 +47,25 @@ class LiveSession:
     """Monotonic time until which this instance surely holds the session's lease (redis store)."""
     lock: asyncio.Lock = field(default_factory=asyncio.Lock)
     hub: Hub = field(default_factory=Hub)
+    answered: OrderedDict[str, tuple[str, str]] = field(default_factory=OrderedDict)
+    """The answers to the latest inputs sent with an ``Idempotency-Key``: key → (the input's
+    fingerprint, the answer), at most :data:`IDEMPOTENCY_KEYS`, oldest first."""
+
+    def answer_of(self, key: str, fingerprint: str) -> str | None:
+        """The answer already given to the input of ``key`` (``None``: not seen); 409 if the
+        key came with another input."""
+        seen = self.answered.get(key)
+        if seen is None:
+            return None
+        if seen[0] != fingerprint:
+            raise IdempotencyKeyReused(self.id, key)
+        return seen[1]
+
+    def remember(self, key: str, fingerprint: str, answer: str) -> None:
+        """Keep the answer to the input of ``key`` (forgetting the oldest beyond the bound)."""
+        self.answered[key] = (fingerprint, answer)
+        while len(self.answered) > IDEMPOTENCY_KEYS:
+            self.answered.popitem(last=False)
 
     @property
     def id(self) -> str:

@@ -20,6 +20,7 @@ Redis (:class:`~app.cluster.link.ClusterLink`).
 from __future__ import annotations
 
 import functools
+import hashlib
 import logging
 import time
 from collections.abc import Callable
@@ -30,7 +31,8 @@ from typing import TYPE_CHECKING, Any
 import anyio
 from prometheus_client import Counter, Histogram
 
-from app.errors import SessionNotFound, StoreUnavailable
+from app.cluster.quotas import input_work
+from app.errors import LimitExceeded, SessionNotFound, StoreUnavailable
 from app.inputs import DecodedKind, Input, SessionView
 from app.outputs import JSON, Output
 from app.outputs.text import dumps
@@ -94,13 +96,59 @@ class InputPipeline:
         *,
         explain: bool = False,
         output: Output = JSON,
+        idempotency_key: str | None = None,
     ) -> str:
         """Apply one input (of any kind: :mod:`app.inputs`), log it durably, publish its
         result, and return the answer to its sender (text of ``output``). It is checked
-        against the session's config first."""
+        against the session's config first, then its work against ``max_input_work`` (and
+        ``max_explain_cells``) and its tenant's quotas. An input sent again with the
+        ``idempotency_key`` of one already applied gets that first answer, and nothing is
+        applied (the session keeps its latest 256 keys' answers in memory)."""
         items = submitted.items
         await compute(items, functools.partial(submitted.check, session.config))
-        return await self._submit(session, submitted, items, explain=explain, output=output)
+        work = self.check_work(session, submitted, items, explain=explain)
+        await self.registry.quotas.charge(session.record.tenant, work)
+        once = None
+        if idempotency_key is not None:
+            text = f"{explain}:{output}:{submitted.kind.tag}:{submitted.report.model_dump_json()}"
+            once = (idempotency_key, hashlib.sha256(text.encode()).hexdigest())
+        return await self._submit(
+            session, submitted, items, explain=explain, output=output, once=once
+        )
+
+    def check_work(
+        self, session: LiveSession, submitted: Input, items: int, *, explain: bool
+    ) -> int:
+        """The input's work units (:func:`~app.cluster.quotas.input_work`), refused (422) beyond
+        ``max_input_work``, or beyond ``max_explain_cells`` for the matrix ``explain`` adds:
+        before any work."""
+        known = len(session.tracks)
+        tracker = (
+            None if session.engine is None else session.engine.local_trackers.get(submitted.sensor)
+        )
+        known += 0 if tracker is None else tracker.n_tracks  # a detecting sensor's own tracks
+        settings = self.registry.settings
+        where = (submitted.kind.tag,)  # the list of items is named as the kind (tracks, detections)
+        work = input_work(items, known)
+        if work > settings.max_input_work:
+            raise LimitExceeded(
+                "max_input_work",
+                settings.max_input_work,
+                work,
+                what=f"work units of this input ({items} items × ({known} known tracks + 1))",
+                loc=where,
+            )
+        cells = (known + items) * items
+        if explain and cells > settings.max_explain_cells:
+            raise LimitExceeded(
+                "max_explain_cells",
+                settings.max_explain_cells,
+                cells,
+                what=f"cells of the explained score matrix (({known} known + {items} reported "
+                f"tracks) × {items}); send the input without explain=true",
+                loc=where,
+            )
+        return work
 
     async def submit_decoded(
         self,
@@ -132,19 +180,32 @@ class InputPipeline:
         *,
         explain: bool,
         output: Output,
+        once: tuple[str, str] | None = None,
     ) -> str:
         """Under the session lock: (lease,) apply, log durably, then publish and return the result.
 
         An input that waited for the lock of a session evicted meanwhile goes to the session
-        as the store has it now: 404 if it was deleted, 503 if the store is down.
+        as the store has it now: 404 if it was deleted, 503 if the store is down. ``once``:
+        the input's idempotency key and fingerprint (its first answer is given again).
         """
         async with session.lock:
             if not session.closed:
-                return await self._submit_locked(
+                answered = None if once is None else session.answer_of(*once)
+                if answered is not None:
+                    return answered
+                answer = await self._submit_locked(
                     session, submitted, items, explain=explain, output=output
                 )
+                if once is not None:
+                    session.remember(*once, answer)
+                return answer
         return await self._submit(
-            await self.registry.get(session.id), submitted, items, explain=explain, output=output
+            await self.registry.get(session.id),
+            submitted,
+            items,
+            explain=explain,
+            output=output,
+            once=once,
         )
 
     async def _submit_locked(

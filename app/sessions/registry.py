@@ -28,6 +28,7 @@ first input is applied, up to ``max_sensors``; the snapshot keeps the list.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import functools
 import logging
 from collections.abc import Callable, Iterator
@@ -39,14 +40,15 @@ import anyio
 from app.cluster.fanout import ResultFanout
 from app.cluster.lease import SessionLeases
 from app.cluster.link import ClusterLink
-from app.errors import SessionNotFound, StoreUnavailable
+from app.cluster.quotas import TenantQuotas, open_quotas
+from app.errors import SessionNotFound, SessionUnreadable, StoreUnavailable
 from app.inputs import DecodedKind, Input
 from app.metrics import ServiceMetrics
 from app.outputs import JSON, Output
 from app.outputs.json_results import track_fields
 from app.runtime import without_collection
 from app.sessions.expiry import SessionExpiry
-from app.sessions.hub import SESSION_ENDED, Ending, Subscriber
+from app.sessions.hub import SESSION_ENDED, SESSION_UNREADABLE, Ending, Subscriber
 from app.sessions.live import LiveSession, new_session, restore_snapshot
 from app.sessions.pipeline import InputPipeline
 from app.sessions.translate import PlainObject
@@ -71,6 +73,7 @@ class SessionRegistry:
         *,
         leases: SessionLeases | None = None,
         fanout: ResultFanout | None = None,
+        quotas: TenantQuotas | None = None,
         owner: str | None = None,
     ) -> None:
         self.store = store
@@ -82,6 +85,14 @@ class SessionRegistry:
         self._load_lock = asyncio.Lock()
         self._tokens: dict[str, str] = {}
         """Token hash → id of the live sessions in memory (the rate limit's verified identities)."""
+        self.quarantined: dict[str, str] = {}
+        """Sessions the store holds but cannot read: id → what of it (until deleted)."""
+        self.store_corrupt: str | None = None
+        """Why the store itself is damaged, once seen (a permanent fault: /readyz says it)."""
+        self.quotas = quotas or open_quotas(
+            store, settings.tenant_inputs_per_second, settings.tenant_work_per_minute
+        )
+        """The tenants' input quotas (:mod:`app.cluster.quotas`)."""
         self.pipeline = InputPipeline(self)
         self.cluster = ClusterLink(self, leases, fanout, owner)
         self.expiry = SessionExpiry(self)
@@ -107,16 +118,40 @@ class SessionRegistry:
         self._tokens[session.record.token_hash] = session.id
         return session
 
-    def knows_token(self, token_hash: str) -> bool:
-        """Whether ``token_hash`` is the hash of a live session's token held in memory."""
-        return token_hash in self._tokens
+    def tenant_of_token(self, token_hash: str) -> str | None:
+        """The tenant of the live session (held in memory) whose token hashes to ``token_hash``."""
+        session_id = self._tokens.get(token_hash)
+        session = None if session_id is None else self._sessions.get(session_id)
+        return None if session is None else session.record.tenant
 
     async def record(self, session_id: str) -> SessionRecord | None:
         """The stored record of a live session (from memory when the session is loaded)."""
         session = self._sessions.get(session_id)
         if session is not None:
             return session.record
-        return await self.io(self.store.get_session, session_id)
+        self._refuse_quarantined(session_id)
+        try:
+            return await self.io(self.store.get_session, session_id)
+        except SessionUnreadable as unreadable:
+            raise self.quarantine(unreadable) from None
+
+    def _refuse_quarantined(self, session_id: str) -> None:
+        what = self.quarantined.get(session_id)
+        if what is not None:
+            raise SessionUnreadable(session_id, what)
+
+    def quarantine(self, unreadable: SessionUnreadable) -> SessionUnreadable:
+        """Set a session the store cannot read aside (it is served no more, the rest is);
+        ``/readyz`` and ``/metrics`` list it. Returns the error, to raise."""
+        session_id = unreadable.session_id
+        if session_id not in self.quarantined:
+            logger.error(
+                "session %s quarantined: its stored %s cannot be read", session_id, unreadable.what
+            )
+        self.quarantined[session_id] = unreadable.what
+        self.metrics.quarantined.set(len(self.quarantined))
+        self.discard(session_id, SESSION_UNREADABLE)
+        return unreadable
 
     async def get(self, session_id: str) -> LiveSession:
         """The live session ``session_id``, loaded from the store if it is not in memory."""
@@ -126,7 +161,11 @@ class SessionRegistry:
         async with self._load_lock:
             session = self._sessions.get(session_id)
             if session is None:
-                session = await self._load(session_id)
+                self._refuse_quarantined(session_id)
+                try:
+                    session = await self._load(session_id)
+                except SessionUnreadable as unreadable:
+                    raise self.quarantine(unreadable) from None
                 self._sessions[session_id] = session
                 self._tokens[session.record.token_hash] = session_id
         return session
@@ -136,7 +175,13 @@ class SessionRegistry:
         if record is None:
             raise SessionNotFound(session_id)
         load = await self.io(self.store.load, session_id)
-        return await anyio.to_thread.run_sync(functools.partial(self.rebuild, load.session, load))
+        try:
+            return await anyio.to_thread.run_sync(
+                functools.partial(self.rebuild, load.session, load)
+            )
+        except Exception as error:  # a stored config or snapshot the engine cannot take
+            logger.error("session %s: rebuild failed (%s)", session_id, type(error).__name__)
+            raise SessionUnreadable(session_id, "state") from error
 
     def rebuild(self, record: SessionRecord, load: SessionLoad) -> LiveSession:
         """Snapshot + replay of the log after it (runs in a worker thread)."""
@@ -161,13 +206,11 @@ class SessionRegistry:
             return
 
     async def restore_all(self) -> int:
-        """Load every stored session (on start); returns how many."""
-        records = await self.io(self.store.list_sessions)
-        for record in records:
-            try:
-                await self.get(record.id)
-            except Exception:
-                logger.exception("session %s could not be restored", record.id)
+        """Load every stored session (on start); returns how many. A session the store cannot
+        read is quarantined (:meth:`quarantine`): the others are served."""
+        for session_id in await self.io(self.store.session_ids):
+            with contextlib.suppress(SessionUnreadable, SessionNotFound):  # quarantined, or gone
+                await self.get(session_id)
         return len(self._sessions)
 
     def discard(self, session_id: str, ending: Ending = SESSION_ENDED) -> None:
@@ -181,8 +224,11 @@ class SessionRegistry:
         self.cluster.forget(session_id)
 
     async def delete(self, session_id: str) -> bool:
-        """End a session in the store and in memory (and give its lease up)."""
+        """End a session in the store and in memory (and give its lease up); a quarantined
+        session is deleted whole (what could not be read goes too)."""
         deleted = await self.io(self.store.delete_session, session_id)
+        if self.quarantined.pop(session_id, None) is not None:
+            self.metrics.quarantined.set(len(self.quarantined))
         self.discard(session_id)
         await self.cluster.release(session_id)
         self.metrics.sessions.set(await self.io(self.store.count_sessions))
@@ -237,9 +283,12 @@ class SessionRegistry:
         *,
         explain: bool = False,
         output: Output = JSON,
+        idempotency_key: str | None = None,
     ) -> str:
         """:meth:`InputPipeline.submit`."""
-        return await self.pipeline.submit(session, submitted, explain=explain, output=output)
+        return await self.pipeline.submit(
+            session, submitted, explain=explain, output=output, idempotency_key=idempotency_key
+        )
 
     async def submit_decoded(
         self,
@@ -267,6 +316,10 @@ class SessionRegistry:
     def unsubscribe(self, session: LiveSession, subscriber: Subscriber) -> None:
         """:meth:`ClusterLink.unsubscribe`."""
         self.cluster.unsubscribe(session, subscriber)
+
+    async def keep_lease(self, session: LiveSession) -> bool:
+        """:meth:`ClusterLink.keep_lease`."""
+        return await self.cluster.keep_lease(session)
 
     def leases_held(self) -> int:
         """:meth:`ClusterLink.leases_held`."""

@@ -21,6 +21,13 @@ would accept it again.
 Outages: every store raises :class:`~app.errors.StoreUnavailable` for its
 backend's connection and I/O errors (:func:`unavailable_on`), never a raw
 driver error, so the service answers 503 instead of 500.
+
+Corruption: a session's stored value that cannot be decoded (its config, an
+input, a snapshot, a missing field) raises
+:class:`~app.errors.SessionUnreadable` naming the session and what of it
+(:func:`readable`): a permanent fault of that session alone, which the registry
+quarantines. A store whose own structure is damaged (a malformed sqlite file)
+raises :class:`~app.errors.StoreCorrupt`. Neither quotes stored text.
 """
 
 from __future__ import annotations
@@ -36,17 +43,45 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 import orjson
 
-from app.errors import Conflict, LimitExceeded, SessionNotFound, StoreUnavailable
+from app.errors import (
+    Conflict,
+    LimitExceeded,
+    SessionNotFound,
+    SessionUnreadable,
+    StoreUnavailable,
+)
 
 JsonObject = dict[str, Any]
 _PLAIN_KINDS = frozenset("biuf")
 """numpy dtype kinds whose ``tolist()`` is plain data (bool, signed/unsigned int, float)."""
 
 
+SESSION_SLOT_RETRY_S = 60
+"""``Retry-After`` of a session refused for want of a slot: a slot frees when a session is
+deleted or expires, which the service cannot foresee; a minute is a polite polling period."""
+
+
 def session_limit(max_sessions: int, live: int) -> LimitExceeded:
-    """The refusal of a session beyond ``max_sessions`` (429, the setting named)."""
+    """The refusal of a session beyond ``max_sessions`` (429, the setting named, ``Retry-After``)."""
     return LimitExceeded(
-        "max_sessions", max_sessions, live, what="sessions", status=HTTPStatus.TOO_MANY_REQUESTS
+        "max_sessions",
+        max_sessions,
+        live,
+        what="live sessions of the service (delete one, or wait for one to expire)",
+        status=HTTPStatus.TOO_MANY_REQUESTS,
+        retry_after_s=SESSION_SLOT_RETRY_S,
+    )
+
+
+def tenant_session_limit(max_sessions: int, live: int) -> LimitExceeded:
+    """The refusal of a session beyond the tenant's ``tenant_max_sessions`` (429)."""
+    return LimitExceeded(
+        "tenant_max_sessions",
+        max_sessions,
+        live,
+        what="live sessions of this tenant (delete one, or wait for one to expire)",
+        status=HTTPStatus.TOO_MANY_REQUESTS,
+        retry_after_s=SESSION_SLOT_RETRY_S,
     )
 
 
@@ -83,6 +118,9 @@ class SessionRecord:
     token_hash: str
     created_at: datetime
     deleted: bool = False
+    tenant: str = ""
+    """Who created it (:mod:`app.tenants`): its inputs count against that tenant's
+    quotas, whichever token sends them ("" for a session stored before tenants existed)."""
 
 
 @dataclass(frozen=True)
@@ -159,12 +197,18 @@ class Store(Protocol):
     under a lock, microseconds) is called on the event loop, where a thread hop would
     cost more than the call."""
 
-    def create_session(self, record: SessionRecord, max_sessions: int | None = None) -> None:
+    def create_session(
+        self,
+        record: SessionRecord,
+        max_sessions: int | None = None,
+        max_tenant_sessions: int | None = None,
+    ) -> None:
         """Store a new session; :class:`SessionExists` if the id is taken,
-        :func:`session_limit` (429) if ``max_sessions`` live sessions exist already.
+        :func:`session_limit` (429) if ``max_sessions`` live sessions exist already,
+        :func:`tenant_session_limit` (429) if its tenant has ``max_tenant_sessions``.
 
         Counting and storing are one atomic step of the store (one lock, one
-        transaction, one Lua script), so instances sharing it never exceed the limit.
+        transaction, one Lua script), so instances sharing it never exceed the limits.
         """
         ...
 
@@ -173,7 +217,12 @@ class Store(Protocol):
         ...
 
     def list_sessions(self) -> list[SessionRecord]:
-        """Every live session, oldest first."""
+        """Every live session that can be read, oldest first (an unreadable one is left out:
+        :meth:`session_ids` has it)."""
+        ...
+
+    def session_ids(self) -> list[str]:
+        """The ids of every live session, readable or not, oldest first."""
         ...
 
     def count_sessions(self) -> int:
@@ -356,6 +405,20 @@ def history(store: Store, session_id: str, after: int, limit: int) -> History:
         entries = store.entries(session_id, after=after, limit=limit)
         return History(snapshot=None, entries=entries, last_seq=load.last_seq)
     return History(snapshot=load.snapshot, entries=load.entries[:limit], last_seq=load.last_seq)
+
+
+UNREADABLE = (ValueError, KeyError, TypeError, IndexError, AttributeError)
+"""What decoding a damaged stored value raises (``json.JSONDecodeError`` is a ValueError)."""
+
+
+@contextmanager
+def readable(session_id: str, what: str) -> Iterator[None]:
+    """Decode a session's stored ``what``: a damaged value raises :class:`SessionUnreadable`
+    (naming the session and ``what``, never quoting the stored text)."""
+    try:
+        yield
+    except UNREADABLE as error:
+        raise SessionUnreadable(session_id, what) from error
 
 
 @contextmanager

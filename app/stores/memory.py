@@ -25,6 +25,7 @@ from app.stores.base import (
     encode,
     require,
     session_limit,
+    tenant_session_limit,
 )
 
 
@@ -76,12 +77,22 @@ class MemoryStore:
     def _live(self, session_id: str) -> _SessionData | None:
         return self._sessions.get(session_id)
 
-    def create_session(self, record: SessionRecord, max_sessions: int | None = None) -> None:
+    def create_session(
+        self,
+        record: SessionRecord,
+        max_sessions: int | None = None,
+        max_tenant_sessions: int | None = None,
+    ) -> None:
         with self._lock:
             if record.id in self._sessions:
                 raise SessionExists(record.id)
             if max_sessions is not None and len(self._sessions) >= max_sessions:
                 raise session_limit(max_sessions, len(self._sessions))
+            if max_tenant_sessions is not None:
+                tenant = record.tenant
+                live = sum(data.record.tenant == tenant for data in self._sessions.values())
+                if live >= max_tenant_sessions:
+                    raise tenant_session_limit(max_tenant_sessions, live)
             if not record.deleted:
                 self._sessions[record.id] = _SessionData(
                     replace(record, config={}), encode(record.config)
@@ -96,6 +107,9 @@ class MemoryStore:
         with self._lock:
             records = [data.full_record() for data in self._sessions.values()]
         return sorted(records, key=lambda record: (record.created_at, record.id))
+
+    def session_ids(self) -> list[str]:
+        return [record.id for record in self.list_sessions()]
 
     def count_sessions(self) -> int:
         with self._lock:

@@ -25,10 +25,12 @@ a :class:`~app.stores.base.SequenceConflict`.
 
 Retention: deleting a session unlinks its record, log and snapshots;
 :meth:`RedisStore.compact` trims the log stream (``XTRIM MINID``) behind the
-latest snapshot. Outages: redis-py retries a failed command three times
-(backoff with jitter, a 5 s socket timeout), then its connection and timeout
-errors are raised as :class:`~app.errors.StoreUnavailable`; the next command
-after Redis is back reconnects by itself.
+latest snapshot. Outages: a command not answered within 2 s (a frozen Redis)
+fails at once, and one whose connection broke (a restarted Redis) is sent
+again twice on a new connection; then the error is raised as
+:class:`~app.errors.StoreUnavailable` (503). An input whose append timed
+out may still be logged once Redis thaws: the client tells from the session's
+``seq`` (README, "Clients and failures").
 
 Durability: an append returns once Redis has applied it. That is durable in
 the sense of the sqlite store only if Redis persists before answering
@@ -44,9 +46,11 @@ from datetime import UTC, datetime, timedelta
 from typing import Any, cast
 
 import redis
+from redis.backoff import ExponentialWithJitterBackoff
 from redis.client import Pipeline
+from redis.retry import Retry
 
-from app.errors import SessionNotFound
+from app.errors import SessionNotFound, SessionUnreadable
 from app.stores.base import (
     LogEntry,
     SequenceConflict,
@@ -57,7 +61,9 @@ from app.stores.base import (
     StoreUsage,
     dumps,
     loads,
+    readable,
     session_limit,
+    tenant_session_limit,
     unavailable_on,
 )
 from app.stores.redis_keys import DEFAULT_PREFIX, RedisKeys
@@ -67,28 +73,44 @@ DEFAULT_URL = "redis://127.0.0.1:6379/0"
 _EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
 _SCAN_BATCH = 500
 CONNECT_TIMEOUT_S = 2.0
-SOCKET_TIMEOUT_S = 5.0
+SOCKET_TIMEOUT_S = 2.0
+"""A command not answered by then fails (a frozen Redis: 503 within it, not after it thaws)."""
+RECONNECT = Retry(ExponentialWithJitterBackoff(base=0.05, cap=0.5), 2, (redis.ConnectionError,))
+"""A command whose connection broke (Redis restarted) is sent again on a new one, twice at
+most; a timeout is not retried: a frozen Redis would hold the request a timeout per try."""
 UNREACHABLE = (redis.ConnectionError, redis.TimeoutError)
 """redis-py's errors of a server that does not answer (after its retries)."""
 
-# KEYS: session, index. ARGV: id, config, token_hash, created_at, deleted, score, the
-# session limit ('' for none). Replies 1 (created), 0 (the id exists) or -1 - live (the
-# index holds `limit` live sessions already): counting and creating are one step.
+# KEYS: session, index, tenants. ARGV: id, config, token_hash, created_at, deleted, score,
+# the session limit ('' for none), tenant, the tenant's limit ('' for none). Replies
+# {1} (created), {0} (the id exists), {-1, live} (the index holds `limit` live sessions
+# already) or {-2, live} (the tenant has its limit): counting and creating are one step.
 _CREATE = """
-if redis.call('EXISTS', KEYS[1]) == 1 then return 0 end
+if redis.call('EXISTS', KEYS[1]) == 1 then return {0} end
 if ARGV[7] ~= '' then
   local live = redis.call('ZCARD', KEYS[2])
-  if live >= tonumber(ARGV[7]) then return -1 - live end
+  if live >= tonumber(ARGV[7]) then return {-1, live} end
+end
+if ARGV[9] ~= '' then
+  local mine = tonumber(redis.call('HGET', KEYS[3], ARGV[8]) or '0')
+  if mine >= tonumber(ARGV[9]) then return {-2, mine} end
 end
 redis.call('HSET', KEYS[1], 'id', ARGV[1], 'config', ARGV[2], 'token_hash', ARGV[3],
-           'created_at', ARGV[4], 'deleted', ARGV[5], 'last_seq', '0')
-if ARGV[5] == '0' then redis.call('ZADD', KEYS[2], ARGV[6], ARGV[1]) end
-return 1
+           'created_at', ARGV[4], 'deleted', ARGV[5], 'last_seq', '0', 'tenant', ARGV[8])
+if ARGV[5] == '0' then
+  redis.call('ZADD', KEYS[2], ARGV[6], ARGV[1])
+  redis.call('HINCRBY', KEYS[3], ARGV[8], 1)
+end
+return {1}
 """
 
-# KEYS: session, index, log, snapshots. ARGV: id. Frees everything the session held.
+# KEYS: session, index, log, snapshots, tenants. ARGV: id. Frees everything the session held.
 _DELETE = """
 local live = redis.call('HGET', KEYS[1], 'deleted') == '0'
+if live then
+  local tenant = redis.call('HGET', KEYS[1], 'tenant') or ''
+  if redis.call('HINCRBY', KEYS[5], tenant, -1) <= 0 then redis.call('HDEL', KEYS[5], tenant) end
+end
 redis.call('ZREM', KEYS[2], ARGV[1])
 redis.call('UNLINK', KEYS[1], KEYS[3], KEYS[4])
 if live then return 1 end
@@ -171,31 +193,35 @@ def _pairs(flat: list[str]) -> dict[str, str]:
     return dict(zip(flat[::2], flat[1::2], strict=True))
 
 
-def _record(fields: Mapping[str, str]) -> SessionRecord:
-    return SessionRecord(
-        id=fields["id"],
-        config=loads(fields["config"]),
-        token_hash=fields["token_hash"],
-        created_at=datetime.fromisoformat(fields["created_at"]),
-        deleted=fields["deleted"] == "1",
-    )
+def _record(session_id: str, fields: Mapping[str, str]) -> SessionRecord:
+    with readable(session_id, "record"):
+        return SessionRecord(
+            id=fields["id"],
+            config=loads(fields["config"]),
+            token_hash=fields["token_hash"],
+            created_at=datetime.fromisoformat(fields["created_at"]),
+            deleted=fields["deleted"] == "1",
+            tenant=fields.get("tenant", ""),
+        )
 
 
-def _entry(stream_id: str, fields: Mapping[str, str]) -> LogEntry:
-    return LogEntry(
-        seq=int(stream_id.split("-", 1)[0]),
-        received_at=datetime.fromisoformat(fields["received_at"]),
-        input=loads(fields["input"]),
-    )
+def _entry(session_id: str, stream_id: str, fields: Mapping[str, str]) -> LogEntry:
+    with readable(session_id, f"input {stream_id}"):
+        return LogEntry(
+            seq=int(stream_id.split("-", 1)[0]),
+            received_at=datetime.fromisoformat(fields["received_at"]),
+            input=loads(fields["input"]),
+        )
 
 
-def _snapshot(text: str) -> Snapshot:
-    document = loads(text)
-    return Snapshot(
-        seq=int(document["seq"]),
-        taken_at=datetime.fromisoformat(document["taken_at"]),
-        state=document["state"],
-    )
+def _snapshot(session_id: str, text: str) -> Snapshot:
+    with readable(session_id, "snapshot"):
+        document = loads(text)
+        return Snapshot(
+            seq=int(document["seq"]),
+            taken_at=datetime.fromisoformat(document["taken_at"]),
+            state=document["state"],
+        )
 
 
 class RedisStore:
@@ -228,6 +254,8 @@ class RedisStore:
             decode_responses=True,
             socket_connect_timeout=CONNECT_TIMEOUT_S,
             socket_timeout=SOCKET_TIMEOUT_S,
+            retry=RECONNECT,
+            retry_on_timeout=False,
         )
         self._closed = False
         self._create = self.client.register_script(_CREATE)
@@ -251,10 +279,15 @@ class RedisStore:
     def _reachable() -> contextlib.AbstractContextManager[None]:
         return unavailable_on(UNREACHABLE, "redis")
 
-    def create_session(self, record: SessionRecord, max_sessions: int | None = None) -> None:
+    def create_session(
+        self,
+        record: SessionRecord,
+        max_sessions: int | None = None,
+        max_tenant_sessions: int | None = None,
+    ) -> None:
         with self._reachable():
-            created = self._create(
-                keys=[self.keys.session(record.id), self.keys.sessions()],
+            reply: list[int] = self._create(
+                keys=[self.keys.session(record.id), self.keys.sessions(), self.keys.tenants()],
                 args=[
                     record.id,
                     dumps(record.config),
@@ -263,21 +296,27 @@ class RedisStore:
                     "1" if record.deleted else "0",
                     creation_score(record.created_at),
                     "" if max_sessions is None else str(max_sessions),
+                    record.tenant,
+                    "" if max_tenant_sessions is None else str(max_tenant_sessions),
                 ],
                 client=self._redis(),
             )
-        if created < 0:
+        outcome = int(reply[0])
+        if outcome == -1:
             assert max_sessions is not None
-            raise session_limit(max_sessions, -1 - int(created))
-        if not created:
+            raise session_limit(max_sessions, int(reply[1]))
+        if outcome == -2:
+            assert max_tenant_sessions is not None
+            raise tenant_session_limit(max_tenant_sessions, int(reply[1]))
+        if not outcome:
             raise SessionExists(record.id)
 
     def get_session(self, session_id: str) -> SessionRecord | None:
         with self._reachable():
             fields = cast(dict[str, str], self._redis().hgetall(self.keys.session(session_id)))
-        if not fields or fields["deleted"] != "0":
+        if not fields or fields.get("deleted") == "1":
             return None
-        return _record(fields)
+        return _record(session_id, fields)
 
     def list_sessions(self) -> list[SessionRecord]:
         client = self._redis()
@@ -287,7 +326,16 @@ class RedisStore:
             for session_id in ids:
                 pipeline.hgetall(self.keys.session(session_id))
             rows: list[dict[str, str]] = pipeline.execute()
-        return [_record(fields) for fields in rows if fields and fields["deleted"] == "0"]
+        records = []
+        for session_id, fields in zip(ids, rows, strict=True):
+            if fields and fields.get("deleted") != "1":
+                with contextlib.suppress(SessionUnreadable):  # session_ids() has it
+                    records.append(_record(session_id, fields))
+        return records
+
+    def session_ids(self) -> list[str]:
+        with self._reachable():
+            return cast(list[str], self._redis().zrange(self.keys.sessions(), 0, -1))
 
     def count_sessions(self) -> int:
         with self._reachable():
@@ -301,6 +349,7 @@ class RedisStore:
                     self.keys.sessions(),
                     self.keys.log(session_id),
                     self.keys.snapshots(session_id),
+                    self.keys.tenants(),
                 ],
                 args=[session_id],
                 client=self._redis(),
@@ -344,7 +393,7 @@ class RedisStore:
         rows: list[tuple[str, dict[str, str]]] = self._live_then(
             session_id, lambda pipeline: pipeline.xrange(key, min=start, max="+", count=limit)
         )
-        return [_entry(stream_id, fields) for stream_id, fields in rows]
+        return [_entry(session_id, stream_id, fields) for stream_id, fields in rows]
 
     def save_snapshot(self, session_id: str, snapshot: Snapshot) -> None:
         document = {
@@ -374,10 +423,12 @@ class RedisStore:
         if not reply:
             raise SessionNotFound(session_id)
         fields, snapshot, rows = reply
+        with readable(session_id, "record"):
+            record = _pairs(fields)
         return SessionLoad(
-            session=_record(_pairs(fields)),
-            snapshot=_snapshot(snapshot) if snapshot is not None else None,
-            entries=[_entry(stream_id, _pairs(entry)) for stream_id, entry in rows],
+            session=_record(session_id, record),
+            snapshot=_snapshot(session_id, snapshot) if snapshot is not None else None,
+            entries=[_entry(session_id, stream_id, _pairs(entry)) for stream_id, entry in rows],
         )
 
     def compact(self, session_id: str, through: int) -> int:

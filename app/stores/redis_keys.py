@@ -12,8 +12,10 @@ record, log and snapshots together stay legal there.
 name                           type    holds
 =============================  ======  ================================================
 ``P:sessions``                 zset    live session ids, score = creation time (µs)
+``P:tenant-sessions``          hash    tenant → its live sessions (the tenant quota)
+``P:quota:…``                  string  the tenants' input and work counters (limits library)
 ``P:{sid}:session``            hash    id, config (JSON), token_hash, created_at,
-                                       deleted, last_seq, snapshot_seq
+                                       deleted, last_seq, snapshot_seq, tenant
 ``P:{sid}:log``                stream  one entry per input, id ``<seq>-0``, fields
                                        ``received_at`` and ``input`` (JSON)
 ``P:{sid}:snapshots``          hash    seq → snapshot JSON (the two latest)
@@ -46,6 +48,14 @@ class RedisKeys:
     def sessions(self) -> str:
         """The sorted set of live session ids."""
         return f"{self.prefix}:sessions"
+
+    def tenants(self) -> str:
+        """The hash of each tenant's live-session count."""
+        return f"{self.prefix}:tenant-sessions"
+
+    def quotas(self) -> str:
+        """The start of the tenants' quota counters' keys."""
+        return f"{self.prefix}:quota"
 
     def session(self, session_id: str) -> str:
         """The session's record (a hash)."""

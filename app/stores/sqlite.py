@@ -13,7 +13,10 @@ file stops growing once a session's retained log has its size (the WAL is
 checkpointed automatically and truncated to ``JOURNAL_SIZE_LIMIT``).
 sqlite's ``OperationalError`` (I/O error, full disk, a lock held past the
 busy timeout, a file that cannot be opened) is raised as
-:class:`~app.errors.StoreUnavailable`.
+:class:`~app.errors.StoreUnavailable`; a damaged file ("database disk
+image is malformed", "file is not a database") as
+:class:`~app.errors.StoreCorrupt`, a permanent fault (opening such a file
+succeeds: the service starts, not ready).
 
 Threads: each thread gets its own connection (sqlite3 connections are not
 shared across threads); writes are serialised by a process lock and
@@ -23,6 +26,7 @@ file), and the sequence-number check runs inside that transaction.
 
 from __future__ import annotations
 
+import contextlib
 import sqlite3
 import threading
 from collections.abc import Callable, Iterator, Mapping
@@ -31,6 +35,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import Any, Literal, TypeVar
 
+from app.errors import SessionUnreadable, StoreCorrupt, StoreUnavailable
 from app.stores.base import (
     LogEntry,
     SessionExists,
@@ -41,12 +46,14 @@ from app.stores.base import (
     check_seq,
     dumps,
     loads,
+    readable,
     require,
     session_limit,
-    unavailable_on,
+    tenant_session_limit,
 )
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+"""1: the first; 2: sessions carry their tenant (a version-1 file is migrated on open)."""
 SNAPSHOTS_KEPT = 2
 BUSY_TIMEOUT_MS = 30_000
 JOURNAL_SIZE_LIMIT = 16 * 1024 * 1024
@@ -60,7 +67,8 @@ CREATE TABLE IF NOT EXISTS sessions (
     config TEXT NOT NULL,
     token_hash TEXT NOT NULL,
     created_at TEXT NOT NULL,
-    deleted INTEGER NOT NULL DEFAULT 0
+    deleted INTEGER NOT NULL DEFAULT 0,
+    tenant TEXT NOT NULL DEFAULT ''
 );
 CREATE TABLE IF NOT EXISTS inputs (
     session_id TEXT NOT NULL REFERENCES sessions(id),
@@ -84,21 +92,44 @@ _ID = {"inputs": "session_id", "snapshots": "session_id", "sessions": "id"}
 
 
 def _record(row: sqlite3.Row) -> SessionRecord:
-    return SessionRecord(
-        id=row["id"],
-        config=loads(row["config"]),
-        token_hash=row["token_hash"],
-        created_at=datetime.fromisoformat(row["created_at"]),
-        deleted=bool(row["deleted"]),
-    )
+    with readable(str(row["id"]), "record"):
+        return SessionRecord(
+            id=row["id"],
+            config=loads(row["config"]),
+            token_hash=row["token_hash"],
+            created_at=datetime.fromisoformat(row["created_at"]),
+            deleted=bool(row["deleted"]),
+            tenant=row["tenant"],
+        )
 
 
-def _entry(row: sqlite3.Row) -> LogEntry:
-    return LogEntry(
-        seq=row["seq"],
-        received_at=datetime.fromisoformat(row["received_at"]),
-        input=loads(row["input"]),
-    )
+def _entry(session_id: str, row: sqlite3.Row) -> LogEntry:
+    with readable(session_id, f"input {row['seq']}"):
+        return LogEntry(
+            seq=row["seq"],
+            received_at=datetime.fromisoformat(row["received_at"]),
+            input=loads(row["input"]),
+        )
+
+
+CORRUPT_MESSAGES = ("malformed", "not a database", "corrupt")
+"""sqlite errors that say the file itself is damaged (whatever exception class they come as)."""
+
+
+@contextmanager
+def _faults() -> Iterator[None]:
+    """sqlite's errors as the service's: a damaged file is :class:`StoreCorrupt` (permanent),
+    any other operational error :class:`StoreUnavailable` (503, retry)."""
+    try:
+        yield
+    except sqlite3.DatabaseError as error:
+        reason = f"{type(error).__name__}: {error}"[:200]
+        damaged = not isinstance(error, sqlite3.OperationalError) or any(
+            text in str(error).lower() for text in CORRUPT_MESSAGES
+        )
+        if damaged:
+            raise StoreCorrupt("sqlite", reason) from error
+        raise StoreUnavailable("sqlite", reason) from error
 
 
 class SqliteStore:
@@ -119,12 +150,20 @@ class SqliteStore:
         self._connections_lock = threading.Lock()
         self._write_lock = threading.Lock()
         self._closed = False
+        with contextlib.suppress(StoreCorrupt):  # a damaged file: every use says so (/readyz)
+            self._create_schema()
+
+    def _create_schema(self) -> None:
         with self._write() as connection:
             for statement in SCHEMA.split(";"):
                 if statement.strip():
                     connection.execute(statement)
             version = connection.execute("PRAGMA user_version").fetchone()[0]
-            if version == 0:
+            if version == 1:  # before tenants: every session's tenant is ''
+                connection.execute(
+                    "ALTER TABLE sessions ADD COLUMN tenant TEXT NOT NULL DEFAULT ''"
+                )
+            if version in (0, 1):
                 connection.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
             elif version != SCHEMA_VERSION:
                 raise RuntimeError(
@@ -155,7 +194,7 @@ class SqliteStore:
 
     @contextmanager
     def _write(self) -> Iterator[sqlite3.Connection]:
-        with self._write_lock, unavailable_on((sqlite3.OperationalError,), "sqlite"):
+        with self._write_lock, _faults():
             connection = self._connection()
             connection.execute("BEGIN IMMEDIATE")
             try:
@@ -168,7 +207,7 @@ class SqliteStore:
 
     def _read(self, read: Callable[[sqlite3.Connection], T]) -> T:
         """``read`` on this thread's connection; sqlite's operational errors as StoreUnavailable."""
-        with unavailable_on((sqlite3.OperationalError,), "sqlite"):
+        with _faults():
             return read(self._connection())
 
     def _live_record(self, connection: sqlite3.Connection, session_id: str) -> SessionRecord | None:
@@ -186,7 +225,12 @@ class SqliteStore:
         ).fetchone()
         return int(row[0]) if row[0] is not None else 0
 
-    def create_session(self, record: SessionRecord, max_sessions: int | None = None) -> None:
+    def create_session(
+        self,
+        record: SessionRecord,
+        max_sessions: int | None = None,
+        max_tenant_sessions: int | None = None,
+    ) -> None:
         with self._write() as connection:  # one IMMEDIATE transaction: count, then insert
             exists = connection.execute(
                 "SELECT 1 FROM sessions WHERE id = ?", (record.id,)
@@ -199,14 +243,23 @@ class SqliteStore:
                 ).fetchone()
                 if live >= max_sessions:
                     raise session_limit(max_sessions, int(live))
+            if max_tenant_sessions is not None:
+                (mine,) = connection.execute(
+                    "SELECT COUNT(*) FROM sessions WHERE deleted = 0 AND tenant = ?",
+                    (record.tenant,),
+                ).fetchone()
+                if mine >= max_tenant_sessions:
+                    raise tenant_session_limit(max_tenant_sessions, int(mine))
             connection.execute(
-                "INSERT INTO sessions (id, config, token_hash, created_at, deleted) VALUES (?, ?, ?, ?, ?)",
+                "INSERT INTO sessions (id, config, token_hash, created_at, deleted, tenant)"
+                " VALUES (?, ?, ?, ?, ?, ?)",
                 (
                     record.id,
                     dumps(record.config),
                     record.token_hash,
                     record.created_at.isoformat(),
                     int(record.deleted),
+                    record.tenant,
                 ),
             )
 
@@ -214,11 +267,23 @@ class SqliteStore:
         return self._read(lambda connection: self._live_record(connection, session_id))
 
     def list_sessions(self) -> list[SessionRecord]:
+        def read(connection: sqlite3.Connection) -> list[SessionRecord]:
+            records = []
+            for row in connection.execute(
+                "SELECT * FROM sessions WHERE deleted = 0 ORDER BY created_at, id"
+            ):
+                with contextlib.suppress(SessionUnreadable):  # session_ids() has it
+                    records.append(_record(row))
+            return records
+
+        return self._read(read)
+
+    def session_ids(self) -> list[str]:
         return self._read(
             lambda connection: [
-                _record(row)
+                str(row[0])
                 for row in connection.execute(
-                    "SELECT * FROM sessions WHERE deleted = 0 ORDER BY created_at, id"
+                    "SELECT id FROM sessions WHERE deleted = 0 ORDER BY created_at, id"
                 )
             ]
         )
@@ -231,8 +296,13 @@ class SqliteStore:
         )
 
     def delete_session(self, session_id: str) -> bool:
-        with self._write() as connection:
-            live = self._live_record(connection, session_id) is not None
+        with self._write() as connection:  # nothing decoded: an unreadable session goes too
+            live = (
+                connection.execute(
+                    "SELECT 1 FROM sessions WHERE id = ? AND deleted = 0", (session_id,)
+                ).fetchone()
+                is not None
+            )
             for table in ("inputs", "snapshots", "sessions"):
                 connection.execute(f"DELETE FROM {table} WHERE {_ID[table]} = ?", (session_id,))
             return live
@@ -264,7 +334,7 @@ class SqliteStore:
                 " ORDER BY seq LIMIT ?",
                 (session_id, after, -1 if limit is None else limit),
             )
-            return [_entry(row) for row in rows]
+            return [_entry(session_id, row) for row in rows]
 
         return self._read(read)
 
@@ -293,21 +363,20 @@ class SqliteStore:
                 "SELECT seq, taken_at, state FROM snapshots WHERE session_id = ? ORDER BY seq DESC LIMIT 1",
                 (session_id,),
             ).fetchone()
-            snapshot = (
-                Snapshot(
-                    seq=row["seq"],
-                    taken_at=datetime.fromisoformat(row["taken_at"]),
-                    state=loads(row["state"]),
-                )
-                if row is not None
-                else None
-            )
+            snapshot = None
+            if row is not None:
+                with readable(session_id, f"snapshot {row['seq']}"):
+                    snapshot = Snapshot(
+                        seq=row["seq"],
+                        taken_at=datetime.fromisoformat(row["taken_at"]),
+                        state=loads(row["state"]),
+                    )
             after = snapshot.seq if snapshot is not None else 0
             rows = connection.execute(
                 "SELECT seq, received_at, input FROM inputs WHERE session_id = ? AND seq > ? ORDER BY seq",
                 (session_id, after),
             )
-            entries = [_entry(entry) for entry in rows]
+            entries = [_entry(session_id, entry) for entry in rows]
         finally:
             if connection.in_transaction:
                 connection.execute("COMMIT")

@@ -220,8 +220,8 @@ ROWS = [
         limit="max_tracks_per_input",
     ),
     Row("missing token", 401, body=LATER, auth="none", slug="unauthorized"),
-    Row("wrong token", 403, body=LATER, auth="wrong", slug="forbidden"),
-    Row("other session's token", 403, body=LATER, auth="other", slug="forbidden"),
+    Row("wrong token", 404, body=LATER, auth="wrong", slug="session-not-found"),
+    Row("other session's token", 404, body=LATER, auth="other", slug="session-not-found"),
     Row(
         "unknown session",
         404,

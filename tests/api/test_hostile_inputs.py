@@ -18,7 +18,9 @@ is still accepted.
 
 from __future__ import annotations
 
+import contextlib
 import copy
+import gzip
 import http.client
 import json
 import socket
@@ -40,6 +42,8 @@ MAX_BODY = 64 * 1024
 MAX_TRACKS = 20
 MAX_FOCAL_SETS = 8
 WS_RATE = 20
+MAX_WORK = 60  # a track list of 20 on the scene's 3 fused tracks is 20 × 4 = 80 work units
+MAX_EXPLAIN_CELLS = 30  # 8 tracks on 3 explained: (3 + 8) × 8 = 88 cells
 MAX_REFUSAL_BYTES = 16 * 1024
 GOOD = track_report("radar-1", 12.5, seed=1)
 LATER = track_report("radar-1", 13.0, seed=2)
@@ -83,6 +87,9 @@ def scene() -> Iterator[Scene]:
         max_focal_sets=MAX_FOCAL_SETS,
         ws_messages_per_second=WS_RATE,
         body_read_timeout=0.5,
+        request_head_timeout=1.0,
+        max_input_work=MAX_WORK,
+        max_explain_cells=MAX_EXPLAIN_CELLS,
         rate_limit="none",
     )
     with serving(settings) as server, httpx.Client(base_url=server.url, timeout=30.0) as http:
@@ -165,6 +172,51 @@ def raw_http(request: bytes, *, wait: float = 2.0) -> Callable[[Scene], list[Ans
         return [Answer(status, content_type, body)]
 
     return send
+
+
+def raw_head(head: bytes, *, chunk: int = 65536) -> Callable[[Scene], list[Answer]]:
+    """A request head written in pieces until the server answers or closes (a refusal of a
+    head too large comes before the head ends); the answer's status read back."""
+
+    def send(scene: Scene) -> list[Answer]:
+        port = int(scene.server.url.rsplit(":", 1)[1])
+        with socket.create_connection(("127.0.0.1", port), timeout=10.0) as connection:
+            with contextlib.suppress(OSError):  # closed by the server mid-way: read its answer
+                for start in range(0, len(head), chunk):
+                    connection.sendall(head[start : start + chunk])
+            received = b""
+            with contextlib.suppress(OSError):
+                while chunk_in := connection.recv(65536):
+                    received += chunk_in
+        return [_parsed(received)]
+
+    return send
+
+
+def _parsed(received: bytes) -> Answer:
+    if not received:
+        return Answer(499, "closed", b"")
+    head, _, body = received.partition(b"\r\n\r\n")
+    content_type = ""
+    for line in head.split(b"\r\n")[1:]:
+        name, _, value = line.partition(b":")
+        if name.strip().lower() == b"content-type":
+            content_type = value.strip().decode()
+    return Answer(int(head.split(b" ", 2)[1]), content_type, body)
+
+
+def naming(limit: str, send: Callable[[Scene], list[Answer]]) -> Callable[[Scene], list[Answer]]:
+    """``send``, whose first answer must be the refusal that names ``limit`` (``""``: a 415)."""
+
+    def checked(scene: Scene) -> list[Answer]:
+        answers = send(scene)
+        if limit:
+            assert json.loads(answers[0].body).get("limit") == limit, answers[0]
+        else:
+            assert answers[0].status == 415, answers[0]
+        return answers
+
+    return checked
 
 
 def ws_messages(*frames: str | bytes) -> Callable[[Scene], list[Answer]]:
@@ -369,6 +421,13 @@ CASES: dict[str, Callable[[Scene], list[Answer]]] = {
     "lone surrogate in the sensor id": tracks(raw_later('"radar-1"', '"\\ud800"')),
     "NUL in the sensor id": tracks(raw_later('"radar-1"', '"radar\\u0000-1"')),
     "raw control character in a string": tracks(raw_later('"radar-1"', '"radar\x01-1"')),
+    "a gzip body (Content-Encoding)": naming(
+        "",
+        tracks(gzip.compress(json.dumps(LATER).encode()), **{"Content-Encoding": "gzip"}),
+    ),
+    "plain JSON labelled gzip": naming(
+        "", tracks(json.dumps(LATER), **{"Content-Encoding": "gzip"})
+    ),
     "text/plain content type": tracks(json.dumps(LATER), **{"Content-Type": "text/plain"}),
     "empty body": tracks(b""),
     "body null": tracks("null"),
@@ -388,6 +447,25 @@ CASES: dict[str, Callable[[Scene], list[Answer]]] = {
     "picture at time -1e308": get("/v1/sessions/{sid}/tracks", time="-1e308"),
     "session id of 65 characters": get("/v1/sessions/" + "s" * 65),
     "unknown fused track of 1 000 characters": get("/v1/sessions/{sid}/tracks/" + "t" * 1000),
+    "20 tracks over max_input_work (20 × (3 fused + 1))": naming(
+        "max_input_work", tracks(json.dumps(track_report("radar-1", 13.0, seed=3, targets=20)))
+    ),
+    "explain over max_explain_cells ((3 + 8) × 8)": naming(
+        "max_explain_cells",
+        lambda scene: [
+            post(
+                scene,
+                scene.tracks_path + "?explain=true",
+                json.dumps(track_report("radar-1", 13.0, seed=4, targets=8)),
+            )
+        ],
+    ),
+    "picture at time 1e102 (beyond the inputs' 1e12)": get(
+        "/v1/sessions/{sid}/tracks", time="1e102"
+    ),
+    "motion.q 1e300 (later predictions overflow)": lambda scene: [
+        post(scene, "/v1/sessions", json.dumps(dict(CONFIG, motion={"q": 1e300})))
+    ],
     # --- framing and headers
     "body slower than body_read_timeout": raw_http(
         b"POST /v1/sessions/{sid}/tracks HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
@@ -409,6 +487,26 @@ CASES: dict[str, Callable[[Scene], list[Answer]]] = {
             response.content,
         )
     ],
+    "a 4 MB header (max_header_bytes)": naming(
+        "max_header_bytes",
+        raw_head(b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Pad: " + b"a" * (4 << 20) + b"\r\n\r\n"),
+    ),
+    "a 4 MB request line (max_header_bytes)": naming(
+        "max_header_bytes",
+        raw_head(b"GET /healthz?" + b"a" * (4 << 20) + b" HTTP/1.1\r\nHost: x\r\n\r\n"),
+    ),
+    "101 header lines (max_header_count)": naming(
+        "max_header_count",
+        raw_head(
+            b"GET /healthz HTTP/1.1\r\nHost: x\r\n"
+            + b"".join(b"X-%d: 1\r\n" % index for index in range(100))
+            + b"\r\n"
+        ),
+    ),
+    "head slower than request_head_timeout": naming(
+        "request_head_timeout",
+        raw_http(b"GET /v1/sessions/{sid} HTTP/1.1\r\nHost: x\r\n", wait=1.5),
+    ),
     # --- WebSocket abuse
     "ws: not JSON": ws_messages("hello"),
     "ws: nested 30 000 deep": ws_messages(nested(30_000)),
@@ -417,6 +515,12 @@ CASES: dict[str, Callable[[Scene], list[Answer]]] = {
     ),
     "ws: message over 4 × max_body_bytes": ws_oversize(
         json.dumps({"type": "tracks", "pad": "x" * (4 * MAX_BODY)})
+    ),
+    "ws: 3-byte characters over max_body_bytes in bytes": naming(
+        "max_body_bytes",
+        ws_messages(
+            json.dumps({"type": "tracks", "pad": "\u20ac" * (MAX_BODY // 2)}, ensure_ascii=False)
+        ),
     ),
     "ws: binary frame of invalid UTF-8": ws_messages(b"\xff\xfe\x00"),
     "ws: duplicate keys": ws_messages('{"type": "tracks", "type": "detections"}'),

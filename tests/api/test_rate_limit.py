@@ -23,19 +23,30 @@ def limited() -> Iterator[TestClient]:
         yield client
 
 
-def create(client: TestClient) -> dict[str, str]:
-    answer = client.post("/v1/sessions", json=SESSION_CONFIG)
+API_KEY = "alpha-key-0123456789abcdefghijklmnopqrstuvwxyz"
+
+
+@pytest.fixture
+def keyed() -> Iterator[TestClient]:
+    settings = make_settings(rate_limit=RATE, api_keys=f"alpha:{API_KEY}")
+    with TestClient(create_app(settings), raise_server_exceptions=False) as client:
+        yield client
+
+
+def create(client: TestClient, **headers: str) -> dict[str, str]:
+    answer = client.post("/v1/sessions", json=SESSION_CONFIG, headers=headers)
     assert answer.status_code == 201, answer.text
     created = answer.json()
     return {"Authorization": f"Bearer {created['token']}", "sid": created["id"]}
 
 
-def test_a_token_beyond_its_rate_gets_429_naming_the_limit(limited: TestClient) -> None:
-    owner = create(limited)
+def test_a_tenant_beyond_its_rate_gets_429_naming_the_limit(keyed: TestClient) -> None:
+    """The session's token spends its tenant's budget (the API key's that created it)."""
+    owner = create(keyed, Authorization=f"Bearer {API_KEY}")  # the tenant's first request
     sid = owner.pop("sid")
-    for _ in range(3):
-        assert limited.get(f"/v1/sessions/{sid}", headers=owner).status_code == 200
-    refused = limited.get(f"/v1/sessions/{sid}", headers=owner)
+    for _ in range(2):
+        assert keyed.get(f"/v1/sessions/{sid}", headers=owner).status_code == 200
+    refused = keyed.get(f"/v1/sessions/{sid}", headers=owner)
     assert refused.status_code == 429
     assert refused.headers["content-type"] == "application/problem+json"
     retry_after = int(refused.headers["Retry-After"])
@@ -45,23 +56,20 @@ def test_a_token_beyond_its_rate_gets_429_naming_the_limit(limited: TestClient) 
     assert problem["limit"] == "rate_limit"
     assert problem["rate"] == "3 per 1 minute"
     assert problem["retry_after"] == retry_after
-    assert "rate_limit" in problem["detail"] and "this token" in problem["detail"]
+    assert "rate_limit" in problem["detail"] and "tenant 'key:alpha'" in problem["detail"]
+    # the address without a key is another tenant, with its own budget
+    assert keyed.post("/v1/sessions", json=SESSION_CONFIG).status_code == 201
 
 
-def test_verified_tokens_are_counted_apart_forged_ones_count_against_the_address(
-    limited: TestClient,
-) -> None:
-    owner = create(limited)  # the address's first request
-    sid = owner.pop("sid")
-    for _ in range(3):
-        assert limited.get(f"/v1/sessions/{sid}", headers=owner).status_code == 200
-    assert limited.get(f"/v1/sessions/{sid}", headers=owner).status_code == 429
+def test_minting_tokens_buys_no_requests(limited: TestClient) -> None:
+    """Issue 28: each session token had its own budget, and anyone could mint tokens; now every
+    token of a tenant (here: of one client address) spends one budget."""
+    first, second = create(limited), create(limited)  # the address's requests 1 and 2
+    first_sid, second_sid = first.pop("sid"), second.pop("sid")
+    assert limited.get(f"/v1/sessions/{first_sid}", headers=first).status_code == 200
+    assert limited.get(f"/v1/sessions/{second_sid}", headers=second).status_code == 429
     forged = {"Authorization": "Bearer another-token"}
-    assert (
-        limited.get(f"/v1/sessions/{sid}", headers=forged).status_code == 403
-    )  # the address's 2nd
-    create(limited)  # the address's third request
-    refused = limited.post("/v1/sessions", json=SESSION_CONFIG)
+    refused = limited.get(f"/v1/sessions/{first_sid}", headers=forged)
     assert refused.status_code == 429
     assert "this client address" in refused.json()["detail"]
 
@@ -84,7 +92,7 @@ def test_liveness_is_never_limited(limited: TestClient) -> None:
 def test_a_websocket_upgrade_counts_and_is_refused_beyond_the_rate(limited: TestClient) -> None:
     owner = create(limited)
     sid = owner.pop("sid")
-    for _ in range(3):
+    for _ in range(2):
         with limited.websocket_connect(f"/v1/sessions/{sid}/subscribe", headers=owner) as ws:
             assert ws.receive_json()["type"] == "ack"
     with (
@@ -106,3 +114,15 @@ def test_rate_settings() -> None:
     with pytest.raises(ValueError, match="rate_limit"):
         make_settings(rate_limit="as many as you like")
     assert make_settings().rate_limit == "1000/second"
+
+
+def test_a_tenants_body_bytes_are_limited_before_the_body_is_read() -> None:
+    settings = make_settings(rate_limit="none", tenant_body_bytes_per_second=2048)
+    with TestClient(create_app(settings), raise_server_exceptions=False) as client:
+        body = b"{" + b" " * 1400 + b"}"
+        headers = {"Content-Type": "application/json"}
+        assert client.post("/v1/sessions", content=body, headers=headers).status_code == 422
+        refused = client.post("/v1/sessions", content=body, headers=headers)
+        assert refused.status_code == 429
+        assert refused.json()["limit"] == "tenant_body_bytes_per_second"
+        assert int(refused.headers["Retry-After"]) >= 1

@@ -66,6 +66,7 @@ def test_keys_are_namespaced_json_and_purged() -> None:
             f"{store.prefix}:{{s1}}:session",
             f"{store.prefix}:{{s1}}:log",
             f"{store.prefix}:{{s1}}:snapshots",
+            f"{store.prefix}:tenant-sessions",
         }
         client = store.client
         assert json.loads(client.hget(store.keys.session("s1"), "config")) == record().config
@@ -74,7 +75,7 @@ def test_keys_are_namespaced_json_and_purged() -> None:
         assert json.loads(fields["input"]) == {"tracks": [{"id": "T1", "x": 0.5}]}
         snapshot = json.loads(client.hget(store.keys.snapshots("s1"), "1"))
         assert snapshot["state"] == {"n": 1} and snapshot["seq"] == 1
-        assert store.purge() == 4
+        assert store.purge() == 5
         assert remaining_keys(store.prefix) == []
 
 

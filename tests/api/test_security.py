@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import base64
+import hashlib
 import hmac
+import re
 from pathlib import Path
 
 import pytest
@@ -72,10 +75,14 @@ def test_session_routes_need_the_sessions_own_token(client: TestClient) -> None:
     assert missing.headers["www-authenticate"].startswith("Bearer")
 
     assert client.get(events, headers={"Authorization": f"Basic {first_token}"}).status_code == 401
-    assert client.get(events, headers=bearer("not-a-token")).status_code == 403
+    # a token that does not open the session: 404 as for an unknown one (no existence oracle)
+    forged = client.get(events, headers=bearer("not-a-token"))
+    unknown = client.get("/v1/sessions/0123abcd/events", headers=bearer("not-a-token"))
+    assert forged.status_code == unknown.status_code == 404
+    assert forged.json()["title"] == unknown.json()["title"]
     other = client.get(events, headers=bearer(second_token))
-    assert other.status_code == 403
-    assert other.json()["type"] == "urn:credal-fusion:problem:forbidden"
+    assert other.status_code == 404
+    assert other.json()["type"] == "urn:credal-fusion:problem:session-not-found"
 
     assert client.get(events, headers=bearer(first_token)).status_code == 200
     assert client.get(events, headers=bearer(ADMIN_TOKEN)).status_code == 200
@@ -153,3 +160,31 @@ def test_session_count_limit() -> None:
 def test_no_token_starts_with_a_dash_that_a_command_line_would_read_as_an_option() -> None:
     # one url-safe token in 64 would (2 000 tokens: all but certain to meet one)
     assert not any(issue_token().startswith("-") for _ in range(2000))
+
+
+def test_answers_are_not_sniffed_nor_cached(client: TestClient) -> None:
+    """Issue 28: the answer carrying a token had no Cache-Control: no-store; nothing sent nosniff."""
+    created = client.post("/v1/sessions", json=SESSION_CONFIG)
+    assert created.headers["cache-control"] == "no-store"
+    assert created.headers["x-content-type-options"] == "nosniff"
+    refused = client.post("/v1/sessions", json={})
+    assert refused.headers["cache-control"] == "no-store"
+    assert client.get("/healthz").headers["x-content-type-options"] == "nosniff"
+
+
+def test_pages_run_only_their_own_scripts_and_cannot_be_framed(client: TestClient) -> None:
+    """Issue 28: the viewer allowed any inline script and framing."""
+    for page in ("/", "/docs", "/redoc"):
+        answer = client.get(page)
+        policy = dict(
+            part.strip().split(" ", 1)
+            for part in answer.headers["content-security-policy"].split(";")
+        )
+        assert "'unsafe-inline'" not in policy["script-src"], page
+        assert policy["frame-ancestors"] == "'none'" and answer.headers["x-frame-options"] == "DENY"
+        inline = re.findall(r"<script>(.*?)</script>", answer.text, re.DOTALL)
+        digests = {
+            "'sha256-" + base64.b64encode(hashlib.sha256(script.encode()).digest()).decode() + "'"
+            for script in inline
+        }
+        assert digests <= set(policy["script-src"].split()), page

@@ -59,8 +59,9 @@ def test_export_with_a_wrong_token_says_so_in_one_line(live_server: LiveServer) 
     sid, _ = session(live_server)
     done = cli("export", "--server", live_server.url, "--session", sid, "--token", "wrong")
     line = one_line_failure(done)
-    assert line.startswith(f"credal-fusion export: GET /v1/sessions/{sid} answered 403")
-    assert "check --token" in line
+    # 404, as for an unknown session: a token cannot tell which sessions exist
+    assert line.startswith(f"credal-fusion export: GET /v1/sessions/{sid} answered 404")
+    assert "--token" in line
     assert done.stdout == ""
 
 

@@ -5,13 +5,15 @@ fsync per write) and a real service instance on it. It applies inputs, kills
 Redis with SIGKILL, checks what every client is told while it is down, starts
 Redis again on the same port and checks that the service recovers by itself
 and that every acknowledged input, and only those, is in the log, with
-results equal to one uninterrupted run. How long the service takes to notice
-and to recover is measured by ``bench/outage.py``.
+results equal to one uninterrupted run; then freezes Redis (SIGSTOP) and
+checks that an input and ``/readyz`` say so while it is frozen. How long the
+service takes to notice and to recover is measured by ``bench/outage.py``.
 """
 
 from __future__ import annotations
 
 import json
+import signal
 import time
 from contextlib import ExitStack
 from pathlib import Path
@@ -112,6 +114,27 @@ def test_redis_down_answers_503_and_the_service_recovers_without_losing_anything
         assert logged == [(body["sensor"], body["time"]) for body in bodies]
         resubscribed = stack.enter_context(connect(ws_url, additional_headers=headers))
         assert json.loads(resubscribed.recv(timeout=10))["seq"] == STEPS
+
+        # frozen (SIGSTOP), not dead: told while it is still frozen (issue 28; before, inputs
+        # waited and succeeded once it thawed, and /readyz took 8 s to say 503)
+        assert server.process is not None
+        server.process.send_signal(signal.SIGSTOP)
+        try:
+            frozen = client.post(path, json=reports(STEPS + 1)[STEPS], headers=headers)
+            frozen_ready = client.get("/readyz")
+        finally:
+            server.process.send_signal(signal.SIGCONT)
+        assert_store_unavailable(frozen)
+        assert frozen_ready.status_code == 503
+        thawed = time.monotonic()
+        while client.get("/readyz").status_code != 200:
+            assert time.monotonic() - thawed < RECOVERY_TIMEOUT_S, "never ready again"
+            time.sleep(0.05)
+        # the append that timed out may have run once Redis thawed: seq tells the client
+        assert client.get(f"/v1/sessions/{sid}", headers=headers).json()["seq"] in (
+            STEPS,
+            STEPS + 1,
+        )
 
 
 def test_the_service_starts_with_redis_down_and_recovers_when_it_comes_up(

@@ -1,12 +1,15 @@
 """Two real service instances (uvicorn subprocesses) share one session through the real Redis.
 
-Instance A applies the inputs; a ``subscribe`` client on instance B receives
+A sensor streams its inputs with the reference client (``app/commands/resilient.py``);
+instance A applies them; a ``subscribe`` client on instance B receives
 every result, in order, identical to A's answers. Then A is killed with
 SIGKILL while it holds the session's lease: B refuses inputs (503 with
 ``Retry-After``) until the lease lapses, then takes the session over,
 rebuilding it from the store, and the state continues exactly: B's results
 equal those of one uninterrupted run. Redis must answer (the test fails, never
 skips, without it); every key lives under a prefix of this test, deleted after.
+The sensor's client fails over by itself and loses nothing: every input is
+applied once, in order (README, "Clients and failures").
 """
 
 from __future__ import annotations
@@ -14,7 +17,6 @@ from __future__ import annotations
 import json
 import signal
 import subprocess
-import time
 from contextlib import AbstractContextManager, ExitStack
 from typing import Any
 
@@ -22,6 +24,7 @@ import httpx
 from fastapi.testclient import TestClient
 from websockets.sync.client import ClientConnection, connect
 
+from app.commands.resilient import ResilientStream
 from app.main import create_app
 from tests.api.conftest import make_settings
 from tests.api.redis_support import REDIS_URL, redis_prefix
@@ -79,10 +82,12 @@ def test_a_session_moves_to_the_surviving_instance_and_continues_exactly() -> No
         subscriber = stack.enter_context(connect(ws_url, additional_headers=headers))
         assert receive(subscriber) == {"type": "ack", "ref": None, "seq": 0}
 
+        # the sensor streams with the reference client, to A first (app/commands/resilient.py)
+        sensor = ResilientStream([a_url, b_url], sid, created.json()["token"])
+        stack.callback(sensor.close)
         for index in range(ON_A):
-            answer = a.post(path, json=bodies[index], headers=headers)
-            assert answer.status_code == 200, answer.text
-            assert answer.json() == expected[index]
+            delivery = sensor.send({"type": "tracks", **bodies[index]})
+            assert (delivery.seq, delivery.result) == (index + 1, expected[index])
         for index in range(ON_A):  # B's subscriber: every result of A, in order
             message = receive(subscriber)
             assert message["type"] == "result"
@@ -95,13 +100,15 @@ def test_a_session_moves_to_the_surviving_instance_and_continues_exactly() -> No
         assert refused.json()["type"] == "urn:credal-fusion:problem:session-leased"
         assert 1 <= int(refused.headers["Retry-After"]) <= LEASE_TTL_MS / 1000 + 1
 
-        time.sleep(LEASE_TTL_MS / 1000 + 0.2)  # the lease lapses: B takes the session over
+        # the client's stream broke: it reconnects (to B), waits out the lease's time left, reads
+        # ack.seq (its last input was applied) and goes on; B takes the session over
         for index in range(ON_A, STEPS):
-            answer = b.post(path, json=bodies[index], headers=headers)
-            assert answer.status_code == 200, answer.text
-            assert answer.json() == expected[index]  # bit for bit: the state continued exactly
+            delivery = sensor.send({"type": "tracks", **bodies[index]})
+            assert delivery.seq == index + 1
+            assert delivery.result == expected[index]  # bit for bit: the state continued exactly
             message = receive(subscriber)
             assert message["result"] == expected[index]
+        assert delivery.retries == 0 and sensor.next_url >= 2  # it failed over, then streamed
         summary = b.get(f"/v1/sessions/{sid}", headers=headers).json()
         assert summary["seq"] == STEPS
         events = b.get(f"/v1/sessions/{sid}/events", headers=headers).json()

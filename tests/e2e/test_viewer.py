@@ -199,7 +199,7 @@ def test_the_viewer_draws_a_live_session(
         # a wrong token is refused and not retried; the tab's token stays the good one
         page.evaluate(f"location.hash = 'session={sid}&token=not-the-token'")
         wait_for_connection(page, "refused")
-        assert "403" in viewer_state(page)["status"]
+        assert "404" in viewer_state(page)["status"]  # as for an unknown session
         assert page.evaluate(f"sessionStorage.getItem('credal-fusion.token.{sid}')") == token
 
         # the session's end is shown as such
@@ -349,4 +349,4 @@ def test_the_viewer_login_subscribes_with_the_bearer_subprotocol(live_server: Li
             connect(url, subprotocols=["bearer", "not-the-token"]),  # type: ignore[list-item]
         ):
             pass
-        assert refused.value.response.status_code == 403
+        assert refused.value.response.status_code == 404
