@@ -304,7 +304,8 @@ class SensorConfig(WireModel):
         description=(
             "false detections per unit of position space (m² in 2-D, m³ in 3-D) per scan: "
             "β_FT of this sensor's track score and gate-emptiness termination (default "
-            "null: one per km² or km³, 1e-6 in 2-D, 1e-9 in 3-D)"
+            "null: estimated from the sensor's own detections, docs/algorithms.md §8.4; "
+            "paper profile: one per km² or km³)"
         ),
     )
 
@@ -340,59 +341,70 @@ class StateFusionConfig(WireModel):
 
 
 class TrackThresholds(WireModel):
-    """Track life cycle of both layers (docs/algorithms.md §4, §7.3): score thresholds and termination.
+    """Track life cycle of both layers (docs/algorithms.md §4, §7.3, §8): score thresholds and
+    termination.
 
     The wire face of ``core.lifecycle.LifeCycleConfig``: same names, defaults
-    and ranges (a test pins them together).
+    and ranges (a test pins them together). ``tracking.profile: "paper"`` puts
+    the unset ones at the papers' values (``min_points`` null, ``score_ceiling``
+    the confirm threshold).
     """
 
     false_confirmation: OpenUnitFloat = Field(
         default=1e-3, description="α: probability that a false track is confirmed"
     )
     true_deletion: OpenUnitFloat = Field(
-        default=1e-3, description="β: probability that a true track is deleted"
+        default=1e-3,
+        description=(
+            "β: probability that a true track is deleted (per run of misses: with the default "
+            "score_ceiling, per scan)"
+        ),
     )
     termination_probability: Annotated[float, Field(allow_inf_nan=False, ge=0.0, lt=1.0)] = Field(
         default=0.5,
         description=(
-            "gate-emptiness termination ([HZ] §4.2): a coasting track ends when the probability "
-            "of its gate being empty falls below this; 0 turns it off"
+            "gate-emptiness termination ([HZ] §4.2): a coasting track that has missed three "
+            "scans in a row ends when the probability of its gate being empty falls below "
+            "this; 0 turns it off"
         ),
     )
     min_points: Annotated[int, Field(ge=1, le=100)] | None = Field(
-        default=None,
-        description="confirm a tentative track after this many hits (null: score only)",
+        default=2,
+        description=(
+            "confirm a tentative track after this many hits while its score is ≥ 0 "
+            "(P(target) ≥ ½); null: by the score's confirm threshold only"
+        ),
     )
-    score_margin: FiniteFloat | None = Field(
+    score_ceiling: FiniteFloat | None = Field(
         default=0.0,
         description=(
-            "an established track's score is clamped at the confirm threshold + this margin, "
-            "so it is deleted after a bounded run of misses; a negative margin down to "
-            "−confirm threshold restarts the test at confirmation; null: the raw SPRT"
+            "an established track's score is clamped at this value, so a run of misses "
+            "deletes it: 0 (default) restarts the test at confirmation (3 misses at P_D 0.9); "
+            "the confirm threshold ln((1−β)/α) keeps it 6; null: the raw SPRT"
         ),
     )
 
     @model_validator(mode="after")
     def _ceiling_above_delete(self) -> Self:
-        if self.score_margin is None:
+        if self.score_ceiling is None:
             return self
-        confirm = math.log((1.0 - self.true_deletion) / self.false_confirmation)
         delete = math.log(self.true_deletion / (1.0 - self.false_confirmation))
-        if confirm + self.score_margin <= delete:
+        if self.score_ceiling <= delete:
             message = (
-                "score_margin puts the score ceiling (confirm threshold + margin) at or under "
-                "the delete threshold"
+                f"score_ceiling must be above the delete threshold ln(β/(1−α)) = {delete:.4g}: "
+                "a track would be deleted at its confirmation"
             )
             raise_issues(
-                "TrackThresholds", [FieldIssue(("score_margin",), message, self.score_margin)]
+                "TrackThresholds", [FieldIssue(("score_ceiling",), message, self.score_ceiling)]
             )
         return self
 
 
 class TwoPointInitiation(WireModel):
-    """A leftover detection joined by one of the next scan within ``max_speed · Δt`` starts a track."""
+    """A leftover detection joined by one of the next scan within ``max_speed · Δt`` starts a track
+    (the papers' initiation: ``tracking.profile: "paper"``)."""
 
-    kind: Literal["two_point"] = "two_point"
+    kind: Literal["two_point"]
     max_speed: PositiveFloat = Field(
         default=1000.0, description="largest target speed (m/s): the pairing gate"
     )
@@ -403,15 +415,36 @@ class TwoPointInitiation(WireModel):
 
 
 class SinglePointInitiation(WireModel):
-    """Every leftover detection starts a track: velocity 0 with ``velocity_std`` per axis."""
+    """Every leftover detection starts a track; its second detections branch and its third
+    tests them (docs/algorithms.md §8.3)."""
 
-    kind: Literal["single_point"]
-    velocity_std: PositiveFloat = Field(
-        default=300.0, description="standard deviation of a new target's velocity per axis (m/s)"
+    kind: Literal["single_point"] = "single_point"
+    velocity_std: PositiveFloat | None = Field(
+        default=None,
+        description=(
+            "the velocity prior: standard deviation of a new target's velocity per axis (m/s); "
+            "null (default): no velocity knowledge — targets from 1 to 300 m/s are confirmed, "
+            "at most a scan or two later than with their true prior"
+        ),
     )
 
 
-Initiation = Annotated[TwoPointInitiation | SinglePointInitiation, Field(discriminator="kind")]
+def _initiation_kind(value: object) -> str:
+    """The initiation's ``kind``; left out, ``single_point`` (the default)."""
+    if isinstance(value, dict):
+        return str(value.get("kind", "single_point"))
+    return str(getattr(value, "kind", "single_point"))
+
+
+Initiation = Annotated[
+    Annotated[TwoPointInitiation, Tag("two_point")]
+    | Annotated[SinglePointInitiation, Tag("single_point")],
+    Discriminator(_initiation_kind),
+]
+TrackingProfile = Literal["default", "paper"]
+"""``default``: for real sensors (docs/algorithms.md §8); ``paper``: the papers' experiments
+(two-point starts, score-only confirmation, ceiling at the confirm threshold, one false
+alarm and one birth per km^q when not given, [HZ]'s gate emptiness from the first miss)."""
 
 
 class TrackingConfig(WireModel):
@@ -427,6 +460,15 @@ class TrackingConfig(WireModel):
     are per ``time_interval``.
     """
 
+    profile: TrackingProfile = Field(
+        default="default",
+        description=(
+            "default: rules for real sensors, from the physics given (docs/algorithms.md §8); "
+            "paper: the papers' experiments (two-point starts, score-only confirmation, "
+            "densities one per km² or km³ when not given); the resolved config shows the "
+            "values the profile filled in"
+        ),
+    )
     preset: TrackingPreset | None = None
     time_interval: PositiveFloat = Field(
         default=1.0, description="the nominal scan period ΔT (s); scans may come at any times"
@@ -437,11 +479,11 @@ class TrackingConfig(WireModel):
         default=None,
         description=(
             "new targets per unit of position space (m² in 2-D, m³ in 3-D) per scan: β_NT of "
-            "the track score and of gate-emptiness termination (default null: one per km² or "
-            "km³, 1e-6 in 2-D, 1e-9 in 3-D)"
+            "the track score and of gate-emptiness termination (default null: equal to each "
+            "sensor's clutter density, prior odds 1; paper profile: one per km² or km³)"
         ),
     )
-    initiation: Initiation = Field(default_factory=TwoPointInitiation)
+    initiation: Initiation = Field(default_factory=SinglePointInitiation)
     class_behaviours: (
         Annotated[
             dict[Label, Annotated[list[Label], Field(max_length=10)]], Field(max_length=MAX_CLASSES)
@@ -458,6 +500,28 @@ class TrackingConfig(WireModel):
             "rambler [static, walking], sportsman [walking, running])"
         ),
     )
+
+    @model_validator(mode="after")
+    def _profile_fills(self) -> Self:
+        """The paper profile's values where the client left a field out."""
+        if self.profile != "paper":
+            return self
+        if "initiation" not in self.model_fields_set:
+            self.initiation = TwoPointInitiation(kind="two_point")
+        chosen = self.thresholds
+        given = chosen.model_fields_set
+        paper: dict[str, object] = {}
+        if "min_points" not in given:
+            paper["min_points"] = None
+        if "score_ceiling" not in given:
+            paper["score_ceiling"] = math.log(
+                (1.0 - chosen.true_deletion) / chosen.false_confirmation
+            )
+        if paper:
+            self.thresholds = TrackThresholds.model_validate(
+                {**chosen.model_dump(include=given), **paper}
+            )
+        return self
 
 
 class TimeConfig(WireModel):

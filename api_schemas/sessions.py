@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pydantic import Field
+
 from api_schemas.base import FiniteFloat, Identifier, Timestamp, WireModel
 from api_schemas.config import SessionConfig
 
@@ -15,12 +17,42 @@ class SessionCreated(WireModel):
     created_at: Timestamp
 
 
+class DetectionTally(WireModel):
+    """What a detecting sensor's detections did in its local tracker, summed over its scans
+    (docs/algorithms.md §8.8): the answer to "why is nothing tracked"."""
+
+    detections: int = Field(description="detections received")
+    joined_established: int = Field(description="detections that updated a confirmed track")
+    joined_tentative: int = Field(description="detections that updated a tentative track")
+    started: int = Field(description="detections that started a track")
+    unused: int = Field(
+        description=(
+            "detections that did neither (two-point seeds, left out by the association, "
+            "pairs scored at the delete threshold)"
+        )
+    )
+    confirmed: int = Field(description="tracks confirmed")
+    refuted: int = Field(description="tentative tracks ended without being confirmed")
+    refuted_detections: int = Field(description="the detections of those tracks")
+    ended: int = Field(description="confirmed tracks ended")
+    ended_reasons: dict[str, int] = Field(description="why they ended: reason → count")
+    clutter_density: FiniteFloat | None = Field(
+        description=(
+            "the clutter density the sensor's scans are scored with: given, or its current "
+            "estimate (null before the first scan)"
+        )
+    )
+
+
 class SensorActivity(WireModel):
     """What the session has received from one sensor."""
 
     id: Identifier
     inputs: int
     last_time: FiniteFloat | None
+    detections: DetectionTally | None = Field(
+        default=None, description="a detecting sensor's tally (null for a track-list source)"
+    )
 
 
 class TrackCounts(WireModel):

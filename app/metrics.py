@@ -74,6 +74,8 @@ class ServiceMetrics:
     internal_errors: Counter
     loop_lag: Histogram
     collections: Histogram
+    detections: Counter
+    local_tracks: Counter
 
     @classmethod
     def create(cls) -> ServiceMetrics:
@@ -151,6 +153,21 @@ class ServiceMetrics:
                 "the GIL) with every request on hold. Sampled every 5 ms (app.runtime.LoopLag); "
                 "a stall of S seconds reads between S - 0.005 and S.",
                 buckets=LOOP_LAG_BUCKETS,
+                registry=registry,
+            ),
+            detections=Counter(
+                "credal_detections",
+                "Detections by what they did in their sensor's local tracker, over every "
+                "session (docs/algorithms.md §8.8; per session and sensor: GET "
+                "/v1/sessions/{sid}): joined_established, joined_tentative, started, unused.",
+                ("outcome",),
+                registry=registry,
+            ),
+            local_tracks=Counter(
+                "credal_local_tracks",
+                "Local tracks by event, over every session: confirmed, refuted (tentative "
+                "ended unconfirmed), ended (confirmed, then ended).",
+                ("event",),
                 registry=registry,
             ),
             collections=Histogram(

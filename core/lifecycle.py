@@ -9,7 +9,8 @@ probability ratio test on "true track" vs "false track":
   two-point track, made of two detections, starts at ``L₀`` plus the second
   detection's hit ΔL (:meth:`ScoreModel.two_point_initial`);
 - a hit adds ``ΔL = ln[P_D / ((2π)^{q/2} β_FT √|S|)] − D/2``;
-- a miss adds ``ΔL = ln(1 − P_D)``;
+- a miss adds ``ΔL = ln(1 − P_D)``, only at a scan of a sensor that should have
+  seen the track (docs/algorithms.md §8.1);
 - confirm when ``L ≥ ln((1 − β) / α)``, delete when ``L ≤ ln(β / (1 − α))``,
 
 with α = P(false track confirmed) and β = P(true track deleted). The papers
@@ -21,7 +22,13 @@ probability of having found nothing in its gate is
 ``P = Π_k [1 − (ρ_FA + ρ_NT) A_G(k)]`` (each factor clipped at 0), with gate
 volume ``A_G = c_q γ^{q/2} √|S|`` (c_q the volume of the unit q-ball, γ the
 gate on D). The track is terminated when P falls below
-``termination_probability`` (0.5 in [HZ] §6).
+``termination_probability`` (0.5 in [HZ] §6) — by default only once it has
+missed ``termination_misses`` scans in a row (3), so that one or two plain
+misses in a large gate (a 3-D radar at a 4–5 s revisit) never end a track
+(docs/algorithms.md §8.1; [HZ] tests from the first miss).
+
+The defaults are for real sensors (§8); :meth:`LifeCycleConfig.paper` is the
+life cycle of the papers' experiments.
 """
 
 from __future__ import annotations
@@ -31,6 +38,7 @@ import enum
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -204,6 +212,11 @@ def gate_emptiness_factor(
 # ------------------------------------------------------------------ configuration
 MAX_MIN_POINTS = 100
 """Largest ``min_points`` (the wire's bound too)."""
+DEFAULT_ALPHA = DEFAULT_BETA = 1e-3
+"""The default α (false confirmation) and β (true deletion)."""
+PLAIN_MISSES = 2
+"""Misses in a row that never end a track by gate emptiness (§8.1: a true target at
+P_D 0.9 shows them)."""
 
 
 @dataclass(frozen=True)
@@ -212,27 +225,40 @@ class LifeCycleConfig:
 
     The local tracker (``LocalTrackerConfig.life_cycle``), the fusion engine
     (``FusionConfig.management``) and the wire schema
-    (``api_schemas.config.TrackThresholds``, pinned by a test) share it.
+    (``api_schemas.config.TrackThresholds``, pinned by a test) share it. The
+    defaults are for real sensors (docs/algorithms.md §8); :meth:`paper` is
+    the life cycle of the papers' experiments.
 
     Attributes
     ----------
     false_confirmation : α, P(a false track is confirmed), in (0, 1).
     true_deletion : β, P(a true track is deleted), in (0, 1).
     false_target_density : β_FT (= ρ_FA), false alarms per unit of position space per scan;
-        None (the default): :func:`default_density` of the layer's position dimension,
-        filled in by :meth:`for_dimension` (``LocalTrackerConfig`` and ``FusionConfig``
-        call it, so a layer always runs numbers; the wire's ``null`` is this None).
+        None (the default): the local tracker estimates it per sensor from its own
+        detections (``core.tracking.clutter``); the fused layer takes
+        :func:`default_density` of its dimension (:meth:`for_dimension`).
     new_target_density : β_NT (= ρ_NT), new targets per unit of position space per scan;
-        None as for β_FT.
+        None (the default): equal to the scan's β_FT (prior odds 1, L₀ = 0).
     termination_probability : gate-emptiness threshold ([HZ] §4.2) in [0, 1); 0 turns it off.
+    termination_misses : the gate-emptiness test runs only on a track that has missed at
+        least this many scans in a row (default :data:`PLAIN_MISSES` + 1: one or two plain
+        misses never end a track, whatever its gate; [HZ] tests from the first, 1).
     gate_probability : γ of the gate volume A_G (as a χ² probability) and of the
         hand-over to phantoms, in (0, 1).
     min_points : confirm a tentative track after this many hits while its score is
         not below 0 (P(target) ≥ ½: docs/algorithms.md §7.2), 1 to
-        :data:`MAX_MIN_POINTS` (None: score only).
-    score_margin : the score is clamped at ``confirm threshold + score_margin``, so a
+        :data:`MAX_MIN_POINTS` (None: score only). Default 2.
+    initiation_hits : a tentative track hit in a scan is not deleted by its score while
+        it has at most this many hits: a start is tested by its later detections, not
+        by a prior it could not know (§8.3); 0: the SPRT as written.
+    score_ceiling : an established track's score is clamped at this value, so a
         long-lived track is still deleted after a few misses where it should have been
-        seen (``core.tracking.config`` Readings); None keeps the raw SPRT.
+        seen (``core.tracking.config`` Readings); None keeps the raw SPRT. Default 0: the
+        test restarts once a track is established (P(target) = ½), and a run of misses
+        deletes it when it reaches the delete threshold ln(β/(1 − α)) from there — 3 at
+        P_D 0.9, the run a true target shows with probability β per scan. A tentative
+        track is scored up to its confirm threshold whatever the ceiling. The paper
+        profile: the confirm threshold (6 misses at P_D 0.9).
     occlusion_radius : radius of a known track as an occluder ([HZ] §2.1); 0: no occlusion.
     phantom_max_distance, phantom_min_speed : a phantom lives at most
         ``max_distance / min_speed`` seconds ([HZ] §5.1).
@@ -240,18 +266,40 @@ class LifeCycleConfig:
         coasts and is terminated by score or gate emptiness).
     """
 
-    false_confirmation: float = 1e-3
-    true_deletion: float = 1e-3
+    false_confirmation: float = DEFAULT_ALPHA
+    true_deletion: float = DEFAULT_BETA
     false_target_density: float | None = None
     new_target_density: float | None = None
     termination_probability: float = 0.5
+    termination_misses: int = PLAIN_MISSES + 1
     gate_probability: float = 0.999
-    min_points: int | None = None
-    score_margin: float | None = 0.0
+    min_points: int | None = 2
+    initiation_hits: int = 3
+    score_ceiling: float | None = 0.0
     occlusion_radius: float = 0.0
     phantom_max_distance: float = 500.0
     phantom_min_speed: float = 1.0
     phantoms: bool = True
+
+    @classmethod
+    def paper(cls, dim: int = 2, **options: Any) -> LifeCycleConfig:
+        """The life cycle of the papers' experiments (the first two editions' defaults) for
+        ``dim`` position axes: both densities one per km^q (:func:`default_density`),
+        [HZ]'s gate emptiness from the first miss, score-only confirmation, no start exempt
+        from the SPRT, the score ceiling at the confirm threshold; ``options`` override any field."""
+        settings: dict[str, Any] = {
+            "false_target_density": default_density(dim),
+            "new_target_density": default_density(dim),
+            "termination_misses": 1,
+            "min_points": None,
+            "initiation_hits": 0,
+        }
+        settings.update(options)
+        if "score_ceiling" not in options:
+            alpha = float(settings.get("false_confirmation", DEFAULT_ALPHA))
+            beta = float(settings.get("true_deletion", DEFAULT_BETA))
+            settings["score_ceiling"] = confirm_threshold(alpha, beta)
+        return cls(**settings)
 
     def __post_init__(self) -> None:
         _check_probability(self.false_confirmation, "false_confirmation")
@@ -269,13 +317,12 @@ class LifeCycleConfig:
                 continue
             if not (math.isfinite(value) and value > 0.0):
                 raise InvalidInput(f"{name} must be a positive number, got {value!r}")
-        if self.score_margin is not None and not (
-            math.isfinite(self.score_margin)
-            and self.confirm_threshold + self.score_margin > self.delete_threshold
+        if self.score_ceiling is not None and not (
+            math.isfinite(self.score_ceiling) and self.score_ceiling > self.delete_threshold
         ):
             raise InvalidInput(
-                "score_margin must keep the score ceiling (confirm threshold + margin) above "
-                f"the delete threshold, or be None; got {self.score_margin!r}"
+                f"score_ceiling must be above the delete threshold {self.delete_threshold:.4g}, "
+                f"or None; got {self.score_ceiling!r}"
             )
         if not (math.isfinite(self.occlusion_radius) and self.occlusion_radius >= 0.0):
             raise InvalidInput(f"occlusion_radius must be >= 0, got {self.occlusion_radius!r}")
@@ -283,19 +330,20 @@ class LifeCycleConfig:
             raise InvalidInput(
                 f"min_points must be in [1, {MAX_MIN_POINTS}] or None, got {self.min_points}"
             )
+        for name in ("termination_misses", "initiation_hits"):
+            value = getattr(self, name)
+            if not 0 <= value <= MAX_MIN_POINTS:
+                raise InvalidInput(f"{name} must be in [0, {MAX_MIN_POINTS}], got {value!r}")
 
     def for_dimension(self, dim: int) -> LifeCycleConfig:
-        """This life cycle with every unset density at :func:`default_density` of ``dim``."""
-        default = default_density(dim)
-        return dataclasses.replace(
-            self,
-            false_target_density=(
-                default if self.false_target_density is None else self.false_target_density
-            ),
-            new_target_density=(
-                default if self.new_target_density is None else self.new_target_density
-            ),
+        """This life cycle with every unset density filled for a layer of ``dim`` positions
+        whose inputs give no clutter estimate (the fused layer): β_FT at
+        :func:`default_density`, β_NT at β_FT."""
+        clutter = (
+            default_density(dim) if self.false_target_density is None else self.false_target_density
         )
+        birth = clutter if self.new_target_density is None else self.new_target_density
+        return dataclasses.replace(self, false_target_density=clutter, new_target_density=birth)
 
     @property
     def densities(self) -> tuple[float, float]:
@@ -312,6 +360,18 @@ class LifeCycleConfig:
         """The SPRT score of a sensor with detection probability ``p_detect`` (built once)."""
         return _score_model(self, p_detect)
 
+    def scan_score(self, p_detect: float, clutter_density: float) -> ScoreModel:
+        """The SPRT score of one scan of a sensor with its own P_D and β_FT (given or
+        estimated); β_NT is the configured one, or that β_FT when unset."""
+        birth = clutter_density if self.new_target_density is None else self.new_target_density
+        return ScoreModel(
+            p_detect=p_detect,
+            false_target_density=clutter_density,
+            new_target_density=birth,
+            false_confirmation=self.false_confirmation,
+            true_deletion=self.true_deletion,
+        )
+
     @property
     def confirm_threshold(self) -> float:
         """ln((1 − β) / α): it depends on α and β only."""
@@ -323,11 +383,9 @@ class LifeCycleConfig:
         return delete_threshold(self.false_confirmation, self.true_deletion)
 
     @property
-    def score_ceiling(self) -> float:
-        """Largest score a track keeps (+inf without a margin)."""
-        if self.score_margin is None:
-            return math.inf
-        return self.confirm_threshold + self.score_margin
+    def ceiling(self) -> float:
+        """Largest score an established track keeps (+inf without a ceiling)."""
+        return math.inf if self.score_ceiling is None else self.score_ceiling
 
     @property
     def phantom_lifetime(self) -> float:
@@ -337,14 +395,8 @@ class LifeCycleConfig:
 
 @lru_cache(maxsize=64)
 def _score_model(config: LifeCycleConfig, p_detect: float) -> ScoreModel:
-    clutter, birth = config.densities
-    return ScoreModel(
-        p_detect=p_detect,
-        false_target_density=clutter,
-        new_target_density=birth,
-        false_confirmation=config.false_confirmation,
-        true_deletion=config.true_deletion,
-    )
+    clutter, _ = config.densities  # set for the dimension: β_NT is the configured one
+    return config.scan_score(p_detect, clutter)
 
 
 # ------------------------------------------------------------------ state
@@ -376,7 +428,8 @@ class LifeState:
     """The life of n tracks as arrays (codes index :data:`STATUSES` / :data:`REASONS`).
 
     Never changed in place: every function here returns a new one.
-    ``phantom_since`` is NaN for a track that is not a phantom.
+    ``phantom_since`` is NaN for a track that is not a phantom; ``misses`` counts the
+    scans in a row that should have seen the track and did not detect it.
     """
 
     status: IntArray
@@ -385,6 +438,7 @@ class LifeState:
     hits: IntArray
     empty_gate: FloatArray
     phantom_since: FloatArray
+    misses: IntArray
 
     @classmethod
     def empty(cls) -> LifeState:
@@ -400,17 +454,18 @@ class LifeState:
             hits=np.full(count, hits, dtype=np.int64),
             empty_gate=np.ones(count),
             phantom_since=np.full(count, np.nan),
+            misses=np.zeros(count, dtype=np.int64),
         )
 
     def __len__(self) -> int:
         return len(self.status)
 
     def select(self, rows: IntArray) -> LifeState:
-        return LifeState(*(getattr(self, name)[rows] for name in _LIFE_ARRAYS))
+        return LifeState(*(getattr(self, name)[rows] for name in LIFE_ARRAYS))
 
     def concatenate(self, other: LifeState) -> LifeState:
         return LifeState(
-            *(np.concatenate([getattr(self, name), getattr(other, name)]) for name in _LIFE_ARRAYS)
+            *(np.concatenate([getattr(self, name), getattr(other, name)]) for name in LIFE_ARRAYS)
         )
 
     def statuses(self) -> list[TrackStatus]:
@@ -420,7 +475,8 @@ class LifeState:
         return [REASONS[code] for code in self.reason.tolist()]
 
 
-_LIFE_ARRAYS = ("status", "reason", "score", "hits", "empty_gate", "phantom_since")
+LIFE_ARRAYS = ("status", "reason", "score", "hits", "empty_gate", "phantom_since", "misses")
+"""The arrays of a :class:`LifeState`, in field order."""
 
 
 def initiated(
@@ -441,7 +497,7 @@ def initiated(
     """
     if not confirmed_below:
         return LifeState.new(count, score, hits)
-    life = LifeState.new(count, min(config.score_ceiling, config.confirm_threshold), hits)
+    life = LifeState.new(count, min(config.ceiling, config.confirm_threshold), hits)
     return LifeState(
         np.full(count, CONFIRMED, dtype=np.int64),
         np.full(count, reason_code(StatusReason.LOCAL_CONFIRMED), dtype=np.int64),
@@ -449,6 +505,7 @@ def initiated(
         life.hits,
         life.empty_gate,
         life.phantom_since,
+        life.misses,
     )
 
 
@@ -471,6 +528,8 @@ class Evidence:
     occluded : inside the sensor's field of view but hidden by a known track.
     sensors : how many sensors report each track (second-sensor confirmation);
         None for a single-sensor layer.
+    densities : the step's (ρ_FA, ρ_NT) for the gate volume ([HZ] §4.2), or None for
+        the configuration's.
     """
 
     time: float
@@ -483,6 +542,7 @@ class Evidence:
     visibility: IntArray
     occluded: BoolArray
     sensors: IntArray | None = None
+    densities: tuple[float, float] | None = None
 
 
 # ------------------------------------------------------------------ visibility
@@ -533,7 +593,8 @@ def advance(
     """One step of the life cycle of every track; returns the new state and the newly confirmed.
 
     1. score: a hit adds its ΔL, a miss (seen, not detected, not a phantom)
-       ln(1 − P_D); clamped at :attr:`LifeCycleConfig.score_ceiling`;
+       ln(1 − P_D) and one to the track's misses in a row; clamped at
+       :attr:`LifeCycleConfig.score_ceiling`;
     2. a coasting track that is hit is confirmed again (``reacquired``); a
        confirmed one that misses coasts (``missed``); a coasting miss multiplies
        the empty-gate probability by ``1 − (ρ_FA + ρ_NT) A_G`` ([HZ] §4.2);
@@ -549,8 +610,10 @@ def advance(
        undetected in a blind zone, tentative   terminated     blind_zone
        occluded, established                   phantom        occluded
        occluded, tentative                     terminated     occluded
-       score ≤ delete threshold                terminated     score_deleted
-       coasting, empty gate < termination p.   terminated     gate_emptiness
+       score ≤ delete threshold (not a start  terminated     score_deleted
+       hit with ≤ initiation_hits hits)
+       coasting, empty gate < termination p.,  terminated     gate_emptiness
+       ≥ termination_misses misses in a row
        tentative, reported by ≥ 2 sensors      confirmed      second_sensor
        tentative, min_points hits and L ≥ 0    confirmed      min_points
        tentative, score ≥ confirm threshold    confirmed      score_confirmed
@@ -564,15 +627,16 @@ def advance(
     detected = evidence.detected & ~is_phantom
     missed = evidence.seen & ~detected & ~is_phantom
     score = state.score + np.where(detected, evidence.hit_increment, 0.0)
-    # A tentative track is never held below its confirm threshold (a ceiling under it,
-    # score_margin < 0, restarts the test of established tracks only).
+    # A tentative track is never held below its confirm threshold (a ceiling under it
+    # restarts the test of established tracks only).
     ceiling = np.where(
         status == TENTATIVE,
-        max(config.score_ceiling, config.confirm_threshold),
-        config.score_ceiling,
+        max(config.ceiling, config.confirm_threshold),
+        config.ceiling,
     )
     score = np.minimum(score + np.where(missed, evidence.miss_increment, 0.0), ceiling)
     hits = state.hits + detected.astype(np.int64)
+    misses = np.where(detected, 0, state.misses + missed.astype(np.int64))
     reason = state.reason
 
     def changed(mask: BoolArray, new_status: int, why: StatusReason) -> tuple[IntArray, IntArray]:
@@ -589,7 +653,8 @@ def advance(
         volume = gate_volume(
             gate, np.where(coasting_miss, evidence.gate_log_det, 0.0), evidence.gate_dim
         )
-        factor = gate_emptiness_factor(*config.densities, volume)
+        densities = config.densities if evidence.densities is None else evidence.densities
+        factor = gate_emptiness_factor(*densities, volume)
         empty_gate = np.where(coasting_miss, empty_gate * factor, empty_gate)
 
     undecided = np.ones(len(status), dtype=bool)
@@ -616,10 +681,14 @@ def advance(
             phantom_since = np.where(entering, evidence.time, phantom_since)
             decide(entering, PHANTOM, why)
             decide(hidden & (status == TENTATIVE), TERMINATED, why)
-    decide(score <= config.delete_threshold, TERMINATED, StatusReason.SCORE_DELETED)
+    # a start hit in this scan is tested by its next detections, not deleted (§8.3)
+    starting = (status == TENTATIVE) & detected & (hits <= config.initiation_hits)
+    decide((score <= config.delete_threshold) & ~starting, TERMINATED, StatusReason.SCORE_DELETED)
     if config.termination_probability > 0.0:
         decide(
-            (status == COASTING) & (empty_gate < config.termination_probability),
+            (status == COASTING)
+            & (empty_gate < config.termination_probability)
+            & (misses >= config.termination_misses),
             TERMINATED,
             StatusReason.GATE_EMPTINESS,
         )
@@ -636,8 +705,8 @@ def advance(
     decide(tentative & (score >= config.confirm_threshold), CONFIRMED, StatusReason.SCORE_CONFIRMED)
     confirmed = tentative & (status == CONFIRMED)
     # an established track is under the ceiling from the scan that confirms it
-    score = np.where(confirmed, np.minimum(score, config.score_ceiling), score)
-    new = LifeState(status, reason, score, hits, empty_gate, phantom_since)
+    score = np.where(confirmed, np.minimum(score, config.ceiling), score)
+    new = LifeState(status, reason, score, hits, empty_gate, phantom_since, misses)
     return new, np.asarray(confirmed, dtype=bool)
 
 
@@ -656,11 +725,13 @@ def hand_over(
     status, reason = state.status.copy(), state.reason.copy()
     score, hits = state.score.copy(), state.hits.copy()
     empty_gate, phantom_since = state.empty_gate.copy(), state.phantom_since.copy()
+    misses = state.misses.copy()
     rejoined = keepers[status[keepers] != CONFIRMED]
     status[rejoined], reason[rejoined] = CONFIRMED, reason_code(StatusReason.REACQUIRED)
     score[keepers] = np.maximum(score[keepers], score[newcomers])
     hits[keepers] += hits[newcomers]
     empty_gate[keepers] = 1.0
     phantom_since[keepers] = np.nan
+    misses[keepers] = 0
     status[newcomers], reason[newcomers] = TERMINATED, reason_code(why)
-    return LifeState(status, reason, score, hits, empty_gate, phantom_since)
+    return LifeState(status, reason, score, hits, empty_gate, phantom_since, misses)

@@ -116,9 +116,9 @@ def close_pair_rate(
         noise_reading=noise_reading,
     )
     variance = max(float(scenario.measurement_noise[0, 0]), NOISE_FLOOR)
-    config = LocalTrackerConfig(
+    config = LocalTrackerConfig.paper(
         measurement_noise=((variance, 0.0), (0.0, variance)),
-        imm_distance=imm_distance,  # type: ignore[arg-type]
+        imm_distance=imm_distance,
         classification=None,
         fields_of_view={"radar": None},
     )

@@ -146,9 +146,9 @@ class CrossingStudy:
 
 
 def _config(variance: float, imm_distance: str) -> LocalTrackerConfig:
-    return LocalTrackerConfig(
+    return LocalTrackerConfig.paper(
         measurement_noise=((variance, 0.0), (0.0, variance)),
-        imm_distance=imm_distance,  # type: ignore[arg-type]
+        imm_distance=imm_distance,
         fields_of_view={"radar": None},
         classification=PAPER_CLASSIFICATION,  # [MTT]'s own experiment
     )

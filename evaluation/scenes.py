@@ -94,7 +94,9 @@ def tracked_aircraft(
     if gaps:
         scenario = _without_gaps(scenario, SCORE_GAPS)
     settings: dict[str, object] = dict(NO_TERMINATION) if raw_score else {}
-    config = LocalTrackerConfig(fields_of_view={"radar": None}, life_cycle=life_cycle(settings))
+    config = LocalTrackerConfig.paper(
+        fields_of_view={"radar": None}, life_cycle=life_cycle(settings)
+    )
     run = track_scenario(scenario, config)
     truths = {}
     for truth in scenario.truths:

@@ -26,7 +26,7 @@ from core.tracking.config import LocalTrackerConfig
 from core.tracking.models import ModelBank
 from core.tracking.tracker import LocalTracker
 
-NO_TERMINATION: Mapping[str, object] = {"termination_probability": 0.0, "score_margin": None}
+NO_TERMINATION: Mapping[str, object] = {"termination_probability": 0.0, "score_ceiling": None}
 """[HZ] §6 "termination strategy switched off": no gate-emptiness test and the raw SPRT
 (a long-lived track is then never deleted by a few dozen misses)."""
 
@@ -73,14 +73,15 @@ def road_config(scenario: Scenario, **options: object) -> LocalTrackerConfig:
     settings["life_cycle"] = life_cycle(
         settings, false_target_density=1e-3, new_target_density=1e-4
     )
-    return LocalTrackerConfig(**settings)  # type: ignore[arg-type]
+    return LocalTrackerConfig.paper(**settings)
 
 
 def life_cycle(settings: dict[str, object], **defaults: object) -> LifeCycleConfig:
-    """Take the :class:`LifeCycleConfig` fields out of ``settings`` (over ``defaults``)."""
+    """The paper life cycle (:meth:`LifeCycleConfig.paper`, 2-D) with the
+    :class:`LifeCycleConfig` fields taken out of ``settings`` (over ``defaults``)."""
     names = {entry.name for entry in fields(LifeCycleConfig)}
     chosen = {**defaults, **{name: settings.pop(name) for name in list(settings) if name in names}}
-    return LifeCycleConfig(**chosen)  # type: ignore[arg-type]
+    return LifeCycleConfig.paper(2, **chosen)
 
 
 @dataclass(frozen=True)

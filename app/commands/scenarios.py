@@ -93,7 +93,7 @@ def _detection_run(name: str, scenario: Scenario, tracking_preset: str | None) -
         "state": _state_layout(),
         "motion": {"model": "constant_velocity", "q": MOTION_Q.get(name, 10.0)},
         "sensors": sensor_configs,
-        "tracking": {"preset": preset, "time_interval": scenario.time_interval},
+        "tracking": {"profile": "paper", "preset": preset, "time_interval": scenario.time_interval},
     }
     if surveyed is not None:
         session["region"] = surveyed

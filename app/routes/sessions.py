@@ -12,6 +12,7 @@ from fastapi import APIRouter, Query, Response
 from api_schemas.config import SessionConfig
 from api_schemas.events import EventLog, SnapshotEvent
 from api_schemas.sessions import (
+    DetectionTally,
     SensorActivity,
     SessionCreated,
     SessionList,
@@ -138,6 +139,7 @@ def summary(session: LiveSession) -> SessionSummary:
                 id=sensor,
                 inputs=session.sensor_inputs.get(sensor, 0),
                 last_time=session.last_time(sensor),
+                detections=detection_tally(session, sensor),
             )
             for sensor in session.sensor_ids()
         ],
@@ -149,6 +151,15 @@ def summary(session: LiveSession) -> SessionSummary:
             terminated=session.created_tracks - len(statuses),
         ),
     )
+
+
+def detection_tally(session: LiveSession, sensor: str) -> DetectionTally | None:
+    """A detecting sensor's tally and clutter density (docs/algorithms.md §8.8)."""
+    tracker = None if session.engine is None else session.engine.local_trackers.get(sensor)
+    if tracker is None:
+        return None
+    tally = tracker.tallies[sensor].to_plain()
+    return DetectionTally(**tally, clutter_density=tracker.clutter_density(sensor))
 
 
 @router.get("/{sid}", responses=problem_responses(401, 403, 404, 503))

@@ -43,6 +43,7 @@ from app.sessions.translate import PlainObject
 from app.sessions.work import compute
 from app.stores import LogEntry, SequenceConflict, Snapshot
 from core.fusion.engine import SessionEngine
+from core.tracking.track import ScanTally
 
 if TYPE_CHECKING:
     from app.sessions.registry import SessionRegistry
@@ -302,6 +303,7 @@ class InputPipeline:
         started = time.perf_counter()
         size = items + len(session.tracks)
         engine_seq = None if session.engine is None else session.engine.seq
+        tallied = _tally(session.engine, sensor)
         try:
             step = await compute(size, apply)
         except BaseException:
@@ -315,6 +317,7 @@ class InputPipeline:
         series = self._series(kind)
         series.fusion_step.observe(time.perf_counter() - started)
         series.engine_cpu.observe(step.engine_cpu_s)
+        self._count_detections(_tally(step.engine, sensor), tallied)
         received_at = datetime.now(UTC)
         seq = session.seq + 1
         try:
@@ -344,6 +347,19 @@ class InputPipeline:
         session.last_input_at = received_at
         session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
         return step
+
+    def _count_detections(self, after: ScanTally | None, before: ScanTally | None) -> None:
+        """What a detecting sensor's scan did, into ``/metrics`` (docs/algorithms.md §8.8)."""
+        if after is None:
+            return
+        before = before or ScanTally()
+        metrics = self.registry.metrics
+        for outcome in ("joined_established", "joined_tentative", "started", "unused"):
+            metrics.detections.labels(outcome).inc(
+                getattr(after, outcome) - getattr(before, outcome)
+            )
+        for event in ("confirmed", "refuted", "ended"):
+            metrics.local_tracks.labels(event).inc(getattr(after, event) - getattr(before, event))
 
     async def _snapshot(self, session: LiveSession) -> None:
         """Snapshot the engine, then compact the log to ``log_retention`` inputs behind it."""
@@ -377,3 +393,9 @@ class InputPipeline:
 def result_message(result: str, ref: str | None = None) -> str:
     """A ``result`` WebSocket message around a result's JSON text (not serialised again)."""
     return f'{{"type":"result","ref":{dumps(ref)},"result":{result}}}'
+
+
+def _tally(engine: SessionEngine | None, sensor: str) -> ScanTally | None:
+    """A detecting sensor's tally so far (:class:`~core.tracking.track.ScanTally`), or None."""
+    tracker = None if engine is None else engine.local_trackers.get(sensor)
+    return None if tracker is None else tracker.tallies.get(sensor)

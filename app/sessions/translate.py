@@ -25,6 +25,7 @@ from api_schemas.associate import AssociateRequest
 from api_schemas.association import AssociationOptions
 from api_schemas.classification import ClassEvidence
 from api_schemas.config import (
+    CartesianMeasurement,
     PolarMeasurement,
     PolygonFieldOfView,
     SectorFieldOfView,
@@ -105,13 +106,51 @@ def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> Sens
         fov = None if sensor.fov is None else field_of_view(sensor.fov, site, heading)
     except InvalidInput as error:
         raise InvalidFields([FieldIssue(("sensors", index, "fov"), str(error), None)]) from None
+    tracker = local_tracker_config(config, sensor, fov)
+    if tracker is not None:
+        confirmable(tracker, sensor, index)
     return SensorSpec(
         id=sensor.id,
         reliability=sensor.reliability,
         p_detect=sensor.p_detect,
         fov=fov,
-        tracker=local_tracker_config(config, sensor, fov),
+        tracker=tracker,
     )
+
+
+def confirmable(tracker: LocalTrackerConfig, sensor: SensorConfig, index: int) -> None:
+    """Refuse (a validation error at the density) a sensor whose tracks can never be confirmed.
+
+    A hit adds ``ΔL = ln[P_D / ((2π)^{q/2} β_FT √|S|)] − D/2`` ([MTT] §4.3) and S is at
+    least the detections' R: when even a detection exactly at the prediction (D = 0,
+    S = R) lowers the score, no run of detections ever confirms a track. Checked where
+    R is one matrix (``measurement.r``) and β_FT is known (given, or the paper profile's);
+    a polar sensor's R shrinks near its site and an estimated β_FT follows the data.
+    """
+    clutter = tracker.physics(sensor.id)[1]
+    if clutter is None or not isinstance(sensor.measurement, CartesianMeasurement):
+        return
+    r = np.asarray(tracker.model_bank().measurement.noise_covariance, dtype=np.float64)
+    q = r.shape[0]
+    best = tracker.life_cycle.scan_score(sensor.p_detect, clutter).hit_increment(
+        np.zeros(1), np.array([np.linalg.slogdet(r)[1]]), q
+    )[0]
+    if best > 0.0:
+        return
+    unit = "m²" if q == 2 else ("m³" if q == 3 else "m")
+    field = "clutter_density" if sensor.clutter_density is not None else None
+    location: tuple[str | int, ...] = (
+        ("sensors", index, field) if field is not None else ("tracking", "profile")
+    )
+    message = (
+        f"no track of sensor {sensor.id!r} can ever be confirmed: at a clutter density of "
+        f"{clutter:.3g} per {unit} per scan, a detection exactly where a track predicts it "
+        f"(noise r, P_D {sensor.p_detect:g}) is {math.exp(-best):.3g} times as likely clutter "
+        f"as target (hit score {best:.3g} ≤ 0). Fix: give clutter_density per {unit} per "
+        "scan (false alarms per scan divided by the covered area), or leave it out to have "
+        "it estimated from the sensor's detections"
+    )
+    raise InvalidFields([FieldIssue(location, message, clutter)])
 
 
 def local_tracker_config(
@@ -153,7 +192,11 @@ def local_tracker_config(
         imm_distance=options.imm_distance or DEFAULT_IMM_DISTANCE,
         p_detect=sensor.p_detect,
         life_cycle=life_cycle_config(
-            thresholds, tracking.birth_density, clutter_density=sensor.clutter_density
+            thresholds,
+            tracking.birth_density,
+            clutter_density=sensor.clutter_density,
+            paper=tracking.profile == "paper",
+            dim=axes,
         ),
         initiation=initiation.kind,
         max_speed=(
@@ -232,23 +275,34 @@ def life_cycle_config(
     thresholds: TrackThresholds,
     birth_density: float | None,
     clutter_density: float | None = None,
+    *,
+    paper: bool = False,
+    dim: int = 2,
 ) -> LifeCycleConfig:
     """The life cycle of both layers from the wire thresholds and densities.
 
     A local tracker gets its sensor's ``clutter_density``; the fused layer,
     whose inputs are tracks and not detections, the default of its dimension.
-    A ``null`` density stays None: the core config fills in
-    :func:`~core.lifecycle.default_density` of its dimension (one source).
+    A ``null`` density stays None (the core estimates β_FT, or fills in
+    :func:`~core.lifecycle.default_density` in the fused layer); ``paper``: the
+    paper profile (:meth:`LifeCycleConfig.paper` of ``dim`` positions), whose
+    unset densities are one per km^q.
     """
-    return LifeCycleConfig(
-        false_confirmation=thresholds.false_confirmation,
-        true_deletion=thresholds.true_deletion,
-        false_target_density=clutter_density,
-        new_target_density=birth_density,
-        termination_probability=thresholds.termination_probability,
-        min_points=thresholds.min_points,
-        score_margin=thresholds.score_margin,
-    )
+    values: dict[str, Any] = {
+        "false_confirmation": thresholds.false_confirmation,
+        "true_deletion": thresholds.true_deletion,
+        "termination_probability": thresholds.termination_probability,
+        "min_points": thresholds.min_points,
+        "score_ceiling": thresholds.score_ceiling,
+    }
+    densities: dict[str, Any] = {
+        "false_target_density": clutter_density,
+        "new_target_density": birth_density,
+    }
+    if paper:
+        given = {name: value for name, value in densities.items() if value is not None}
+        return LifeCycleConfig.paper(dim, **values, **given)
+    return LifeCycleConfig(**values, **densities)
 
 
 def motion_density(config: SessionConfig) -> float:
@@ -306,7 +360,12 @@ def fusion_config(config: SessionConfig, extra_sensors: Iterable[str] = ()) -> F
         association_options=method_options(association.options),
         distance=association.options.distance or "sum",
         state_fusion=StateFusion(config.fusion.state),
-        management=life_cycle_config(thresholds, config.tracking.birth_density),
+        management=life_cycle_config(
+            thresholds,
+            config.tracking.birth_density,
+            paper=config.tracking.profile == "paper",
+            dim=len(config.state.position),
+        ),
     )
 
 

@@ -108,7 +108,7 @@ def local_track_report(
     order = list(local_order(layout))
     preset = tracker.preset
     headings = preset is not None and preset.velocity_convention == "heading"
-    updated = {track_id for track_id in step.assignment if track_id is not None}
+    updated = set(step.updated)
     reported = []
     for track in step.tracks:
         if track.status is not TrackStatus.CONFIRMED or track.id not in updated:

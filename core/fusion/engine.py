@@ -78,6 +78,7 @@ from core.fusion.track import FusedRows, FusedTrack, Kinematics, SensorEstimate
 from core.lifecycle import (
     COASTING,
     CONFIRMED,
+    LIFE_ARRAYS,
     PHANTOM,
     REASON_CODES,
     STATUS_CODES,
@@ -890,7 +891,7 @@ def _is_live(status: IntArray) -> BoolArray:
 def _replaced_life(life: LifeState, rows: IntArray, by: LifeState) -> LifeState:
     """``life`` with ``rows`` replaced by ``by`` (new arrays)."""
     arrays = []
-    for name in ("status", "reason", "score", "hits", "empty_gate", "phantom_since"):
+    for name in LIFE_ARRAYS:
         values = getattr(life, name).copy()
         values[rows] = getattr(by, name)
         arrays.append(values)
@@ -919,4 +920,6 @@ def _plain_lives(plain_tracks: list[dict[str, Any]]) -> LifeState:
             ],
             dtype=np.float64,
         ),
+        # an export written before the count has none: no misses in a row
+        misses=np.array([int(plain.get("misses", 0)) for plain in plain_tracks], dtype=np.int64),
     )

@@ -94,8 +94,9 @@ class FusedTrack:
     number : the integer part of the id, for a stable order.
 
     ``status``, ``reason``, ``score`` (SPRT log-likelihood ratio), ``hits``,
-    ``empty_gate_probability`` ([HZ] §4.2 product while coasting) and
-    ``phantom_since`` (None unless a phantom) are read from the rows.
+    ``empty_gate_probability`` ([HZ] §4.2 product while coasting),
+    ``phantom_since`` (None unless a phantom) and ``misses`` (in a row) are read
+    from the rows.
     """
 
     id: str
@@ -131,6 +132,10 @@ class FusedTrack:
     @property
     def empty_gate_probability(self) -> float:
         return float(self.rows.rows.life.empty_gate[self.row])
+
+    @property
+    def misses(self) -> int:
+        return int(self.rows.rows.life.misses[self.row])
 
     @property
     def phantom_since(self) -> float | None:
@@ -191,6 +196,7 @@ class FusedTrack:
             },
             "empty_gate_probability": self.empty_gate_probability,
             "phantom_since": self.phantom_since,
+            "misses": self.misses,
             "history": [[time, state] for time, state in self.history],
         }
 

@@ -28,9 +28,9 @@ from core.lifecycle import ScoreModel
 from core.pipeline.gate import pair_positions
 from core.tracking.config import CHEAP_JPDA, LocalTrackerConfig
 from core.tracking.gating import ScanGating, TrackGatingProblem, gate_pairs
-from core.tracking.imm import IMMPrediction, IMMUpdate, IMMUpdater
+from core.tracking.imm import IMMPrediction, IMMState, IMMUpdate, IMMUpdater
 from core.tracking.jpda import cheap_jpda_weights, clutter_bias, pda_update
-from core.tracking.models import ModelBank
+from core.tracking.models import ModelBank, position_indices, velocity_indices
 
 
 @dataclass(frozen=True)
@@ -43,6 +43,7 @@ class Association:
     rows, cols : each assigned detection ``cols[k]`` and its track ``rows[k]`` (of ``sub``).
     hit_gain : ΔL of each hit track of ``sub`` (0 elsewhere).
     used : the detections the association used (no track starts from them).
+    branches : the starts' other gated detections (:class:`Branches`), or None.
     """
 
     update: IMMUpdate
@@ -50,16 +51,67 @@ class Association:
     cols: IntArray
     hit_gain: FloatArray
     used: IntArray
+    branches: Branches | None = None
+
+
+@dataclass(frozen=True)
+class Branches:
+    """Tracks split off single-point starts (docs/algorithms.md §8.3): one per other
+    gated detection of a start, each that start updated with it.
+
+    Attributes
+    ----------
+    rows : the start each branch comes from (a row of ``sub``).
+    cols : its detection.
+    gain : its hit ΔL.
+    state : its updated IMM state.
+    """
+
+    rows: IntArray
+    cols: IntArray
+    gain: FloatArray
+    state: IMMState
+
+
+VELOCITY_SCALES: tuple[tuple[float, float], ...] = ((1.0, 1 / 3), (0.1, 1 / 3), (0.01, 1 / 3))
+"""(scale s_k of σ_v, weight w_k) of the velocity prior's scale mixture without a velocity
+prior (``core.tracking.config`` Readings)."""
+MAX_BRANCHES = 8
+"""Most hypotheses one single-point start carries into its second scan (its closest
+gated detections): bounds the tentative tracks a dense scene makes."""
+BRANCH_GATE_PROBABILITY = 0.999
+"""The gate of a single-point start's second detections (as a χ² probability)."""
+
+
+def z_rows(measurements: FloatArray, cols: IntArray) -> FloatArray:
+    """The measurements ``cols`` as a (k, q) array."""
+    return np.asarray(measurements[cols], dtype=np.float64).reshape(
+        len(cols), measurements.shape[1]
+    )
 
 
 class DetectionAssociator:
     """The association method of a :class:`LocalTrackerConfig`, parsed once."""
 
-    def __init__(self, config: LocalTrackerConfig, bank: ModelBank, score: ScoreModel) -> None:
+    def __init__(
+        self,
+        config: LocalTrackerConfig,
+        bank: ModelBank,
+        score: ScoreModel,
+        velocities: bool = True,
+    ) -> None:
         self.config = config
         self.bank = bank
         self.updater = IMMUpdater(bank)
         self._score = score
+        self._scan = score
+        self._branch_gate = float(chi2.ppf(BRANCH_GATE_PROBABILITY, bank.measurement.dim))
+        # no velocity prior: a start's second detection is scored under a scale mixture
+        self._velocity_scales: tuple[tuple[float, float], ...] = (
+            VELOCITY_SCALES if config.initial_velocity_std is None and velocities else ()
+        )
+        self._positions = position_indices(bank.axes)
+        self._velocities = velocity_indices(bank.axes)
         self._h = bank.measurement.matrix
         self._noise = bank.measurement.noise_covariance
         self._q = bank.measurement.dim
@@ -102,20 +154,36 @@ class DetectionAssociator:
             self._modified_sum = ModifiedScale.of(steady.innovation - self._noise, **kwargs)
 
     def associate(
-        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None, first: BoolArray
+        self,
+        sub: IMMPrediction,
+        z: FloatArray,
+        own_noise: FloatArray | None,
+        first: BoolArray | IntArray,
+        score: ScoreModel | None = None,
+        branching: int | None = None,
     ) -> Association:
         """Associate and update the tracks of ``sub`` with the detections ``z`` (own R or None),
-        the ``first`` tracks (the established ones) before the others (cheap JPDA: soft
-        over all)."""
+        in passes: the ``first`` tracks (the established ones) before the others, or, given
+        integer ranks, rank 0 first, then 1, … on the detections left (cheap JPDA: soft
+        over all); hits are scored by ``score`` (the scan's sensor's; default the
+        configuration's). The tracks of rank ``branching`` (single-point starts) are not
+        assigned: each takes its closest gated detection of those left, and each other
+        one makes a branch (:class:`Branches`); their detections stay free."""
+        self._scan = self._score if score is None else score
         if self._method == CHEAP_JPDA:
             return self._jpda(sub, z, own_noise)
-        return self._method_and_update(sub, z, own_noise, first)
+        return self._method_and_update(sub, z, own_noise, first, branching)
 
     def _hit_gain(self, distance: FloatArray, log_det: FloatArray) -> FloatArray:
-        return self._score.hit_increment(distance, log_det, self._q)
+        return self._scan.hit_increment(distance, log_det, self._q)
 
     def _method_and_update(
-        self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None, first: BoolArray
+        self,
+        sub: IMMPrediction,
+        z: FloatArray,
+        own_noise: FloatArray | None,
+        first: BoolArray | IntArray,
+        branching: int | None = None,
     ) -> Association:
         """Assignment by an association method, the ``first`` tracks before the others,
         which share the detections left (docs/algorithms.md §4, "Assignment"); then the
@@ -133,15 +201,32 @@ class DetectionAssociator:
             self.config.imm_distance,
             self._modified if own_noise is None else self._modified_sum,
         )
-        rows, cols, gain = self._assign(gating, np.flatnonzero(first), np.arange(len(z)))
+        rank = np.asarray(first)
+        if rank.dtype == np.bool_:
+            rank = np.where(rank, 0, 1)
         left = np.ones(len(z), dtype=bool)
-        left[cols] = False
-        later_rows, later_cols, later_gain = self._assign(
-            gating, np.flatnonzero(~first), np.flatnonzero(left)
-        )
-        rows, cols = np.concatenate([rows, later_rows]), np.concatenate([cols, later_cols])
+        found_rows, found_cols, found_gain = [], [], []
+        for level in np.unique(rank[rank != branching]).tolist():
+            rows, cols, gain = self._assign(
+                gating, np.flatnonzero(rank == level), np.flatnonzero(left)
+            )
+            left[cols] = False
+            found_rows.append(rows)
+            found_cols.append(cols)
+            found_gain.append(gain)
+        used = np.concatenate([np.zeros(0, dtype=np.int64), *found_cols])
+        split = None
+        if branching is not None and np.any(rank == branching):
+            own, split = self._branch(
+                gating, sub, np.flatnonzero(rank == branching), np.flatnonzero(left), own_noise
+            )
+            found_rows.append(own[0])
+            found_cols.append(own[1])
+            found_gain.append(own[2])
+        rows = np.concatenate([np.zeros(0, dtype=np.int64), *found_rows])
+        cols = np.concatenate([np.zeros(0, dtype=np.int64), *found_cols])
         hit_gain = np.zeros(len(first))
-        hit_gain[rows] = np.concatenate([gain, later_gain])
+        hit_gain[rows] = np.concatenate([np.zeros(0), *found_gain])
         tracks = len(first)
         assigned = np.zeros((tracks, self._q))
         assigned[rows] = z[cols]
@@ -152,7 +237,86 @@ class DetectionAssociator:
             noises = np.broadcast_to(self._noise, (tracks, self._q, self._q)).copy()
             noises[rows] = own_noise[cols]
         update = self.updater.update(sub, assigned, detected, noises)
-        return Association(update, rows, cols, hit_gain, cols)
+        return Association(update, rows, cols, hit_gain, used, split)
+
+    def _branch(
+        self,
+        gating: ScanGating,
+        sub: IMMPrediction,
+        starts: IntArray,
+        detections: IntArray,
+        own_noise: FloatArray | None,
+    ) -> tuple[tuple[IntArray, IntArray, FloatArray], Branches]:
+        """Every gated pair of ``starts`` × ``detections`` (the scan's 0.999 gate): each
+        start's closest detection (smallest D) is its own hit, each other pair a branch
+        (at most :data:`MAX_BRANCHES` per start, the closest)."""
+        gated = gating.pairs(self._branch_gate, starts, detections)
+        pairs = gated.pairs
+        rows, cols = starts[pairs.rows], detections[pairs.cols]
+        if self._velocity_scales:
+            gain = self._mixture_gain(sub, gating.measurements, own_noise, rows, cols)
+        else:
+            gain = self._hit_gain(gated.plain_distance, pairs.log_det)
+        order = np.lexsort((cols, gated.plain_distance, rows))  # by start, closest first
+        rows, cols, gain = rows[order], cols[order], gain[order]
+        rank_in_start = np.arange(len(rows)) - np.searchsorted(rows, rows, side="left")
+        own = rank_in_start == 0
+        extra = (rank_in_start > 0) & (rank_in_start < MAX_BRANCHES)
+        branch_rows, branch_cols = rows[extra], cols[extra]
+        copies = IMMPrediction(
+            sub.means[branch_rows],
+            sub.covariances[branch_rows],
+            sub.log_mode_probabilities[branch_rows],
+            sub.measurement_means[branch_rows],
+            sub.innovation_covariances[branch_rows],
+        )
+        noises = None if own_noise is None else own_noise[branch_cols]
+        updated = self.updater.update(
+            copies, z_rows(gating.measurements, branch_cols), None, noises
+        )
+        branches = Branches(branch_rows, branch_cols, gain[extra], updated.state)
+        return (rows[own], cols[own], gain[own]), branches
+
+    def _mixture_gain(
+        self,
+        sub: IMMPrediction,
+        z: FloatArray,
+        own_noise: FloatArray | None,
+        rows: IntArray,
+        cols: IntArray,
+    ) -> FloatArray:
+        """The hit ΔL of a start's second detection under the scale mixture of its velocity
+        prior (``core.tracking.config`` Readings): ``ln P_D − ln β_FT + ln Σ_k w_k N(ν; 0, S_k)``,
+        ``S_k = S − (1 − s_k²) H P_pv P_vv⁻¹ P_vp Hᵀ`` (the part of S the velocity prior
+        makes, scaled by s_k²), on the bank's first model."""
+        if len(rows) == 0:
+            return np.zeros(0)
+        position, velocity = list(self._positions), list(self._velocities)
+        covariance = sub.covariances[rows, 0]
+        cross = covariance[:, position][:, :, velocity]
+        spread = cross @ np.linalg.solve(
+            covariance[:, velocity][:, :, velocity], np.swapaxes(cross, 1, 2)
+        )
+        s = sub.innovation_covariances[rows, 0]
+        if own_noise is not None:
+            s = s - self._noise + own_noise[cols]
+        innovation = z[cols] - sub.measurement_means[rows, 0]
+        terms = []
+        for scale, weight in self._velocity_scales:
+            s_k = s - (1.0 - scale**2) * spread
+            distance = np.einsum(
+                "pi,pi->p", innovation, np.linalg.solve(s_k, innovation[..., None])[..., 0]
+            )
+            log_det = np.linalg.slogdet(s_k)[1]
+            terms.append(
+                math.log(weight) - 0.5 * (self._q * math.log(2.0 * math.pi) + log_det + distance)
+            )
+        mixed = np.logaddexp.reduce(np.stack(terms), axis=0)
+        score = self._scan
+        return np.asarray(
+            math.log(score.p_detect) - math.log(score.false_target_density) + mixed,
+            dtype=np.float64,
+        )
 
     def _assign(
         self, gating: ScanGating, tracks: IntArray, detections: IntArray

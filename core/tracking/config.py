@@ -4,10 +4,19 @@ Plain frozen dataclasses, no web types (docs/algorithms.md §4). Every option th
 papers leave open is a named field here; the defaults are the ones of
 docs/algorithms.md §3.7 and §4.
 
+The defaults are for real sensors (docs/algorithms.md §8): single-point
+starts with no velocity knowledge (a 1 m/s walker and a 300 m/s aircraft
+alike), confirmation at a second hit that leaves the score ≥ 0, deletion
+after the run of misses a true target shows with probability β, each
+sensor's clutter density estimated from its own data when not given
+(:mod:`core.tracking.clutter`). :meth:`LocalTrackerConfig.paper` is the
+tracker of the papers' experiments (the first two editions' defaults).
+
 Readings
 --------
 ``initiation``
-    ``"two_point"`` (default): an unassigned detection becomes a *seed*; a
+    ``"single_point"`` (default) or ``"two_point"`` (the paper profile): an
+    unassigned detection becomes a *seed*; a
     seed joined by an unassigned detection of the next scan within
     ``max_speed · Δt`` (plus the gate on R) starts a tentative track by
     :func:`~core.tracking.initiator.two_point_initiation`, scored from
@@ -48,18 +57,21 @@ Readings
 ``life_cycle``
     Score, confirmation, deletion, gate emptiness, occlusion and phantoms are
     :class:`~core.lifecycle.LifeCycleConfig`, shared with the fusion engine;
-    ``p_detect`` is the tracker's P_D. ``score_margin`` (there): the SPRT of
+    ``p_detect`` is the tracker's P_D, ``sensor_physics`` each sensor's own P_D and
+    β_FT (a scan is scored with its sensor's). β_FT left out (here and in
+    the life cycle) is estimated from the sensor's detections
+    (:mod:`core.tracking.clutter`); β_NT left out is the scan's β_FT. ``score_ceiling`` (there): the SPRT of
     [MTT] §4.3 as written never deletes a track that has lived a while: with
     β_FT = 1e-6 each hit adds about +11, so after 100 hits the delete
     threshold is hundreds of misses away. Blackman & Popoli delete on a fixed
-    drop below the track's best score; we clamp the score at ``confirm
-    threshold + score_margin`` (default margin 0), so a confirmed track is
-    deleted after ``⌈(confirm − delete + margin) / |ln(1 − P_D)|⌉``
-    consecutive misses (5 with the defaults). ``None`` keeps the raw SPRT. A
-    negative margin down to ``−confirm`` (ceiling 0) restarts the test once a
-    track is established: deleted after ``⌈(−delete) / |ln(1 − P_D)|⌉`` misses
-    (3 at P_D 0.9), the run of misses a true target shows with probability β;
-    tentative tracks are still scored up to their confirm threshold.
+    drop below the track's best score; we clamp an established track's score
+    at ``score_ceiling``, so it is deleted after
+    ``⌈(ceiling − delete) / |ln(1 − P_D)|⌉`` consecutive misses. The default
+    ceiling 0 restarts the test once a track is established: 3 misses at
+    P_D 0.9, the run a true target shows with probability β (Stone Soup's
+    tutorial deletes after 3 scans without an update); the paper profile's
+    ceiling is the confirm threshold (6). ``None`` keeps the raw SPRT.
+    Tentative tracks are scored up to their confirm threshold.
     The gate of the gate-emptiness volume and of the hand-over is the life
     cycle's ``gate_probability``, not the association's.
 """
@@ -70,7 +82,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -92,6 +104,9 @@ from core.tracking.range_rate import RangeRateModel
 ImmDistance = Literal["closest_model", "combined", "gated_combined"]
 DistanceKind = Literal["plain", "modified"]
 Initiation = Literal["two_point", "single_point"]
+UNKNOWN_VELOCITY_STD = 100.0
+"""σ_v (m/s per axis) of a start without a velocity prior: a 300 m/s target's second
+detection one scan later is at D ≤ 9, inside the χ² 0.999 gate (13.8 in 2-D)."""
 
 IMM_DISTANCES: tuple[ImmDistance, ...] = ("closest_model", "combined", "gated_combined")
 DEFAULT_IMM_DISTANCE: ImmDistance = "gated_combined"
@@ -151,6 +166,33 @@ for it; the default calibrates them to the sensor's noise, §8.5)."""
 
 
 @dataclass(frozen=True)
+class SensorPhysics:
+    """What a sensor's data sheet says about its detections, for the track score.
+
+    Attributes
+    ----------
+    p_detect : P_D, or None for the tracker's ``p_detect``.
+    clutter_density : β_FT per unit of position space per scan, or None: the life
+        cycle's, else estimated from the sensor's detections (:mod:`core.tracking.clutter`).
+    """
+
+    p_detect: float | None = None
+    clutter_density: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.p_detect is not None and not (
+            math.isfinite(self.p_detect) and 0.0 < self.p_detect < 1.0
+        ):
+            raise TrackingError(f"p_detect must be in (0, 1), got {self.p_detect!r}")
+        if self.clutter_density is not None and not (
+            math.isfinite(self.clutter_density) and self.clutter_density > 0.0
+        ):
+            raise TrackingError(
+                f"clutter_density must be a positive number, got {self.clutter_density!r}"
+            )
+
+
+@dataclass(frozen=True)
 class LocalTrackerConfig:
     """Everything a :class:`~core.tracking.tracker.LocalTracker` needs (module Readings).
 
@@ -174,12 +216,15 @@ class LocalTrackerConfig:
         and ``gate_probability``.
     imm_distance, distance : see the module Readings.
     modified_beta, modified_k, modified_alpha : β, k, α of the modified distance.
-    p_detect : P_D of the system's sensors (the track score).
+    p_detect : P_D of the system's sensors (the track score), unless ``sensor_physics`` says.
+    sensor_physics : each sensor's own P_D and β_FT by name (:class:`SensorPhysics`); a
+        sensor not named takes ``p_detect`` and the life cycle's β_FT.
     life_cycle : score thresholds and densities, confirmation, deletion, gate
         emptiness, occlusion and phantoms (:class:`~core.lifecycle.LifeCycleConfig`);
-        densities left None become :func:`~core.lifecycle.default_density` of the
-        measured positions (``axes``, or the explicit bank's measurement dimension).
-    initiation, max_speed, initial_velocity_std : see the module Readings.
+        β_FT left None is estimated per sensor (module Readings).
+    initiation, max_speed : see the module Readings.
+    initial_velocity_std : σ_v of a new track's velocity per axis (m/s), the velocity
+        prior; None (default): no velocity knowledge (module Readings).
     range_rate : the system's range-rate measurement (site and σ), or None; a scan
         may then give each detection's range-rate (:mod:`core.tracking.range_rate`).
     fields_of_view : the system's sensors and their fields of view.
@@ -208,10 +253,13 @@ class LocalTrackerConfig:
     modified_k: float = 1.0
     modified_alpha: float = 4.0
     p_detect: float = 0.9
+    sensor_physics: Mapping[str, SensorPhysics] = field(
+        default_factory=lambda: MappingProxyType({})
+    )
     life_cycle: LifeCycleConfig = field(default_factory=LifeCycleConfig)
-    initiation: Initiation = "two_point"
+    initiation: Initiation = "single_point"
     max_speed: float = 1000.0
-    initial_velocity_std: float = 300.0
+    initial_velocity_std: float | None = None
     range_rate: RangeRateModel | None = None
     fields_of_view: Mapping[str, FieldOfView | None] = field(
         default_factory=lambda: MappingProxyType({"sensor": None})
@@ -244,13 +292,52 @@ class LocalTrackerConfig:
             "initial_velocity_std",
         ):
             value = getattr(self, name)
+            if value is None and name == "initial_velocity_std":
+                continue
             if not (math.isfinite(value) and value > 0.0):
                 raise TrackingError(f"{name} must be a positive number, got {value!r}")
         if not self.fields_of_view:
             raise TrackingError("fields_of_view needs at least one sensor")
-        # densities left unset are per m^q of the measured positions (core.lifecycle)
-        measured = self.axes if self.bank is None else self.bank.measurement.dim
-        object.__setattr__(self, "life_cycle", self.life_cycle.for_dimension(measured))
+        unknown = sorted(set(self.sensor_physics) - set(self.fields_of_view))
+        if unknown:
+            raise TrackingError(f"sensor_physics names {unknown}, not among fields_of_view")
+
+    @classmethod
+    def paper(cls, **options: Any) -> LocalTrackerConfig:
+        """The tracker of the papers' experiments (the first two editions' defaults):
+        two-point starts (σ_v 300 m/s, pairs within 1000 m/s), the paper life cycle
+        (:meth:`~core.lifecycle.LifeCycleConfig.paper`: densities one per km^q, score-only
+        confirmation, ceiling at the confirm threshold, [HZ]'s gate emptiness from the
+        first miss); ``options`` override any field (``life_cycle`` as a whole)."""
+        measured = int(options.get("axes", 2))
+        bank = options.get("bank")
+        if isinstance(bank, ModelBank):
+            measured = bank.measurement.dim
+        settings: dict[str, Any] = {
+            "initiation": "two_point",
+            "initial_velocity_std": 300.0,
+            "life_cycle": LifeCycleConfig.paper(measured),
+        }
+        settings.update(options)
+        return cls(**settings)
+
+    @property
+    def velocity_std(self) -> float:
+        """σ_v of a start: the velocity prior, or :data:`UNKNOWN_VELOCITY_STD` without one."""
+        given = self.initial_velocity_std
+        return UNKNOWN_VELOCITY_STD if given is None else given
+
+    @property
+    def measured(self) -> int:
+        """The number of measured position components."""
+        return self.axes if self.bank is None else self.bank.measurement.dim
+
+    def physics(self, sensor: str) -> tuple[float, float | None]:
+        """``(P_D, β_FT or None: estimate it)`` of a sensor's scans."""
+        own = self.sensor_physics.get(sensor, SensorPhysics())
+        p_detect = self.p_detect if own.p_detect is None else own.p_detect
+        clutter = own.clutter_density
+        return p_detect, self.life_cycle.false_target_density if clutter is None else clutter
 
     def tracking_preset(self) -> TrackingPreset | None:
         """The preset (with the session's own classes, ``class_behaviours``), or None when
@@ -293,5 +380,6 @@ class LocalTrackerConfig:
 
     @property
     def score(self) -> ScoreModel:
-        """The SPRT score of the tracker's sensors (P_D and the life cycle's densities)."""
-        return self.life_cycle.score_model(self.p_detect)
+        """The SPRT score of the tracker's sensors (P_D and the life cycle's densities;
+        :func:`~core.lifecycle.default_density` for a density left to the estimate)."""
+        return self.life_cycle.for_dimension(self.measured).score_model(self.p_detect)

@@ -10,7 +10,8 @@ are written as the strings ``"inf"``, ``"-inf"``, ``"nan"`` (:func:`plain_floats
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -93,6 +94,69 @@ class LocalTrack:
         }
 
 
+TALLY_FIELDS = (
+    "detections",
+    "joined_established",
+    "joined_tentative",
+    "started",
+    "unused",
+    "confirmed",
+    "refuted",
+    "refuted_detections",
+    "ended",
+)
+"""The counts of a :class:`ScanTally`, in order."""
+
+
+@dataclass(frozen=True)
+class ScanTally:
+    """What a tracker did with a sensor's detections (one scan, or summed over scans):
+    the answer to "why is nothing tracked" (docs/algorithms.md §8).
+
+    Attributes
+    ----------
+    detections : detections received.
+    joined_established : detections that updated a confirmed or coasting track.
+    joined_tentative : detections that updated a tentative track.
+    started : detections that started a track (two-point: the pair's second).
+    unused : detections that did neither (two-point seeds, detections left out by the
+        association, pairs whose start score was at the delete threshold).
+    confirmed : tracks confirmed.
+    refuted : tentative tracks terminated without ever being confirmed (their starts
+        refuted: clutter), with ``refuted_detections`` detections between them.
+    ended : established tracks terminated, with ``ended_reasons`` (reason → count).
+    """
+
+    detections: int = 0
+    joined_established: int = 0
+    joined_tentative: int = 0
+    started: int = 0
+    unused: int = 0
+    confirmed: int = 0
+    refuted: int = 0
+    refuted_detections: int = 0
+    ended: int = 0
+    ended_reasons: Mapping[str, int] = field(default_factory=dict)
+
+    def __add__(self, other: ScanTally) -> ScanTally:
+        reasons = dict(self.ended_reasons)
+        for reason, count in other.ended_reasons.items():
+            reasons[reason] = reasons.get(reason, 0) + count
+        counts = {name: getattr(self, name) + getattr(other, name) for name in TALLY_FIELDS}
+        return ScanTally(**counts, ended_reasons=dict(sorted(reasons.items())))
+
+    def to_plain(self) -> dict[str, Any]:
+        plain: dict[str, Any] = {name: getattr(self, name) for name in TALLY_FIELDS}
+        plain["ended_reasons"] = dict(self.ended_reasons)
+        return plain
+
+    @classmethod
+    def from_plain(cls, plain: Mapping[str, Any]) -> ScanTally:
+        counts = {name: int(plain[name]) for name in TALLY_FIELDS}
+        reasons = {str(k): int(v) for k, v in plain["ended_reasons"].items()}
+        return cls(**counts, ended_reasons=reasons)
+
+
 @dataclass(frozen=True, eq=False)
 class TrackerStep:
     """The result of one scan.
@@ -114,6 +178,9 @@ class TrackerStep:
     sensor: str
     tracks: tuple[LocalTrack, ...]
     assignment: tuple[str | None, ...]
+    tally: ScanTally = field(default_factory=lambda: ScanTally())
+    clutter_density: float = math.nan
+    updated: tuple[str, ...] = ()
 
     def track(self, track_id: str) -> LocalTrack:
         """The track with that id (KeyError when absent)."""
@@ -129,4 +196,7 @@ class TrackerStep:
             "sensor": self.sensor,
             "tracks": [track.to_plain() for track in self.tracks],
             "assignment": list(self.assignment),
+            "tally": self.tally.to_plain(),
+            "clutter_density": plain_float(self.clutter_density),
+            "updated": list(self.updated),
         }

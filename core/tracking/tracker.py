@@ -77,11 +77,15 @@ from core.lifecycle import (
     REASONS,
     STATUS_CODES,
     STATUSES,
+    TENTATIVE,
+    TERMINATED,
     Evidence,
     LifeState,
+    ScoreModel,
     StatusReason,
     TrackStatus,
     advance,
+    default_density,
     established,
     hand_over,
     initiated,
@@ -91,16 +95,26 @@ from core.pipeline.handover import hand_over_pairs
 from core.pipeline.predict import predict_bank
 from core.pipeline.rows import TrackRows
 from core.tracking.associate import Association, DetectionAssociator
+from core.tracking.clutter import ClutterEstimate, prior_gate
 from core.tracking.config import CHEAP_JPDA, LocalTrackerConfig
 from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState
 from core.tracking.initiator import pair_seeds, single_point_initiation, two_point_initiation
 from core.tracking.presets import VELOCITY, TrackingPreset, VelocityConvention
 from core.tracking.range_rate import range_rate_update
-from core.tracking.track import LocalTrack, TrackerStep, float_array, mass_to_plain, plain_floats
+from core.tracking.track import (
+    LocalTrack,
+    ScanTally,
+    TrackerStep,
+    float_array,
+    mass_to_plain,
+    plain_floats,
+)
 
-EXPORT_VERSION = 2
-"""2: the seeds' covariances (``seed_covariances``); a version-1 export (without them)
-restores its seeds with the bank's R, the R they were started with then."""
+EXPORT_VERSION = 3
+"""3: each track's ``misses`` in a row, each sensor's clutter estimate and tally;
+2: the seeds' covariances (``seed_covariances``). An older export restores with no
+misses, empty estimates and tallies, and (version 1) its seeds with the bank's R, the R
+they were started with then."""
 SEED_NOISE_GATE = 0.999
 """Gate probability of the measurement-noise part of the seed distance bound."""
 
@@ -113,6 +127,18 @@ def _select_prediction(prediction: IMMPrediction, rows: IntArray) -> IMMPredicti
         prediction.measurement_means[rows],
         prediction.innovation_covariances[rows],
     )
+
+
+START_PASS = 2
+"""The pass of the single-point starts (:func:`_passes`), which branch instead."""
+
+
+def _passes(life: LifeState) -> IntArray:
+    """The association pass of each track (docs/algorithms.md §4 "Assignment"): the
+    established first, then the tentative tracks with two hits or more, then the starts
+    of one detection, whose first gate is the velocity prior's and would take the others'
+    detections in one assignment on D."""
+    return np.where(established(life.status), 0, np.where(life.hits >= 2, 1, START_PASS))
 
 
 def _concatenate(first: IMMState, second: IMMState) -> IMMState:
@@ -145,7 +171,6 @@ class LocalTracker:
 
     def __init__(self, config: LocalTrackerConfig) -> None:
         self.config = config
-        self._score_model = config.score  # the SPRT of this tracker's sensors, built once
         found: TrackingPreset | None = config.tracking_preset()
         self.preset = found
         """The tracking preset (None with an explicit bank), built once per tracker."""
@@ -158,7 +183,9 @@ class LocalTracker:
         )
         if config.range_rate is not None and set(self._conventions) != {VELOCITY}:
             raise TrackingError("a range-rate needs velocities in the state, not headings")
-        self._associator = DetectionAssociator(config, self.bank, self._score_model)
+        self._associator = DetectionAssociator(
+            config, self.bank, config.score, velocities=set(self._conventions) == {VELOCITY}
+        )
         self.classifier: BatchedCredalClassifier | None = None
         self._significance: float | None = None
         if found is not None and config.classification is not None:
@@ -172,6 +199,10 @@ class LocalTracker:
                 reliability=chosen.reliability,
                 accumulation=chosen.accumulation,
             )
+        # single-point starts branch on their second scan (docs/algorithms.md §8.3)
+        self._branching = config.initiation == "single_point" and (
+            config.association_method != CHEAP_JPDA
+        )
         self._coverage = config.coverage
         self._views = dict(config.fields_of_view)
         # The state: one row per live track.
@@ -187,6 +218,11 @@ class LocalTracker:
         self._seed_noises: FloatArray = np.zeros((0, self._q, self._q))
         self._seed_times: FloatArray = np.zeros(0)
         self._seed_sensors: IntArray = np.zeros(0, dtype=np.int64)
+        # per sensor: the clutter estimate (when β_FT is not given) and what was done
+        self._clutter = {name: ClutterEstimate.empty(self._q) for name in config.sensors}
+        self.tallies: dict[str, ScanTally] = {name: ScanTally() for name in config.sensors}
+        """Per sensor, what its detections did, summed over its scans (:class:`ScanTally`)."""
+        self._sigma = float(np.sqrt(np.linalg.eigvalsh(self._noise)[-1]))
 
     # ------------------------------------------------------------------ api
     @property
@@ -302,21 +338,31 @@ class LocalTracker:
             time, measurements, measurement_covariances, sensor
         )
         doppler = self._check_range_rates(range_rates, len(z))
+        noises = (
+            np.broadcast_to(self._noise, (len(z), self._q, self._q))
+            if own_noise is None
+            else own_noise
+        )
+        claimed_any = bool(np.any(established(self._rows.life.status)))
+        score = self._scan_score(sensor_name, z, noises, counted=not claimed_any)
         prediction = predict_bank(self.predictor, self._state, elapsed)
         positions, gates = prediction.combined_measurement()
-        status = self._rows.life.status
+        before = self._rows.life
+        status = before.status
         codes = coverage_codes(self._coverage, positions)
         seen, hidden = seen_by(
             self._views[sensor_name], positions, status, self.config.life_cycle.occlusion_radius
         )
-        candidates = np.flatnonzero((status != PHANTOM) & self._can_be_hit(prediction))
+        candidates = np.flatnonzero((status != PHANTOM) & self._can_be_hit(prediction, score))
         association = self._associator.associate(
             prediction
             if len(candidates) == len(status)  # every track, in order: no copy
             else _select_prediction(prediction, candidates),
             z,
             own_noise,
-            established(status[candidates]),
+            _passes(before.select(candidates)),
+            score,
+            branching=START_PASS if self._branching else None,
         )
         if doppler is not None and self.config.range_rate is not None and len(association.rows):
             measured = np.isfinite(doppler[association.cols])
@@ -336,13 +382,13 @@ class LocalTracker:
         detected, gain = hits(len(status), candidates[hit], association.hit_gain[hit])
         life, newly_confirmed = advance(
             self.config.life_cycle,
-            self._rows.life,
+            before,
             Evidence(
                 time=time,
                 detected=detected,
                 hit_increment=gain,
                 seen=seen,
-                miss_increment=self._score_model.miss_increment,
+                miss_increment=score.miss_increment,
                 # log|S|: A_G of the tracks that coast through a miss
                 gate_log_det=(
                     np.linalg.slogdet(gates)[1]
@@ -352,22 +398,114 @@ class LocalTracker:
                 gate_dim=self._q,
                 visibility=codes,
                 occluded=hidden,
+                densities=(score.false_target_density, score.new_target_density),
             ),
         )
         self._rows = self._rows.living(life)
         # Per-detection assignment (by track number for now).
         numbers = np.full(len(z), -1, dtype=np.int64)
         numbers[association.cols] = self._rows.numbers[candidates[association.rows]]
-        self._hand_over(newly_confirmed, numbers)
+        in_pass = np.isin(association.cols, association.used)
+        joined = established(status[candidates[association.rows[in_pass]]])
+        claimed = np.zeros(len(z), dtype=bool)  # by an established track
+        claimed[association.cols[in_pass][joined]] = True
+        updated = self._rows.numbers[np.flatnonzero(detected)]  # every track hit (§8.3: starts
+        # may share a detection, which the assignment names once)
+        self._hand_over(newly_confirmed, numbers, updated)
+        if association.branches is not None:
+            split = association.branches
+            parents = candidates[split.rows]
+            self._append(
+                split.state, split.cols, numbers, before.score[parents] + split.gain, hits=2
+            )
         free = np.ones(len(z), dtype=bool)
-        free[association.used] = False
-        noises = (
-            np.broadcast_to(self._noise, (len(z), self._q, self._q))
-            if own_noise is None
-            else own_noise
+        free[association.used] = False  # a start's detections start tracks too (§8.3)
+        started = self._initiate(time, sensor_name, z, noises, free, numbers, score)
+        tally = self._tally(before, life, len(z), joined, started, newly_confirmed)
+        self._count(sensor_name, tally, z[~claimed], noises[~claimed], counted=not claimed_any)
+        return self._result(time, sensor_name, numbers, tally, score.false_target_density, updated)
+
+    def _scan_score(
+        self, sensor: str, z: FloatArray, noises: FloatArray, counted: bool
+    ) -> ScoreModel:
+        """The SPRT of this scan: its sensor's P_D and β_FT, given or estimated
+        (:mod:`core.tracking.clutter`). ``counted``: no established track could claim a
+        detection, so every one counts (and widens the region) before the scan is scored."""
+        p_detect, clutter = self.config.physics(sensor)
+        if clutter is None:
+            if counted:
+                self._clutter = {**self._clutter, sensor: self._counted(sensor, z, noises)}
+            clutter = self.clutter_density(sensor)
+            if clutter is None:  # nothing seen yet: the prior of one false alarm per km^q
+                clutter = default_density(self._q)
+        return self.config.life_cycle.scan_score(p_detect, clutter)
+
+    def _counted(self, sensor: str, z: FloatArray, noises: FloatArray) -> ClutterEstimate:
+        """The sensor's estimate after a scan's unclaimed detections ``z`` (their noises)."""
+        sigma = self._sigma
+        if len(z):
+            sigma = max(sigma, float(np.sqrt(np.linalg.eigvalsh(noises)[:, -1].max())))
+        return self._clutter[sensor].widened(z, sigma).counted(len(z))
+
+    def _tally(
+        self,
+        before: LifeState,
+        after: LifeState,
+        detections: int,
+        joined: BoolArray,
+        started: int,
+        newly_confirmed: BoolArray,
+    ) -> ScanTally:
+        """What this scan did with its detections and tracks (:class:`ScanTally`)."""
+        ended = (after.status == TERMINATED) & (before.status != TERMINATED)
+        refuted = ended & (before.status == TENTATIVE)
+        closed = ended & (before.status != TENTATIVE)
+        reasons: dict[str, int] = {}
+        for code in after.reason[closed].tolist():
+            name = REASONS[code].value
+            reasons[name] = reasons.get(name, 0) + 1
+        with_track = len(joined)
+        return ScanTally(
+            detections=detections,
+            joined_established=int(joined.sum()),
+            joined_tentative=with_track - int(joined.sum()),
+            started=started,
+            unused=detections - with_track - started,
+            confirmed=int(newly_confirmed.sum()),
+            refuted=int(refuted.sum()),
+            refuted_detections=int(after.hits[refuted].sum()),
+            ended=int(closed.sum()),
+            ended_reasons=dict(sorted(reasons.items())),
         )
-        self._initiate(time, sensor_name, z, noises, free, numbers)
-        return self._result(time, sensor_name, numbers)
+
+    def _count(
+        self,
+        sensor: str,
+        tally: ScanTally,
+        unclaimed: FloatArray,
+        noises: FloatArray,
+        counted: bool,
+    ) -> None:
+        """The sensor's tally, and its clutter estimate after the scan's detections no
+        established track claimed (``unclaimed``: :mod:`core.tracking.clutter`), unless
+        ``counted`` before it."""
+        self.tallies = {**self.tallies, sensor: self.tallies[sensor] + tally}
+        if counted or self.config.physics(sensor)[1] is not None:
+            return
+        self._clutter = {**self._clutter, sensor: self._counted(sensor, unclaimed, noises)}
+
+    def clutter_density(self, sensor: str) -> float | None:
+        """The β_FT the sensor's next scan starts from: given, or its estimate so far (None
+        before its first detection)."""
+        given = self.config.physics(sensor)[1]
+        if given is not None:
+            return given
+        estimate = self._clutter[sensor]
+        if not np.all(np.isfinite(estimate.low)):
+            return None
+        return estimate.density(
+            prior_gate(self.config.velocity_std, self.config.time_interval, self._sigma)
+        )
 
     # ------------------------------------------------------------ checks
     def _check(
@@ -431,23 +569,26 @@ class LocalTracker:
         return doppler
 
     # ---------------------------------------------------------- predict
-    def _can_be_hit(self, prediction: IMMPrediction) -> BoolArray:
+    def _can_be_hit(self, prediction: IMMPrediction, scan: ScoreModel) -> BoolArray:
         """Tracks a detection could keep alive: the largest hit increment they could get
         (distance 0, their most certain model, no measurement noise: ``log |H P_j Hᵀ|``)
-        leaves their score above the delete threshold.
+        leaves their score above the delete threshold, or a start that a hit keeps
+        (``initiation_hits``).
 
         A prediction so uncertain that no detection can (a scan after a long gap)
         is not associated: the track misses, its gate empties ([HZ] §4.2) and
         it is terminated, and the scan costs what any scan costs instead of
         gating every detection with every track.
         """
-        score = self._rows.life.score
+        life = self._rows.life
+        score = life.score
         if len(score) == 0:
             return np.zeros(0, dtype=bool)
         sign, log_det = np.linalg.slogdet(prediction.innovation_covariances - self._noise)
         log_det = np.where(sign > 0.0, log_det, -np.inf).min(axis=1)
-        best = self._score_model.hit_increment(np.zeros_like(log_det), log_det, self._q)
-        return np.asarray(score + best > self._score_model.delete_threshold, dtype=np.bool_)
+        best = scan.hit_increment(np.zeros_like(log_det), log_det, self._q)
+        starting = (life.status == TENTATIVE) & (life.hits < self.config.life_cycle.initiation_hits)
+        return np.asarray((score + best > scan.delete_threshold) | starting, dtype=np.bool_)
 
     # ------------------------------------------------------------ update
     def _update(
@@ -495,7 +636,7 @@ class LocalTracker:
             self._classes = classified if every else self._classes.replace(candidates, classified)
 
     # -------------------------------------------------------- hand-over
-    def _hand_over(self, newly_confirmed: BoolArray, numbers: IntArray) -> None:
+    def _hand_over(self, newly_confirmed: BoolArray, numbers: IntArray, updated: IntArray) -> None:
         """Newly confirmed tracks that match a phantom give it their estimate ([HZ] §5.1)."""
         life = self._rows.life
         phantoms = np.flatnonzero(life.status == PHANTOM)
@@ -524,6 +665,7 @@ class LocalTracker:
         own = self._rows.numbers
         for keeper, newcomer in zip(keepers.tolist(), newcomers.tolist(), strict=True):
             numbers[numbers == own[newcomer]] = own[keeper]
+            updated[updated == own[newcomer]] = own[keeper]
 
     # -------------------------------------------------------- initiation
     def _initiate(
@@ -534,17 +676,19 @@ class LocalTracker:
         noises: FloatArray,
         free: BoolArray,
         numbers: IntArray,
-    ) -> None:
+        score: ScoreModel,
+    ) -> int:
         """New tentative tracks from the detections nobody used (config Readings), each
-        started and scored with its detections' own covariances ``noises`` (m, q, q)."""
+        started and scored with its detections' own covariances ``noises`` (m, q, q);
+        returns how many detections started one."""
         detections = np.flatnonzero(free)
         if self.config.initiation == "single_point":
             starts = detections
             state = single_point_initiation(
-                self.bank, z[starts], self.config.initial_velocity_std, noises=noises[starts]
+                self.bank, z[starts], self.config.velocity_std, noises=noises[starts]
             )
-            self._append(state, starts, numbers)
-            return
+            self._append(state, starts, numbers, score.initial)
+            return len(starts)
         sensor_index = self.config.sensors.index(sensor)
         mine = self._seed_sensors == sensor_index
         older = mine & (self._seed_times < time)
@@ -567,11 +711,9 @@ class LocalTracker:
                 first, first_noises = seeds[seed_index], seed_noises[seed_index]
                 # [MTT] §4.3: the pair's score has both detections' evidence; a pair
                 # scoring at or below the delete threshold starts no track.
-                spread = self.config.initial_velocity_std**2 * interval**2
+                spread = self.config.velocity_std**2 * interval**2
                 pair_covariance = first_noises + noises[starts] + spread * np.eye(self._q)
-                start_score = self._score_model.two_point_initial(
-                    z[starts] - first, pair_covariance
-                )
+                start_score = score.two_point_initial(z[starts] - first, pair_covariance)
                 alive = start_score > self.config.life_cycle.delete_threshold
                 starts, first, start_score = starts[alive], first[alive], start_score[alive]
                 state = two_point_initiation(
@@ -586,7 +728,7 @@ class LocalTracker:
                 order = np.argsort(starts, kind="stable")
                 starts = starts[order]
                 state = state.select(order)
-                self._append(state, starts, numbers, hits=2, score=start_score[order])
+                self._append(state, starts, numbers, start_score[order], hits=2)
         remaining = np.setdiff1d(detections, starts)
         kept = ~older
         self._seeds = np.concatenate([self._seeds[kept], z[remaining]])
@@ -595,23 +737,27 @@ class LocalTracker:
         self._seed_sensors = np.concatenate(
             [self._seed_sensors[kept], np.full(len(remaining), sensor_index, dtype=np.int64)]
         )
+        return len(starts)
 
     def _append(
         self,
         state: IMMState,
         detections: IntArray,
         numbers: IntArray,
+        start: float | FloatArray,
         hits: int = 1,
-        score: FloatArray | None = None,
     ) -> None:
         count = len(detections)
         if count == 0:
             return
-        start = self._score_model.initial if score is None else score
         self._rows = self._rows.started(
             self.next_number, initiated(self.config.life_cycle, count, start, hits)
         )
-        numbers[detections] = self._rows.numbers[-count:]
+        # a detection that updated a track names that one (a start's detections start
+        # tracks too: the assignment says which track each detection updated first)
+        numbers[detections] = np.where(
+            numbers[detections] < 0, self._rows.numbers[-count:], numbers[detections]
+        )
         self.next_number += count
         self._state = _concatenate(self._state, state)
         if self.classifier is not None and self._classes is not None:
@@ -622,7 +768,15 @@ class LocalTracker:
     def _track_id(self, number: int) -> str:
         return f"{self.config.id_prefix}{number}"
 
-    def _result(self, time: float, sensor: str, numbers: IntArray) -> TrackerStep:
+    def _result(
+        self,
+        time: float,
+        sensor: str,
+        numbers: IntArray,
+        tally: ScanTally,
+        clutter: float,
+        updated: IntArray,
+    ) -> TrackerStep:
         means, covariances = self._state.combined()
         mu = self._state.mode_probabilities
         own = self._rows.numbers
@@ -660,7 +814,15 @@ class LocalTracker:
         self._keep(self._rows.alive)
         self.time = time
         assignment = tuple(None if n < 0 else self._track_id(int(n)) for n in numbers.tolist())
-        return TrackerStep(time=time, sensor=sensor, tracks=tuple(tracks), assignment=assignment)
+        return TrackerStep(
+            time=time,
+            sensor=sensor,
+            tracks=tuple(tracks),
+            assignment=assignment,
+            tally=tally,
+            clutter_density=clutter,
+            updated=tuple(self._track_id(int(n)) for n in np.unique(updated).tolist()),
+        )
 
     def _keep(self, rows: IntArray) -> None:
         self._rows = self._rows.select(rows)
@@ -682,6 +844,7 @@ class LocalTracker:
                 "hits": int(life.hits[row]),
                 "empty_gate_probability": plain_floats(life.empty_gate[row]),
                 "phantom_since": plain_floats(life.phantom_since[row]),
+                "misses": int(life.misses[row]),
                 "means": plain_floats(self._state.means[row]),
                 "covariances": plain_floats(self._state.covariances[row]),
                 "log_mode_probabilities": plain_floats(self._state.log_mode_probabilities[row]),
@@ -706,6 +869,8 @@ class LocalTracker:
             "seed_covariances": plain_floats(self._seed_noises),
             "seed_times": plain_floats(self._seed_times),
             "seed_sensors": self._seed_sensors.tolist(),
+            "clutter": {name: estimate.to_plain() for name, estimate in self._clutter.items()},
+            "tallies": {name: tally.to_plain() for name, tally in self.tallies.items()},
             "tracks": tracks,
         }
 
@@ -713,7 +878,7 @@ class LocalTracker:
     def restore(cls, config: LocalTrackerConfig, plain: dict[str, Any]) -> LocalTracker:
         """Rebuild a tracker from :meth:`export`'s output and the same configuration."""
         version = plain.get("version")
-        if version not in (1, EXPORT_VERSION):
+        if version not in (1, 2, EXPORT_VERSION):
             raise TrackingError(f"unknown tracker export version {version!r}")
         tracker = cls(config)
         tracker.time = None if plain["time"] is None else float(float_array(plain["time"]))
@@ -722,9 +887,16 @@ class LocalTracker:
         tracker._seeds = float_array(plain["seeds"]).reshape(-1, q)
         tracker._seed_noises = (
             float_array(plain["seed_covariances"]).reshape(-1, q, q)
-            if version == EXPORT_VERSION
+            if version != 1
             else np.broadcast_to(tracker._noise, (len(tracker._seeds), q, q)).copy()
         )
+        if version == EXPORT_VERSION:
+            tracker._clutter = {
+                name: ClutterEstimate.from_plain(plain["clutter"][name]) for name in config.sensors
+            }
+            tracker.tallies = {
+                name: ScanTally.from_plain(plain["tallies"][name]) for name in config.sensors
+            }
         tracker._seed_times = float_array(plain["seed_times"]).reshape(-1)
         tracker._seed_sensors = np.array(plain["seed_sensors"], dtype=np.int64).reshape(-1)
         entries = plain["tracks"]
@@ -740,6 +912,7 @@ class LocalTracker:
             hits=np.array([e["hits"] for e in entries], dtype=np.int64),
             empty_gate=float_array([e["empty_gate_probability"] for e in entries]).reshape(-1),
             phantom_since=float_array([e["phantom_since"] for e in entries]).reshape(-1),
+            misses=np.array([e.get("misses", 0) for e in entries], dtype=np.int64),
         )
         tracker._rows = TrackRows(np.array([e["number"] for e in entries], dtype=np.int64), life)
         tracker._state = IMMState(

@@ -6,8 +6,8 @@ detection. The local tracker's kinematic classification does not depend on
 the evidence, and Dempster's rule is associative and commutative: the
 class mass with evidence must be the one without, combined by hand (a
 brute-force conjunctive rule on frozensets, normalised) with the evidence of
-every detection the track took (the track starts at the second scan, with
-two-point initiation: the first detection is a seed, not yet a track).
+every detection the track took (a single-point start, the default since
+issue 22: from the first scan on).
 Likelihood evidence is the mass [MTT] eq 10 gives, worked by hand too. A
 session without a preset has no local classification: evidence there is
 refused, naming the field.
@@ -78,7 +78,7 @@ def test_mass_evidence_on_detections_joins_the_track_classification(client: Test
     without = _run(client, None)
     evidence: Mass = {frozenset(f["set"]): f["mass"] for f in EVIDENCE}
     expected = without
-    for _ in range(SCANS - 1):  # every detection of the track: all but the first (a seed)
+    for _ in range(SCANS):  # every detection of the track: a single-point start has all
         expected = _dempster(expected, evidence)
     _close(_run(client, {"mass": EVIDENCE}), expected)
     assert _run(client, {"mass": EVIDENCE}) != without
@@ -98,7 +98,7 @@ def test_likelihood_evidence_is_the_gbt_mass(client: TestClient) -> None:
     empty = gbt.pop(frozenset())
     gbt = {focal: value / (1.0 - empty) for focal, value in gbt.items()}
     expected = _run(client, None)
-    for _ in range(SCANS - 1):
+    for _ in range(SCANS):
         expected = _dempster(expected, gbt)
     _close(_run(client, {"likelihoods": LIKELIHOODS}), expected)
 

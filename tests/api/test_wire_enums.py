@@ -105,9 +105,10 @@ def test_local_tracking_vocabulary_is_the_cores() -> None:
 def test_local_tracking_defaults_are_the_cores() -> None:
     core = LocalTrackerConfig
     assert TrackingConfig().time_interval == core.time_interval
-    assert TwoPointInitiation().max_speed == core.max_speed
-    velocity_std = SinglePointInitiation(kind="single_point").velocity_std
-    assert TwoPointInitiation().velocity_std == velocity_std == core.initial_velocity_std
+    assert TwoPointInitiation(kind="two_point").max_speed == core.max_speed
+    assert SinglePointInitiation().velocity_std is core.initial_velocity_std is None
+    paper = LocalTrackerConfig.paper()
+    assert TwoPointInitiation(kind="two_point").velocity_std == paper.initial_velocity_std
 
 
 MEASUREMENTS: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {

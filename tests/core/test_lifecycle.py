@@ -99,11 +99,12 @@ def test_a_two_point_start_scores_both_detections() -> None:
     np.testing.assert_allclose(model.two_point_initial(displacement, pair), expected, rtol=1e-12)
 
 
-def test_a_negative_margin_restarts_the_test_of_established_tracks_only() -> None:
-    """Ceiling 0 (margin −confirm): a tentative track is scored above it up to the confirm
-    threshold; the scan that confirms it puts it under the ceiling, as every established track."""
-    config = LifeCycleConfig(score_margin=-LifeCycleConfig().confirm_threshold)
-    assert config.score_ceiling == pytest.approx(0.0)
+def test_the_default_ceiling_restarts_the_test_of_established_tracks_only() -> None:
+    """Ceiling 0 (the default): a tentative track is scored above it up to the confirm
+    threshold; the scan that confirms it puts it under the ceiling, as every established track.
+    (min_points off: this is the score's own confirmation.)"""
+    config = LifeCycleConfig(min_points=None)
+    assert config.ceiling == 0.0
     state = LifeState.new(3, 5.0, hits=2)
     state = LifeState(
         np.array([TENTATIVE, TENTATIVE, CONFIRMED]),
@@ -112,6 +113,7 @@ def test_a_negative_margin_restarts_the_test_of_established_tracks_only() -> Non
         state.hits,
         state.empty_gate,
         state.phantom_since,
+        state.misses,
     )
     evidence = Evidence(
         time=1.0,
@@ -129,4 +131,4 @@ def test_a_negative_margin_restarts_the_test_of_established_tracks_only() -> Non
     np.testing.assert_allclose(after.score, [6.0, 0.0, 0.0])
     assert confirmed.tolist() == [False, True, False]
     with pytest.raises(InvalidInput):
-        LifeCycleConfig(score_margin=-20.0)  # the ceiling would be under the delete threshold
+        LifeCycleConfig(score_ceiling=-7.0)  # under the delete threshold −6.9068

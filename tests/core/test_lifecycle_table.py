@@ -45,7 +45,9 @@ T, N, C, P, X = (
     TrackStatus.TERMINATED,
 )
 R_ = StatusReason
-CONFIG = LifeCycleConfig(true_deletion=1e-3, min_points=3).for_dimension(2)
+CONFIG = LifeCycleConfig.paper(2, true_deletion=1e-3, min_points=3)
+"""The paper life cycle (ceiling at the confirm threshold, gate emptiness from the first
+miss, no start exempt); the defaults' own rules are checked after the table."""
 CONFIRM = math.log(0.999 / 0.001)
 DELETE = math.log(0.001 / 0.999)
 MISS = math.log(0.1)
@@ -80,6 +82,7 @@ class Case:
     sensors: int = 1
     expected_empty_gate: float | None = None
     expected_since: float | None = None
+    misses: int = 0
 
 
 def factor(log_det: float) -> float:
@@ -274,6 +277,7 @@ def state_of(cases: list[Case]) -> LifeState:
         hits=np.array([c.hits for c in cases], dtype=np.int64),
         empty_gate=np.array([c.empty_gate for c in cases]),
         phantom_since=np.array([c.phantom_since for c in cases]),
+        misses=np.array([c.misses for c in cases], dtype=np.int64),
     )
 
 
@@ -309,7 +313,9 @@ def test_every_row_of_the_table_at_once() -> None:
 def test_with_phantoms_off_a_hidden_track_is_not_a_phantom() -> None:
     cases = [c for c in CASES if c.name in ("blind zone: phantom", "occluded: phantom")]
     after, _ = advance(
-        LifeCycleConfig(true_deletion=1e-3, phantoms=False), state_of(cases), evidence_of(cases)
+        LifeCycleConfig.paper(2, true_deletion=1e-3, phantoms=False),
+        state_of(cases),
+        evidence_of(cases),
     )
     assert after.statuses() == [N, C]
     assert after.reasons() == [R_.SCORE_CONFIRMED, R_.MISSED]
@@ -317,10 +323,76 @@ def test_with_phantoms_off_a_hidden_track_is_not_a_phantom() -> None:
 
 def test_termination_probability_zero_turns_gate_emptiness_off() -> None:
     (case,) = [c for c in CASES if c.name == "gate emptiness"]
-    off = LifeCycleConfig(true_deletion=1e-3, termination_probability=0.0).for_dimension(2)
+    off = LifeCycleConfig.paper(2, true_deletion=1e-3, termination_probability=0.0)
     after, _ = advance(off, state_of([case]), evidence_of([case]))
     assert (after.statuses(), after.reasons()) == ([C], [R_.MISSED])
     assert after.empty_gate[0] == pytest.approx(0.6 * factor(LARGE_GATE))
+
+
+def test_the_defaults_keep_a_start_until_its_third_hit_and_a_track_through_two_misses() -> None:
+    """Defaults (§8.1, §8.3): a tentative track hit with ≤ 3 hits is not deleted by its score
+    (its next detection tests it), one with 4 is; a coasting track whose gate is all but
+    sure to hold clutter survives its 1st and 2nd miss in a row and ends at its 3rd."""
+    config = LifeCycleConfig().for_dimension(2)
+    start = dict(status=T, reason=R_.INITIATED, detected=True, seen=True, increment=-2.0)
+    lost = dict(status=C, reason=R_.MISSED, score=0.0, seen=True, gate=LARGE_GATE)
+    cases = [
+        Case(
+            "start, 2nd hit, weak",
+            score=-6.0,
+            hits=1,
+            expected=(T, R_.INITIATED),
+            expected_score=-8.0,
+            **start,
+        ),
+        Case(
+            "start, 3rd hit, weak",
+            score=-6.0,
+            hits=2,
+            expected=(T, R_.INITIATED),
+            expected_score=-8.0,
+            **start,
+        ),
+        Case(
+            "tentative, 4th hit, weak",
+            score=-6.0,
+            hits=3,
+            expected=(X, R_.SCORE_DELETED),
+            expected_score=-8.0,
+            **start,
+        ),
+        Case(
+            "1st miss, large gate",
+            expected=(C, R_.MISSED),
+            expected_score=MISS,
+            misses=0,
+            empty_gate=1.0,
+            **lost,
+        ),
+        Case(
+            "2nd miss, large gate",
+            expected=(C, R_.MISSED),
+            expected_score=MISS,
+            misses=1,
+            empty_gate=0.13,
+            **lost,
+        ),
+        Case(
+            "3rd miss, large gate",
+            expected=(X, R_.GATE_EMPTINESS),
+            expected_score=MISS,
+            misses=2,
+            empty_gate=0.13,
+            **lost,
+        ),
+    ]
+    after, _ = advance(config, state_of(cases), evidence_of(cases))
+    for k, case in enumerate(cases):
+        assert (STATUSES[after.status[k]], REASONS[after.reason[k]]) == case.expected, case.name
+        assert after.score[k] == pytest.approx(case.expected_score), case.name
+    assert after.misses.tolist() == [0, 0, 0, 1, 2, 3]
+    # the 1st miss's empty-gate probability is already under 0.5: [HZ] alone would end it
+    assert after.empty_gate[3] == pytest.approx(factor(LARGE_GATE)) and factor(LARGE_GATE) < 0.5
 
 
 def test_new_tracks_are_tentative_and_initiated() -> None:
@@ -341,23 +413,26 @@ def test_hand_over_to_a_phantom_and_a_duplicate_merge() -> None:
         hits=np.array([10, 20, 3, 1], dtype=np.int64),
         empty_gate=np.array([0.8, 0.9, 1.0, 1.0]),
         phantom_since=np.array([40.0, np.nan, np.nan, np.nan]),
+        misses=np.array([0, 2, 0, 0], dtype=np.int64),
     )
     phantom = hand_over(state, np.array([0]), np.array([2]), R_.MERGED_INTO_PHANTOM)
     assert phantom.statuses()[:3] == [N, N, X]
     assert phantom.reasons()[:3] == [R_.REACQUIRED, R_.MISSED, R_.MERGED_INTO_PHANTOM]
     assert phantom.score[0] == 6.0 and phantom.hits[0] == 13
     assert phantom.empty_gate[0] == 1.0 and math.isnan(phantom.phantom_since[0])
+    assert phantom.misses[0] == 0
     duplicate = hand_over(state, np.array([1]), np.array([3]), R_.DUPLICATE)
     assert duplicate.statuses()[1::2] == [N, X]
     assert duplicate.reasons()[1::2] == [R_.MISSED, R_.DUPLICATE]  # a confirmed keeper stays as is
     assert duplicate.score[1] == 5.0 and duplicate.hits[1] == 21
+    assert duplicate.misses[1] == 0  # the keeper was just reported
     assert state.statuses() == [P, N, N, T]  # not changed in place
 
 
 # ----------------------------------------------- tracker and engine, same evidence
 FOV = PolygonView(((-100.0, -100.0), (100.0, -100.0), (100.0, 100.0), (-100.0, 100.0)))
 REGION = PolygonView(((-100.0, -100.0), (400.0, -100.0), (400.0, 100.0), (-100.0, 100.0)))
-LIFE = LifeCycleConfig(phantom_max_distance=50.0, phantom_min_speed=10.0)  # phantoms live 5 s
+LIFE = LifeCycleConfig.paper(2, phantom_max_distance=50.0, phantom_min_speed=10.0)  # 5 s phantoms
 BANK = ModelBank.from_config(
     {
         "time_interval": 1.0,
@@ -379,7 +454,9 @@ def tracker_statuses(
     truth: list[tuple[float, float]], missed: range
 ) -> list[tuple[TrackStatus, StatusReason] | None]:
     tracker = LocalTracker(
-        LocalTrackerConfig(bank=BANK, fields_of_view={"radar": FOV}, region=REGION, life_cycle=LIFE)
+        LocalTrackerConfig.paper(
+            bank=BANK, fields_of_view={"radar": FOV}, region=REGION, life_cycle=LIFE
+        )
     )
     out: list[tuple[TrackStatus, StatusReason] | None] = []
     for t, point in enumerate(truth):
@@ -457,11 +534,13 @@ def test_the_tracker_and_the_engine_both_make_an_occluded_track_a_phantom() -> N
     layers make it a phantom (``occluded``) at 3 s and end it at 9 s (phantom lifetime 5 s),
     scan by scan alike once the tracker has confirmed it (2 s)."""
     view = Sector((0.0, 0.0), heading_deg=90.0, half_angle_deg=30.0, range_min=0.0, range_max=500.0)
-    life = LifeCycleConfig(occlusion_radius=2.0, phantom_max_distance=50.0, phantom_min_speed=10.0)
+    life = LifeCycleConfig.paper(
+        2, occlusion_radius=2.0, phantom_max_distance=50.0, phantom_min_speed=10.0
+    )
     near, far = (0.0, 50.0), (0.0, 100.0)
     seen_far = range(3)
     tracker = LocalTracker(
-        LocalTrackerConfig(bank=BANK, fields_of_view={"radar": view}, life_cycle=life)
+        LocalTrackerConfig.paper(bank=BANK, fields_of_view={"radar": view}, life_cycle=life)
     )
     engine = SessionEngine(
         FusionConfig(

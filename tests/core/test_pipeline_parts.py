@@ -110,12 +110,12 @@ def test_rows_start_numbered_and_keep_the_living() -> None:
 
 
 def test_tracks_confirmed_below_start_confirmed_at_the_confirm_threshold() -> None:
-    config = LifeCycleConfig(score_margin=None)
+    config = LifeCycleConfig(score_ceiling=None)
     plain = initiated(config, 2, -1.0)
     assert plain.status.tolist() == [TENTATIVE] * 2 and plain.score.tolist() == [-1.0] * 2
     below = initiated(config, 2, -1.0, confirmed_below=True)
     assert below.status.tolist() == [CONFIRMED] * 2
     assert below.reason.tolist() == [reason_code(StatusReason.LOCAL_CONFIRMED)] * 2
     assert below.score.tolist() == [math.log((1 - 1e-3) / 1e-3)] * 2
-    capped = initiated(LifeCycleConfig(score_margin=-2.0), 1, 0.0, confirmed_below=True)
-    assert capped.score[0] == pytest.approx(math.log(999.0) - 2.0)
+    capped = initiated(LifeCycleConfig(), 1, 0.0, confirmed_below=True)
+    assert capped.score[0] == 0.0  # the default ceiling

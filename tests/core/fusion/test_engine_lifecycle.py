@@ -19,6 +19,7 @@ P is diagonal; one sensor, so the fused estimate is that sensor's estimate):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -40,12 +41,16 @@ LAST_HIT = 3
 
 
 def management(score_margin: float | None) -> LifeCycleConfig:
-    return LifeCycleConfig(
+    """The paper life cycle (gate emptiness from the first miss), the score ceiling at the
+    confirm threshold + ``score_margin`` (None: the raw SPRT)."""
+    paper = LifeCycleConfig.paper(
+        2,
         false_target_density=RHO_FA,
         new_target_density=RHO_NT,
         true_deletion=1e-3,  # the worked numbers below: delete at ln(1e-3 / 0.999)
-        score_margin=score_margin,
     )
+    ceiling = None if score_margin is None else paper.confirm_threshold + score_margin
+    return dataclasses.replace(paper, score_ceiling=ceiling)
 
 
 def run_until_gone(score_margin: float | None) -> tuple[SessionEngine, list[StepResult]]:

@@ -8,7 +8,7 @@ scans on average (10 at worst) to confirm a target 50 km out; started from
 each detection's own covariance, the two-point velocity is as good as the two
 detections make it, the first gates and hits are tighter, and the same targets
 confirm within 6 scans on average. The seed's covariance is part of the
-tracker's export (version 2); a version-1 export restores its seeds with the
+tracker's export (version 2 on); a version-1 export restores its seeds with the
 bank's R.
 """
 
@@ -41,7 +41,7 @@ def _radar_tracker() -> LocalTracker:
         mode_transition=np.ones((1, 1)),
     )
     return LocalTracker(
-        LocalTrackerConfig(
+        LocalTrackerConfig.paper(
             bank=bank,
             measurement_noise=((reference, 0.0), (0.0, reference)),
         )
@@ -131,7 +131,7 @@ def test_seed_covariances_survive_export_and_restore_exactly() -> None:
     uninterrupted = [json.dumps(whole.step(*s).to_plain(), sort_keys=True) for s in scans]
     first.step(*scans[0])
     saved = json.loads(json.dumps(first.export()))
-    assert saved["version"] == 2 and len(saved["seed_covariances"]) == 2
+    assert saved["version"] == 3 and len(saved["seed_covariances"]) == 2
     restored = LocalTracker.restore(first.config, saved)
     continued = [json.dumps(restored.step(*s).to_plain(), sort_keys=True) for s in scans[1:]]
     assert continued == uninterrupted[1:]
@@ -156,4 +156,4 @@ def test_a_version_1_export_restores_its_seeds_with_the_bank_noise() -> None:
     assert outputs[0] == outputs[1]
     assert any("confirmed" in line for line in outputs[0])
     with pytest.raises(TrackingError, match="version"):
-        LocalTracker.restore(seeded_with_bank_noise.config, {**old, "version": 3})
+        LocalTracker.restore(seeded_with_bank_noise.config, {**old, "version": 4})

@@ -170,7 +170,7 @@ def _straight_targets(count: int) -> tuple[np.ndarray, np.ndarray]:
 def _position_rms(times: np.ndarray, noise: np.ndarray, warm: int) -> float:
     """Position RMS of the confirmed tracks' estimates against the truth, scans after ``warm``."""
     start, velocity = _straight_targets(noise.shape[1])
-    tracker = LocalTracker(LocalTrackerConfig(classification=None))
+    tracker = LocalTracker(LocalTrackerConfig.paper(classification=None))
     errors = []
     for k, t in enumerate(times):
         truth = start + t * velocity
@@ -204,7 +204,7 @@ def test_a_long_gap_is_one_prediction(monkeypatch: pytest.MonkeyPatch) -> None:
     tracks that uncertain (their best hit increment is below the delete threshold), so they are
     not associated: they miss, their gates empty ([HZ] §4.2), and the targets start anew."""
     start, velocity = _straight_targets(4)
-    tracker = LocalTracker(LocalTrackerConfig())
+    tracker = LocalTracker(LocalTrackerConfig.paper())
     for k in range(6):
         tracker.step(float(k), start + k * velocity)
     calls: list[float | None] = []
@@ -231,7 +231,7 @@ def test_a_long_gap_is_one_prediction(monkeypatch: pytest.MonkeyPatch) -> None:
 def test_a_moderate_gap_keeps_the_tracks() -> None:
     """After 20 s without scans the tracks are still associated and keep their ids."""
     start, velocity = _straight_targets(4)
-    tracker = LocalTracker(LocalTrackerConfig())
+    tracker = LocalTracker(LocalTrackerConfig.paper())
     for k in range(6):
         step = tracker.step(float(k), start + k * velocity)
     ids = step.assignment
@@ -267,7 +267,9 @@ def test_3d_presets_add_a_vertical_constant_velocity_axis(factory: object) -> No
 
 def test_a_3d_tracker_follows_a_climbing_target() -> None:
     rng = np.random.default_rng(RNG_SEED)
-    config = LocalTrackerConfig(axes=3, measurement_noise=((0.2, 0, 0), (0, 0.2, 0), (0, 0, 0.2)))
+    config = LocalTrackerConfig.paper(
+        axes=3, measurement_noise=((0.2, 0, 0), (0, 0.2, 0), (0, 0, 0.2))
+    )
     tracker = LocalTracker(config)
     start, velocity = np.array([0.0, 0.0, 1000.0]), np.array([150.0, -40.0, 12.0])
     times = np.cumsum(rng.uniform(0.8, 1.2, 20))

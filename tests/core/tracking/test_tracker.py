@@ -52,7 +52,7 @@ def road_config(scenario: Scenario, **options: object) -> LocalTrackerConfig:
     settings["life_cycle"] = life_cycle(
         settings, false_target_density=1e-3, new_target_density=1e-4
     )
-    return LocalTrackerConfig(**settings)  # type: ignore[arg-type]
+    return LocalTrackerConfig.paper(**settings)  # type: ignore[arg-type]
 
 
 # ------------------------------------------------------------------ aircraft
@@ -70,7 +70,9 @@ def test_aircraft_tracks_confirmed_and_deleted_in_the_score_windows() -> None:
     ⌈(6.898 + 4.604) / 2.303⌉ = 5 → steps 100..104, deleted at 104.
     """
     scenario = aircraft_scenario(seed=0)
-    run = run_tracker(scenario, LocalTrackerConfig(life_cycle=LifeCycleConfig(true_deletion=1e-2)))
+    run = run_tracker(
+        scenario, LocalTrackerConfig.paper(life_cycle=LifeCycleConfig.paper(2, true_deletion=1e-2))
+    )
     confirm = math.log(0.99 / 0.001)
     delete = math.log(0.01 / 0.999)
     misses_to_delete = math.ceil((confirm - delete) / -math.log(0.1))
@@ -104,7 +106,7 @@ def test_aircraft_tracks_confirmed_and_deleted_in_the_score_windows() -> None:
 def test_aircraft_classification_rides_along() -> None:
     """Tracks of the aircraft preset carry a class mass and BetP on liner/bomber/fighter."""
     scenario = aircraft_scenario(seed=0)
-    run = run_tracker(scenario, LocalTrackerConfig())
+    run = run_tracker(scenario, LocalTrackerConfig.paper())
     track = run.outputs[-1][1].track(run.track_of(1))
     assert track.pignistic is not None and track.class_mass is not None
     assert track.pignistic.shape == (3,)
@@ -146,7 +148,7 @@ def test_overtaking_vehicle_keeps_its_identity_through_the_blind_zone(seed: int)
 
 
 # ------------------------------------------------- accelerating: stealing
-NO_TERMINATION: dict[str, object] = {"termination_probability": 0.0, "score_margin": None}
+NO_TERMINATION: dict[str, object] = {"termination_probability": 0.0, "score_ceiling": None}
 """[HZ] Fig 5a/5b run without the termination strategy: no gate-emptiness test and
 the raw SPRT (a long-lived track is never deleted by a few dozen misses)."""
 
@@ -223,7 +225,7 @@ def test_export_restore_continues_exactly(name: str, cut: int) -> None:
     """export → JSON → restore → continue gives byte-identical outputs and state."""
     if name == "aircraft":
         scenario = aircraft_scenario(seed=1)
-        config = LocalTrackerConfig()
+        config = LocalTrackerConfig.paper()
     else:
         scenario = overtaking_scenario(seed=0)
         config = road_config(scenario, region=rectangle(((-10.0, 10.0), (-40.0, 60.0))))
@@ -263,7 +265,7 @@ def test_same_inputs_same_outputs() -> None:
 
 
 def test_refused_scans_change_nothing() -> None:
-    tracker = LocalTracker(LocalTrackerConfig())
+    tracker = LocalTracker(LocalTrackerConfig.paper())
     tracker.step(1.0, np.array([[0.0, 0.0]]))
     before = json.dumps(tracker.export())
     with pytest.raises(TrackingError):
@@ -416,7 +418,9 @@ def test_cheap_jpda_with_its_clutter_term_is_stone_soups_pda_for_one_track() -> 
 def test_cheap_jpda_tracker_follows_the_aircraft() -> None:
     """The baseline as a whole tracker: every aircraft keeps one confirmed track."""
     scenario = aircraft_scenario(seed=0)
-    config = LocalTrackerConfig(association_method="cheap_jpda", association_options={"bias": 1e-6})
+    config = LocalTrackerConfig.paper(
+        association_method="cheap_jpda", association_options={"bias": 1e-6}
+    )
     run = run_tracker(scenario, config)
     for target in (1, 3, 4):
         track = run.track_of(target)
@@ -430,7 +434,7 @@ def _close_pair_rate(noise_ratio: float, imm_distance: str, runs: int = 20) -> f
     for seed in range(runs):
         scenario = close_pair_scenario(seed=seed, noise_ratio=noise_ratio, noise_reading="std")
         variance = float(scenario.measurement_noise[0, 0])
-        config = LocalTrackerConfig(
+        config = LocalTrackerConfig.paper(
             measurement_noise=((variance, 0.0), (0.0, variance)),
             imm_distance=imm_distance,  # type: ignore[arg-type]
             classification=None,
@@ -478,11 +482,11 @@ def test_established_tracks_take_their_detections_before_tentative_ones() -> Non
         LinearMeasurementModel(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]), np.eye(2)),
         np.ones((1, 1)),
     )
-    life = LifeCycleConfig(
-        false_target_density=1e-4, new_target_density=1e-5, min_points=2, phantoms=False
+    life = LifeCycleConfig.paper(
+        2, false_target_density=1e-4, new_target_density=1e-5, min_points=2, phantoms=False
     )
     tracker = LocalTracker(
-        LocalTrackerConfig(
+        LocalTrackerConfig.paper(
             bank=bank,
             life_cycle=life,
             initiation="single_point",
@@ -493,23 +497,24 @@ def test_established_tracks_take_their_detections_before_tentative_ones() -> Non
     tracker.step(0.0, [[0.0, 0.0]])
     tracker.step(1.0, [[1.0, 0.0]])
     before = tracker.step(2.0, [[2.0, 0.0], [3.0, 5.6]])  # the target, and clutter
-    assert [(t.id, t.status.value) for t in before.tracks] == [
-        ("L1", "confirmed"),
-        ("L2", "tentative"),
-    ]
+    # L2 started at the target's second detection (a start's detections start tracks too)
+    # and took the clutter; L3 started at the clutter
+    fresh = before.track("L3")
+    assert (before.track("L1").status.value, fresh.status.value, fresh.hits) == (
+        "confirmed",
+        "tentative",
+        1,
+    )
     f = np.kron(np.eye(2), np.array([[1.0, 1.0], [0.0, 1.0]]))
     q = np.kron(np.eye(2), 0.05 * np.array([[1 / 3, 1 / 2], [1 / 2, 1.0]]))
     h = np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]])
     z = np.array([3.0, 2.6])
     distances = []
-    for track in before.tracks:
+    for track in (before.track("L1"), fresh):
         s = h @ (f @ track.covariance @ f.T + q) @ h.T + np.eye(2)
         innovation = z - h @ f @ track.state
         distances.append(float(innovation @ np.linalg.solve(s, innovation)))
     assert distances[1] < distances[0] < 13.8  # both gated, the tentative track closer
     after = tracker.step(3.0, [z])
     assert after.assignment == ("L1",)
-    assert [(t.id, t.status.value) for t in after.tracks] == [
-        ("L1", "confirmed"),
-        ("L2", "tentative"),
-    ]
+    assert (after.track("L1").status.value, after.track("L3").hits) == ("confirmed", 1)

@@ -25,9 +25,11 @@ SIGMA = 60.0
 Q_DENSITY = 1.0
 VELOCITY = np.array([-200.0, 50.0, 10.0])
 START = np.array([20_000.0, 1_000.0, 5_000.0])
+CONFIRM = LifeCycleConfig().confirm_threshold
 
 
 def _tracker(density: float, margin: float | None = 0.0) -> LocalTracker:
+    """The paper profile's tracker, the score ceiling at confirm + ``margin`` (None: raw)."""
     # the bank of app.sessions.translate.local_tracker_config for a session without preset
     bank = ModelBank(
         models=(constant_velocity(1.0, Q_DENSITY, axes=3, noise="continuous"),),
@@ -35,12 +37,15 @@ def _tracker(density: float, margin: float | None = 0.0) -> LocalTracker:
         mode_transition=np.ones((1, 1)),
     )
     return LocalTracker(
-        LocalTrackerConfig(
+        LocalTrackerConfig.paper(
             time_interval=1.0,
             bank=bank,
             measurement_noise=tuple(tuple(row) for row in (SIGMA**2 * np.eye(3)).tolist()),
-            life_cycle=LifeCycleConfig(
-                false_target_density=density, new_target_density=density, score_margin=margin
+            life_cycle=LifeCycleConfig.paper(
+                3,
+                false_target_density=density,
+                new_target_density=density,
+                score_ceiling=None if margin is None else CONFIRM + margin,
             ),
         )
     )

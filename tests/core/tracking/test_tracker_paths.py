@@ -78,13 +78,15 @@ def test_a_vanished_target_is_terminated_by_gate_emptiness_when_the_product_pred
     """[HZ] §4.2: P = Π_k [1 − (ρ_FA + ρ_NT) A_G(k)], A_G = π γ √|S| (q = 2), terminate at P < 0.5.
 
     A stationary target at the origin (exact detections) for scans 0..7, then
-    nothing. Densities 1e-3 make the gate fill fast; ``score_margin=None``
+    nothing. Densities 1e-3 make the gate fill fast; ``score_ceiling=None``
     keeps the raw SPRT score far above the delete threshold, so only gate
     emptiness can end the track.
     """
     rho = 1e-3
-    life = LifeCycleConfig(false_target_density=rho, new_target_density=rho, score_margin=None)
-    config = LocalTrackerConfig(bank=BANK, p_detect=0.9, life_cycle=life)
+    life = LifeCycleConfig.paper(
+        2, false_target_density=rho, new_target_density=rho, score_ceiling=None
+    )
+    config = LocalTrackerConfig.paper(bank=BANK, p_detect=0.9, life_cycle=life)
     score = config.score
     tracker = LocalTracker(config)
     last_hit = 7
@@ -132,9 +134,13 @@ def test_a_vanished_target_is_terminated_by_gate_emptiness_when_the_product_pred
 def test_gate_emptiness_product_matches_the_reference_scan_by_scan() -> None:
     """The exported empty-gate probability after each miss is the reference product."""
     rho = 1e-3
-    life = LifeCycleConfig(false_target_density=rho, new_target_density=rho, score_margin=None)
+    life = LifeCycleConfig.paper(
+        2, false_target_density=rho, new_target_density=rho, score_ceiling=None
+    )
     # a velocity prior of 1 m/s: the standing pair's start score confirms it by the 4th scan
-    config = LocalTrackerConfig(bank=BANK, p_detect=0.9, life_cycle=life, initial_velocity_std=1.0)
+    config = LocalTrackerConfig.paper(
+        bank=BANK, p_detect=0.9, life_cycle=life, initial_velocity_std=1.0
+    )
     tracker = LocalTracker(config)
     for t in range(4):
         tracker.step(float(t), [[0.0, 0.0]])
@@ -166,10 +172,10 @@ def test_a_track_hidden_behind_a_known_track_is_not_penalised(radius: float) -> 
     view = Sector(
         origin=(0.0, 0.0), heading_deg=90.0, half_angle_deg=30.0, range_min=0.0, range_max=500.0
     )
-    config = LocalTrackerConfig(
+    config = LocalTrackerConfig.paper(
         bank=BANK,
         fields_of_view={"radar": view},
-        life_cycle=LifeCycleConfig(occlusion_radius=radius),
+        life_cycle=LifeCycleConfig.paper(2, occlusion_radius=radius),
     )
     tracker = LocalTracker(config)
     a, b = [0.0, 50.0], [0.0, 100.0]
@@ -198,7 +204,9 @@ def test_single_point_initiation_starts_at_once_and_the_sprt_confirms() -> None:
     crosses ln(0.99/0.001) after the number of hits computed below.
     """
     sigma_v = 30.0
-    config = LocalTrackerConfig(bank=BANK, initiation="single_point", initial_velocity_std=sigma_v)
+    config = LocalTrackerConfig.paper(
+        bank=BANK, initiation="single_point", initial_velocity_std=sigma_v
+    )
     score = config.score
     tracker = LocalTracker(config)
     z = np.array([10.0, 20.0])
@@ -237,7 +245,9 @@ def test_single_point_initiation_starts_at_once_and_the_sprt_confirms() -> None:
 # ------------------------------------------------ per-detection covariance
 def test_a_detection_with_its_own_covariance_gets_the_kalman_update_with_it() -> None:
     """Scan 3 brings z = (1, −0.5) with R₃ = [[4, 1], [1, 2]]; the update must use R₃, not I."""
-    config = LocalTrackerConfig(bank=BANK, life_cycle=LifeCycleConfig(score_margin=None))
+    config = LocalTrackerConfig.paper(
+        bank=BANK, life_cycle=LifeCycleConfig.paper(2, score_ceiling=None)
+    )
     own = np.array([[4.0, 1.0], [1.0, 2.0]])
     z = np.array([1.0, -0.5])
     with_own, default = LocalTracker(config), LocalTracker(config)
