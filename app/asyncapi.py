@@ -109,8 +109,10 @@ frame, a message larger than `CREDAL_MAX_BODY_BYTES`, more than
 429, the message not applied). The one exception: a message beyond 4 times
 `CREDAL_MAX_BODY_BYTES` is not parsed; its `error` (422 `limit-exceeded`,
 `limit` `max_body_bytes`, `ref` null) is the last message before the server
-closes the connection with 1009 (the rest of the message is read and
-discarded first, up to 8 MB or 2 s, so that the client receives both).
+closes the connection with 1009. The server then half-closes and reads and
+discards the rest of the message and the client's close until the client
+closes its side (at most 8 MB or 2 s), so that the client receives both
+rather than a connection reset.
 
 Backpressure: the server keeps at most 16 answers per `stream` connection;
 when the client does not read them, the server stops reading its messages

@@ -30,11 +30,11 @@ stays open) — invalid JSON, nesting too deep, a schema violation, more than
 ``max_body_bytes``, more than ``ws_messages_per_second`` — except a message
 beyond ``WS_FRAME_FACTOR × max_body_bytes``: uvicorn stops parsing it there
 (it is never buffered whole) and closes with 1009; the ``error`` naming
-``max_body_bytes`` is sent just before that close frame, and the rest of the
-frame is read and discarded (up to ``DRAIN_BYTES``, for at most
-:data:`DRAIN_SECONDS`) before the socket closes, so that the peer can read
-both instead of a connection reset — as an oversize HTTP body is drained
-before its 413.
+``max_body_bytes`` is sent just before that close frame. The server then
+half-closes the connection and reads and discards what comes (the rest of the
+frame, the peer's close) until the peer closes its side, up to ``DRAIN_BYTES``
+or :data:`DRAIN_SECONDS`, so that the peer can read both instead of a
+connection reset — as an oversize HTTP body is drained before its 413.
 
 Messages are not compressed (no per-message deflate): zlib runs on the event
 loop, and compressing one 10 MB result held it ~200 ms (``bench/bounds.py``).
@@ -69,7 +69,7 @@ class PatientWebSocketProtocol(WebSocketsSansIOProtocol):
         """Messages sent since the peer's last pong (the first is the connection's ack)."""
         self.ever_ponged = False
         self.draining: int | None = None
-        """Bytes of a refused oversize frame still to read and discard before closing."""
+        """Bytes still to read and discard after an oversize frame (its rest, the peer's close)."""
         self.release_connection: Callable[[], None] | None = None
         """Gives the connection's count back (:mod:`app.http.transport`), set on upgrade."""
 
@@ -108,9 +108,15 @@ class PatientWebSocketProtocol(WebSocketsSansIOProtocol):
         # not through the connection's state machine)
         text = oversize_error(self.config.ws_max_size, too_big, self.scope.get("path"))
         self.transport.write(Frame(Opcode.TEXT, text.encode()).serialize(mask=False))
-        # uvicorn's handler, but the transport closes only once the rest of the refused
-        # frame is read (up to DRAIN_BYTES, for at most DRAIN_SECONDS): closed with it
-        # unread, the socket resets and the peer loses the error and the close frame
+        # uvicorn's handler, but the connection is half-closed and the transport closes only
+        # once the peer has closed its side (after reading both frames and answering the
+        # close), or after DRAIN_BYTES or DRAIN_SECONDS: the rest of the refused frame and the
+        # peer's close frame are read and discarded meanwhile. A socket closed with bytes
+        # unread resets, and a peer that gets the reset before it has processed both frames
+        # loses them (the websockets client drops the frames it has parsed when writing its
+        # close answer fails). The close timer also keeps uvicorn from closing the transport
+        # as soon as the application has ended on the disconnect below (that immediate close
+        # was the reset of a flaky ``error``-then-1009 test).
         assert self.conn.close_sent is not None
         close = self.conn.close_sent
         self.queue.put_nowait(
@@ -118,8 +124,10 @@ class PatientWebSocketProtocol(WebSocketsSansIOProtocol):
         )
         self.transport.write(b"".join(self.conn.data_to_send()))
         self.close_sent = True
-        self.draining = min(getattr(too_big, "size", None) or DRAIN_BYTES, DRAIN_BYTES)
-        self.loop.call_later(DRAIN_SECONDS, self.transport.close)
+        self.draining = DRAIN_BYTES
+        self.close_timer = self.loop.call_later(DRAIN_SECONDS, self.transport.close)
+        if self.transport.can_write_eof():
+            self.transport.write_eof()
 
     def keepalive_timeout(self) -> None:
         owed = self.sent_since_pong > (0 if self.ever_ponged else 1)

@@ -627,6 +627,78 @@ def test_keep_alive_survives_refusals(scene: Scene) -> None:
         connection.close()
 
 
+def read_frames(peer: socket.socket) -> tuple[list[tuple[int, bytes]], bytes]:
+    """The server's frames (opcode, payload) up to its end of stream, and any bytes left over.
+
+    A connection reset while reading fails the test (``ConnectionResetError``)."""
+    received = b""
+    while chunk := peer.recv(65536):
+        received += chunk
+    frames = []
+    while len(received) >= 2:
+        length, start = received[1] & 0x7F, 2
+        if length == 126:
+            length, start = int.from_bytes(received[2:4], "big"), 4
+        elif length == 127:
+            length, start = int.from_bytes(received[2:10], "big"), 10
+        if len(received) < start + length:
+            break
+        frames.append((received[0] & 0x0F, received[start : start + length]))
+        received = received[start + length :]
+    return frames, received
+
+
+def masked_frame_head(opcode: int, length: int, mask: bytes) -> bytes:
+    """A client frame's head (FIN set) for a payload of ``length`` bytes, ``mask`` last."""
+    assert length >= 65536
+    return bytes([0x80 | opcode, 0x80 | 127]) + length.to_bytes(8, "big") + mask
+
+
+def masking(data: bytes, mask: bytes) -> bytes:
+    """``data`` masked as a client sends it (RFC 6455 § 5.3)."""
+    return bytes(byte ^ mask[index % 4] for index, byte in enumerate(data))
+
+
+def test_the_oversize_error_survives_a_slow_sender(scene: Scene) -> None:
+    """The ``error`` and the 1009 close reach a client that sends the rest of its oversize frame
+    after the server has refused it (and after the application has ended on that refusal),
+    then answers the close: its stream ends cleanly, never with a reset.
+
+    Before the fix, uvicorn closed the socket as soon as the application ended, with the rest of
+    the frame unread: the kernel reset the connection, and a client that had not yet processed
+    the two frames lost them (the flaky ``ws: message over 4 × max_body_bytes`` case)."""
+    port = int(scene.server.url.rsplit(":", 1)[1])
+    payload = json.dumps({"type": "tracks", "pad": "x" * (4 * MAX_BODY)}).encode()
+    mask = b"\x01\x02\x03\x04"
+    masked = masking(payload, mask)
+    key = "dGhlIHNhbXBsZSBub25jZQ=="
+    with socket.create_connection(("127.0.0.1", port), timeout=30) as peer:
+        peer.sendall(
+            (
+                f"GET /v1/sessions/{scene.sid}/stream HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                "Upgrade: websocket\r\nConnection: Upgrade\r\n"
+                f"Sec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n"
+                f"Authorization: {scene.headers['Authorization']}\r\n\r\n"
+            ).encode()
+        )
+        head = b""
+        while b"\r\n\r\n" not in head:
+            head += peer.recv(1)
+        assert head.startswith(b"HTTP/1.1 101"), head
+        peer.sendall(masked_frame_head(0x1, len(payload), mask) + masked[:1000])
+        time.sleep(0.5)  # the server refuses at the frame's head; its application ends
+        peer.sendall(masked[1000:])
+        peer.sendall(bytes([0x88, 0x82]) + mask + masking((1009).to_bytes(2, "big"), mask))
+        frames, rest = read_frames(peer)
+    assert rest == b""
+    opcodes = [opcode for opcode, _ in frames]
+    assert opcodes == [0x1, 0x1, 0x8], opcodes  # ack, error, close
+    assert json.loads(frames[0][1])["type"] == "ack"
+    error = json.loads(frames[1][1])
+    assert error["type"] == "error" and "max_body_bytes" in json.dumps(error["problem"])
+    assert int.from_bytes(frames[2][1][:2], "big") == 1009
+
+
 def test_settings_refuse_a_short_admin_token() -> None:
     with pytest.raises(ValueError, match="at least 32 characters"):
         make_settings(admin_token="short")
