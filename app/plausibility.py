@@ -225,6 +225,9 @@ def _hint(lat: float, lon: float, origin: GeodeticPoint) -> tuple[str, str] | No
     for code, words, plat, plon, olat, olon in candidates:
         fixed = float(great_circle(plat, plon, olat, olon))
         if fixed <= FAR_M:
+            if code == "lat_lon_swapped" and abs(origin.lon) <= 90.0:
+                alike = float(great_circle(lat, lon, origin.lon, origin.lat))
+                words += " (or the origin's)" if alike <= FAR_M else ""
             return code, f"{words}: so corrected, it would be {km(fixed)} from the origin"
     return None
 
@@ -292,29 +295,51 @@ def _far_sites(config: SessionConfig, origin: LocalFrame | None) -> Iterator[Fie
 @config_rule(
     "origin_in_radians",
     "origin_lat_lon_swapped",
-    flags="an origin whose lat/lon, read as radians or swapped, would bring every geodetic "
-    f"site that is more than {km(FAR_M)} away within {km(FAR_M)}",
+    flags=f"no geodetic site within {km(FAR_M)} of the origin, and every one would be with "
+    "the origin read as radians (or swapped, for two sites or more)",
 )
 def _suspect_origin(config: SessionConfig, origin: LocalFrame | None) -> Iterator[FieldWarning]:
-    if config.origin is None or origin is None:
+    point = config.origin
+    if point is None or origin is None:
         return
-    far = []
-    for sensor in config.sensors:
-        site = sensor.site
-        if site is None or site.lat is None or site.lon is None:
-            continue
-        if float(np.linalg.norm(sensor_site(sensor, origin)[0])) > FAR_M:
-            far.append((sensor.id, _hint(site.lat, site.lon, config.origin)))
-    codes = {hint[0] if hint else None for _, hint in far}
-    if len(codes) == 1 and (code := codes.pop()) in ("origin_in_radians", "origin_lat_lon_swapped"):
-        names = ", ".join(repr(name) for name, _ in far)
-        hint = far[0][1]
-        assert hint is not None
-        message = (
-            f"the sites of {names} are more than {km(FAR_M)} from the origin; {hint[1]} "
-            "(the first); lat and lon are degrees"
+    geodetic = [
+        (sensor.id, sensor.site.lat, sensor.site.lon, sensor_site(sensor, origin)[0])
+        for sensor in config.sensors
+        if sensor.site is not None and sensor.site.lat is not None and sensor.site.lon is not None
+    ]
+    far = [(name, lat, lon) for name, lat, lon, at in geodetic if np.linalg.norm(at) > FAR_M]
+    if not far or len(far) < len(geodetic):
+        return  # a site near the origin vouches for it
+    corrections = []
+    if abs(point.lat) <= math.pi / 2 and abs(point.lon) <= math.pi:
+        degrees = math.degrees(point.lat), math.degrees(point.lon)
+        corrections.append(
+            (
+                "origin_in_radians",
+                f"the origin looks like radians (as degrees: {degrees[0]:.4f}, {degrees[1]:.4f})",
+                *degrees,
+            )
         )
-        yield warning(("origin",), code, message)
+    if abs(point.lon) <= 90.0:
+        corrections.append(
+            ("origin_lat_lon_swapped", "the origin's lat/lon look swapped", point.lon, point.lat)
+        )
+    lats = np.array([lat for _, lat, _ in far])
+    lons = np.array([lon for _, _, lon in far])
+    names = ", ".join(repr(name) for name, _, _ in far)
+    for code, words, lat0, lon0 in corrections:
+        fixed = great_circle(lats, lons, lat0, lon0)
+        # one site swapped or a swapped origin are alike: the origin is blamed for two or more
+        ambiguous = code == "origin_lat_lon_swapped" and len(far) == 1
+        if np.all(fixed <= FAR_M) and not ambiguous:
+            yield warning(
+                ("origin",),
+                code,
+                f"the sites of {names} are more than {km(FAR_M)} from the origin; {words}: so "
+                f"corrected, they would be {', '.join(km(float(d)) for d in fixed)} from it "
+                "(lat and lon are degrees)",
+            )
+            return
 
 
 @config_rule(

@@ -258,3 +258,84 @@ def test_every_rule_code_is_documented() -> None:
     section = section[: section.index("\n## ", 1)]
     for code in plausibility.rule_codes():
         assert f"`{code}`" in section, code
+
+
+def config_codes(body: dict[str, Any]) -> list[tuple[str, str]]:
+    from api_schemas.config import SessionConfig
+
+    found = plausibility.config_warnings(SessionConfig.model_validate(body))
+    return [(entry.pointer, entry.code) for entry in found]
+
+
+def test_an_origin_with_lat_lon_swapped_is_named_at_the_origin() -> None:
+    from api_schemas.config import SessionConfig
+
+    receiver = {"id": "adsb", "site": {"lat": 48.5, "lon": 2.0}}
+    body = config(origin={"lat": ORIGIN["lon"], "lon": ORIGIN["lat"]})
+    body["sensors"][1] = receiver
+    found = plausibility.config_warnings(SessionConfig.model_validate(body))
+    # each site alone could be the swapped one; both at once point at the origin
+    assert [(w.pointer, w.code) for w in found] == [
+        ("#/sensors/0/site", "lat_lon_swapped"),
+        ("#/sensors/1/site", "lat_lon_swapped"),
+        ("#/origin", "origin_lat_lon_swapped"),
+    ]
+    assert all("(or the origin's)" in w.message for w in found[:2])
+    near = [
+        great_circle_km(lat, lon, ORIGIN["lat"], ORIGIN["lon"])
+        for lat, lon in ((48.85, 2.9), (48.5, 2.0))
+    ]
+    assert f"they would be {near[0]:.1f} km, {near[1]:.1f} km from it" in found[2].message
+
+
+def test_a_site_in_radians_and_far_positions() -> None:
+    radar = copy.deepcopy(RADAR)
+    radar["site"] = {"lat": math.radians(SITE["lat"]), "lon": math.radians(SITE["lon"])}
+    sited = {"id": "far", "site": {"position": [3.0e6, 0.0]}}
+    apex = {
+        "id": "apex",
+        "fov": {
+            "kind": "sector",
+            "origin": [0.0, 2.0e6],
+            "heading_deg": 0,
+            "half_angle_deg": 30,
+            "range": [0, 1000],
+        },
+    }
+    assert config_codes(config(sensors=[radar, sited, apex])) == [
+        ("#/sensors/0/site", "in_radians"),
+        ("#/sensors/1/site/position", "far_from_origin"),
+        ("#/sensors/2/fov/origin", "far_from_origin"),
+    ]
+
+
+def test_track_and_detection_rules_without_a_server() -> None:
+    from api_schemas.config import SessionConfig
+    from api_schemas.reports import DetectionReport, TrackReport
+
+    session = SessionConfig.model_validate(config())
+    far = TrackReport.model_validate(
+        {
+            "sensor": "adsb",
+            "time": 1.0,
+            "tracks": [
+                {"id": "near", "state": [1e5, 0, 1e5, 0], "covariance": EYE4},
+                {"id": "far", "state": [1e6, 0, 1e5, 0], "covariance": EYE4},  # 1005 km
+            ],
+        }
+    )
+    assert [(w.pointer, w.code) for w in plausibility.input_warnings("tracks", far, session)] == [
+        ("#/tracks/1/state", "far_from_origin")
+    ]
+    km_scan = DetectionReport.model_validate(
+        {"sensor": "radar", "time": 1.0, "detections": [{"range": 12.0, "azimuth_deg": 40.0}]}
+    )
+    found = plausibility.input_warnings("detections", km_scan, session)
+    assert [(w.pointer, w.code) for w in found] == [
+        ("#/detections", "range_in_km"),  # 12 m ≤ 60 000 m / 1000
+        ("#/detections/0/range", "blind_range"),
+        ("#/detections/0/range", "range_in_km"),  # nearer than sigma_range 20 m
+    ]
+    # without an origin nothing is far: a session frame may be UTM
+    plain = SessionConfig.model_validate({"state": STATE})
+    assert plausibility.input_warnings("tracks", far, plain) == []
