@@ -42,7 +42,7 @@ from api_schemas.config import (
     SensorConfig,
     SessionConfig,
 )
-from api_schemas.reports import DetectionReport, PolarDetection, TrackReport
+from api_schemas.reports import CartesianDetection, DetectionReport, PolarDetection, TrackReport
 from api_schemas.warnings import FieldWarning, SitePlacement
 from app.errors import pointer
 from app.geo.geodesy import LocalFrame
@@ -483,6 +483,45 @@ def _polar_detections(report: DetectionReport, config: SessionConfig) -> Iterato
             "range_in_km",
             f"range {ranges[index]:g} m is nearer than one sigma_range ({sigma:g} m): is it in "
             "km? range is in metres",
+        )
+
+
+@input_rule(
+    "detections",
+    "blind_range",
+    flags="a position detection nearer to its sensor's sector apex than the sector's minimum "
+    "range (a session-frame sector, or a sensor-frame one with its apex at the site)",
+)
+def _cartesian_blind_range(
+    report: DetectionReport, config: SessionConfig
+) -> Iterator[FieldWarning]:
+    sensor = config.sensor(report.sensor)
+    fov = None if sensor is None else sensor.fov
+    if sensor is None or not isinstance(fov, SectorFieldOfView) or fov.range[0] <= 0.0:
+        return
+    if isinstance(sensor.measurement, PolarMeasurement) or len(config.state.position) < 2:
+        return
+    if fov.frame == "session" and fov.origin is not None:
+        apex = np.asarray(fov.origin, dtype=np.float64)
+    elif fov.frame == "sensor" and fov.origin is None:
+        apex = sensor_site(sensor, session_origin(config))[0][:2]
+    else:
+        return
+    points = [
+        (index, detection.z)
+        for index, detection in enumerate(report.detections)
+        if isinstance(detection, CartesianDetection) and len(detection.z) >= 2
+    ]
+    if not points:
+        return
+    planar = np.array([z[:2] for _, z in points], dtype=np.float64)
+    distances = np.linalg.norm(planar - apex, axis=1)
+    for position in np.flatnonzero(distances < fov.range[0]).tolist():
+        yield warning(
+            ("detections", points[position][0], "z"),
+            "blind_range",
+            f"the detection is {distances[position]:.0f} m from its sensor's field-of-view "
+            f"apex, inside the minimum range {fov.range[0]:g} m (its blind range)",
         )
 
 

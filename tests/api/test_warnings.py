@@ -336,6 +336,19 @@ def test_track_and_detection_rules_without_a_server() -> None:
         ("#/detections/0/range", "blind_range"),
         ("#/detections/0/range", "range_in_km"),  # nearer than sigma_range 20 m
     ]
+    camera = copy.deepcopy(RADAR) | {"id": "camera", "measurement": {"r": [[25, 0], [0, 25]]}}
+    with_camera = SessionConfig.model_validate(config(sensors=[camera]))
+    east, north = plausibility.site_placements(with_camera)[0].position[:2]
+    near = DetectionReport.model_validate(
+        {
+            "sensor": "camera",
+            "time": 1.0,
+            "detections": [{"z": [east + 30.0, north + 40.0]}, {"z": [east + 600.0, north]}],
+        }
+    )
+    found = plausibility.input_warnings("detections", near, with_camera)
+    assert [(w.pointer, w.code) for w in found] == [("#/detections/0/z", "blind_range")]
+    assert "50 m from its sensor's field-of-view apex" in found[0].message
     # without an origin nothing is far: a session frame may be UTM
     plain = SessionConfig.model_validate({"state": STATE})
     assert plausibility.input_warnings("tracks", far, plain) == []
