@@ -8,10 +8,12 @@ edge instead of reaching the algorithms.
 
 from __future__ import annotations
 
+import math
 from datetime import datetime
 from typing import Annotated
 
-from pydantic import BaseModel, ConfigDict, Field, StringConstraints
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StringConstraints
+from pydantic_core import PydanticCustomError
 
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 """A finite float (NaN and ±Infinity rejected)."""
@@ -24,7 +26,31 @@ OpenUnitFloat = Annotated[float, Field(allow_inf_nan=False, gt=0.0, lt=1.0)]
 """A finite float in the open interval (0, 1)."""
 
 Vector = list[FiniteFloat]
-Matrix = list[list[FiniteFloat]]
+
+
+def rows_expected(value: object) -> object:
+    """A matrix given as one flat list of numbers is one error that says rows are expected
+    ("a list of 4 rows of 4"), not one "not a list" error per number."""
+    if not isinstance(value, list) or not value or isinstance(value[0], list):
+        return value
+    if not any(isinstance(row, list) for row in value):
+        count = len(value)
+        side = math.isqrt(count)
+        shape = (
+            f"a list of {side} rows of {side}"
+            if side * side == count
+            else "a list of rows (each a list of numbers)"
+        )
+        raise PydanticCustomError(
+            "matrix_rows",
+            "must be {shape} (each row a list); got a flat list of {count} entries",
+            {"shape": shape, "count": count},
+        )
+    return value
+
+
+Matrix = Annotated[list[list[FiniteFloat]], BeforeValidator(rows_expected)]
+"""A matrix: a list of rows (a flat list is refused with one error naming the shape)."""
 
 Label = Annotated[str, StringConstraints(min_length=1, max_length=64)]
 """A class label (an element of the session's class frame)."""

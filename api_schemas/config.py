@@ -182,7 +182,7 @@ class CartesianMeasurement(WireModel):
     @model_validator(mode="after")
     def _r_is_covariance(self) -> Self:
         try:
-            check_covariance(self.r)
+            check_covariance(self.r, name="r")
         except ValueError as error:
             raise_issues("CartesianMeasurement", [FieldIssue(("r",), str(error), self.r)])
         return self
@@ -591,7 +591,8 @@ class SessionConfig(WireModel):
                 issues.append(
                     FieldIssue(
                         ("sensors", index, "measurement", "r"),
-                        f"r is {size}x{size}, expected {measured}x{measured} (one row per position component)",
+                        f"r must be a list of {measured} rows of {measured} to match the session's "
+                        f"{measured} position components; got {size} rows of {size}",
                         sensor.measurement.r,
                     )
                 )

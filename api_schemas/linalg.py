@@ -18,27 +18,48 @@ SYMMETRY_TOLERANCE = estimates.SYMMETRY_TOLERANCE
 """Relative tolerance on ``|P - Pᵀ|`` (the core's: one check, one tolerance)."""
 
 
-def check_square(matrix: Sequence[Sequence[float]], size: int | None = None) -> int:
-    """Check that ``matrix`` is square (and ``size`` × ``size`` if given); return its size."""
+def check_square(
+    matrix: Sequence[Sequence[float]],
+    size: int | None = None,
+    *,
+    name: str = "matrix",
+    vector: str | None = None,
+) -> int:
+    """Check that ``matrix`` is square (and ``size`` × ``size`` if given); return its size.
+
+    The message says the shape expected in the wire's words ("covariance must be a list
+    of 6 rows of 6 to match the 6-element state"): ``name`` is the matrix's field and
+    ``vector`` the field whose length ``size`` is (the state, ``z``).
+    """
     rows = len(matrix)
+    wanted = rows if size is None else size
+    match = "" if size is None or vector is None else f" to match the {size}-element {vector}"
+    shape = f"{name} must be a list of {wanted} rows of {wanted}{match}"
     if rows == 0:
-        raise ValueError("matrix is empty")
+        raise ValueError(f"{shape}; got an empty list")
+    if size is not None and rows != size:
+        ragged = any(len(row) != rows for row in matrix)
+        got = _rows(rows) if ragged else f"{_rows(rows)} of {rows}"
+        hint = f" (or the {vector} must have {rows} elements)" if vector is not None else ""
+        raise ValueError(f"{shape}; got {got}{hint}")
     for index, row in enumerate(matrix):
         if len(row) != rows:
-            raise ValueError(
-                f"matrix is not square: row {index} has {len(row)} entries, expected {rows}"
-            )
-    if size is not None and rows != size:
-        raise ValueError(f"matrix is {rows}x{rows}, expected {size}x{size}")
+            raise ValueError(f"{shape}; row {index} has {len(row)} entries")
     return rows
 
 
-def check_covariance(matrix: Sequence[Sequence[float]], size: int | None = None) -> None:
+def _rows(count: int) -> str:
+    return "1 row" if count == 1 else f"{count} rows"
+
+
+def check_covariance(
+    matrix: Sequence[Sequence[float]], size: int | None = None, *, name: str = "matrix"
+) -> None:
     """Check that ``matrix`` is a square, symmetric, positive-definite covariance.
 
     For the many matrices of one input use :func:`covariance_problems` (one batch).
     """
-    check_square(matrix, size)
+    check_square(matrix, size, name=name)
     problem = covariance_problems([matrix]).get(0)
     if problem is not None:
         raise ValueError(problem)

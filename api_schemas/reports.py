@@ -45,7 +45,7 @@ class SensorTrack(WireModel):
         all their covariances at once with :func:`~api_schemas.linalg.covariance_problems`.
         """
         try:
-            check_square(self.covariance, len(self.state))
+            check_square(self.covariance, len(self.state), name="covariance", vector="state")
         except ValueError as error:
             raise_issues("SensorTrack", [FieldIssue(("covariance",), str(error), self.covariance)])
         return self
@@ -117,7 +117,7 @@ class CartesianDetection(WireModel):
         """Square and of ``z``'s size; symmetric positive definite is checked by the report."""
         if self.r is not None:
             try:
-                check_square(self.r, len(self.z))
+                check_square(self.r, len(self.z), name="r", vector="z")
             except ValueError as error:
                 raise_issues("CartesianDetection", [FieldIssue(("r",), str(error), self.r)])
         return self

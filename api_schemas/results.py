@@ -9,6 +9,12 @@ from pydantic import Field
 from api_schemas.association import AssociationMethod
 from api_schemas.base import FiniteFloat, Identifier, Label, Matrix, UnitFloat, Vector, WireModel
 from api_schemas.classification import FocalMass
+from api_schemas.warnings import Warnings
+
+STEP_WARNINGS_DESCRIPTION = (
+    "implausible but legal values of this input (README 'Warnings'), pointers into its body: "
+    "the step used them as given"
+)
 
 TrackStatus = Literal["tentative", "confirmed", "coasting", "phantom", "terminated"]
 StatusReason = Literal[
@@ -151,6 +157,7 @@ class StepResult(WireModel):
     sensor: Identifier
     tracks: list[FusedTrack]
     association: StepAssociation
+    warnings: Warnings = Field(default_factory=list, description=STEP_WARNINGS_DESCRIPTION)
 
 
 class TrackHistoryPoint(WireModel):
@@ -215,6 +222,9 @@ class FusedFeatureCollection(WireModel):
     seq: int | None = None
     time: FiniteFloat | None = None
     sensor: Identifier | None = None
+    warnings: Warnings | None = Field(
+        default=None, description=f"a step's answer only: {STEP_WARNINGS_DESCRIPTION}"
+    )
     features: list[TrackFeature]
 
 

@@ -6,6 +6,12 @@ from pydantic import Field
 
 from api_schemas.base import FiniteFloat, Identifier, Timestamp, WireModel
 from api_schemas.config import SessionConfig
+from api_schemas.warnings import SitePlacement, Warnings
+
+SITES_DESCRIPTION = "each configured sensor's site in the session frame and its distance"
+WARNINGS_DESCRIPTION = (
+    "implausible but legal values of the config (README 'Warnings'): the session uses them as given"
+)
 
 
 class SessionCreated(WireModel):
@@ -15,6 +21,8 @@ class SessionCreated(WireModel):
     token: str
     config: SessionConfig
     created_at: Timestamp
+    sites: list[SitePlacement] = Field(default_factory=list, description=SITES_DESCRIPTION)
+    warnings: Warnings = Field(default_factory=list, description=WARNINGS_DESCRIPTION)
 
 
 class DetectionTally(WireModel):
@@ -77,6 +85,8 @@ class SessionSummary(WireModel):
     time: FiniteFloat | None
     sensors: list[SensorActivity]
     counts: TrackCounts
+    sites: list[SitePlacement] = Field(default_factory=list, description=SITES_DESCRIPTION)
+    warnings: Warnings = Field(default_factory=list, description=WARNINGS_DESCRIPTION)
 
 
 class SessionListItem(WireModel):

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from api_schemas.base import WireModel
+from api_schemas.warnings import FieldWarning
 from app.geo.geojson import GeodeticOutput
 from core.fusion.reports import FusedTrackView
 from core.fusion.reports import StepResult as CoreStepResult
@@ -36,8 +37,15 @@ class OutputFormat(ABC):
     description: ClassVar[str]
 
     @abstractmethod
-    def step(self, step: CoreStepResult, seq: int, geodetic: GeodeticOutput | None) -> str:
-        """A step result numbered ``seq``."""
+    def step(
+        self,
+        step: CoreStepResult,
+        seq: int,
+        geodetic: GeodeticOutput | None,
+        warnings: Sequence[FieldWarning] = (),
+    ) -> str:
+        """A step result numbered ``seq``, with its input's ``warnings``
+        (:mod:`app.plausibility`)."""
 
     @abstractmethod
     def picture(
@@ -66,9 +74,9 @@ class Output:
         """The answer's media type."""
         return self.format.media_type
 
-    def step(self, step: CoreStepResult, seq: int) -> str:
+    def step(self, step: CoreStepResult, seq: int, warnings: Sequence[FieldWarning] = ()) -> str:
         """:meth:`OutputFormat.step`."""
-        return self.format.step(step, seq, self.geodetic)
+        return self.format.step(step, seq, self.geodetic, warnings)
 
     def picture(self, seq: int, time: float | None, views: Sequence[FusedTrackView]) -> str:
         """:meth:`OutputFormat.picture`."""

@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from api_schemas.results import FusedFeatureCollection
+from api_schemas.warnings import FieldWarning
 from app.geo.geojson import GEOJSON_MEDIA_TYPE, GeodeticOutput, feature_collection
 from app.outputs.base import OutputFormat, PlainObject
 from app.outputs.json_results import check_finite
@@ -33,9 +34,20 @@ class GeoJsonFormat(OutputFormat):
     needs_geodetic = True
     description = "an application/geo+json FeatureCollection of the tracks (needs origin)"
 
-    def step(self, step: CoreStepResult, seq: int, geodetic: GeodeticOutput | None) -> str:
+    def step(
+        self,
+        step: CoreStepResult,
+        seq: int,
+        geodetic: GeodeticOutput | None,
+        warnings: Sequence[FieldWarning] = (),
+    ) -> str:
         assert geodetic is not None
-        header: dict[str, Any] = {"seq": seq, "time": step.time, "sensor": step.sensor}
+        header: dict[str, Any] = {
+            "seq": seq,
+            "time": step.time,
+            "sensor": step.sensor,
+            "warnings": [entry.model_dump() for entry in warnings],
+        }
         return _collection(header, step.tracks, geodetic)
 
     def picture(
@@ -50,7 +62,9 @@ class GeoJsonFormat(OutputFormat):
 
     def from_plain(self, result: PlainObject, geodetic: GeodeticOutput | None) -> str:
         assert geodetic is not None
-        header: dict[str, Any] = {k: result[k] for k in ("seq", "time", "sensor") if k in result}
+        header: dict[str, Any] = {
+            k: result[k] for k in ("seq", "time", "sensor", "warnings") if k in result
+        }
         return itemwise({**header, **feature_collection(result["tracks"], geodetic)})
 
 

@@ -20,6 +20,7 @@ import orjson
 
 from api_schemas.results import FusedPicture
 from api_schemas.results import StepResult as StepResultModel
+from api_schemas.warnings import FieldWarning
 from app.geo.geojson import GeodeticOutput, with_geodetic
 from app.outputs.base import OutputFormat, PlainObject
 from app.outputs.text import itemwise
@@ -37,8 +38,14 @@ class JsonFormat(OutputFormat):
     needs_geodetic = False
     description = "the contract's JSON (frame=geodetic adds each track's geodetic position)"
 
-    def step(self, step: StepResult, seq: int, geodetic: GeodeticOutput | None) -> str:
-        return step_json(step, seq, geodetic)
+    def step(
+        self,
+        step: StepResult,
+        seq: int,
+        geodetic: GeodeticOutput | None,
+        warnings: Sequence[FieldWarning] = (),
+    ) -> str:
+        return step_json(step, seq, geodetic, warnings)
 
     def picture(
         self,
@@ -152,10 +159,15 @@ def _association_plain(association: AssociationView) -> PlainObject:
     }
 
 
-def step_json(step: StepResult, seq: int, geodetic: GeodeticOutput | None = None) -> str:
+def step_json(
+    step: StepResult,
+    seq: int,
+    geodetic: GeodeticOutput | None = None,
+    warnings: Sequence[FieldWarning] = (),
+) -> str:
     """A step result in the contract's shape (``StepResult``), numbered ``seq`` (the
     session's input number), as compact JSON text (hot path); ``geodetic``: with each
-    track's ``geodetic`` position (``?frame=geodetic``).
+    track's ``geodetic`` position (``?frame=geodetic``); ``warnings``: its input's.
 
     Refuses (``ValueError``) a non-finite time, state, covariance or score instead
     of writing ``null``; a pair's or a matrix cell's non-finite score is ``null``.
@@ -168,6 +180,7 @@ def step_json(step: StepResult, seq: int, geodetic: GeodeticOutput | None = None
         "sensor": step.sensor,
         "tracks": track_items(step.tracks, geodetic),
         "association": _association_plain(step.association),
+        "warnings": [entry.model_dump() for entry in warnings],
     }
     return itemwise(document, wire_json)  # no single C call for a 10 MB answer
 

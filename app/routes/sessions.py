@@ -35,6 +35,7 @@ from app.http.errors import problem_responses
 from app.http.requests import WireRoute
 from app.http.responses import JSONTextResponse, dumps, itemwise
 from app.http.security import hash_token, issue_token
+from app.plausibility import config_warnings, site_placements
 from app.runtime import collection_paused
 from app.sessions.live import LiveSession, new_session
 from app.sessions.log import event_json
@@ -87,7 +88,12 @@ def create_session(
     metrics.sessions.set(store.count_sessions())
     # the validated config as it is (constructing the answer would validate it once more)
     created = SessionCreated.model_construct(
-        id=record.id, token=token, config=config, created_at=record.created_at
+        id=record.id,
+        token=token,
+        config=config,
+        created_at=record.created_at,
+        sites=site_placements(config),
+        warnings=config_warnings(config),
     )
     # written here, in the worker thread: the resolved config of 64 fields of view is ~1 MB
     return JSONTextResponse(created.model_dump_json(), status_code=HTTPStatus.CREATED)
@@ -150,6 +156,8 @@ def summary(session: LiveSession) -> SessionSummary:
             phantom=statuses.count("phantom"),
             terminated=session.created_tracks - len(statuses),
         ),
+        sites=site_placements(session.config),
+        warnings=config_warnings(session.config),
     )
 
 

@@ -36,6 +36,7 @@ from app.errors import LimitExceeded, SessionNotFound, StoreUnavailable
 from app.inputs import DecodedKind, Input, SessionView
 from app.outputs import JSON, Output
 from app.outputs.text import dumps
+from app.plausibility import input_warnings
 from app.sessions.hub import SESSION_RELOADED, STORE_UNAVAILABLE, Published
 from app.sessions.live import LiveSession
 from app.sessions.log import logged_input
@@ -268,9 +269,11 @@ class InputPipeline:
                 engine.leave(submitted.sensor)  # a refused input joins no sensor
             raise
         step, seq = applied.step, session.seq + 1
+        # annotations only: computed beside the step, from the input and the config
+        warnings = input_warnings(submitted.kind.tag, submitted.report, session.config)
         return Step(
             engine=engine,
-            written={output: output.step(step, seq) for output in outputs | {JSON}},  # once, here
+            written={output: output.step(step, seq, warnings) for output in outputs | {JSON}},
             logged=submitted.logged(),
             engine_cpu_s=applied.engine_cpu_s,
         )

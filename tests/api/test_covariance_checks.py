@@ -132,7 +132,14 @@ def test_a_bad_covariance_and_a_duplicate_id_are_both_named() -> None:
 def test_a_track_alone_still_checks_the_covariance_size() -> None:
     with pytest.raises(ValidationError) as caught:
         SensorTrack.model_validate({"id": "x", "state": [1.0, 2.0], "covariance": [[1.0]]})
-    assert located(caught.value) == [(("covariance",), "matrix is 1x1, expected 2x2")]
+    assert located(caught.value) == [
+        (
+            ("covariance",),
+            (
+                "covariance must be a list of 2 rows of 2 to match the 2-element state; got 1 row of 1"
+            ),
+        )
+    ]
 
 
 def test_bad_detection_noise_is_named_by_its_index() -> None:

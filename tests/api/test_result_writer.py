@@ -184,9 +184,10 @@ OPTIONAL_FIELDS = {
     ("FusedTrack", "geodetic"),
     ("TrackHistoryPoint", "geodetic"),
     ("FusedFeatureCollection", "sensor"),
+    ("FusedFeatureCollection", "warnings"),
 }
 """Fields the writer leaves out by design (``geodetic``: only with ``frame=geodetic``; a
-picture has no ``sensor``)."""
+picture has no ``sensor`` nor ``warnings``)."""
 
 
 def outputs_of(session: SessionConfig) -> list[Output]:
