@@ -21,6 +21,7 @@ from api_schemas.config import (
 )
 from api_schemas.consistency import detection_report_issues
 from api_schemas.events import DetectionsEvent
+from api_schemas.examples import DETECTION_REPORT_EXAMPLES
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import CartesianDetection, DetectionReport, PolarDetection
 from api_schemas.ws import DetectionsMessage
@@ -37,6 +38,7 @@ class Detections(InputKind[DetectionReport]):
     """A sensor's detections at one time."""
 
     tag = "detections"
+    examples = DETECTION_REPORT_EXAMPLES
     report_model = DetectionReport
     message_model = DetectionsMessage
     event_model = DetectionsEvent

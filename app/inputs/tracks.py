@@ -14,6 +14,7 @@ import numpy as np
 from api_schemas.config import SessionConfig
 from api_schemas.consistency import track_report_issues
 from api_schemas.events import TracksEvent
+from api_schemas.examples import TRACK_REPORT_EXAMPLES
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import SensorTrack, TrackReport
 from api_schemas.ws import TracksMessage
@@ -36,6 +37,7 @@ class Tracks(InputKind[TrackReport]):
     """A sensor's track list at one time."""
 
     tag = "tracks"
+    examples = TRACK_REPORT_EXAMPLES
     report_model = TrackReport
     message_model = TracksMessage
     event_model = TracksEvent
