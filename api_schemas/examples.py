@@ -101,11 +101,12 @@ TRACK_REPORT_EXAMPLES: dict[str, Example] = {
             "position slots hold latitude, longitude (°), its velocity slots east, north "
             "(m/s): [lat, v_east, lon, v_north] here. The covariance is in metres (and m/s) "
             "of the East-North-Up plane at the point, ordered as the session frame's state "
-            "[x east, vx, y north, vy]. `time` may be an RFC 3339 timestamp."
+            "[x east, vx, y north, vy]. `time` is an RFC 3339 timestamp here (seconds since "
+            "the Unix epoch for the service); a number is seconds of any epoch."
         ),
         "value": {
             "sensor": "adsb",
-            "time": 0,
+            "time": "2026-12-03T08:00:00Z",
             "frame": "geodetic",
             "tracks": [
                 {
@@ -141,12 +142,13 @@ DETECTION_REPORT_EXAMPLES: dict[str, Example] = {
         "summary": "radar-t's plots in range and azimuth (for the `geodetic` session)",
         "description": (
             "A polar sensor's detections: `range` (m) and `azimuth_deg` (clockwise from "
-            "north at its site). `time` is the time of these plots; a rotating radar sends "
-            "each plot (or each sector's plots) at the time the beam saw it."
+            "north at its site). `time` is when the beam saw these plots (here an RFC 3339 "
+            "timestamp): a rotating radar sends each plot, or each sector's plots, with its "
+            "own time, not the scan's."
         ),
         "value": {
             "sensor": "radar-t",
-            "time": 0,
+            "time": "2026-12-03T08:00:00.5Z",
             "detections": [
                 {"range": 12000, "azimuth_deg": 45},
                 {"range": 30500, "azimuth_deg": 301.5},

@@ -127,6 +127,12 @@ class Input:
         return self.kind.sensor(self.report)
 
     @property
+    def time(self) -> float | str:
+        """Its ``time`` as given (seconds, or an RFC 3339 timestamp)."""
+        time: float | str = self.report.time
+        return time
+
+    @property
     def items(self) -> int:
         """Tracks or detections in it."""
         return self.kind.items(self.report)

@@ -136,6 +136,7 @@ def summary(session: LiveSession) -> SessionSummary:
         config=session.config,
         seq=session.seq,
         time=session.time,
+        time_epoch=session.time_epoch,
         sensors=[
             SensorActivity(
                 id=sensor,
