@@ -44,6 +44,18 @@ SESSION_EXAMPLES = DOCUMENT["paths"][SESSIONS]["post"]["requestBody"]["content"]
 ]["examples"]
 
 
+def test_the_only_bodies_without_a_json_example_are_binary() -> None:
+    """ASTERIX data blocks (``application/octet-stream``): Swagger UI offers a file to send."""
+    others = {
+        (path, media)
+        for path, item in DOCUMENT["paths"].items()
+        for operation in item.values()
+        for media in operation.get("requestBody", {}).get("content", {})
+        if media != "application/json"
+    }
+    assert others == {(f"{SESSIONS}/{{sid}}/asterix", "application/octet-stream")}
+
+
 def test_every_json_request_body_has_examples_with_a_summary() -> None:
     bodies = json_bodies()
     assert {(path, method) for path, method, _ in bodies} >= {
