@@ -23,6 +23,7 @@ from api_schemas.classification import ClassEvidence
 from api_schemas.issues import FieldIssue, raise_issues
 from api_schemas.limits import MAX_ITEMS, bounded
 from api_schemas.linalg import check_square, covariance_problems
+from api_schemas.timing import SessionTime
 
 StateVector = Annotated[Vector, Field(min_length=1, max_length=64)]
 MAX_RANGE = 1e8
@@ -55,7 +56,8 @@ TrackFrame = Literal["session", "sensor", "geodetic"]
 
 
 class TrackReport(WireModel):
-    """A sensor's track list at one time (seconds on the session clock).
+    """A sensor's track list at one time (``time``: seconds on the session clock, or an RFC 3339
+    timestamp: :mod:`api_schemas.timing`).
 
     ``frame``: ``"session"`` (default) the session frame; ``"sensor"`` the
     sending sensor's own frame (origin at its site, y along its heading);
@@ -66,7 +68,7 @@ class TrackReport(WireModel):
     """
 
     sensor: Identifier
-    time: FiniteFloat
+    time: SessionTime
     frame: TrackFrame = "session"
     tracks: Annotated[
         list[SensorTrack],
@@ -152,10 +154,10 @@ Detection = Annotated[
 
 
 class DetectionReport(WireModel):
-    """A sensor's detections at one time."""
+    """A sensor's detections at one time (``time`` as a track list's)."""
 
     sensor: Identifier
-    time: FiniteFloat
+    time: SessionTime
     detections: Annotated[
         list[Detection],
         Field(max_length=MAX_ITEMS),

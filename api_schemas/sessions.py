@@ -6,6 +6,7 @@ from pydantic import Field
 
 from api_schemas.base import FiniteFloat, Identifier, Timestamp, WireModel
 from api_schemas.config import SessionConfig
+from api_schemas.timing import TimeEpoch
 from api_schemas.warnings import SitePlacement, Warnings
 
 SITES_DESCRIPTION = "each configured sensor's site in the session frame and its distance"
@@ -82,7 +83,16 @@ class SessionSummary(WireModel):
     last_input_at: Timestamp | None
     config: SessionConfig
     seq: int
-    time: FiniteFloat | None
+    time: FiniteFloat | None = Field(
+        description="the fusion time (s; null before the first input): seconds since the Unix "
+        "epoch when time_epoch is unix"
+    )
+    time_epoch: TimeEpoch | None = Field(
+        default=None,
+        description="how the session's times count, as its first input gave them: 'arbitrary' "
+        "(numbers: seconds of the client's own epoch) or 'unix' (RFC 3339 timestamps, as seconds "
+        "since 1970-01-01T00:00:00Z); null before the first input. The other way is refused (422)",
+    )
     sensors: list[SensorActivity]
     counts: TrackCounts
     sites: list[SitePlacement] = Field(default_factory=list, description=SITES_DESCRIPTION)

@@ -10,6 +10,7 @@ packages that ``.ci/run`` installs are checked against their sources.
 
 from __future__ import annotations
 
+import calendar
 import json
 import re
 import subprocess
@@ -124,6 +125,14 @@ def geodetic(output: str) -> None:
     assert distance < 30.0, distance
 
 
+def timestamped(output: str) -> None:
+    """The timestamp is worked out here by the C library's ``timegm`` (UTC), not the service's
+    parser; the number sent after it is refused (422)."""
+    first, second, seconds, epoch = output.split()
+    assert (first, second, epoch) == ("200", "422", "unix"), output
+    assert float(seconds) == calendar.timegm((2026, 12, 3, 8, 0, 0)) + 0.5
+
+
 CHECKS: dict[str, Callable[[str], None]] = {
     "SESSION=$(curl": created,
     '"sensor": "radar-1", "time": 12,': tied,
@@ -135,6 +144,7 @@ CHECKS: dict[str, Callable[[str], None]] = {
     "credal-fusion export": replayed,
     "/metrics": stalls,
     "format=geojson": geodetic,
+    '"2026-12-03T09:00:00.5+01:00"': timestamped,
 }
 """Each runnable block, by a piece of its text, and what its output must show."""
 

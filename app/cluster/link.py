@@ -125,7 +125,7 @@ class ClusterLink:
             functools.partial(self.registry.rebuild, load.session, load)
         )
         logger.info("session %s: rebuilt from the store at seq %d", session.id, fresh.seq)
-        session.engine = fresh.engine
+        session.engine, session.time_epoch = fresh.engine, fresh.time_epoch
         session.seq = fresh.seq
         session.sensor_inputs = fresh.sensor_inputs
         session.last_input_at = fresh.last_input_at

@@ -92,8 +92,19 @@ def _admin_token(settings: Settings) -> str | None:
 
 async def require_admin(token: BearerToken, settings: SettingsDep) -> Principal:
     """Admin routes: only the admin token (403 for any other token)."""
-    if not is_admin_token(token, _admin_token(settings)):
-        raise Forbidden("this route needs the admin token")
+    admin_token = _admin_token(settings)
+    if admin_token is None:
+        raise Forbidden(
+            "this route needs the admin token, and this service has none: start it with the "
+            "environment variable CREDAL_ADMIN_TOKEN set (at least 32 visible ASCII "
+            "characters), then send it as 'Authorization: Bearer <CREDAL_ADMIN_TOKEN>'"
+        )
+    if not is_admin_token(token, admin_token):
+        raise Forbidden(
+            "this route needs the admin token: the value of the environment variable "
+            "CREDAL_ADMIN_TOKEN the service runs with, as 'Authorization: Bearer "
+            "<CREDAL_ADMIN_TOKEN>' (a session's token opens its own session only)"
+        )
     return Principal(admin=True)
 
 

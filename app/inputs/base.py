@@ -22,6 +22,7 @@ from typing import Any, ClassVar, Generic, TypeVar
 
 from api_schemas.base import WireModel
 from api_schemas.config import SessionConfig
+from api_schemas.examples import Example
 from api_schemas.issues import FieldIssue
 from app.errors import InvalidFields, StaleReport
 from app.outputs.text import dumps
@@ -57,6 +58,8 @@ class InputKind(ABC, Generic[ReportT]):
     """One line for the AsyncAPI file."""
     description: ClassVar[str]
     """What its route does (its OpenAPI description)."""
+    examples: ClassVar[dict[str, Example]] = {}
+    """Its route's request examples (:mod:`api_schemas.examples`)."""
 
     # ------------------------------------------------------------ wire
     def parse(self, body: PlainObject) -> ReportT:
@@ -122,6 +125,12 @@ class Input:
     def sensor(self) -> str:
         """The sending sensor."""
         return self.kind.sensor(self.report)
+
+    @property
+    def time(self) -> float | str:
+        """Its ``time`` as given (seconds, or an RFC 3339 timestamp)."""
+        time: float | str = self.report.time
+        return time
 
     @property
     def items(self) -> int:

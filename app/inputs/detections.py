@@ -21,8 +21,10 @@ from api_schemas.config import (
 )
 from api_schemas.consistency import detection_report_issues
 from api_schemas.events import DetectionsEvent
+from api_schemas.examples import DETECTION_REPORT_EXAMPLES
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import CartesianDetection, DetectionReport, PolarDetection
+from api_schemas.timing import seconds
 from api_schemas.ws import DetectionsMessage
 from app.geo.geodesy import LocalFrame, rotate_covariances
 from app.geo.polar import polar_to_cartesian
@@ -37,6 +39,7 @@ class Detections(InputKind[DetectionReport]):
     """A sensor's detections at one time."""
 
     tag = "detections"
+    examples = DETECTION_REPORT_EXAMPLES
     report_model = DetectionReport
     message_model = DetectionsMessage
     event_model = DetectionsEvent
@@ -119,7 +122,7 @@ def polar_detection_report(
             dtype=np.float64,
         )
     return CoreDetectionReport(
-        report.sensor, report.time, offsets + site[:dim], covariances, range_rates
+        report.sensor, seconds(report.time), offsets + site[:dim], covariances, range_rates
     )
 
 
@@ -148,11 +151,11 @@ def _measured(report: DetectionReport, config: SessionConfig) -> CoreDetectionRe
     dim = len(detections[0].z) if detections else 2
     measurements = np.array([d.z for d in detections], dtype=np.float64).reshape(-1, dim)
     if all(detection.r is None for detection in detections):
-        return CoreDetectionReport(report.sensor, report.time, measurements, None)
+        return CoreDetectionReport(report.sensor, seconds(report.time), measurements, None)
     noise = None if sensor is None else sensor.measurement
     default = noise.r if isinstance(noise, CartesianMeasurement) else None
     covariances = np.array(
         [detection.r if detection.r is not None else default for detection in detections],
         dtype=np.float64,
     )
-    return CoreDetectionReport(report.sensor, report.time, measurements, covariances)
+    return CoreDetectionReport(report.sensor, seconds(report.time), measurements, covariances)

@@ -14,8 +14,10 @@ import numpy as np
 from api_schemas.config import SessionConfig
 from api_schemas.consistency import track_report_issues
 from api_schemas.events import TracksEvent
+from api_schemas.examples import TRACK_REPORT_EXAMPLES
 from api_schemas.issues import FieldIssue
 from api_schemas.reports import SensorTrack, TrackReport
+from api_schemas.timing import seconds
 from api_schemas.ws import TracksMessage
 from app.geo.geodesy import geodetic_to_session, sensor_to_session
 from app.inputs.base import InputKind
@@ -36,6 +38,7 @@ class Tracks(InputKind[TrackReport]):
     """A sensor's track list at one time."""
 
     tag = "tracks"
+    examples = TRACK_REPORT_EXAMPLES
     report_model = TrackReport
     message_model = TracksMessage
     event_model = TracksEvent
@@ -84,7 +87,7 @@ def core_track_report(report: TrackReport, frame: Frame | None) -> CoreTrackRepo
     """A sensor's track list for the engine."""
     return CoreTrackReport(
         sensor=report.sensor,
-        time=report.time,
+        time=seconds(report.time),
         tracks=tuple(reported_track(track, frame) for track in report.tracks),
     )
 

@@ -8,6 +8,7 @@ import anyio
 from fastapi import APIRouter
 
 from api_schemas.associate import AssociateRequest, AssociateResponse
+from api_schemas.examples import ASSOCIATE_EXAMPLES, json_body_examples
 from app.http.deps import RegistryDep, SettingsDep, TenantDep
 from app.http.errors import LimitExceeded, problem_responses
 from app.http.requests import WireRoute
@@ -57,6 +58,7 @@ def run_association(request: AssociateRequest) -> PlainObject:
     "/v1/associate",
     response_model=AssociateResponse,
     responses=problem_responses(401, 408, 413, 422, 503),
+    openapi_extra=json_body_examples(ASSOCIATE_EXAMPLES),
 )
 async def associate_tracks(
     request: AssociateRequest, tenant: TenantDep, settings: SettingsDep, registry: RegistryDep

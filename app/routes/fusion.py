@@ -8,10 +8,11 @@ from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Path, Query
 
-from api_schemas.base import FiniteFloat
 from api_schemas.config import SessionConfig
+from api_schemas.issues import FieldIssue
 from api_schemas.results import FusedTrackDetail
-from app.errors import TrackNotFound
+from api_schemas.timing import QueryTime, seconds
+from app.errors import InvalidFields, TrackNotFound
 from app.geo.geojson import with_geodetic
 from app.http.deps import CurrentSessionDep, RegistryDep
 from app.http.errors import problem_responses
@@ -20,7 +21,6 @@ from app.http.responses import JSONTextResponse
 from app.outputs import FRAMES, OUTPUT_FORMATS, Output, output_for
 from app.outputs.json_results import wire_json
 from app.sessions.translate import session_geodetic
-from core.numerics import MAX_TIME
 
 router = APIRouter(prefix="/v1/sessions", tags=["fusion"], route_class=WireRoute)
 
@@ -80,12 +80,11 @@ async def list_fused_tracks(
     session: CurrentSessionDep,
     registry: RegistryDep,
     time: Annotated[
-        FiniteFloat | None,
+        QueryTime | None,
         Query(
-            ge=-MAX_TIME,
-            le=MAX_TIME,
-            description="predict the tracks to this time (default: the fusion time); at most "
-            "1e12 s in magnitude, as the inputs' times",
+            description="predict the tracks to this time (default: the fusion time): seconds "
+            "(at most 1e12 in magnitude, as the inputs' times) or, in a session whose inputs "
+            "gave RFC 3339 timestamps (time_epoch unix), a timestamp too",
         ),
     ] = None,
     frame: OutputFrame = "session",
@@ -99,7 +98,20 @@ async def list_fused_tracks(
     properties). Both need the session's ``origin`` (else 422).
     """
     output = output_of(session.config, format, frame)
-    text = await registry.picture(session, time, output)
+    if isinstance(time, str) and session.time_epoch == "arbitrary":
+        raise InvalidFields(
+            [
+                FieldIssue(
+                    ("time",),
+                    "this session's times are seconds of its own epoch (its inputs gave "
+                    f"numbers): ask for a time in seconds, not the timestamp {time!r}",
+                    time,
+                )
+            ],
+            prefix="query",
+        )
+    at = None if time is None else seconds(time)
+    text = await registry.picture(session, at, output)
     return JSONTextResponse(text, media_type=output.media_type)
 
 

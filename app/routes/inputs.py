@@ -9,6 +9,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Header, Query, Request
 
 from api_schemas.base import WireModel
+from api_schemas.examples import json_body_examples
 from app.http.deps import LiveSessionDep, RegistryDep
 from app.http.errors import problem_responses
 from app.http.requests import WireRoute
@@ -66,6 +67,7 @@ def _submit_route(router: APIRouter, kind: InputKind[Any]) -> None:
         response_model=None,  # the formats' models: output_responses
         responses=output_responses("step", 401, 403, 404, 409, 408, 413, 422, 503),
         name=submit.__name__,
+        openapi_extra=json_body_examples(kind.examples),
     )
 
 

@@ -11,6 +11,7 @@ from fastapi import APIRouter, Query, Response
 
 from api_schemas.config import SessionConfig
 from api_schemas.events import EventLog, SnapshotEvent
+from api_schemas.examples import SESSION_EXAMPLES, json_body_examples
 from api_schemas.sessions import (
     DetectionTally,
     SensorActivity,
@@ -54,6 +55,7 @@ MAX_SEQ = 2**53
     status_code=HTTPStatus.CREATED,
     response_model=SessionCreated,
     responses=problem_responses(400, 401, 408, 413, 422, 429, 503),
+    openapi_extra=json_body_examples(SESSION_EXAMPLES),
 )
 def create_session(
     config: SessionConfig,
@@ -140,6 +142,7 @@ def summary(session: LiveSession) -> SessionSummary:
         config=session.config,
         seq=session.seq,
         time=session.time,
+        time_epoch=session.time_epoch,
         sensors=[
             SensorActivity(
                 id=sensor,

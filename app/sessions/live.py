@@ -13,8 +13,10 @@ from dataclasses import dataclass, field
 from datetime import datetime
 
 from api_schemas.config import SessionConfig
+from api_schemas.issues import FieldIssue, Location
 from api_schemas.limits import CEILINGS, limits_of
-from app.errors import IdempotencyKeyReused, LimitExceeded
+from api_schemas.timing import EXAMPLE_TIMESTAMP, TimeEpoch, epoch_of
+from app.errors import IdempotencyKeyReused, InvalidFields, LimitExceeded
 from app.sessions.hub import Hub
 from app.sessions.translate import PlainObject, class_frame, fusion_config
 from app.stores import SessionRecord, Snapshot
@@ -47,6 +49,9 @@ class LiveSession:
     """Monotonic time until which this instance surely holds the session's lease (redis store)."""
     lock: asyncio.Lock = field(default_factory=asyncio.Lock)
     hub: Hub = field(default_factory=Hub)
+    time_epoch: TimeEpoch | None = None
+    """How its inputs give their times: its first input's way (numbers, ``arbitrary``; RFC 3339
+    timestamps, ``unix``; :mod:`api_schemas.timing`), ``None`` before it."""
     answered: OrderedDict[str, tuple[str, str]] = field(default_factory=OrderedDict)
     """The answers to the latest inputs sent with an ``Idempotency-Key``: key → (the input's
     fingerprint, the answer), at most :data:`IDEMPOTENCY_KEYS`, oldest first."""
@@ -66,6 +71,24 @@ class LiveSession:
         self.answered[key] = (fingerprint, answer)
         while len(self.answered) > IDEMPOTENCY_KEYS:
             self.answered.popitem(last=False)
+
+    def epoch_of(self, time: float | str, where: Location = ("time",)) -> TimeEpoch:
+        """The epoch of an input's ``time``: refused (422 at ``where``) unless it is the
+        session's (:mod:`api_schemas.timing`)."""
+        epoch = epoch_of(time)
+        if self.time_epoch is None or epoch == self.time_epoch:
+            return epoch
+        if epoch == "unix":
+            message = (
+                f"this session's times are seconds of its own epoch (its first input gave a "
+                f"number): send time as a number, not the timestamp {time!r}"
+            )
+        else:
+            message = (
+                f"this session's times are RFC 3339 timestamps (its first input gave one): send "
+                f"time as a timestamp such as {EXAMPLE_TIMESTAMP!r}, not the number {time!r}"
+            )
+        raise InvalidFields([FieldIssue(where, message, time)])
 
     @property
     def id(self) -> str:
@@ -136,6 +159,7 @@ class LiveSession:
             "joined_sensors": self.joined_sensors,
             "sensor_inputs": dict(self.sensor_inputs),
             "last_input_at": None if self.last_input_at is None else self.last_input_at.isoformat(),
+            "time_epoch": self.time_epoch,
         }
 
 
@@ -181,3 +205,8 @@ def restore_snapshot(session: LiveSession, snapshot: Snapshot) -> None:
     session.sensor_inputs = {str(k): int(v) for k, v in state["sensor_inputs"].items()}
     last = state["last_input_at"]
     session.last_input_at = None if last is None else datetime.fromisoformat(last)
+    epoch = state.get("time_epoch")  # absent from a snapshot taken before timestamps existed
+    if epoch in ("arbitrary", "unix"):
+        session.time_epoch = epoch
+    elif engine is not None and engine.time is not None:
+        session.time_epoch = "arbitrary"

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 import anyio
 from prometheus_client import Counter, Histogram
 
+from api_schemas.timing import TimeEpoch
 from app.cluster.quotas import input_work
 from app.errors import LimitExceeded, SessionNotFound, StoreUnavailable
 from app.inputs import DecodedKind, Input, SessionView
@@ -67,6 +68,7 @@ class Step:
     written: dict[Output, str]
     logged: PlainObject
     engine_cpu_s: float
+    time_epoch: TimeEpoch
 
     @property
     def result(self) -> str:
@@ -260,7 +262,9 @@ class InputPipeline:
         outputs: frozenset[Output] = frozenset((JSON,)),
     ) -> Step:
         """Apply an input to the session's engine (or a copy with a new sensor), write its
-        result in ``outputs`` (and JSON); logs nothing."""
+        result in ``outputs`` (and JSON); logs nothing. Its ``time`` is refused unless given
+        as the session's are (numbers or timestamps: :meth:`LiveSession.epoch_of`)."""
+        time_epoch = session.epoch_of(submitted.time)
         engine, joined = session.engine_for(submitted.sensor, self.registry.settings.max_sensors)
         try:
             applied = submitted.apply(engine, session.config, explain=explain)
@@ -276,6 +280,7 @@ class InputPipeline:
             written={output: output.step(step, seq, warnings) for output in outputs | {JSON}},
             logged=submitted.logged(),
             engine_cpu_s=applied.engine_cpu_s,
+            time_epoch=time_epoch,
         )
 
     def replay(self, session: LiveSession, entries: list[LogEntry]) -> None:
@@ -287,7 +292,7 @@ class InputPipeline:
             except Exception:
                 logger.exception("session %s: replay of input %d failed", record.id, entry.seq)
             else:
-                session.engine = step.engine
+                session.engine, session.time_epoch = step.engine, step.time_epoch
             sensor = str(entry.input.get("report", {}).get("sensor", ""))
             session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
             session.seq = entry.seq
@@ -345,7 +350,7 @@ class InputPipeline:
             # the engine holds an unlogged step: rebuild on next use
             self.registry.discard(session.id, SESSION_RELOADED)
             raise
-        session.engine = step.engine
+        session.engine, session.time_epoch = step.engine, step.time_epoch
         session.seq = seq
         session.last_input_at = received_at
         session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1

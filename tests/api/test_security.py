@@ -100,7 +100,9 @@ def test_unknown_session_is_404(client: TestClient) -> None:
 def test_listing_is_admin_only(client: TestClient) -> None:
     sid, token = create_session(client)
     assert client.get("/v1/sessions").status_code == 401
-    assert client.get("/v1/sessions", headers=bearer(token)).status_code == 403
+    refused = client.get("/v1/sessions", headers=bearer(token))
+    assert refused.status_code == 403
+    assert "environment variable CREDAL_ADMIN_TOKEN" in refused.json()["detail"]
     listed = client.get("/v1/sessions", headers=bearer(ADMIN_TOKEN))
     assert listed.status_code == 200
     assert [item["id"] for item in listed.json()["sessions"]] == [sid]
@@ -111,7 +113,12 @@ def test_without_admin_token_configured_no_token_is_admin() -> None:
         create_app(make_settings(admin_token=None)), raise_server_exceptions=False
     ) as client:
         assert client.get("/v1/sessions", headers=bearer("")).status_code == 401
-        assert client.get("/v1/sessions", headers=bearer("None")).status_code == 403
+        refused = client.get("/v1/sessions", headers=bearer("None"))
+        assert refused.status_code == 403
+        assert (
+            "has none: start it with the environment variable CREDAL_ADMIN_TOKEN"
+            in (refused.json()["detail"])
+        )
 
 
 def test_delete_ends_the_session_and_its_token(client: TestClient) -> None:

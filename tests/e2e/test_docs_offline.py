@@ -78,3 +78,23 @@ def test_docs_and_redoc_load_offline(
     icon = httpx.get(f"{live_server.url}/favicon.ico")
     assert icon.status_code == 200 and icon.headers["content-type"] == "image/png"
     assert icon.content.startswith(b"\x89PNG")
+
+
+def test_try_it_out_creates_a_session_from_the_documented_example(
+    live_server: LiveServer, browser_page: BrowserPage
+) -> None:
+    """ "Try it out → Execute" on ``POST /v1/sessions`` in ``/docs``, as a user clicks it:
+    Swagger UI sends the first request example, and the service answers 201."""
+    page = browser_page.page
+    page.goto(f"{live_server.url}/docs")
+    operation = page.locator("#operations-sessions-create_session")
+    operation.locator(".opblock-summary").click()
+    operation.locator(".try-out__btn").click()
+    operation.locator(".execute").click()
+    status = operation.locator(".live-responses-table .response .response-col_status").first
+    status.wait_for()
+    assert status.inner_text().strip() == "201", operation.locator(
+        ".live-responses-table"
+    ).inner_text()
+    body = operation.locator(".live-responses-table .response-col_description pre").first
+    assert '"token"' in body.inner_text()
