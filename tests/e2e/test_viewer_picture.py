@@ -12,6 +12,7 @@ land in the test's temporary directory.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import re
@@ -29,6 +30,7 @@ from tests.e2e.browser import BrowserPage
 
 README = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
 LAYOUT_2D = {"dim": 4, "position": [0, 2], "velocity": [1, 3]}
+WHEEL_STEPS = 14
 
 PIXELS = """([x0, y0, w, h, colours, points]) => {
   const canvas = document.getElementById('plot'), ratio = window.devicePixelRatio || 1;
@@ -159,9 +161,13 @@ def test_the_readme_geodetic_session_is_drawn_on_the_map(
         page.mouse.move(
             canvas["x"] + plot["x0"] + plot["w"] / 2, canvas["y"] + plot["y0"] + plot["h"] / 2
         )
-        for _ in range(14):
+        for _ in range(WHEEL_STEPS):
             page.mouse.wheel(0, 400)
-        page.wait_for_function("() => window.__viewer.state().metresPerPixel > 400")
+        # every step taken (the page zooms by exp(0.0015 · deltaY) a step) before reading it
+        page.wait_for_function(
+            "mpp => window.__viewer.state().metresPerPixel > mpp",
+            arg=close["metresPerPixel"] * math.exp(0.0015 * 400 * (WHEEL_STEPS - 0.5)),
+        )
         far = state(page)
         page.screenshot(path=tmp_path / "viewer-map-far.png")
         assert not far["follow"]  # the user zoomed: the view is theirs
@@ -445,3 +451,26 @@ def test_the_detail_panel_scrolls_and_writes_numbers_for_people(
                 assert abs(shown - value) <= step / 2 + 1e-12, (i, j, text, value)
     page.screenshot(path=tmp_path / "viewer-details-scrolled.png")
     assert not log.console_errors, log.console_errors
+
+
+def test_the_map_is_the_vendored_natural_earth_file_with_its_licence(
+    live_server: LiveServer,
+) -> None:
+    """``/map/countries-50m.json`` is world-atlas 2.0.2's file, byte for byte (the SHA-256 its
+    provenance note gives), a TopoJSON topology with land and countries; the ISC licence and
+    the public-domain note sit beside it."""
+    folder = Path(__file__).resolve().parents[2] / "app" / "static" / "map"
+    note = (folder / "README.md").read_text(encoding="utf-8")
+    digest = re.search(r"SHA-256\s+`([0-9a-f]{64})`", note)
+    assert digest is not None, note
+    assert "public domain" in note and "ISC" in note
+    licence = (folder / "LICENSE").read_text(encoding="utf-8")
+    assert "Michael Bostock" in licence and "Permission to use, copy, modify" in licence
+    with httpx.Client(base_url=live_server.url, timeout=30) as client:
+        answer = client.get("/map/countries-50m.json")
+    assert answer.status_code == 200
+    assert answer.headers["content-type"].startswith("application/json")
+    assert hashlib.sha256(answer.content).hexdigest() == digest.group(1)
+    topology = answer.json()
+    assert topology["type"] == "Topology"
+    assert {"land", "countries"} <= set(topology["objects"])
