@@ -192,16 +192,36 @@ class PointGeometry(WireModel):
     coordinates: Annotated[list[FiniteFloat], Field(min_length=2, max_length=3)]
 
 
+class PositionEllipse(WireModel):
+    """A fused track's horizontal position uncertainty: the ``sigma``-σ ellipse (2-σ) of its
+    position covariance's east/north block, in the tangent plane at the track's point."""
+
+    sigma: FiniteFloat = Field(description="the ellipse's size in standard deviations (2)")
+    semi_major_m: FiniteFloat = Field(description="semi-major axis, metres")
+    semi_minor_m: FiniteFloat = Field(description="semi-minor axis, metres")
+    orientation_deg: FiniteFloat = Field(
+        description="the major axis' direction, degrees clockwise from north, in [0, 180) "
+        "(0 for a circle)"
+    )
+
+
 class TrackFeatureProperties(WireModel):
     """What a fused track's GeoJSON feature says besides its point."""
 
     id: Identifier
     status: TrackStatus
+    sources: list[Identifier] = Field(
+        description="ids of the sensors whose tracks contribute to it, each once"
+    )
     decision: Label | None
+    decision_state: DecisionState | None = Field(
+        description="decided, tied or undefined (FusedClassification); null: no class evidence"
+    )
     pignistic: dict[Label, UnitFloat] | None
     velocity_enu: list[FiniteFloat] = Field(
         description="east/north(/up) velocity (m/s) in the tangent plane at the track's point"
     )
+    position_ellipse: PositionEllipse
 
 
 class TrackFeature(WireModel):
@@ -238,6 +258,7 @@ __all__ = [
     "FusedTrackDetail",
     "PairBasis",
     "PointGeometry",
+    "PositionEllipse",
     "ScoreMatrix",
     "StepAssociation",
     "StepResult",

@@ -1,7 +1,8 @@
 """The ``geojson`` output format: fused tracks as an ``application/geo+json`` FeatureCollection.
 
 Point features ``[lon°, lat°, alt m]`` on WGS84 (RFC 7946) with each track's
-id, status, decision, BetP and velocity east/north(/up) at its point
+id, status, sources (sensor ids), decision and decision state, BetP, velocity
+east/north(/up) and 2-σ position ellipse at its point
 (:func:`app.geo.geojson.feature_collection`); the answer's ``seq`` and
 ``time`` (and a step's ``sensor``) are foreign members of the collection
 (RFC 7946 §6.1). ``api_schemas.results.FusedFeatureCollection`` documents it.
@@ -78,6 +79,8 @@ def _collection(
             "id": view.id,
             "status": view.status.value,
             "state": view.state,
+            "covariance": view.covariance,
+            "sources": view.sources,
             "classification": _decision(view.classification),
         }
         for view in views
@@ -86,11 +89,14 @@ def _collection(
 
 
 def _decision(assessment: ClassAssessment | None) -> PlainObject | None:
-    """What a GeoJSON feature says of a track's class: its decision and BetP."""
-    if assessment is None or assessment.mass is None:
+    """What a GeoJSON feature says of a track's class: its decision, decision state and BetP."""
+    if assessment is None:
         return None
+    if assessment.mass is None:  # total conflict: no BetP, no decision
+        return {"decision": None, "decision_state": assessment.decision_state.value}
     labels = assessment.mass.frame.labels
     return {
         "decision": assessment.decision,
+        "decision_state": assessment.decision_state.value,
         "pignistic": dict(zip(labels, assessment.pignistic.tolist(), strict=True)),
     }
