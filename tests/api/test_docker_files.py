@@ -39,7 +39,7 @@ DOCKERFILE = ROOT / "docker" / "Dockerfile"
 COMPOSE = ROOT / "docker" / "compose.yaml"
 CONTAINER_PORT = 8000
 SERVICE = "credal-fusion"
-START_TIMEOUT_S = 30.0
+START_TIMEOUT_S = 90.0
 
 
 def instructions() -> list[tuple[str, str]]:

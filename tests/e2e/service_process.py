@@ -26,7 +26,7 @@ import redis
 from tests.api.conftest import ADMIN_TOKEN
 
 ROOT = Path(__file__).resolve().parents[2]
-START_TIMEOUT_S = 30.0
+START_TIMEOUT_S = 90.0
 
 
 def free_port() -> int:

@@ -26,7 +26,7 @@ from tests.api.conftest import ADMIN_TOKEN
 from tests.api.scenario import reports, session_config
 
 ROOT = Path(__file__).resolve().parents[2]
-START_TIMEOUT_S = 30.0
+START_TIMEOUT_S = 90.0
 STEPS = 14
 KILLED_AFTER = 8
 
