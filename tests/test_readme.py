@@ -5,7 +5,7 @@ holding a link to this ``.venv``) with ``BASE`` set to the test's server,
 and what each prints is checked against what the README says it shows. The
 set-up block (`make run`, `make test`) is fenced ```shell: it starts things
 and is not run here. The README's lists of scenarios and of the system
-packages that ``.ci/run`` installs are checked against their sources.
+packages that ``make test`` installs are checked against their sources.
 """
 
 from __future__ import annotations
@@ -191,14 +191,10 @@ def test_the_readme_lists_every_scenario_of_simulate() -> None:
     assert re.findall(r"`([\w-]+)`", listed.group(1)) == scenario_names()
 
 
-def test_the_readme_names_the_system_packages_of_ci_run() -> None:
-    ci_run = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
-    installed = [
-        package
-        for command in re.findall(r"apt-get install ([^\n;&|]+)", ci_run)
-        for package in command.split()
-        if not package.startswith("-")
-    ]
-    assert "`.ci/run`" in README
+def test_the_readme_names_the_system_packages_of_make_test() -> None:
+    script = (ROOT / "tools" / "test-prerequisites").read_text(encoding="utf-8")
+    installed = re.findall(r"missing\+=\(([\w-]+)\)", script)
+    assert installed == ["chromium", "redis-server"]
+    assert "`tools/test-prerequisites`" in README
     for package in installed:
-        assert f"`{package}`" in README, f".ci/run installs {package}: the README must say so"
+        assert f"`{package}`" in README, f"make test installs {package}: the README must say so"
