@@ -176,6 +176,8 @@ def test_every_sh_block_of_the_readme_runs_against_a_live_server(
         f"README block {ran[-1] if ran else 0} failed ({done.returncode}):\n"
         f"{blocks[int(ran[-1])] if ran and ran[-1] != 'end' else ''}\n{done.stderr}"
     )
+    # nothing left where the blocks ran (a user's clone): example files go to temporary ones
+    assert sorted(path.name for path in tmp_path.iterdir()) == [".venv"]
     outputs = pieces[2::2]
     for index, (check, output) in enumerate(zip(checks, outputs, strict=False)):
         try:
