@@ -2,33 +2,52 @@
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
-STAMP  := $(VENV)/.installed-stamp
+# Two installs: the service alone (`make run`), and the service with the test and figure
+# tools, the `dev` and `figures` extras (every other target).
+SERVICE_STAMP := $(VENV)/.service-stamp
+STAMP         := $(VENV)/.installed-stamp
+# pip names every package it fetches; tools/heartbeat.py says what is still running when
+# it is silent (venv's ensurepip, building asterix-decoder's C extension, unpacking numpy).
+PIP_INSTALL := $(PYTHON) tools/heartbeat.py $(BIN)/python -m pip install --progress-bar off
 
-.PHONY: run test lint bench soak openapi figures clean
+.PHONY: run test test-prerequisites lint bench soak openapi figures clean
 
-# Each step says what it does, and pip names every package it installs (the
-# first run takes about two minutes).
-$(STAMP): pyproject.toml
-	@test -x $(BIN)/python || { echo "==> creating the virtual environment $(VENV)/ ($(PYTHON))"; $(PYTHON) -m venv $(VENV); }
+$(BIN)/python:
+	@echo "==> creating the virtual environment $(VENV)/ ($(PYTHON))"
+	@$(PYTHON) tools/heartbeat.py $(PYTHON) -m venv $(VENV)
 	@echo "==> upgrading pip in $(VENV)/"
-	@$(BIN)/python -m pip install --quiet --upgrade pip
-	@echo "==> installing credal-fusion and its dependencies from pyproject.toml (first time: about 2 minutes)"
-	@$(BIN)/python -m pip install --progress-bar off -e '.[dev,figures]'
-	@touch $(STAMP)
+	@$(PIP_INSTALL) --quiet --upgrade pip
+
+$(SERVICE_STAMP): pyproject.toml | $(BIN)/python
+	@echo "==> installing credal-fusion and the service's dependencies only (first time: a minute or more, asterix-decoder is compiled)"
+	@$(PIP_INSTALL) -e .
+	@touch $@
+	@echo "==> $(VENV)/ is ready to run the service"
+
+$(STAMP): pyproject.toml | $(BIN)/python
+	@echo "==> installing credal-fusion with its test and figure tools, the dev and figures extras (first time: 2 minutes or more)"
+	@$(PIP_INSTALL) -e '.[dev,figures]'
+	@touch $@ $(SERVICE_STAMP)
 	@echo "==> $(VENV)/ is ready"
 
-run: $(STAMP)
+run: $(SERVICE_STAMP)
 	@mkdir -p data
 	@echo "==> starting the service (sqlite store in data/); Ctrl-C stops it"
 	$(BIN)/credal-fusion serve --host 127.0.0.1 --port 8000
+
+# Debian's chromium and redis-server, installed when missing (tools/test-prerequisites);
+# the tests' Redis: the one at CREDAL_TEST_REDIS_URL (default 127.0.0.1:6379), else a
+# private redis-server for the run (tools/with-test-redis).
+test-prerequisites:
+	@tools/test-prerequisites
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
 
-test: lint
-	$(BIN)/python -m pytest -q
+test: test-prerequisites lint
+	tools/with-test-redis $(BIN)/python $(BIN)/python -m pytest -q
 
 openapi: $(STAMP)
 	$(BIN)/python -m app.openapi openapi.json

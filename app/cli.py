@@ -9,7 +9,10 @@ plotting code. Options left out take their value from the settings
 from __future__ import annotations
 
 import argparse
+import contextlib
+import errno
 import functools
+import socket
 import subprocess
 import sys
 from collections.abc import Sequence
@@ -20,12 +23,6 @@ from evaluation.catalogue import CATALOGUE
 
 
 def _serve(args: argparse.Namespace) -> int:
-    import uvicorn
-
-    from app.http.keepalive import server_options
-    from app.http.transport import raise_descriptor_limit
-    from app.main import create_app
-    from app.runtime import tune_garbage_collector
     from app.settings import get_settings
 
     given = {
@@ -34,18 +31,28 @@ def _serve(args: argparse.Namespace) -> int:
         if (value := getattr(args, name)) is not None
     }
     settings = get_settings().model_copy(update=given)
+    listening = _listen(settings.host, settings.port)  # a busy port: one line, no banner
+    address = f"http://{settings.host}:{listening.getsockname()[1]}"
+
+    import uvicorn
+
+    from app.http.keepalive import server_options
+    from app.http.transport import raise_descriptor_limit
+    from app.main import create_app
+    from app.runtime import tune_garbage_collector
+
     _check_store(settings.store, settings.redis_prefix)
     print(
-        f"credal-fusion on http://{settings.host}:{settings.port}\n"
-        f"  live viewer: http://{settings.host}:{settings.port}/\n"
-        f"  API docs: http://{settings.host}:{settings.port}/docs\n"
+        f"credal-fusion on {address}\n"
+        f"  live viewer: {address}/\n"
+        f"  API docs: {address}/docs\n"
         f"  store: {settings.store}",
         flush=True,
     )
     application = create_app(settings)
     tune_garbage_collector()
     raise_descriptor_limit()  # the connection limits decide, not the descriptor limit
-    uvicorn.run(
+    config = uvicorn.Config(
         application,
         host=settings.host,
         port=settings.port,
@@ -53,7 +60,32 @@ def _serve(args: argparse.Namespace) -> int:
         access_log=settings.access_log,
         **server_options(settings),
     )
-    return 0
+    server = uvicorn.Server(config)
+    with contextlib.suppress(KeyboardInterrupt):  # as uvicorn.run: Ctrl-C is a clean stop
+        server.run(sockets=[listening])
+    return 0 if server.started else 3  # 3: uvicorn's status of a failed start
+
+
+def _listen(host: str, port: int) -> socket.socket:
+    """The service's socket, bound as uvicorn binds it (``SO_REUSEADDR``); uvicorn listens on
+    it. An address in use is one line saying what to do (not uvicorn's ``[Errno 98]``)."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    listening = socket.socket(family, socket.SOCK_STREAM)
+    listening.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        listening.bind((host, port))
+    except OSError as error:
+        listening.close()
+        if error.errno == errno.EADDRINUSE:
+            raise CommandError(
+                f"{host}:{port} is in use (another credal-fusion serve?): stop it, "
+                "or choose another port with --port"
+            ) from None
+        raise CommandError(
+            f"cannot listen on {host}:{port} ({error.strerror or error}): check --host and --port"
+        ) from None
+    listening.set_inheritable(True)
+    return listening
 
 
 def _check_store(url: str, redis_prefix: str) -> None:
@@ -96,6 +128,24 @@ def _store_url(text: str) -> str:
     return text
 
 
+def _server_url(text: str) -> str:
+    """A ``--server`` URL: ``HOST:PORT`` without a scheme is read as ``http://HOST:PORT``."""
+    url = text.strip().rstrip("/")
+    scheme, found, rest = url.partition("://")
+    if not found:
+        scheme, rest, url = "http", url, f"http://{url}"
+    if scheme not in ("http", "https"):
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: the service's URL starts with http:// or https://, not {scheme}://"
+        )
+    if not rest or rest.startswith((":", "/")):
+        raise argparse.ArgumentTypeError(f"{text!r} names no host, e.g. http://127.0.0.1:8000")
+    return url
+
+
+SERVER_HELP = "URL of a running service, e.g. http://127.0.0.1:8000 (or 127.0.0.1:8000: http)"
+
+
 def _positive(text: str) -> float:
     value = float(text)
     if not value > 0:
@@ -129,7 +179,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
 
 def _export(args: argparse.Namespace) -> int:
-    from app.commands.replay import export_command
+    from app.commands.export import export_command  # httpx only: no engine for a few GETs
 
     return export_command(args)
 
@@ -180,8 +230,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     simulate.add_argument(
         "--server",
-        help="URL of a running service, e.g. http://127.0.0.1:8000: prints the session, "
-        "its token and the viewer URL first",
+        type=_server_url,
+        help=f"{SERVER_HELP}: prints the session, its token and the viewer URL first",
     )
     simulate.add_argument(
         "--keep",
@@ -191,27 +241,36 @@ def build_parser() -> argparse.ArgumentParser:
     simulate.add_argument(
         "--speed",
         type=_positive,
-        help="play the inputs at SPEED times the scenario's clock (1: real time, to watch "
-        "in the viewer; default: as fast as possible)",
+        help="with --server: play the inputs at SPEED times the scenario's clock (1: real "
+        "time, to watch in the viewer; default: as fast as possible)",
     )
     simulate.add_argument("--quiet", action="store_true", help="no progress bar")
     simulate.set_defaults(handler=_simulate)
 
     reproduce = add_parser("reproduce", help="regenerate one paper figure (PNG)")
     reproduce.add_argument("figure", choices=sorted(CATALOGUE))
-    reproduce.add_argument("--out", default="docs/figures", help="directory (default: %(default)s)")
+    reproduce.add_argument(
+        "--out",
+        default="out/figures",
+        help="directory (default: %(default)s, ignored by git; docs/figures replaces the "
+        "committed figure)",
+    )
     reproduce.add_argument("--reduced", action="store_true", help="small sizes, for a quick look")
     reproduce.set_defaults(handler=_reproduce)
 
     export = add_parser("export", help="write a session's event log as JSON lines")
-    export.add_argument("--server", required=True)
+    export.add_argument("--server", type=_server_url, required=True, help=SERVER_HELP)
     export.add_argument("--session", required=True)
     export.add_argument("--token", required=True, help="the session's token (or the admin token)")
     export.set_defaults(handler=_export)
 
     replay = add_parser("replay", help="apply an exported event log, print the results")
     replay.add_argument("events", help="EVENTS.jsonl written by `credal-fusion export`")
-    replay.add_argument("--server", help="replay through a running service instead of in process")
+    replay.add_argument(
+        "--server",
+        type=_server_url,
+        help=f"replay through a running service instead of in process ({SERVER_HELP})",
+    )
     replay.add_argument("--quiet", action="store_true", help="no progress bar")
     replay.set_defaults(handler=_replay)
 
@@ -261,9 +320,34 @@ def _bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _idle_flag(args: argparse.Namespace) -> str | None:
+    """Why a flag given would do nothing in this command line (it is then refused), or None."""
+    if args.command != "simulate":
+        return None
+    if args.server is None:
+        if args.keep:
+            return "--keep leaves the server's session open: it needs --server"
+        if args.speed is not None:
+            return "--speed paces the inputs for a server's live viewer: it needs --server"
+    if args.preset is not None:
+        from app.commands.scenarios import tracks_locally
+
+        if not tracks_locally(args.scenario):
+            return (
+                f"--preset sets the local tracking of a detection scenario; {args.scenario} "
+                "is a track-list scenario (no local tracking): leave --preset out"
+            )
+    return None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the console script: a failure is one line on stderr and exit status 1."""
+    """Entry point of the console script: a failure is one line on stderr and exit status 1;
+    a flag that would do nothing is one line and exit status 2."""
     args = build_parser().parse_args(argv)
+    idle = _idle_flag(args)
+    if idle is not None:
+        print(f"credal-fusion {args.command}: {idle}", file=sys.stderr)
+        return 2
     try:
         return int(args.handler(args))
     except KeyboardInterrupt:

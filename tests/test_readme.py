@@ -5,7 +5,7 @@ holding a link to this ``.venv``) with ``BASE`` set to the test's server,
 and what each prints is checked against what the README says it shows. The
 set-up block (`make run`, `make test`) is fenced ```shell: it starts things
 and is not run here. The README's lists of scenarios and of the system
-packages that ``.ci/run`` installs are checked against their sources.
+packages that ``make test`` installs are checked against their sources.
 """
 
 from __future__ import annotations
@@ -186,6 +186,8 @@ def test_every_sh_block_of_the_readme_runs_against_a_live_server(
         f"README block {ran[-1] if ran else 0} failed ({done.returncode}):\n"
         f"{blocks[int(ran[-1])] if ran and ran[-1] != 'end' else ''}\n{done.stderr}"
     )
+    # nothing left where the blocks ran (a user's clone): example files go to temporary ones
+    assert sorted(path.name for path in tmp_path.iterdir()) == [".venv"]
     outputs = pieces[2::2]
     for index, (check, output) in enumerate(zip(checks, outputs, strict=False)):
         try:
@@ -201,14 +203,10 @@ def test_the_readme_lists_every_scenario_of_simulate() -> None:
     assert re.findall(r"`([\w-]+)`", listed.group(1)) == scenario_names()
 
 
-def test_the_readme_names_the_system_packages_of_ci_run() -> None:
-    ci_run = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
-    installed = [
-        package
-        for command in re.findall(r"apt-get install ([^\n;&|]+)", ci_run)
-        for package in command.split()
-        if not package.startswith("-")
-    ]
-    assert "`.ci/run`" in README
+def test_the_readme_names_the_system_packages_of_make_test() -> None:
+    script = (ROOT / "tools" / "test-prerequisites").read_text(encoding="utf-8")
+    installed = re.findall(r"missing\+=\(([\w-]+)\)", script)
+    assert installed == ["chromium", "redis-server"]
+    assert "`tools/test-prerequisites`" in README
     for package in installed:
-        assert f"`{package}`" in README, f".ci/run installs {package}: the README must say so"
+        assert f"`{package}`" in README, f"make test installs {package}: the README must say so"

@@ -8,7 +8,10 @@ usual foreign failures (the server does not answer, a file is missing).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import httpx
 
 MAX_DETAIL_CHARS = 300
 """A server's answer quoted in a message is cut to this length."""
@@ -39,6 +42,17 @@ def http_failure(method: str, path: str, status: int, body: Any) -> CommandError
     detail = " ".join(detail.split())[:MAX_DETAIL_CHARS]
     hint = HINTS.get(status, "see the server's log" if status >= 500 else "see the detail")
     return CommandError(f"{method} {path} answered {status}: {detail} ({hint})")
+
+
+def raise_for_problem(answer: httpx.Response) -> None:
+    """Raise a one-line :class:`CommandError` if ``answer`` is not a success."""
+    if answer.is_success:
+        return
+    try:
+        body = answer.json()
+    except ValueError:
+        body = answer.text
+    raise http_failure(answer.request.method, answer.request.url.path, answer.status_code, body)
 
 
 def pydantic_line(error: Any) -> str:

@@ -1,4 +1,5 @@
-"""``credal-fusion export`` and ``credal-fusion replay``: a session's inputs as JSON lines.
+"""``credal-fusion replay`` (and the format ``credal-fusion export`` writes): a session's inputs
+as JSON lines.
 
 An event file (``EVENTS.jsonl``) is one JSON object per line: first
 ``{"type": "session", "config": {...}}`` (the resolved session config), then
@@ -18,17 +19,15 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, TextIO
 
-import httpx
 from pydantic import BaseModel, ValidationError
 
 from api_schemas.config import SessionConfig
 from app.commands.errors import CommandError, pydantic_line
 from app.commands.progress import shown as progress
-from app.commands.runner import Input, raise_for_problem, run_locally, run_on_server
+from app.commands.runner import Input, run_locally, run_on_server
 from app.inputs import INPUT_KINDS
 from app.outputs.text import dumps
 
@@ -82,39 +81,6 @@ def _checked(number: int, event: Body, key: str, model: type[BaseModel]) -> Body
     except ValidationError as error:
         raise ValueError(f"line {number}: invalid {key}: {pydantic_line(error)}") from None
     return body
-
-
-def export_events(server: str, session: str, token: str) -> Iterator[str]:
-    """The event file of a session of a running server, line by line."""
-    headers = {"Authorization": f"Bearer {token}"}
-    with httpx.Client(base_url=server.rstrip("/"), headers=headers, timeout=60.0) as client:
-        summary = client.get(f"/v1/sessions/{session}")
-        raise_for_problem(summary)
-        yield dumps({"type": "session", "config": summary.json()["config"]})
-        after = 0
-        while True:
-            page = client.get(f"/v1/sessions/{session}/events", params={"after": after})
-            raise_for_problem(page)
-            body = page.json()
-            snapshot, events = body.get("snapshot"), body["events"]
-            if snapshot is not None:  # the inputs up to it were compacted
-                yield dumps(
-                    {"type": "snapshot", "seq": snapshot["seq"], "state": snapshot["state"]}
-                )
-                after = snapshot["seq"]
-            if not events:
-                if snapshot is None:
-                    return
-                continue
-            for event in events:
-                yield dumps({"type": event["type"], "seq": event["seq"], "report": event["report"]})
-            after = events[-1]["seq"]
-
-
-def export_command(args: argparse.Namespace) -> int:
-    for line in export_events(args.server, args.session, args.token):
-        print(line)
-    return 0
 
 
 def replay_command(args: argparse.Namespace) -> int:

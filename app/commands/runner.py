@@ -16,7 +16,7 @@ from typing import Any
 import httpx
 
 from api_schemas.limits import MAX_SENSORS
-from app.commands.errors import http_failure
+from app.commands.errors import raise_for_problem
 from app.inputs import parse_input
 from app.outputs.json_results import step_json
 from app.sessions.live import new_session, restore_snapshot
@@ -90,14 +90,3 @@ def run_on_server(
             if not keep:
                 with contextlib.suppress(httpx.TransportError):
                     client.delete(f"/v1/sessions/{session['id']}", headers=headers)
-
-
-def raise_for_problem(answer: httpx.Response) -> None:
-    """Raise a one-line :class:`CommandError` if ``answer`` is not a success."""
-    if answer.is_success:
-        return
-    try:
-        body = answer.json()
-    except ValueError:
-        body = answer.text
-    raise http_failure(answer.request.method, answer.request.url.path, answer.status_code, body)

@@ -184,7 +184,7 @@ def build(name: str, seed: int, preset: str | None = None) -> ScenarioRun:
     """
     if preset is not None and preset not in PRESETS:
         raise ValueError(f"unknown preset {preset!r}; choose one of {list(PRESETS)}")
-    if name in SCENARIOS:
+    if tracks_locally(name):
         return _detection_run(name, SCENARIOS[name](seed), preset)
     track_lists: dict[str, Callable[[int], ScenarioRun]] = {
         "t2t-four": lambda s: _track_list_run(name, t2t_four(s)),
@@ -194,6 +194,12 @@ def build(name: str, seed: int, preset: str | None = None) -> ScenarioRun:
     if name not in track_lists:
         raise ValueError(f"unknown scenario {name!r}; choose one of {names()}")
     return track_lists[name](seed)
+
+
+def tracks_locally(name: str) -> bool:
+    """Whether the scenario ``name`` sends detections, tracked in the session (so a
+    ``preset`` applies), rather than track lists."""
+    return name in SCENARIOS
 
 
 def names() -> list[str]:

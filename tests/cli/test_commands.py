@@ -12,7 +12,8 @@ import pytest
 from api_schemas.reports import TrackReport
 from app.cli import main
 from app.commands import simulate
-from app.commands.replay import export_events, read_events
+from app.commands.export import export_events
+from app.commands.replay import read_events
 from app.commands.runner import run_locally, run_on_server
 from app.commands.scenarios import build
 from tests.api.conftest import LiveServer, live_server, make_settings, serving

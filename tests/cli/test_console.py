@@ -20,12 +20,13 @@ import pytest
 
 from app.cli import build_parser, main
 from app.commands.errors import CommandError
-from app.commands.replay import export_events
+from app.commands.export import export_events
 from tests.api.conftest import ADMIN_TOKEN, LiveServer, live_server
 from tests.api.examples import SESSION_CONFIG, TRACK_REPORT
 
 __all__ = ["live_server"]
 
+ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = Path(sys.executable).with_name("credal-fusion")
 TIMEOUT_S = 120.0
 
@@ -79,7 +80,7 @@ def test_a_server_that_is_not_running_is_named_with_what_to_do() -> None:
 def test_serve_with_a_store_it_cannot_open_says_so_before_serving(tmp_path: Path) -> None:
     # a directory is no sqlite file (an unreachable Redis is an outage: the service starts,
     # tests/e2e/test_store_outage.py)
-    done = cli("serve", "--store", f"sqlite:{tmp_path}", "--port", "1")
+    done = cli("serve", "--store", f"sqlite:{tmp_path}", "--port", "0")
     line = one_line_failure(done)
     assert line.startswith(f"credal-fusion serve: cannot use the store sqlite:{tmp_path}")
     assert "--store" in line
@@ -142,3 +143,97 @@ def test_simulate_against_a_server_tells_the_session_and_its_viewer(
     listed = httpx.get(f"{live_server.url}/v1/sessions", headers=admin).json()
     ids = {entry["id"] for entry in listed["sessions"]}
     assert sid in ids and other not in ids
+
+
+# ---------------------------------------------------------------- issue 27: the CLI as met
+def test_a_server_without_a_scheme_is_read_as_http(live_server: LiveServer) -> None:
+    sid, token = session(live_server)
+    bare = live_server.url.removeprefix("http://")
+    done = cli("export", "--server", bare, "--session", sid, "--token", token)
+    assert done.returncode == 0, done.stderr
+    [first] = done.stdout.splitlines()  # the session line (no input yet)
+    assert json.loads(first)["config"]["name"] == SESSION_CONFIG["name"]
+
+
+def test_a_server_url_of_another_scheme_is_refused_naming_http() -> None:
+    done = cli("export", "--server", "ws://127.0.0.1:8000", "--session", "s", "--token", "t")
+    assert done.returncode == 2
+    assert "starts with http:// or https://, not ws://" in done.stderr
+
+
+@pytest.mark.parametrize(
+    ("flags", "says"),
+    [
+        (
+            ["--speed", "1"],
+            "--speed paces the inputs for a server's live viewer: it needs --server",
+        ),
+        (["--keep"], "--keep leaves the server's session open: it needs --server"),
+        (["--preset", "aircraft"], "t2t-four is a track-list scenario (no local tracking)"),
+    ],
+)
+def test_a_flag_that_would_do_nothing_is_refused(flags: list[str], says: str) -> None:
+    done = cli("simulate", "t2t-four", "--quiet", *flags)
+    assert done.returncode == 2
+    assert done.stdout == ""
+    assert done.stderr.startswith("credal-fusion simulate: ") and says in done.stderr
+    assert len(done.stderr.splitlines()) == 1
+
+
+def test_serve_on_a_busy_port_is_one_line_and_no_banner() -> None:
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        done = cli("serve", "--port", str(port), "--store", "memory")
+    line = one_line_failure(done)
+    assert line == (
+        f"credal-fusion serve: 127.0.0.1:{port} is in use (another credal-fusion serve?): "
+        "stop it, or choose another port with --port"
+    )
+    assert done.stdout == ""  # no banner
+
+
+HEAVY = ("numpy", "scipy", "core", "pydantic", "app.sessions", "app.main")
+
+
+def test_export_loads_neither_the_engine_nor_numpy(live_server: LiveServer) -> None:
+    """The real export, then the modules it had loaded: a few GETs need httpx alone."""
+    sid, token = session(live_server)
+    probe = (
+        "import sys; from app.cli import main; status = main(sys.argv[1:]); "
+        f"heavy = sorted(m for m in sys.modules if m.startswith({HEAVY!r})); "
+        "print(heavy, file=sys.stderr); sys.exit(status)"
+    )
+    export = ["export", "--server", live_server.url, "--session", sid, "--token", token]
+    done = subprocess.run(
+        [sys.executable, "-c", probe, *export],
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT_S,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.strip() == "[]"
+    assert json.loads(done.stdout.splitlines()[0])["type"] == "session"
+
+
+def test_reproduce_writes_outside_the_tracked_tree_by_default(tmp_path: Path) -> None:
+    done = subprocess.run(
+        [str(SCRIPT), "reproduce", "aircraft", "--reduced"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT_S,
+        check=False,
+        env={**os.environ, "MPLBACKEND": "Agg"},
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[-1] == "out/figures/aircraft.png"
+    assert [path.relative_to(tmp_path) for path in tmp_path.rglob("*.png")] == [
+        Path("out/figures/aircraft.png")
+    ]
+    ignored = subprocess.run(
+        ["git", "check-ignore", "-q", "out/figures/aircraft.png"], cwd=ROOT, check=False
+    )
+    assert ignored.returncode == 0, "out/ must be ignored by git in a checkout"

@@ -1,7 +1,7 @@
 """A headless Chromium page for the browser tests: Debian's ``/usr/bin/chromium`` driven by Playwright.
 
 Playwright cannot download its own browsers here, so it drives the system
-package (``.ci/run`` installs it when it is missing). A missing Chromium is a
+package (``make test`` installs it when it is missing: ``tools/test-prerequisites``). A missing Chromium is a
 failure, not a skip. Each test gets a fresh profile under its temporary
 directory and a page that records what the browser did: every request URL
 (WebSockets included), every answer of 400 or more, every console error and
@@ -74,7 +74,7 @@ def browser_page(tmp_path: Path) -> Iterator[BrowserPage]:
     """A page of a fresh headless Chromium (its profile in the test's tmp dir)."""
     assert CHROMIUM.exists(), (
         f"{CHROMIUM} is missing: the browser tests need Debian's chromium "
-        "(apt-get install -y chromium; .ci/run installs it)"
+        "(apt-get install -y chromium; `make test` installs it: tools/test-prerequisites)"
     )
     with sync_playwright() as playwright:
         context = playwright.chromium.launch_persistent_context(
