@@ -57,7 +57,7 @@ def test_create_returns_token_once_and_resolved_config(client: TestClient) -> No
     response = client.post("/v1/sessions", json=SESSION_CONFIG)
     assert response.status_code == 201
     created = response.json()
-    assert set(created) == {"id", "token", "config", "created_at"}
+    assert set(created) == {"id", "token", "config", "created_at", "sites", "warnings"}
     assert created["config"]["association"]["options"]["alpha"] == 1.0
     assert created["config"]["tracking"]["association"]["method"] == "gnn"
     listed = client.get("/v1/sessions", headers=bearer(ADMIN_TOKEN)).json()
