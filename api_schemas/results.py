@@ -9,6 +9,7 @@ from pydantic import Field
 from api_schemas.association import AssociationMethod
 from api_schemas.base import FiniteFloat, Identifier, Label, Matrix, UnitFloat, Vector, WireModel
 from api_schemas.classification import FocalMass
+from api_schemas.timing import ANSWER_TIME
 from api_schemas.warnings import Warnings
 
 STEP_WARNINGS_DESCRIPTION = (
@@ -153,7 +154,7 @@ class StepResult(WireModel):
     """The fused result of one accepted input."""
 
     seq: int
-    time: FiniteFloat
+    time: FiniteFloat = Field(description=ANSWER_TIME)
     sensor: Identifier
     tracks: list[FusedTrack]
     association: StepAssociation
@@ -181,7 +182,7 @@ class FusedPicture(WireModel):
     """``GET …/tracks``: the current fused tracks, optionally predicted to ``time``."""
 
     seq: int
-    time: FiniteFloat | None
+    time: FiniteFloat | None = Field(description=ANSWER_TIME)
     tracks: list[FusedTrack]
 
 

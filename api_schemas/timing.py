@@ -30,6 +30,12 @@ TimeEpoch = Literal["arbitrary", "unix"]
 timestamps, as seconds since 1970-01-01T00:00:00Z."""
 
 EXAMPLE_TIMESTAMP = "2026-12-03T08:00:00Z"
+ANSWER_TIME = (
+    "seconds on the session's clock: since the Unix epoch (1970-01-01T00:00:00Z) when the "
+    "session's inputs give RFC 3339 timestamps (time_epoch 'unix' in GET /v1/sessions/{sid}), "
+    "else of the client's own epoch"
+)
+"""What an answer's ``time`` is (answers always give seconds, never timestamps)."""
 RFC3339 = re.compile(
     r"(?P<date>\d{4}-\d{2}-\d{2})[Tt ](?P<clock>\d{2}:\d{2}:\d{2})(?P<fraction>\.\d{1,9})?"
     r"(?P<offset>[Zz]|[+-]\d{2}:\d{2})"
