@@ -145,7 +145,7 @@ def confirmable(
     if isinstance(noise, CartesianMeasurement):
         r = np.asarray(tracker.model_bank().measurement.noise_covariance, dtype=np.float64)
         log_det = float(np.linalg.slogdet(r)[1])
-    else:
+    elif isinstance(noise, PolarMeasurement):
         sigma_range, sigma_azimuth_deg = noise.polar_sigmas
         near = max(fov.range_min, sigma_range) if isinstance(fov, Sector) else sigma_range
         sigmas = [sigma_range, near * math.radians(sigma_azimuth_deg)]
@@ -153,6 +153,8 @@ def confirmable(
             sigmas.append(near * math.radians(noise.sigma_elevation_deg))
         log_det = 2.0 * sum(math.log(sigma) for sigma in sigmas)
         where = f"polar noise at {near:.3g} m, the nearest range it covers"
+    else:
+        return
     best = tracker.life_cycle.scan_score(sensor.p_detect, clutter).hit_increment(
         np.zeros(1), np.array([log_det]), q
     )[0]
