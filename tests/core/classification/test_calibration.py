@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -165,3 +166,36 @@ def test_tracks_without_three_detections_show_nothing() -> None:
     times = np.array([[np.nan, 0.0, 1.0], [0.0, 1.0, 2.0]])
     noises = np.broadcast_to(np.eye(2), (2, 3, 2, 2))
     np.testing.assert_array_equal(resolved_accelerations(times, positions, noises), [False, True])
+
+
+def test_a_straight_flyer_in_the_banks_cycle_at_a_12_s_revisit_stays_undecided() -> None:
+    """The aircraft bank at 12 s with σ = 300 m: a straight 230 m/s track whose velocity is
+    put 235 m/s off per axis (u Δt / 2 of the diagonal 4g models, as a start or a
+    re-acquisition left it on the real-traffic scene) stays in a cycle of opposite 4g
+    models — its velocity is still hundreds of m/s off 20 scans later, each step's best
+    model far better than constant velocity — but its three detections are on a line
+    within their noise at every step, so the class stays vacuous (BetP 1/3 each)."""
+    sigma, dt = 300.0, 12.0
+    config = LocalTrackerConfig(measurement_noise=((sigma**2, 0.0), (0.0, sigma**2)))
+    rng = np.random.default_rng(0)
+    velocity = np.array([230.0, -90.0])
+
+    def scan(k: int) -> np.ndarray:
+        return (np.array([5000.0, 2000.0]) + velocity * dt * k + rng.normal(0, sigma, 2))[None]
+
+    tracker = LocalTracker(config)
+    for k in range(20):
+        tracker.step(dt * k, scan(k))
+    saved = json.loads(json.dumps(tracker.export()))
+    (entry,) = saved["tracks"]
+    means = np.array(entry["means"]).reshape(13, 4)
+    means[:, [1, 3]] += 235.0
+    entry["means"] = means.tolist()
+    tracker = LocalTracker.restore(config, saved)
+    for k in range(20, 40):
+        step = tracker.step(dt * k, scan(k))
+    (track,) = step.tracks
+    assert track.status.value == "confirmed"
+    assert np.linalg.norm(track.state[[1, 3]] - velocity) > 150.0  # still in the cycle
+    assert track.pignistic is not None
+    np.testing.assert_allclose(track.pignistic, 1.0 / 3.0, atol=1e-9)
