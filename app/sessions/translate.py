@@ -108,7 +108,7 @@ def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> Sens
         raise InvalidFields([FieldIssue(("sensors", index, "fov"), str(error), None)]) from None
     tracker = local_tracker_config(config, sensor, fov)
     if tracker is not None:
-        confirmable(tracker, sensor, index)
+        confirmable(tracker, sensor, index, fov)
     return SensorSpec(
         id=sensor.id,
         reliability=sensor.reliability,
@@ -118,22 +118,45 @@ def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> Sens
     )
 
 
-def confirmable(tracker: LocalTrackerConfig, sensor: SensorConfig, index: int) -> None:
+def confirmable(
+    tracker: LocalTrackerConfig,
+    sensor: SensorConfig,
+    index: int,
+    fov: FieldOfView | None = None,
+) -> None:
     """Refuse (a validation error at the density) a sensor whose tracks can never be confirmed.
 
     A hit adds ``ΔL = ln[P_D / ((2π)^{q/2} β_FT √|S|)] − D/2`` ([MTT] §4.3) and S is at
     least the detections' R: when even a detection exactly at the prediction (D = 0,
     S = R) lowers the score, no run of detections ever confirms a track. Checked where
-    R is one matrix (``measurement.r``) and β_FT is known (given, or the paper profile's);
-    a polar sensor's R shrinks near its site and an estimated β_FT follows the data.
+    β_FT is known (given, or the paper profile's): with ``measurement.r``, at that R; for
+    a polar sensor, whose converted R grows with the range ρ
+    (``|R| = σ_ρ² (ρ σ_a)² [(ρ σ_e)²]``, at elevation 0), at the nearest range it covers
+    — its sector's near range, or σ_ρ without one (nearer than its own range noise
+    nothing is resolved). An estimated β_FT is not checked: it follows the data (the
+    detections over their box, docs/algorithms.md §8.4).
     """
     clutter = tracker.physics(sensor.id)[1]
-    if clutter is None or not isinstance(sensor.measurement, CartesianMeasurement):
+    if clutter is None:
         return
-    r = np.asarray(tracker.model_bank().measurement.noise_covariance, dtype=np.float64)
-    q = r.shape[0]
+    noise = sensor.measurement
+    q = tracker.measured
+    where = "noise r"
+    if isinstance(noise, CartesianMeasurement):
+        r = np.asarray(tracker.model_bank().measurement.noise_covariance, dtype=np.float64)
+        log_det = float(np.linalg.slogdet(r)[1])
+    elif isinstance(noise, PolarMeasurement):
+        sigma_range, sigma_azimuth_deg = noise.polar_sigmas
+        near = max(fov.range_min, sigma_range) if isinstance(fov, Sector) else sigma_range
+        sigmas = [sigma_range, near * math.radians(sigma_azimuth_deg)]
+        if q == 3 and noise.sigma_elevation_deg is not None:
+            sigmas.append(near * math.radians(noise.sigma_elevation_deg))
+        log_det = 2.0 * sum(math.log(sigma) for sigma in sigmas)
+        where = f"polar noise at {near:.3g} m, the nearest range it covers"
+    else:
+        return
     best = tracker.life_cycle.scan_score(sensor.p_detect, clutter).hit_increment(
-        np.zeros(1), np.array([np.linalg.slogdet(r)[1]]), q
+        np.zeros(1), np.array([log_det]), q
     )[0]
     if best > 0.0:
         return
@@ -145,9 +168,10 @@ def confirmable(tracker: LocalTrackerConfig, sensor: SensorConfig, index: int) -
     message = (
         f"no track of sensor {sensor.id!r} can ever be confirmed: at a clutter density of "
         f"{clutter:.3g} per {unit} per scan, a detection exactly where a track predicts it "
-        f"(noise r, P_D {sensor.p_detect:g}) is {math.exp(-best):.3g} times as likely clutter "
+        f"({where}, P_D {sensor.p_detect:g}) is {math.exp(min(-best, 700.0)):.3g} times as likely clutter "
         f"as target (hit score {best:.3g} ≤ 0). Fix: give clutter_density per {unit} per "
-        "scan (false alarms per scan divided by the covered area), or leave it out to have "
+        f"scan (false alarms per scan divided by the covered {'area' if q == 2 else 'volume'}), "
+        "or leave it out to have "
         "it estimated from the sensor's detections"
     )
     raise InvalidFields([FieldIssue(location, message, clutter)])

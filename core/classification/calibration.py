@@ -35,9 +35,13 @@ as the models that ignore it fall out of the noise band. κ = :data:`SIGNIFICANC
 
 from __future__ import annotations
 
-import numpy as np
+from dataclasses import dataclass
+from typing import Any
 
-from core.arrays import FloatArray
+import numpy as np
+from scipy.stats import chi2, norm
+
+from core.arrays import BoolArray, FloatArray, IntArray
 
 SIGNIFICANCE = 4.5
 """κ: a likelihood ratio counts as evidence beyond what noise gives with probability
@@ -115,3 +119,158 @@ def sharp_predictions(
     ratio = np.where(sign > 0, (log_predicted - log_noise) / (2 * q), np.inf)
     out[rows] = ratio <= np.log(sharpness)
     return out
+
+
+def resolved_accelerations(
+    times: FloatArray,
+    positions: FloatArray,
+    noises: FloatArray,
+    significance: float = SIGNIFICANCE,
+) -> BoolArray:
+    """Rows whose last three detections show an acceleration beyond their noise.
+
+    **Reading.** The model likelihoods compare predictions made from the
+    track's state, and they are evidence of a manoeuvre only where that state
+    is right. At a revisit of 12 s the papers' bank (held inputs of 2g and 4g,
+    ``Q = 0.005 B Bᵀ``) can settle in a cycle that the likelihoods cannot see:
+    a velocity wrong by ``e`` makes the model whose input ``u`` gives
+    ``u Δt²/2 ≈ −e Δt`` fit best, which leaves the velocity wrong by ``−e``,
+    the next step's opposite model fits, and so on, with the velocity's
+    variance shrinking all the while (measured on the real-traffic scene's
+    12 s radar: airliners flying straight, velocity errors of ±230 m/s per
+    axis for minutes, the constant-velocity model at Mahalanobis distance
+    250–1000 at every step). Such a cycle starts wherever the velocity is off
+    by ``u Δt / 2``: a re-acquisition after a gap, a real turn. The
+    detections themselves say whether the target accelerated, independently
+    of the filter: over three detections at t₁ < t₂ < t₃ (Δ₁ = t₂ − t₁,
+    Δ₂ = t₃ − t₂) the second divided difference
+
+        â = 2 [(z₃ − z₂)/Δ₂ − (z₂ − z₁)/Δ₁] / (Δ₁ + Δ₂)
+
+    is the acceleration of a target moving at constant acceleration, and zero
+    in mean for one flying straight, with ``Cov(â) = Σ_k c_k² R_k``
+    (c = 2/(Δ₁(Δ₁+Δ₂)), −2/(Δ₁Δ₂), 2/(Δ₂(Δ₁+Δ₂))). A step is evidence of a
+    manoeuvre only where ``âᵀ Cov(â)⁻¹ â`` exceeds the χ²_q quantile that noise
+    alone exceeds with probability Φ(−κ) (the significance of
+    :func:`noise_calibrated_log_likelihoods`). The papers' 4g turn at 1 s and
+    0.2 m² moves the third detection 20 m off a line whose noise is 1.1 m: it
+    is resolved at its first step, as before.
+
+    Parameters
+    ----------
+    times : (T, 3) detection times, oldest first (NaN: no such detection: False).
+    positions : (T, 3, q) the detections.
+    noises : (T, 3, q, q) their covariances R.
+    significance : κ.
+    """
+    t = np.asarray(times, dtype=np.float64)
+    z = np.asarray(positions, dtype=np.float64)
+    r = np.asarray(noises, dtype=np.float64)
+    out = np.zeros(len(t), dtype=bool)
+    first, second = t[:, 1] - t[:, 0], t[:, 2] - t[:, 1]
+    rows = np.flatnonzero(np.isfinite(first) & np.isfinite(second) & (first > 0) & (second > 0))
+    if len(rows) == 0:
+        return out
+    d1, d2 = first[rows], second[rows]
+    c = np.stack([2.0 / (d1 * (d1 + d2)), -2.0 / (d1 * d2), 2.0 / (d2 * (d1 + d2))], axis=1)
+    acceleration = np.einsum("tk,tkq->tq", c, z[rows])
+    covariance = np.einsum("tk,tkij->tij", c**2, r[rows])
+    solved = np.linalg.solve(covariance, acceleration[..., None])[..., 0]
+    statistic = np.sum(acceleration * solved, axis=-1)
+    q = z.shape[-1]
+    out[rows] = statistic > chi2.isf(norm.sf(significance), q)
+    return out
+
+
+@dataclass(frozen=True)
+class RecentDetections:
+    """The last two detections of T tracks (for :func:`resolved_accelerations`), oldest
+    first; NaN times where a track has fewer. Never changed in place."""
+
+    times: FloatArray
+    """(T, 2)"""
+    positions: FloatArray
+    """(T, 2, q)"""
+    noises: FloatArray
+    """(T, 2, q, q)"""
+
+    @classmethod
+    def empty(cls, count: int, q: int) -> RecentDetections:
+        return cls(np.full((count, 2), np.nan), np.zeros((count, 2, q)), np.zeros((count, 2, q, q)))
+
+    @classmethod
+    def first(cls, time: float, positions: FloatArray, noises: FloatArray) -> RecentDetections:
+        """New tracks, each with one detection at ``time``."""
+        count, q = positions.shape
+        return cls.empty(count, q).pushed(np.arange(count), time, positions, noises)
+
+    def __len__(self) -> int:
+        return len(self.times)
+
+    def select(self, rows: IntArray) -> RecentDetections:
+        return RecentDetections(self.times[rows], self.positions[rows], self.noises[rows])
+
+    def concatenate(self, other: RecentDetections) -> RecentDetections:
+        return RecentDetections(
+            np.concatenate([self.times, other.times]),
+            np.concatenate([self.positions, other.positions]),
+            np.concatenate([self.noises, other.noises]),
+        )
+
+    def replace(self, rows: IntArray, by: RecentDetections) -> RecentDetections:
+        times, positions, noises = self.times.copy(), self.positions.copy(), self.noises.copy()
+        times[rows], positions[rows], noises[rows] = by.times, by.positions, by.noises
+        return RecentDetections(times, positions, noises)
+
+    def with_detection(
+        self, rows: IntArray, time: float, positions: FloatArray, noises: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The three detections of ``rows`` with the new ones: times (R, 3), positions
+        (R, 3, q), noises (R, 3, q, q)."""
+        return (
+            np.concatenate([self.times[rows], np.full((len(rows), 1), time)], axis=1),
+            np.concatenate([self.positions[rows], positions[:, None]], axis=1),
+            np.concatenate([self.noises[rows], noises[:, None]], axis=1),
+        )
+
+    def pushed(
+        self, rows: IntArray, time: float, positions: FloatArray, noises: FloatArray
+    ) -> RecentDetections:
+        """``rows`` detected at ``time``: their latest two detections move on."""
+        times, z, r = self.with_detection(rows, time, positions, noises)
+        return self.replace(rows, RecentDetections(times[:, 1:], z[:, 1:], r[:, 1:]))
+
+    def latest_replaced(
+        self, time: float, positions: FloatArray, noises: FloatArray
+    ) -> RecentDetections:
+        """These tracks with their latest detection replaced by these (a branch of a start
+        that took another detection of the same scan)."""
+        times, z, r = self.times.copy(), self.positions.copy(), self.noises.copy()
+        times[:, 1], z[:, 1], r[:, 1] = time, positions, noises
+        return RecentDetections(times, z, r)
+
+    def to_plain(self, row: int) -> list[dict[str, Any]]:
+        """One track's detections as plain data (oldest first; none for a NaN time)."""
+        return [
+            {
+                "time": float(self.times[row, k]),
+                "position": self.positions[row, k].tolist(),
+                "noise": self.noises[row, k].tolist(),
+            }
+            for k in range(2)
+            if np.isfinite(self.times[row, k])
+        ]
+
+    @classmethod
+    def from_plain(cls, entries: list[list[dict[str, Any]]], q: int) -> RecentDetections:
+        """:meth:`to_plain` of T tracks back (an entry of fewer than two keeps NaN ones first)."""
+        out = cls.empty(len(entries), q)
+        for row, detections in enumerate(entries):
+            for item in detections[-2:]:
+                out = out.pushed(
+                    np.array([row]),
+                    float(item["time"]),
+                    np.array([item["position"]], dtype=np.float64).reshape(1, q),
+                    np.array([item["noise"]], dtype=np.float64).reshape(1, q, q),
+                )
+        return out

@@ -8,9 +8,14 @@ own estimates at its own time.
 
 from __future__ import annotations
 
-from core.arrays import FloatArray
+from dataclasses import replace
+
+import numpy as np
+
+from core.arrays import FloatArray, IntArray
 from core.fusion.motion import MotionModel
 from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState
+from core.tracking.models import ModelBank
 
 
 def predict_bank(predictor: IMMPredictor, state: IMMState, elapsed: float) -> IMMPrediction:
@@ -52,3 +57,30 @@ def predict_estimates(
             states[later], covariances[later], dt[later]
         )
     return predicted, predicted_cov
+
+
+def without_inputs(
+    prediction: IMMPrediction, bank: ModelBank, rows: IntArray, elapsed: float
+) -> IMMPrediction:
+    """``prediction`` with the models of ``rows`` predicted without their input ``B(Δt) u``.
+
+    For single-point starts (docs/algorithms.md §8.3): two detections give a
+    velocity and nothing about an acceleration, and the start's velocity prior
+    is wide, so a held-input model "explains" the displacement of the second
+    detection by a manoeuvre — at a 12 s revisit a 4g model moves the start
+    2.8 km per axis, more than the prior's velocity — and leaves the start
+    with a velocity wrong by about ``u Δt``. With every model predicted as
+    constant velocity the second detection sets the two-point velocity in
+    every model (the models' states and likelihoods are then equal, the mode
+    probabilities unchanged), as a two-point initiation does ([MTT] §4.2).
+    """
+    if len(rows) == 0 or elapsed == 0.0:
+        return prediction
+    offsets = bank.at(elapsed).input_offset  # (r, n)
+    if not np.any(offsets):
+        return prediction
+    means = prediction.means.copy()
+    means[rows] -= offsets[None, :, :]
+    measurement_means = prediction.measurement_means.copy()
+    measurement_means[rows] -= (offsets @ bank.measurement.matrix.T)[None, :, :]
+    return replace(prediction, means=means, measurement_means=measurement_means)

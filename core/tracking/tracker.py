@@ -65,7 +65,9 @@ from core.classification.batched import (
     mass_to_dense,
 )
 from core.classification.calibration import (
+    RecentDetections,
     noise_calibrated_log_likelihoods,
+    resolved_accelerations,
     sharp_predictions,
 )
 from core.distance.estimates import check_covariances
@@ -92,7 +94,7 @@ from core.lifecycle import (
 )
 from core.pipeline.evidence import coasting_misses, coverage_codes, hits, seen_by
 from core.pipeline.handover import hand_over_pairs
-from core.pipeline.predict import predict_bank
+from core.pipeline.predict import predict_bank, without_inputs
 from core.pipeline.rows import TrackRows
 from core.tracking.associate import Association, DetectionAssociator
 from core.tracking.clutter import ClutterEstimate, prior_gate
@@ -213,6 +215,10 @@ class LocalTracker:
         self._state = IMMState(np.zeros((0, r, n)), np.zeros((0, r, n, n)), np.zeros((0, r)))
         self._classes: CredalBatch | None = (
             None if self.classifier is None else self.classifier.initial(0)
+        )
+        # each track's last two detections, for the calibrated classification (§8.5)
+        self._recent: RecentDetections | None = (
+            None if self._significance is None else RecentDetections.empty(0, self._q)
         )
         self._seeds: FloatArray = np.zeros((0, self._q))
         self._seed_noises: FloatArray = np.zeros((0, self._q, self._q))
@@ -346,6 +352,9 @@ class LocalTracker:
         claimed_any = bool(np.any(established(self._rows.life.status)))
         score = self._scan_score(sensor_name, z, noises, counted=not claimed_any)
         prediction = predict_bank(self.predictor, self._state, elapsed)
+        if self._branching:  # §8.3: a start's second detection is its velocity, not a manoeuvre
+            starts = np.flatnonzero(_passes(self._rows.life) == START_PASS)
+            prediction = without_inputs(prediction, self.bank, starts, elapsed)
         positions, gates = prediction.combined_measurement()
         before = self._rows.life
         status = before.status
@@ -376,7 +385,7 @@ class LocalTracker:
                     self.bank.axes,
                 ),
             )
-        self._update(prediction, candidates, association)
+        self._update(prediction, candidates, association, (time, z, noises))
         self._combine_evidence(candidates[association.rows], association.cols)
         hit = association.update.detected
         detected, gain = hits(len(status), candidates[hit], association.hit_gain[hit])
@@ -416,7 +425,16 @@ class LocalTracker:
             split = association.branches
             parents = candidates[split.rows]
             self._append(
-                split.state, split.cols, numbers, before.score[parents] + split.gain, hits=2
+                split.state,
+                split.cols,
+                numbers,
+                before.score[parents] + split.gain,
+                hits=2,
+                recent=None
+                if self._recent is None  # the start's first detection, then the branch's
+                else self._recent.select(parents).latest_replaced(
+                    time, z[split.cols], noises[split.cols]
+                ),
             )
         free = np.ones(len(z), dtype=bool)
         free[association.used] = False  # a start's detections start tracks too (§8.3)
@@ -592,10 +610,14 @@ class LocalTracker:
 
     # ------------------------------------------------------------ update
     def _update(
-        self, prediction: IMMPrediction, candidates: IntArray, association: Association
+        self,
+        prediction: IMMPrediction,
+        candidates: IntArray,
+        association: Association,
+        scan: tuple[float, FloatArray, FloatArray],
     ) -> None:
         """The state: the prediction, with the associated tracks' update; their classes
-        ([MTT] §5.2, all at once)."""
+        ([MTT] §5.2, all at once). ``scan``: the time, detections and their R."""
         update = association.update
         self._state = _replaced(prediction.as_state(), candidates, update.state)
         if self.classifier is not None and self._classes is not None and len(candidates):
@@ -620,6 +642,7 @@ class LocalTracker:
                     & sharp_predictions(
                         update.log_likelihoods, update.innovation_covariances, predicted
                     )
+                    & self._accelerated(candidates, association, scan, significance)
                 )
             chosen = self.config.classification
             log_mu = (  # [MTT] eq 19/22: posterior or prior μ (core.classification.behaviours)
@@ -634,6 +657,27 @@ class LocalTracker:
                 detected,
             )
             self._classes = classified if every else self._classes.replace(candidates, classified)
+
+    def _accelerated(
+        self,
+        candidates: IntArray,
+        association: Association,
+        scan: tuple[float, FloatArray, FloatArray],
+        significance: float,
+    ) -> BoolArray:
+        """Of ``candidates``: whose last three detections, this scan's included, show an
+        acceleration beyond their noise (§8.5, ``resolved_accelerations``); the tracks hit
+        remember this scan's detection."""
+        shown = np.zeros(len(candidates), dtype=bool)
+        if self._recent is None or len(association.rows) == 0:
+            return shown
+        time, z, noises = scan
+        tracks, cols = candidates[association.rows], association.cols
+        shown[association.rows] = resolved_accelerations(
+            *self._recent.with_detection(tracks, time, z[cols], noises[cols]), significance
+        )
+        self._recent = self._recent.pushed(tracks, time, z[cols], noises[cols])
+        return shown
 
     # -------------------------------------------------------- hand-over
     def _hand_over(self, newly_confirmed: BoolArray, numbers: IntArray, updated: IntArray) -> None:
@@ -653,6 +697,8 @@ class LocalTracker:
             return
         keepers, newcomers = phantoms[known], fresh[incoming]
         self._state = _replaced(self._state, keepers, self._state.select(newcomers))
+        if self._recent is not None:
+            self._recent = self._recent.replace(keepers, self._recent.select(newcomers))
         self._rows = self._rows.living(
             hand_over(life, keepers, newcomers, StatusReason.MERGED_INTO_PHANTOM)
         )
@@ -687,7 +733,13 @@ class LocalTracker:
             state = single_point_initiation(
                 self.bank, z[starts], self.config.velocity_std, noises=noises[starts]
             )
-            self._append(state, starts, numbers, score.initial)
+            self._append(
+                state,
+                starts,
+                numbers,
+                score.initial,
+                recent=RecentDetections.first(time, z[starts], noises[starts]),
+            )
             return len(starts)
         sensor_index = self.config.sensors.index(sensor)
         mine = self._seed_sensors == sensor_index
@@ -728,7 +780,19 @@ class LocalTracker:
                 order = np.argsort(starts, kind="stable")
                 starts = starts[order]
                 state = state.select(order)
-                self._append(state, starts, numbers, start_score[order], hits=2)
+                first_times = seed_times[seed_index][alive][order]
+                self._append(
+                    state,
+                    starts,
+                    numbers,
+                    start_score[order],
+                    hits=2,
+                    recent=RecentDetections(
+                        np.stack([first_times, np.full(len(starts), time)], axis=1),
+                        np.stack([first[order], z[starts]], axis=1),
+                        np.stack([first_noises[alive][order], noises[starts]], axis=1),
+                    ),
+                )
         remaining = np.setdiff1d(detections, starts)
         kept = ~older
         self._seeds = np.concatenate([self._seeds[kept], z[remaining]])
@@ -746,10 +810,17 @@ class LocalTracker:
         numbers: IntArray,
         start: float | FloatArray,
         hits: int = 1,
+        recent: RecentDetections | None = None,
     ) -> None:
+        """New tentative tracks of ``detections``; ``recent``: their detections so far
+        (with the calibrated classification)."""
         count = len(detections)
         if count == 0:
             return
+        if self._recent is not None:
+            self._recent = self._recent.concatenate(
+                RecentDetections.empty(count, self._q) if recent is None else recent
+            )
         self._rows = self._rows.started(
             self.next_number, initiated(self.config.life_cycle, count, start, hits)
         )
@@ -829,6 +900,8 @@ class LocalTracker:
         self._state = self._state.select(rows)
         if self._classes is not None:
             self._classes = self._classes.select(rows)
+        if self._recent is not None:
+            self._recent = self._recent.select(rows)
 
     # ------------------------------------------------------- persistence
     def export(self) -> dict[str, Any]:
@@ -860,6 +933,8 @@ class LocalTracker:
                     "log_normaliser": plain_floats(classes.log_normalisers[row]),
                     "steps": int(classes.steps[row]),
                 }
+            if self._recent is not None:
+                entry["recent_detections"] = self._recent.to_plain(row)
             tracks.append(entry)
         return {
             "version": EXPORT_VERSION,
@@ -923,6 +998,10 @@ class LocalTracker:
         if tracker.classifier is not None:
             tracker._classes = tracker.classifier.from_classifications(
                 [tracker._classification(e["classification"]) for e in entries]
+            )
+        if tracker._recent is not None:  # an export without them: none yet
+            tracker._recent = RecentDetections.from_plain(
+                [e.get("recent_detections", []) for e in entries], q
             )
         return tracker
 

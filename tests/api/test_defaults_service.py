@@ -45,6 +45,47 @@ def test_a_configuration_that_cannot_confirm_is_refused_with_the_reason_and_fix(
         assert client.post("/v1/sessions", json=config).status_code == 201
 
 
+def test_a_polar_radar_given_its_false_alarms_per_scan_as_density_is_refused(
+    live_server: LiveServer,
+) -> None:
+    """A 3-D radar (σ 40 m, 0.12°, 0.25°) whose user wrote its 30 false alarms per scan as
+    the density: even at 40 m from its site (its range σ, where R is smallest: σ_ρ² (ρσ_a)²
+    (ρσ_e)²) a perfect hit scores ln[0.9 / ((2π)^{3/2} · 30 · √|R|)] < 0. The same 30 over
+    its 150 km, 30° volume is accepted."""
+    near = 40.0
+    sqrt_det = 40.0 * near * math.radians(0.12) * near * math.radians(0.25)
+    best = math.log(0.9 / ((2 * math.pi) ** 1.5 * 30.0 * sqrt_det))
+    assert best < 0
+    config: dict[str, Any] = {
+        "state": LAYOUT_3D,
+        "sensors": [
+            {
+                "id": "radar",
+                "measurement": {
+                    "kind": "polar",
+                    "sigma_range": 40.0,
+                    "sigma_azimuth_deg": 0.12,
+                    "sigma_elevation_deg": 0.25,
+                },
+                "clutter_density": 30.0,
+            }
+        ],
+    }
+    with httpx.Client(base_url=live_server.url) as client:
+        refused = client.post("/v1/sessions", json=config)
+        assert refused.status_code == 422, refused.text
+        problem = refused.json()
+        text = str(problem)
+        assert "can ever be confirmed" in text and "Fix" in text and "volume" in text
+        assert f"{best:.3g}" in text
+        assert any(
+            error["loc"][-3:] == ["sensors", 0, "clutter_density"] for error in problem["errors"]
+        ), problem
+        volume = 2 * math.pi / 3 * 150e3**3 * math.sin(math.radians(30.0))
+        config["sensors"][0]["clutter_density"] = 30.0 / volume
+        assert client.post("/v1/sessions", json=config).status_code == 201
+
+
 def test_a_5_s_3d_radar_keeps_its_track_through_two_missed_scans(live_server: LiveServer) -> None:
     """A 3-D polar radar (σ 30 m, 0.3°, 0.3°) every 5 s, a 220 m/s aircraft at 40–50 km, three
     false alarms per scan in its volume, no density, no management knob. After confirmation

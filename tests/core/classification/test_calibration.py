@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 
-from core.classification.calibration import noise_calibrated_log_likelihoods, sharp_predictions
+from core.classification.calibration import (
+    noise_calibrated_log_likelihoods,
+    resolved_accelerations,
+    sharp_predictions,
+)
 from core.lifecycle import LifeCycleConfig
 from core.simulation.nearby import crossing_scenario
 from core.tracking.config import ClassificationOptions, LocalTrackerConfig
@@ -106,3 +111,91 @@ def test_a_step_is_evidence_only_where_the_best_model_predicted_sharply() -> Non
     log_likelihoods = np.array([[0.0, -1.0], [-1.0, 0.0], [np.nan, np.nan]])
     kept = sharp_predictions(log_likelihoods, innovation, predicted, sharpness=2.0)
     np.testing.assert_array_equal(kept, [True, False, False])
+
+
+# ------------------------------------------------ accelerations shown by the detections
+def _three(times: list[float], positions: np.ndarray, variance: float) -> bool:
+    q = positions.shape[-1]
+    return bool(
+        resolved_accelerations(
+            np.array([times]),
+            positions[None],
+            np.broadcast_to(variance * np.eye(q), (1, 3, q, q)),
+        )[0]
+    )
+
+
+def test_the_detections_show_an_acceleration_only_beyond_their_noise() -> None:
+    """Equal steps Δ, R = σ² I, q = 2: â = (z₁ − 2z₂ + z₃)/Δ², Var = 6σ²/Δ⁴ per axis, and
+    χ²₂'s survival is exp(−x/2), so the threshold of Φ(−κ) is x = −2 ln Φ(−κ): a quadratic
+    track at |a| just above √(x · 6σ²/Δ⁴) is resolved, just below is not."""
+    kappa, sigma2, dt = 4.5, 0.2, 1.0
+    threshold = -2.0 * math.log(0.5 * math.erfc(kappa / math.sqrt(2.0)))
+    edge = math.sqrt(threshold * 6.0 * sigma2 / dt**4)
+    times = [0.0, dt, 2 * dt]
+    direction = np.array([0.6, 0.8])
+
+    def quadratic(a: float) -> np.ndarray:  # x = v t + a t²/2 along a direction
+        return np.array([(30.0 * t + 0.5 * a * t**2) * direction for t in times])
+
+    assert _three(times, quadratic(1.01 * edge), sigma2)
+    assert not _three(times, quadratic(0.99 * edge), sigma2)
+    # the papers' 4g turn at 1 s, 0.2 m²: far beyond (edge ≈ 5.2 m/s²)
+    assert _three(times, quadratic(4 * 9.81), sigma2)
+
+
+def test_a_straight_flyer_at_a_long_revisit_shows_no_acceleration_and_a_turn_beyond_noise_does() -> (
+    None
+):
+    """Unequal steps (4 s, 12 s): a constant velocity is exactly on the line (â = 0);
+    â of a quadratic is its acceleration whatever the steps, σ_â = σ √(Σ c_k²) with
+    c = 2/(4·16), −2/(4·12), 2/(12·16) (√Σc² = 0.0531): a 2g turn at 50 m noise is
+    19.6 against 2.7 (χ²₃ 54, beyond the threshold 28), a 0.3g one at 300 m 2.9
+    against 15.9 (not shown)."""
+    times = [0.0, 4.0, 16.0]
+    straight = np.array([[230.0 * t, -40.0 * t, 9000.0] for t in times])
+    assert not _three(times, straight, 1.0)
+    for g, sigma, shown in ((2.0, 50.0, True), (0.3, 300.0, False)):
+        turn = np.array([[230.0 * t + 0.5 * g * 9.81 * t**2, -40.0 * t, 9000.0] for t in times])
+        assert _three(times, turn, sigma**2) is shown
+
+
+def test_tracks_without_three_detections_show_nothing() -> None:
+    positions = np.zeros((2, 3, 2))
+    positions[:, 2] = [500.0, 0.0]  # a jump that would be resolved
+    times = np.array([[np.nan, 0.0, 1.0], [0.0, 1.0, 2.0]])
+    noises = np.broadcast_to(np.eye(2), (2, 3, 2, 2))
+    np.testing.assert_array_equal(resolved_accelerations(times, positions, noises), [False, True])
+
+
+def test_a_straight_flyer_in_the_banks_cycle_at_a_12_s_revisit_stays_undecided() -> None:
+    """The aircraft bank at 12 s with σ = 300 m: a straight 230 m/s track whose velocity is
+    put 235 m/s off per axis (u Δt / 2 of the diagonal 4g models, as a start or a
+    re-acquisition left it on the real-traffic scene) stays in a cycle of opposite 4g
+    models — its velocity is still hundreds of m/s off 20 scans later, each step's best
+    model far better than constant velocity — but its three detections are on a line
+    within their noise at every step, so the class stays vacuous (BetP 1/3 each)."""
+    sigma, dt = 300.0, 12.0
+    config = LocalTrackerConfig(measurement_noise=((sigma**2, 0.0), (0.0, sigma**2)))
+    rng = np.random.default_rng(0)
+    velocity = np.array([230.0, -90.0])
+
+    def scan(k: int) -> np.ndarray:
+        return (np.array([5000.0, 2000.0]) + velocity * dt * k + rng.normal(0, sigma, 2))[None]
+
+    tracker = LocalTracker(config)
+    for k in range(20):
+        tracker.step(dt * k, scan(k))
+    saved = json.loads(json.dumps(tracker.export()))
+    (entry,) = saved["tracks"]
+    means = np.array(entry["means"]).reshape(13, 4)
+    means[:, [1, 3]] += 235.0
+    entry["means"] = means.tolist()
+    tracker = LocalTracker.restore(config, saved)
+    for k in range(20, 40):
+        step = tracker.step(dt * k, scan(k))
+    (track,) = step.tracks
+    assert track.status.value == "confirmed"
+    assert np.linalg.norm(track.state[[1, 3]] - velocity) > 150.0  # still in the cycle
+    assert track.pignistic is not None
+    np.testing.assert_allclose(track.pignistic, 1.0 / 3.0, atol=1e-9)

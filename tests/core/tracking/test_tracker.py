@@ -219,13 +219,14 @@ def _plain(step: object) -> str:
 
 @pytest.mark.parametrize(
     ("name", "cut"),
-    [("aircraft", 75), ("overtaking", 2 * 70 + 1)],
+    [("aircraft", 75), ("aircraft-defaults", 75), ("overtaking", 2 * 70 + 1)],
 )
 def test_export_restore_continues_exactly(name: str, cut: int) -> None:
-    """export → JSON → restore → continue gives byte-identical outputs and state."""
-    if name == "aircraft":
+    """export → JSON → restore → continue gives byte-identical outputs and state (the
+    defaults: single-point starts, each track's recent detections exported)."""
+    if name.startswith("aircraft"):
         scenario = aircraft_scenario(seed=1)
-        config = LocalTrackerConfig.paper()
+        config = LocalTrackerConfig.paper() if name == "aircraft" else LocalTrackerConfig()
     else:
         scenario = overtaking_scenario(seed=0)
         config = road_config(scenario, region=rectangle(((-10.0, 10.0), (-40.0, 60.0))))
