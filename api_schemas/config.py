@@ -309,12 +309,12 @@ class SensorConfig(WireModel):
         ),
     )
     local_tracker: bool = Field(
-        default=False,
+        default=True,
         description=(
             "a detecting sensor tracked on its own: its local tracker, then track-to-track "
-            "fusion (default false: with two or more detecting sensors not flagged, the "
-            "session tracks all their detections together in one central tracker, "
-            "docs/algorithms.md §8.9)"
+            "fusion (default true for now); false: with two or more detecting sensors so "
+            "flagged, the session tracks all their detections together in one central "
+            "tracker, in time order (docs/algorithms.md §8.9)"
         ),
     )
 

@@ -12,11 +12,12 @@ thirds, the second all (the middle third is seen by all three).
 Runs, all on the same detections:
 
 - ``alone-k``: a session with sensor k only (its own local tracker: the service path);
-- ``fused``: one session with the three sensors: **defaults plus physics** (each
+- ``fused``: one session with the three sensors flagged ``local_tracker: false``,
+  otherwise **defaults plus physics** (each
   sensor's R, P_D, clutter density and field of view, the birth density and
   ``motion.q``; no velocity prior, no management knob): the central tracker
   (docs/algorithms.md §8.9);
-- ``fused-t2t``: the same sensors flagged ``local_tracker: true``: each its own local
+- ``fused-t2t``: the same sensors with ``local_tracker: true`` (the default): each its own local
   tracker, then credal track-to-track fusion (the path before issue 23);
 - ``ss-gnn`` / ``ss-jpda``: Stone Soup 1.9.1 fed every sensor's detections in time
   order, each detection with its own sensor's ``LinearGaussian`` (its R); a scan

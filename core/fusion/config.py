@@ -46,8 +46,9 @@ class SensorSpec:
         configuration (the session tracks them, docs/algorithms.md §4, §8.9); None for a
         sensor that sends track lists.
     local_tracker : a detecting sensor tracked on its own (its local tracker, then
-        track-to-track fusion) even when the session tracks other sensors' detections
-        centrally (:attr:`FusionConfig.central_tracker`).
+        track-to-track fusion; the default for now, docs/algorithms.md §8.9); False: its
+        detections go to the central tracker (:attr:`FusionConfig.central_tracker`) with
+        the other sensors' so flagged.
     """
 
     id: str
@@ -55,7 +56,7 @@ class SensorSpec:
     p_detect: float = 0.9
     fov: FieldOfView | None = None
     tracker: LocalTrackerConfig | None = None
-    local_tracker: bool = False
+    local_tracker: bool = True
 
     def __post_init__(self) -> None:
         if not self.id:
