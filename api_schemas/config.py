@@ -308,6 +308,15 @@ class SensorConfig(WireModel):
             "paper profile: one per km² or km³)"
         ),
     )
+    local_tracker: bool = Field(
+        default=True,
+        description=(
+            "a detecting sensor tracked on its own: its local tracker, then track-to-track "
+            "fusion (default true for now); false: with two or more detecting sensors so "
+            "flagged, the session tracks all their detections together in one central "
+            "tracker, in time order (docs/algorithms.md §8.9)"
+        ),
+    )
 
 
 class AssociationConfig(WireModel):

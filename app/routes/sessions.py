@@ -166,7 +166,7 @@ def summary(session: LiveSession) -> SessionSummary:
 
 def detection_tally(session: LiveSession, sensor: str) -> DetectionTally | None:
     """A detecting sensor's tally and clutter density (docs/algorithms.md §8.8)."""
-    tracker = None if session.engine is None else session.engine.local_trackers.get(sensor)
+    tracker = None if session.engine is None else session.engine.tracker_of(sensor)
     if tracker is None:
         return None
     tally = tracker.tallies[sensor].to_plain()

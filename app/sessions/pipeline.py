@@ -126,9 +126,7 @@ class InputPipeline:
         ``max_input_work``, or beyond ``max_explain_cells`` for the matrix ``explain`` adds:
         before any work."""
         known = len(session.tracks)
-        tracker = (
-            None if session.engine is None else session.engine.local_trackers.get(submitted.sensor)
-        )
+        tracker = None if session.engine is None else session.engine.tracker_of(submitted.sensor)
         known += 0 if tracker is None else tracker.n_tracks  # a detecting sensor's own tracks
         settings = self.registry.settings
         where = (submitted.kind.tag,)  # the list of items is named as the kind (tracks, detections)
@@ -405,5 +403,5 @@ def result_message(result: str, ref: str | None = None) -> str:
 
 def _tally(engine: SessionEngine | None, sensor: str) -> ScanTally | None:
     """A detecting sensor's tally so far (:class:`~core.tracking.track.ScanTally`), or None."""
-    tracker = None if engine is None else engine.local_trackers.get(sensor)
+    tracker = None if engine is None else engine.tracker_of(sensor)
     return None if tracker is None else tracker.tallies.get(sensor)

@@ -115,6 +115,7 @@ def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> Sens
         p_detect=sensor.p_detect,
         fov=fov,
         tracker=tracker,
+        local_tracker=sensor.local_tracker,
     )
 
 

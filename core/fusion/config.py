@@ -6,6 +6,7 @@ core never sees pydantic.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -14,13 +15,21 @@ from types import MappingProxyType
 from core.association import DEFAULT_DISTANCE
 from core.association.associate import resolve_method
 from core.belief import Frame
-from core.errors import InvalidInput
+from core.errors import InvalidInput, TrackingError
 from core.fusion.detections import check_layout_for_detections
 from core.fusion.motion import MotionModel
 from core.fusion.state import StateFusion
 from core.geometry import Coverage, FieldOfView, PolygonView
 from core.lifecycle import LifeCycleConfig
 from core.tracking.config import LocalTrackerConfig
+
+CENTRAL_MIN_SENSORS = 2
+"""Detecting sensors (not flagged ``local_tracker``) from which a session tracks centrally."""
+CENTRAL_SOURCE = "central"
+"""The fused layer's source id of the central tracker (:attr:`FusionConfig.central_source`)."""
+CENTRAL_P_DETECT = 1.0 - 1e-9
+"""P_D of the central tracker's source in the fused layer: it reports every track it keeps
+at every step, so a track missing from its report is one it ended (one miss deletes)."""
 
 
 @dataclass(frozen=True)
@@ -33,9 +42,13 @@ class SensorSpec:
     reliability : λ for discounting its class evidence ([MTT] eq 7).
     p_detect : P_D, used by the track score.
     fov : its field of view, or None if it sees everywhere.
-    tracker : for a sensor that sends raw detections, its local tracker's
-        configuration (the session tracks them, docs/algorithms.md §4); None for a
+    tracker : for a sensor that sends raw detections, its own tracker
+        configuration (the session tracks them, docs/algorithms.md §4, §8.9); None for a
         sensor that sends track lists.
+    local_tracker : a detecting sensor tracked on its own (its local tracker, then
+        track-to-track fusion; the default for now, docs/algorithms.md §8.9); False: its
+        detections go to the central tracker (:attr:`FusionConfig.central_tracker`) with
+        the other sensors' so flagged.
     """
 
     id: str
@@ -43,6 +56,7 @@ class SensorSpec:
     p_detect: float = 0.9
     fov: FieldOfView | None = None
     tracker: LocalTrackerConfig | None = None
+    local_tracker: bool = True
 
     def __post_init__(self) -> None:
         if not self.id:
@@ -76,6 +90,11 @@ class FusionConfig:
         become :func:`~core.lifecycle.default_density` of the layout's positions).
     region : the surveillance region; by default the union of the sensors'
         ranges (``core.geometry``): outside it a track is out of range.
+    central_tracker : derived, not given: with two or more detecting sensors not flagged
+        ``local_tracker``, one tracker over all their detections in time order
+        (:meth:`LocalTrackerConfig.central`, docs/algorithms.md §8.9); its tracks enter the
+        fusion step as the track list of the source :attr:`central_source`. None: every
+        detecting sensor has its own local tracker.
     """
 
     motion: MotionModel
@@ -90,6 +109,7 @@ class FusionConfig:
     state_fusion: StateFusion = StateFusion.COVARIANCE_INTERSECTION
     management: LifeCycleConfig = field(default_factory=LifeCycleConfig)
     region: PolygonView | None = None
+    central_tracker: LocalTrackerConfig | None = field(init=False, default=None)
 
     def __post_init__(self) -> None:
         if not self.sensors:
@@ -106,6 +126,17 @@ class FusionConfig:
         for sensor in self.sensors:
             if sensor.tracker is not None:
                 self._check_detecting_sensor(sensor, sensor.tracker)
+        central = {
+            sensor.id: sensor.tracker
+            for sensor in self.sensors
+            if sensor.tracker is not None and not sensor.local_tracker
+        }
+        if len(central) >= CENTRAL_MIN_SENSORS:
+            try:
+                tracker = LocalTrackerConfig.central(central, id_prefix=f"{self.central_source}:")
+            except TrackingError as error:
+                raise InvalidInput(str(error), loc=("sensors",)) from None
+            object.__setattr__(self, "central_tracker", tracker)
         distance = self.distance or DEFAULT_DISTANCE.get(self.association_method, "sum")
         # a bad method, option or distance fails here, not at the first step that runs it
         resolve_method(self.association_method, self.association_options, distance)
@@ -132,6 +163,32 @@ class FusionConfig:
     def dim(self) -> int:
         return self.motion.layout.dim
 
+    @property
+    def central_source(self) -> str:
+        """The source id of the central tracker's tracks in the fused layer: ``central``,
+        with ``~`` appended while a sensor has that id."""
+        ids = {sensor.id for sensor in self.sensors}
+        name = CENTRAL_SOURCE
+        while name in ids:
+            name += "~"
+        return name
+
+    def tracked_centrally(self, sensor_id: str) -> bool:
+        """Whether ``sensor_id``'s detections go to the central tracker."""
+        return self.central_tracker is not None and sensor_id in self.central_tracker.sensors
+
+    def source(self, source_id: str) -> SensorSpec:
+        """A sensor, or the central tracker's source (:data:`CENTRAL_SPEC` under its id)."""
+        if self.central_tracker is not None and source_id == self.central_source:
+            return dataclasses.replace(CENTRAL_SPEC, id=source_id)
+        return self.sensor(source_id)
+
+    @property
+    def sources(self) -> tuple[str, ...]:
+        """The fused layer's sources: the sensors, then the central tracker's."""
+        ids = tuple(sensor.id for sensor in self.sensors)
+        return ids if self.central_tracker is None else (*ids, self.central_source)
+
     def sensor(self, sensor_id: str) -> SensorSpec:
         """The sensor called ``sensor_id``."""
         for sensor in self.sensors:
@@ -145,3 +202,7 @@ class FusionConfig:
     @property
     def coverage(self) -> Coverage:
         return Coverage(tuple(sensor.fov for sensor in self.sensors), self.region)
+
+
+CENTRAL_SPEC = SensorSpec(id=CENTRAL_SOURCE, p_detect=CENTRAL_P_DETECT)
+"""The central tracker's source in the fused layer (sees everywhere: module constants)."""

@@ -43,6 +43,8 @@ from core.tracking.models import ModelBank
 from core.tracking.track import LocalTrack, TrackerStep
 from core.tracking.tracker import LocalTracker
 
+KEPT = (TrackStatus.CONFIRMED, TrackStatus.COASTING, TrackStatus.PHANTOM)
+"""The statuses of the tracks a central tracker keeps (and reports at every step)."""
 DETECTION_AXES = (1, 2, 3)
 """Numbers of position components a detecting sensor's state may have."""
 
@@ -102,16 +104,26 @@ def _in_velocity_convention(
 
 
 def local_track_report(
-    tracker: LocalTracker, step: TrackerStep, layout: StateLayout, classes: Frame | None
+    tracker: LocalTracker,
+    step: TrackerStep,
+    layout: StateLayout,
+    classes: Frame | None,
+    *,
+    every: bool = False,
 ) -> tuple[ReportedTrack, ...]:
-    """The confirmed local tracks of a scan, on the session's layout, with their class mass."""
+    """The confirmed local tracks updated in a scan, on the session's layout, with their
+    class mass; ``every``: every track the tracker keeps (confirmed, coasting or phantom,
+    updated or not: the central tracker's, docs/algorithms.md §8.9)."""
     order = list(local_order(layout))
     preset = tracker.preset
     headings = preset is not None and preset.velocity_convention == "heading"
     updated = set(step.updated)
     reported = []
     for track in step.tracks:
-        if track.status is not TrackStatus.CONFIRMED or track.id not in updated:
+        if every:
+            if track.status not in KEPT:
+                continue
+        elif track.status is not TrackStatus.CONFIRMED or track.id not in updated:
             continue
         local_state, local_covariance = _in_velocity_convention(tracker.bank, headings, track)
         state = np.zeros(layout.dim)

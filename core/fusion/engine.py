@@ -100,7 +100,10 @@ from core.pipeline.handover import hand_over_pairs
 from core.pipeline.rows import TrackRows, ended
 from core.tracking.tracker import LocalTracker
 
-EXPORT_VERSION = 1
+EXPORT_VERSION = 2
+"""2: the central tracker's state (``central``, §8.9). A version-1 export restores with an
+empty central tracker (its sessions' detecting sensors were tracked one by one: their
+local trackers are dropped, the fused tracks go on and end as their sources' silence says)."""
 OVERDUE_REVISITS = 2.5
 """A source is overdue on a fused track after this many of its revisits without updating it:
 one ordinary miss (P_D 0.9: one scan in ten) never makes a track coast (§8.6)."""
@@ -127,15 +130,17 @@ class SessionEngine:
         self.local_trackers: dict[str, LocalTracker] = {
             sensor.id: LocalTracker(sensor.tracker)
             for sensor in config.sensors
-            if sensor.tracker is not None
+            if sensor.tracker is not None and not config.tracked_centrally(sensor.id)
         }
+        self.central: LocalTracker | None = (
+            None if config.central_tracker is None else LocalTracker(config.central_tracker)
+        )
+        """The central tracker over the detections of several sensors (§8.9), or None."""
         layout = config.motion.layout
         self._position = np.asarray(layout.position, dtype=np.int64)
         self._coverage = config.coverage
-        self._reliabilities = {sensor.id: sensor.reliability for sensor in config.sensors}
-        self._table = EstimateTable(
-            [sensor.id for sensor in config.sensors], config.motion, config.state_fusion
-        )
+        self._reliabilities = self._source_reliabilities(config)
+        self._table = EstimateTable(list(config.sources), config.motion, config.state_fusion)
         self._rows = FusedRows(self._table)
 
     # ------------------------------------------------------------ sensors
@@ -145,7 +150,7 @@ class SessionEngine:
         config = dataclasses.replace(self.config, sensors=(*self.config.sensors, sensor))
         self._table.add_slot(sensor.id)
         self._set_config(config)
-        if sensor.tracker is not None:
+        if sensor.tracker is not None and not config.tracked_centrally(sensor.id):
             self.local_trackers[sensor.id] = LocalTracker(sensor.tracker)
 
     def leave(self, sensor: str) -> None:
@@ -155,10 +160,27 @@ class SessionEngine:
         self._set_config(dataclasses.replace(self.config, sensors=kept))
         self.local_trackers.pop(sensor, None)
 
+    @staticmethod
+    def _source_reliabilities(config: FusionConfig) -> dict[str, float]:
+        """λ of each source's class evidence ([MTT] eq 7): the sensors', and 1 for the central
+        tracker, whose detections' evidence is discounted by their own sensor's."""
+        return {source: config.source(source).reliability for source in config.sources}
+
+    def _is_central(self, source: str) -> bool:
+        """Whether ``source`` is the central tracker's source (not a sensor)."""
+        return self.central is not None and source == self.config.central_source
+
+    def tracker_of(self, sensor: str) -> LocalTracker | None:
+        """The tracker of ``sensor``'s detections: the central tracker, its own, or None (a
+        sensor that sends track lists)."""
+        if self.central is not None and self.config.tracked_centrally(sensor):
+            return self.central
+        return self.local_trackers.get(sensor)
+
     def _set_config(self, config: FusionConfig) -> None:
         self.config = config
         self._coverage = config.coverage
-        self._reliabilities = {spec.id: spec.reliability for spec in config.sensors}
+        self._reliabilities = self._source_reliabilities(config)
         self._rows.sorted_slots = sorted(self._table.slots.items())
 
     # ------------------------------------------------------------ the step
@@ -173,6 +195,11 @@ class SessionEngine:
         StaleReport
             The report is not newer than the sensor's previous report.
         """
+        if self._is_central(report.sensor):
+            raise InvalidInput(
+                f"{report.sensor!r} is the central tracker's source: it takes no track lists",
+                loc=("sensor",),
+            )
         with self._transaction():
             return self._apply(report, explain)
 
@@ -195,6 +222,8 @@ class SessionEngine:
             time never goes backwards for detections.
         """
         sensor = self.config.sensor(report.sensor)
+        if self.central is not None and self.config.tracked_centrally(sensor.id):
+            return self._apply_central(self.central, sensor, report, explain)
         tracker = self.local_trackers.get(sensor.id)
         if tracker is None:
             raise InvalidInput(
@@ -219,6 +248,49 @@ class SessionEngine:
                 tracker, scan, self.config.motion.layout, self.config.classes
             )
             return self._apply(TrackReport(sensor.id, report.time, tracks), explain)
+
+    def _apply_central(
+        self, central: LocalTracker, sensor: SensorSpec, report: DetectionReport, explain: bool
+    ) -> StepResult:
+        """One sensor's detections through the central tracker (§8.9), then the fusion step.
+
+        The central tracker takes every centrally tracked sensor's detections in time
+        order (two sensors may report at the same instant; a report older than the
+        tracker's latest is stale). Each detection's class evidence is discounted by its
+        sensor's reliability ([MTT] eq 7) before it enters its track's class mass. Every
+        track the tracker keeps (confirmed, coasting or phantom) is the track list of the
+        central source at every step, so a fused track it carries follows it: confirmed
+        at once, ended when the tracker ends it.
+        """
+        check_time(report.time)
+        latest = [self.last_report.get(sensor.id), central.time]
+        last = max((t for t in latest if t is not None), default=None)
+        if last is not None and (
+            report.time < last or report.time == self.last_report.get(sensor.id)
+        ):
+            raise StaleReport(sensor.id, report.time, last)
+        check_detection_magnitudes(report)
+        masses = report.class_masses
+        if masses is not None and sensor.reliability < 1.0:
+            masses = tuple(
+                None if mass is None else mass.discount(sensor.reliability) for mass in masses
+            )
+        source = self.config.central_source
+        with self._transaction(central):
+            scan = central.step(
+                report.time,
+                report.measurements,
+                report.covariances,
+                sensor=sensor.id,
+                range_rates=report.range_rates,
+                class_masses=masses,
+            )
+            tracks = local_track_report(
+                central, scan, self.config.motion.layout, self.config.classes, every=True
+            )
+            result = self._apply(TrackReport(source, report.time, tracks), explain)
+            self.last_report[sensor.id] = report.time
+            return dataclasses.replace(result, sensor=sensor.id)
 
     @contextmanager
     def _transaction(self, tracker: LocalTracker | None = None) -> Iterator[None]:
@@ -267,7 +339,11 @@ class SessionEngine:
 
         rows = np.array([pair[0] for pair in decision.pairs], dtype=np.int64)
         cols = np.array([pair[1] for pair in decision.pairs], dtype=np.int64)
-        increments = self._hit_increments(states[rows], covariances[rows], incoming, cols, sensor)
+        increments = (
+            np.zeros(len(rows))  # the central tracker's tracks passed its test already (§8.9)
+            if self._is_central(report.sensor)
+            else self._hit_increments(states[rows], covariances[rows], incoming, cols, sensor)
+        )
         self._record(live[rows], cols, report, incoming)  # update
         created = self._start(np.asarray(decision.new, dtype=np.int64), report, incoming)
 
@@ -287,10 +363,11 @@ class SessionEngine:
     # ------------------------------------------------------------ checks
     def _check(self, report: TrackReport) -> tuple[SensorSpec, Estimates]:
         """Validate a report without changing anything; returns its sensor and its estimates."""
-        sensor = self.config.sensor(report.sensor)
+        sensor = self.config.source(report.sensor)
         check_time(report.time)
         last = self.last_report.get(report.sensor)
-        if last is not None and report.time <= last:
+        central = self._is_central(report.sensor)  # its sensors may share an instant
+        if last is not None and (report.time < last if central else report.time <= last):
             raise StaleReport(report.sensor, report.time, last)
         ids = [track.id for track in report.tracks]
         if len(set(ids)) != len(ids):
@@ -576,12 +653,14 @@ class SessionEngine:
         if len(cols) == 0:
             return np.zeros(0, dtype=np.int64)
         management = self.config.management
-        sensor = self.config.sensor(report.sensor)
+        sensor = self.config.source(report.sensor)
+        central = self._is_central(report.sensor)
         life = initiated(
             management,
             len(cols),
             management.score_model(sensor.p_detect).initial,
-            confirmed_below=sensor.tracker is not None and len(self.config.sensors) == 1,
+            confirmed_below=central
+            or (sensor.tracker is not None and len(self.config.sensors) == 1),
         )
         rows = self._table.add_rows(len(cols))
         self._rows.rows = self._rows.rows.started(self.next_number, life)
@@ -786,6 +865,7 @@ class SessionEngine:
             "local_trackers": {
                 sensor: tracker.export() for sensor, tracker in sorted(self.local_trackers.items())
             },
+            "central": None if self.central is None else self.central.export(),
         }
 
     def _kinematics(self, track: FusedTrack) -> Kinematics:
@@ -802,9 +882,10 @@ class SessionEngine:
     def restore(cls, config: FusionConfig, state: dict[str, Any]) -> SessionEngine:
         """Rebuild an engine from :meth:`export`'s output and the same configuration.
 
-        Every export so far (version 1) has this layout; an unknown version is refused.
+        Version 1 has no central tracker (:data:`EXPORT_VERSION`); an unknown version is
+        refused.
         """
-        if state.get("version") != EXPORT_VERSION:
+        if state.get("version") not in (1, EXPORT_VERSION):
             raise InvalidInput(f"unknown engine export version {state.get('version')!r}")
         engine = cls(config)
         engine.seq = int(state["seq"])
@@ -846,7 +927,14 @@ class SessionEngine:
             np.array([track.number for track in tracks], dtype=np.int64),
             _plain_lives(plain_tracks),
         )
+        central = state.get("central")
+        if central is not None:
+            if config.central_tracker is None:
+                raise InvalidInput("exported state has a central tracker, the config none")
+            engine.central = LocalTracker.restore(config.central_tracker, central)
         for sensor, plain in state["local_trackers"].items():
+            if config.tracked_centrally(sensor):
+                continue  # a version-1 export of a sensor now tracked centrally
             tracker_config = config.sensor(sensor).tracker
             if tracker_config is None:
                 raise InvalidInput(

@@ -80,12 +80,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from types import MappingProxyType
 from typing import Any, Literal
 
 import numpy as np
 
+from core.arrays import FloatArray
 from core.classification.behaviours import (
     LIKELIHOOD_SCALES,
     MODE_PROBABILITY_READINGS,
@@ -174,12 +175,23 @@ class SensorPhysics:
     p_detect : P_D, or None for the tracker's ``p_detect``.
     clutter_density : β_FT per unit of position space per scan, or None: the life
         cycle's, else estimated from the sensor's detections (:mod:`core.tracking.clutter`).
+    measurement_noise : R of the sensor's detections that carry no covariance of their
+        own, or None: the tracker's (the bank's R).
+    range_rate : the sensor's range-rate measurement (site and σ), or None: the tracker's
+        ``range_rate``.
     """
 
     p_detect: float | None = None
     clutter_density: float | None = None
+    measurement_noise: tuple[tuple[float, ...], ...] | None = None
+    range_rate: RangeRateModel | None = None
 
     def __post_init__(self) -> None:
+        if self.measurement_noise is not None:
+            noise = np.asarray(self.measurement_noise, dtype=np.float64)
+            q = len(noise)
+            if noise.shape != (q, q) or not np.all(np.isfinite(noise)):
+                raise TrackingError("measurement_noise must be a finite square matrix")
         if self.p_detect is not None and not (
             math.isfinite(self.p_detect) and 0.0 < self.p_detect < 1.0
         ):
@@ -321,6 +333,84 @@ class LocalTrackerConfig:
         settings.update(options)
         return cls(**settings)
 
+    @classmethod
+    def central(
+        cls, configs: Mapping[str, LocalTrackerConfig], id_prefix: str = "C"
+    ) -> LocalTrackerConfig:
+        """One tracker over the detections of the sensors ``configs`` (each one's own tracker
+        configuration, by sensor; docs/algorithms.md §8.9).
+
+        Each sensor keeps what is its own: its fields of view, P_D, β_FT (given, or
+        estimated from its own detections), R and range-rate model (``sensor_physics``).
+        Everything else (models, association, life cycle, initiation, classification)
+        is the session's and must agree; the bank's R is the sensor's R of the largest
+        eigenvalue (the gate of a track without a detection is never smaller than a
+        detection's).
+        """
+        if not configs:
+            raise TrackingError("a central tracker needs at least one sensor")
+        names = list(configs)
+        first = configs[names[0]]
+        noises = {name: configs[name].model_bank().measurement.noise_covariance for name in names}
+        if len({noise.shape for noise in noises.values()}) != 1:
+            raise TrackingError("the sensors of a central tracker measure different dimensions")
+        widest = max(names, key=lambda name: float(np.linalg.eigvalsh(noises[name])[-1]))
+        reference = noises[widest]
+        base = first.session_part(id_prefix)
+        views: dict[str, FieldOfView | None] = {}
+        physics: dict[str, SensorPhysics] = {}
+        for name in names:
+            config = configs[name]
+            common = config.session_part(id_prefix)
+            if common != base or (config.bank is None) != (first.bank is None):
+                differing = [
+                    f.name
+                    for f in fields(cls)
+                    if f.name != "bank" and getattr(common, f.name) != getattr(base, f.name)
+                ] or ["bank"]
+                raise TrackingError(
+                    f"sensor {name!r}: a central tracker needs the same {differing} for every "
+                    "sensor"
+                )
+            for sensor, view in config.fields_of_view.items():
+                p_detect, clutter = config.physics(sensor)
+                own = noises[name]
+                views[sensor] = view
+                physics[sensor] = SensorPhysics(
+                    p_detect=p_detect,
+                    clutter_density=clutter,
+                    measurement_noise=(
+                        None
+                        if np.array_equal(own, reference)
+                        else tuple(tuple(float(x) for x in row) for row in own)
+                    ),
+                    range_rate=config.range_rate_of(sensor),
+                )
+        return replace(
+            first,
+            life_cycle=replace(first.life_cycle, false_target_density=None),
+            measurement_noise=tuple(tuple(float(x) for x in row) for row in reference),
+            sensor_physics=MappingProxyType(physics),
+            range_rate=None,
+            fields_of_view=MappingProxyType(views),
+            id_prefix=id_prefix,
+        )
+
+    def session_part(self, id_prefix: str) -> LocalTrackerConfig:
+        """The configuration without what is each sensor's own (:meth:`central`): no bank, R,
+        P_D, β_FT, physics, range-rate or fields of view of its own."""
+        return replace(
+            self,
+            bank=None,
+            measurement_noise=None,
+            p_detect=LocalTrackerConfig.p_detect,
+            sensor_physics=MappingProxyType({}),
+            range_rate=None,
+            fields_of_view=MappingProxyType({"sensor": None}),
+            life_cycle=replace(self.life_cycle, false_target_density=None),
+            id_prefix=id_prefix,
+        )
+
     @property
     def velocity_std(self) -> float:
         """σ_v of a start: the velocity prior, or :data:`UNKNOWN_VELOCITY_STD` without one."""
@@ -338,6 +428,17 @@ class LocalTrackerConfig:
         p_detect = self.p_detect if own.p_detect is None else own.p_detect
         clutter = own.clutter_density
         return p_detect, self.life_cycle.false_target_density if clutter is None else clutter
+
+    def noise(self, sensor: str) -> FloatArray | None:
+        """R of ``sensor``'s detections without their own covariance, when it is not the
+        bank's (``sensor_physics``); None: the bank's."""
+        own = self.sensor_physics.get(sensor, SensorPhysics()).measurement_noise
+        return None if own is None else np.array(own, dtype=np.float64)
+
+    def range_rate_of(self, sensor: str) -> RangeRateModel | None:
+        """The range-rate model of ``sensor``'s detections (its own, else the tracker's)."""
+        own = self.sensor_physics.get(sensor, SensorPhysics()).range_rate
+        return self.range_rate if own is None else own
 
     def tracking_preset(self) -> TrackingPreset | None:
         """The preset (with the session's own classes, ``class_behaviours``), or None when

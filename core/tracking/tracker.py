@@ -183,7 +183,9 @@ class LocalTracker:
         self._conventions: tuple[VelocityConvention, ...] = (
             (VELOCITY,) * self.bank.axes if found is None else found.conventions
         )
-        if config.range_rate is not None and set(self._conventions) != {VELOCITY}:
+        if any(config.range_rate_of(name) is not None for name in config.sensors) and set(
+            self._conventions
+        ) != {VELOCITY}:
             raise TrackingError("a range-rate needs velocities in the state, not headings")
         self._associator = DetectionAssociator(
             config, self.bank, config.score, velocities=set(self._conventions) == {VELOCITY}
@@ -343,7 +345,8 @@ class LocalTracker:
         z, own_noise, sensor_name, elapsed = self._check(
             time, measurements, measurement_covariances, sensor
         )
-        doppler = self._check_range_rates(range_rates, len(z))
+        doppler = self._check_range_rates(range_rates, len(z), sensor_name)
+        own_noise = self._own_noise(sensor_name, own_noise, len(z))
         noises = (
             np.broadcast_to(self._noise, (len(z), self._q, self._q))
             if own_noise is None
@@ -373,7 +376,8 @@ class LocalTracker:
             score,
             branching=START_PASS if self._branching else None,
         )
-        if doppler is not None and self.config.range_rate is not None and len(association.rows):
+        range_rate = self.config.range_rate_of(sensor_name)
+        if doppler is not None and range_rate is not None and len(association.rows):
             measured = np.isfinite(doppler[association.cols])
             association = replace(
                 association,
@@ -381,7 +385,7 @@ class LocalTracker:
                     association.update,
                     association.rows[measured],
                     doppler[association.cols[measured]],
-                    self.config.range_rate,
+                    range_rate,
                     self.bank.axes,
                 ),
             )
@@ -573,11 +577,25 @@ class LocalTracker:
                 )
         return z, own, sensor_name, elapsed
 
-    def _check_range_rates(self, range_rates: ArrayLike | None, count: int) -> FloatArray | None:
+    def _own_noise(
+        self, sensor: str, own_noise: FloatArray | None, count: int
+    ) -> FloatArray | None:
+        """The detections' own R, or the R of their sensor when it is not the bank's
+        (``sensor_physics``: a central tracker's sensors, §8.9); None: the bank's."""
+        if own_noise is not None:
+            return own_noise
+        noise = self.config.noise(sensor)
+        if noise is None:
+            return None
+        return np.broadcast_to(noise, (count, self._q, self._q)).copy()
+
+    def _check_range_rates(
+        self, range_rates: ArrayLike | None, count: int, sensor: str
+    ) -> FloatArray | None:
         """Each detection's range-rate (NaN: none), or None; only with a ``range_rate`` model."""
         if range_rates is None:
             return None
-        if self.config.range_rate is None:
+        if self.config.range_rate_of(sensor) is None:
             raise TrackingError("range_rates need a tracker configured with a range_rate model")
         if self.config.association_method == CHEAP_JPDA:
             raise TrackingError("cheap_jpda takes no range-rates")

@@ -66,10 +66,15 @@ def test_an_old_export_loads_and_continues_like_an_uninterrupted_engine() -> Non
     restored = SessionEngine.restore(CONFIG, old)
     again = restored.export()
     # since issue 22: each track's misses in a row (none in the old file), and the learned
-    # revisits, which start unknown (§8.6)
+    # revisits, which start unknown (§8.6); since issue 23 (version 2): the central tracker
+    # (none in a session whose detecting sensors are not two or more)
     assert [track.pop("misses") for track in again["tracks"]] == [0] * len(old["tracks"])
     assert "revisits" not in old
-    assert json.dumps(again, sort_keys=True) == json.dumps(old | {"revisits": {}}, sort_keys=True)
+    assert again.pop("central") is None and again.pop("version") == 2
+    assert json.dumps(again, sort_keys=True) == json.dumps(
+        {key: value for key, value in old.items() if key != "version"} | {"revisits": {}},
+        sort_keys=True,
+    )
     statuses = {track.status.value for track in restored.tracks}
     assert {"tentative", "confirmed", "phantom"} <= statuses  # the life it carries is read
 
@@ -85,5 +90,5 @@ def test_an_old_export_loads_and_continues_like_an_uninterrupted_engine() -> Non
 
 def test_an_export_of_an_unknown_version_is_refused_by_name() -> None:
     old = json.loads(EXPORT.read_text())
-    with pytest.raises(InvalidInput, match="unknown engine export version 2"):
-        SessionEngine.restore(CONFIG, {**old, "version": 2})
+    with pytest.raises(InvalidInput, match="unknown engine export version 3"):
+        SessionEngine.restore(CONFIG, {**old, "version": 3})

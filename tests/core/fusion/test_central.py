@@ -1,0 +1,212 @@
+"""Detections of several sensors tracked together: the central tracker (docs/algorithms.md §8.9)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from core.errors import InvalidInput, StaleReport
+from core.fusion.config import FusionConfig, SensorSpec
+from core.fusion.engine import SessionEngine
+from core.fusion.motion import MotionModel
+from core.fusion.reports import DetectionReport, ReportedTrack, StepResult, TrackReport
+from core.geometry import Sector
+from core.lifecycle import LifeCycleConfig
+from core.tracking.config import LocalTrackerConfig
+
+from .engine_helpers import LAYOUT
+
+CLUTTER = 1e-7
+"""β_FT of every sensor here (given: no estimate differs between sessions)."""
+SIGMA = 10.0
+STARTS = np.array([[0.0, 0.0], [0.0, 5000.0]])
+VELOCITIES = np.array([[100.0, 0.0], [50.0, -80.0]])
+
+
+def tracker(
+    name: str, p_detect: float = 0.9, sigma: float = SIGMA, fov: Sector | None = None
+) -> LocalTrackerConfig:
+    """A sensor's own tracker configuration, as the service builds it (one sensor each)."""
+    return LocalTrackerConfig(
+        preset="aircraft",
+        measurement_noise=((sigma**2, 0.0), (0.0, sigma**2)),
+        p_detect=p_detect,
+        life_cycle=LifeCycleConfig(false_target_density=CLUTTER),
+        fields_of_view={name: fov},
+        id_prefix=f"{name}:",
+    )
+
+
+def session(*sensors: SensorSpec) -> FusionConfig:
+    return FusionConfig(motion=MotionModel(LAYOUT, q=100.0), sensors=sensors)
+
+
+def detecting(name: str, local: bool = False, **options: object) -> SensorSpec:
+    return SensorSpec(name, tracker=tracker(name, **options), local_tracker=local)  # type: ignore[arg-type]
+
+
+def scans(count: int, seed: int = 0) -> list[np.ndarray]:
+    """Each second, both targets detected (σ 10 m) and three false detections in 10 km²."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for k in range(count):
+        truth = STARTS + VELOCITIES * k
+        clutter = rng.uniform([-2000.0, -2000.0], [3000.0, 7000.0], size=(3, 2))
+        out.append(np.concatenate([truth + rng.normal(0.0, SIGMA, truth.shape), clutter]))
+    return out
+
+
+def feed(engine: SessionEngine, names: list[str], measured: list[np.ndarray]) -> list[StepResult]:
+    return [
+        engine.apply_detections(DetectionReport(names[k % len(names)], float(k), z))
+        for k, z in enumerate(measured)
+    ]
+
+
+def first_confirmation(steps: list[StepResult], target: int) -> int:
+    """The first step with a confirmed fused track within 50 m of ``target``."""
+    for k, step in enumerate(steps):
+        truth = STARTS[target] + VELOCITIES[target] * k
+        for track in step.tracks:
+            near = np.hypot(*(track.state[[0, 2]] - truth)) < 50.0
+            if near and track.status.value == "confirmed":
+                return k
+    raise AssertionError(f"target {target} never confirmed")
+
+
+def test_two_detecting_sensors_are_tracked_centrally_unless_flagged() -> None:
+    both = session(detecting("a"), detecting("b"))
+    assert both.central_tracker is not None
+    assert both.central_tracker.sensors == ("a", "b")
+    assert both.sources == ("a", "b", "central")
+    engine = SessionEngine(both)
+    assert engine.local_trackers == {} and engine.tracker_of("a") is engine.central
+    flagged = session(detecting("a"), detecting("b", local=True))
+    assert flagged.central_tracker is None  # one detecting sensor left: nothing to fuse centrally
+    assert set(SessionEngine(flagged).local_trackers) == {"a", "b"}
+    # a sensor called "central" keeps its id; the central source takes another
+    named = session(detecting("central"), detecting("b"))
+    assert named.central_source == "central~"
+
+
+def test_a_target_seen_alternately_by_two_sensors_confirms_as_early_as_by_one() -> None:
+    measured = scans(8)
+    alone = feed(SessionEngine(session(detecting("a"))), ["a"], measured)
+    central = feed(SessionEngine(session(detecting("a"), detecting("b"))), ["a", "b"], measured)
+    local = feed(
+        SessionEngine(session(detecting("a", local=True), detecting("b", local=True))),
+        ["a", "b"],
+        measured,
+    )
+    for target in (0, 1):
+        # the defaults confirm at the second hit (docs/algorithms.md §8.3): the second scan
+        assert first_confirmation(alone, target) == 1
+        assert first_confirmation(central, target) == 1
+        # each local tracker needs two of its own scans (steps 2 and 3) before it reports
+        assert first_confirmation(local, target) >= 2
+
+
+def test_fusing_a_sensor_with_itself_changes_nothing() -> None:
+    """The scans of one sensor, sent alternately as two sensors of the same physics: the
+    central tracker's tracks are the single sensor's local tracker's, bit for bit."""
+    measured = scans(20, seed=1)
+    single = SessionEngine(session(detecting("a")))
+    twice = SessionEngine(session(detecting("a"), detecting("b")))
+    alone, central = feed(single, ["a"], measured), feed(twice, ["a", "b"], measured)
+    mine, theirs = single.tracker_of("a"), twice.central
+    assert mine is not None and theirs is not None
+    assert json.dumps(theirs.export()["tracks"]) == json.dumps(mine.export()["tracks"])
+    assert theirs.next_number == mine.next_number
+    # and the fused pictures agree on the targets' tracks at every step (a false track that
+    # coasts is shown predicted by the fused layer's model alone, by the central tracker's
+    # IMM in the other: its tracker state is the same, above)
+    for k, (one, two) in enumerate(zip(alone, central, strict=True)):
+        truth = STARTS + VELOCITIES * k
+        for target in (0, 1):
+            near = [
+                [
+                    (t.id, t.status.value, *np.round(t.state, 6))
+                    for t in step.tracks
+                    if np.hypot(*(t.state[[0, 2]] - truth[target])) < 50.0
+                ]
+                for step in (one, two)
+            ]
+            assert near[1] == near[0]
+
+
+def test_misses_count_only_where_the_scanning_sensor_could_see() -> None:
+    """A track outside sensor b's field of view keeps its score through b's empty scans; a
+    sensor b that sees everywhere costs it ln(1 − P_D of b) per empty scan ([MTT] §4.3)."""
+    far = Sector(
+        origin=(0.0, -50_000.0),
+        heading_deg=-90.0,
+        half_angle_deg=10.0,
+        range_min=0.0,
+        range_max=5e3,
+    )
+    for fov, expected in ((far, 0.0), (None, math.log(1.0 - 0.7))):
+        engine = SessionEngine(session(detecting("a"), detecting("b", p_detect=0.7, fov=fov)))
+        central = engine.central
+        assert central is not None
+        truth = STARTS[:1]
+        for k in range(4):
+            engine.apply_detections(DetectionReport("a", float(k), truth + VELOCITIES[:1] * k))
+        before = {t["number"]: t for t in central.export()["tracks"]}
+        confirmed = [n for n, t in before.items() if t["status"] == "confirmed"]
+        assert len(confirmed) == 1
+        engine.apply_detections(DetectionReport("b", 3.5, np.zeros((0, 2))))
+        after = {t["number"]: t for t in central.export()["tracks"]}[confirmed[0]]
+        assert after["score"] - before[confirmed[0]]["score"] == pytest.approx(expected, abs=1e-12)
+
+
+def test_each_sensor_scores_with_its_own_noise() -> None:
+    """A detection of the noisier sensor b is gated and updated with b's R: the central
+    track after one b update is the Kalman update under R_b (independent computation)."""
+    engine = SessionEngine(session(detecting("a"), detecting("b", sigma=40.0)))
+    central = engine.central
+    assert central is not None
+    for k in range(3):
+        engine.apply_detections(DetectionReport("a", float(k), STARTS[:1] + VELOCITIES[:1] * k))
+    predicted = central.predictor.predict(central._state, 1.0)
+    z = STARTS[:1] + VELOCITIES[:1] * 3 + np.array([[30.0, -20.0]])
+    engine.apply_detections(DetectionReport("b", 3.0, z))
+    h = central.bank.measurement.matrix
+    r_b = np.eye(2) * 1600.0
+    state = central.export()["tracks"][0]
+    for model in range(central.bank.n_models):
+        mean, covariance = predicted.means[0, model], predicted.covariances[0, model]
+        s = h @ covariance @ h.T + r_b
+        gain = covariance @ h.T @ np.linalg.inv(s)
+        expected = mean + gain @ (z[0] - h @ mean)
+        np.testing.assert_allclose(state["means"][model], expected, rtol=1e-9, atol=1e-9)
+
+
+def test_central_export_restore_continues_exactly() -> None:
+    config = session(detecting("a"), detecting("b", p_detect=0.8, sigma=20.0))
+    measured = scans(16, seed=2)
+    uninterrupted = SessionEngine(config)
+    feed(uninterrupted, ["a", "b"], measured)
+    engine = SessionEngine(config)
+    feed(engine, ["a", "b"], measured[:9])
+    restored = SessionEngine.restore(config, json.loads(json.dumps(engine.export())))
+    for k in range(9, 16):
+        restored.apply_detections(DetectionReport("ab"[k % 2], float(k), measured[k]))
+    assert json.dumps(restored.export()) == json.dumps(uninterrupted.export())
+    assert restored.export()["version"] == 2 and restored.export()["central"] is not None
+
+
+def test_central_time_order_same_instant_and_refusals() -> None:
+    engine = SessionEngine(session(detecting("a"), detecting("b")))
+    engine.apply_detections(DetectionReport("a", 1.0, STARTS))
+    engine.apply_detections(DetectionReport("b", 1.0, STARTS))  # the same instant: fine
+    before = json.dumps(engine.export())
+    with pytest.raises(StaleReport):
+        engine.apply_detections(DetectionReport("b", 1.0, STARTS))  # b's own time again
+    with pytest.raises(StaleReport):
+        engine.apply_detections(DetectionReport("a", 0.5, STARTS))  # before the tracker's time
+    with pytest.raises(InvalidInput, match="central tracker's source"):
+        engine.apply(TrackReport("central", 2.0, (ReportedTrack("x", np.zeros(4), np.eye(4)),)))
+    assert json.dumps(engine.export()) == before
