@@ -62,8 +62,7 @@ from stonesoup.gater.distance import DistanceGater  # noqa: E402
 from stonesoup.hypothesiser.distance import DistanceHypothesiser  # noqa: E402
 from stonesoup.hypothesiser.probability import PDAHypothesiser  # noqa: E402
 from stonesoup.initiator.simple import MultiMeasurementInitiator  # noqa: E402
-from stonesoup.measures import Euclidean, Mahalanobis  # noqa: E402
-from stonesoup.metricgenerator.ospametric import GOSPAMetric  # noqa: E402
+from stonesoup.measures import Mahalanobis  # noqa: E402
 from stonesoup.models.measurement.linear import LinearGaussian  # noqa: E402
 from stonesoup.models.transition.linear import (  # noqa: E402
     CombinedLinearGaussianTransitionModel,
@@ -79,7 +78,7 @@ from stonesoup.updater.kalman import KalmanUpdater  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from machine import describe_machine  # noqa: E402
-from peers import _jpda_posterior  # noqa: E402
+from peers import _jpda_posterior, gospa_terms  # noqa: E402
 
 from api_schemas.config import SessionConfig  # noqa: E402
 from app.sessions.translate import fusion_config  # noqa: E402
@@ -403,26 +402,11 @@ class Score:
 
 
 def score(scene: Scene, estimates: list[Estimates]) -> Score:
-    metric = GOSPAMetric(c=CUTOFF, p=1, measure=Euclidean((0, 2)))
-    parts = np.zeros(4)
-    assigned: list[dict[str, str | None]] = []
-    times = scene.eval_times()
-    for t, step in zip(times, estimates, strict=True):
-        when = START + datetime.timedelta(seconds=t)
-        truth = scene.truth_at(when)
-        measured = [State(state.reshape(-1, 1), timestamp=when) for _, state in step]
-        truth_states = [State(s.state_vector, timestamp=when) for _, s in truth]
-        if not measured and not truth_states:
-            assigned.append({})
-            continue
-        value, assignment = metric.compute_gospa_metric(measured, truth_states)
-        parts += [value.value[k] for k in ("distance", "localisation", "missed", "false")]
-        row: dict[str, str | None] = {truth_id: None for truth_id, _ in truth}
-        for index, measured_index in enumerate(assignment):
-            if measured_index >= 0:
-                row[truth[index][0]] = step[int(measured_index)][0]
-        assigned.append(row)
-    parts /= len(times)
+    whens = [START + datetime.timedelta(seconds=t) for t in scene.eval_times()]
+    parts, assigned = gospa_terms(
+        ((when, scene.truth_at(when), step) for when, step in zip(whens, estimates, strict=True)),
+        cutoff=CUTOFF,
+    )
     return Score(*parts, identity_switches(assigned))
 
 

@@ -65,7 +65,7 @@ import datetime  # noqa: E402
 import math  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
-from collections.abc import Callable  # noqa: E402
+from collections.abc import Callable, Iterable, Sequence  # noqa: E402
 from dataclasses import dataclass, field  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
@@ -614,12 +614,17 @@ def confirmation_delay(assigned: list[dict[str, str | None]]) -> float:
     return float(np.mean(delays)) if delays else 0.0
 
 
-def score(scene: Scene, run: Run, with_siap: bool) -> Score:
-    metric = GOSPAMetric(c=CUTOFF, p=1, measure=Euclidean((0, 2)))
+def gospa_terms(
+    steps: Iterable[tuple[datetime.datetime, Sequence[tuple[str, Any]], Sequence[tuple[str, Any]]]],
+    cutoff: float,
+) -> tuple[np.ndarray, list[dict[str, str | None]]]:
+    """Stone Soup's GOSPA (c = ``cutoff``, p = 1, α = 2) averaged over ``steps`` of (time, truth
+    ``(id, GroundTruthState)``, estimates ``(id, state vector)``): its distance, localisation,
+    missed and false terms, and each step's truth id → assigned estimate id (for id switches)."""
+    metric = GOSPAMetric(c=cutoff, p=1, measure=Euclidean((0, 2)))
     parts = np.zeros(4)
     assigned: list[dict[str, str | None]] = []
-    for (when, _), estimates in zip(scene.scans, run.estimates, strict=True):
-        truth = scene.truth_states(when)
+    for when, truth, estimates in steps:
         measured = [State(state.reshape(-1, 1), timestamp=when) for _, state in estimates]
         truth_states = [State(s.state_vector, timestamp=when) for _, s in truth]
         if not measured and not truth_states:
@@ -632,7 +637,17 @@ def score(scene: Scene, run: Run, with_siap: bool) -> Score:
             if measured_index >= 0:
                 step[truth[index][0]] = estimates[int(measured_index)][0]
         assigned.append(step)
-    parts /= len(scene.scans)
+    return parts / max(len(assigned), 1), assigned
+
+
+def score(scene: Scene, run: Run, with_siap: bool) -> Score:
+    parts, assigned = gospa_terms(
+        (
+            (when, scene.truth_states(when), estimates)
+            for (when, _), estimates in zip(scene.scans, run.estimates, strict=True)
+        ),
+        cutoff=CUTOFF,
+    )
     # Stone Soup's SIAP refuses the GM-PHD's tracks (a tag that skips a scan)
     siap = siap_metrics(scene, run) if with_siap and run.label != "ss-gmphd" else None
     steady = run.scan_seconds[TIMING_FROM:] or run.scan_seconds  # tracks exist from scan 3

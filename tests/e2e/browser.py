@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import pytest
 from playwright.sync_api import (
@@ -96,3 +97,18 @@ def browser_page(tmp_path: Path) -> Iterator[BrowserPage]:
             yield BrowserPage(page=page, log=log)
         finally:
             context.close()
+
+
+def viewer_state(page: Page) -> dict[str, Any]:
+    """The viewer's own account of what it draws (``window.__viewer.state()``)."""
+    state = page.evaluate("window.__viewer.state()")
+    assert isinstance(state, dict)
+    return state
+
+
+def wait_for_seq(page: Page, seq: int) -> dict[str, Any]:
+    """Wait until the page shows ``seq`` (in its status line) and return its state."""
+    page.wait_for_function(
+        "seq => document.getElementById('seq').textContent === String(seq)", arg=seq
+    )
+    return viewer_state(page)

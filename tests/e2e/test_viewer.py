@@ -24,7 +24,7 @@ from websockets.sync.client import connect
 from tests.api.conftest import LiveServer
 from tests.api.proj_oracle import proj_enu
 from tests.api.scenario import reports, session_config, truth
-from tests.e2e.browser import BrowserPage
+from tests.e2e.browser import BrowserPage, viewer_state, wait_for_seq
 
 RECEIVE_TIMEOUT_S = 20.0
 STEPS_BEFORE = 6  # fed before the page opens: its trails start from the tracks' history
@@ -48,20 +48,6 @@ def viewer_config() -> dict[str, Any]:
     for sensor, fov in zip(config["sensors"], (SECTOR, POLYGON), strict=True):
         sensor["fov"] = fov
     return config
-
-
-def viewer_state(page: Page) -> dict[str, Any]:
-    state = page.evaluate("window.__viewer.state()")
-    assert isinstance(state, dict)
-    return state
-
-
-def wait_for_seq(page: Page, seq: int) -> dict[str, Any]:
-    """Wait until the page shows ``seq`` (in its status line) and return its state."""
-    page.wait_for_function(
-        "seq => document.getElementById('seq').textContent === String(seq)", arg=seq
-    )
-    return viewer_state(page)
 
 
 def wait_for_connection(page: Page, connection: str) -> None:

@@ -22,11 +22,10 @@ from typing import Any
 import httpx
 import numpy as np
 import pytest
-from playwright.sync_api import Page
 
 from tests.api.conftest import LiveServer
 from tests.api.proj_oracle import proj_enu
-from tests.e2e.browser import BrowserPage
+from tests.e2e.browser import BrowserPage, viewer_state, wait_for_seq
 
 README = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
 LAYOUT_2D = {"dim": 4, "position": [0, 2], "velocity": [1, 3]}
@@ -51,19 +50,6 @@ PIXELS = """([x0, y0, w, h, colours, points]) => {
   });
   return { counts, patches };
 }"""
-
-
-def state(page: Page) -> dict[str, Any]:
-    shown = page.evaluate("window.__viewer.state()")
-    assert isinstance(shown, dict)
-    return shown
-
-
-def wait_for_seq(page: Page, seq: int) -> dict[str, Any]:
-    page.wait_for_function(
-        "seq => document.getElementById('seq').textContent === String(seq)", arg=seq
-    )
-    return state(page)
 
 
 def open_session(client: httpx.Client, config: dict[str, Any]) -> tuple[str, str, dict[str, str]]:
@@ -143,7 +129,7 @@ def test_the_readme_geodetic_session_is_drawn_on_the_map(
         wait_for_seq(page, len(inputs))
         page.wait_for_function("() => (window.__viewer.state().map || {}).loaded === true")
         page.wait_for_function("() => window.__viewer.state().trails.F1 >= 2")  # its history
-        close = state(page)
+        close = viewer_state(page)
         page.screenshot(path=tmp_path / "viewer-map-close.png")
         # the aircraft 12.5 km from the radar, near Toulouse: the whole view is land
         colours = close["map"]["colours"]
@@ -168,7 +154,7 @@ def test_the_readme_geodetic_session_is_drawn_on_the_map(
             "mpp => window.__viewer.state().metresPerPixel > mpp",
             arg=close["metresPerPixel"] * math.exp(0.0015 * 400 * (WHEEL_STEPS - 0.5)),
         )
-        far = state(page)
+        far = viewer_state(page)
         page.screenshot(path=tmp_path / "viewer-map-far.png")
         assert not far["follow"]  # the user zoomed: the view is theirs
         # places PROJ puts in the session plane, on land and at sea (tens of km from any coast)
@@ -196,7 +182,9 @@ def test_the_readme_geodetic_session_is_drawn_on_the_map(
         # key F: the view follows the track again
         page.locator("body").press("f")
         page.wait_for_function("() => window.__viewer.state().follow")
-        assert state(page)["metresPerPixel"] == pytest.approx(close["metresPerPixel"], rel=1e-6)
+        assert viewer_state(page)["metresPerPixel"] == pytest.approx(
+            close["metresPerPixel"], rel=1e-6
+        )
 
     map_requests = [url for url in log.requests if "/map/" in url]
     assert map_requests == [f"{live_server.url}/map/countries-50m.json"]
@@ -245,7 +233,7 @@ def test_the_view_follows_a_moving_track_until_the_user_pans(
         page.mouse.down()
         page.mouse.move(canvas["x"] + 700, canvas["y"] + 400, steps=4)
         page.mouse.up()
-        panned = state(page)
+        panned = viewer_state(page)
         assert not panned["follow"]
         assert page.locator("#follow").inner_text() == "follow (F)"
         for t in range(16, 24):
@@ -258,7 +246,7 @@ def test_the_view_follows_a_moving_track_until_the_user_pans(
         # the button brings the view back to the track and follows again
         page.click("#follow")
         page.wait_for_function("() => window.__viewer.state().follow")
-        back = state(page)
+        back = viewer_state(page)
         (mark,) = back["drawn"]
         plot = back["plot"]
         assert plot["x0"] < mark["x"] < plot["x0"] + plot["w"]
@@ -317,7 +305,7 @@ def test_labels_never_collide_and_a_full_sector_has_no_seam(
         wait_for_seq(page, 1)
 
         def check_labels() -> dict[str, Any]:
-            shown = state(page)
+            shown = viewer_state(page)
             labels = [label for label in shown["labels"] if label["shown"]]
             assert len(shown["labels"]) == len(shown["drawn"]) == 24
             assert labels, "no label shown"
@@ -363,7 +351,7 @@ def test_labels_never_collide_and_a_full_sector_has_no_seam(
         page.screenshot(path=tmp_path / "viewer-labels-edge.png")
 
         # the 360° sector: its outer circle and its blind range's circle, no radial edge
-        (field,) = state(page)["fields"]
+        (field,) = viewer_state(page)["fields"]
         outer, blind = field["rings"]
         assert {round(math.hypot(x, y), 6) for x, y in outer} == {3000.0}
         assert {round(math.hypot(x, y), 6) for x, y in blind} == {300.0}
