@@ -47,7 +47,7 @@ lint: $(STAMP)
 	$(BIN)/mypy
 
 test: test-prerequisites lint
-	tools/with-test-redis $(BIN)/python $(BIN)/python -m pytest -q
+	tools/with-test-redis $(BIN)/python $(BIN)/python -m pytest -q -n auto
 
 openapi: $(STAMP)
 	$(BIN)/python -m app.openapi openapi.json
