@@ -13,6 +13,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -127,3 +128,60 @@ def test_acknowledged_inputs_survive_sigkill_and_the_state_is_exact(tmp_path: Pa
         assert fused_tracks(url, sid, headers) == reference_midway
         post(url, sid, headers, bodies[KILLED_AFTER:])
         assert fused_tracks(url, sid, headers) == reference
+
+
+WRITERS = 6
+ACKNOWLEDGED_BEFORE_KILL = 60
+
+
+def test_concurrent_writers_lose_no_acknowledged_input_to_sigkill(tmp_path: Path) -> None:
+    """Many sessions written at once share sqlite's commits (group commit); the server is
+    killed while their inputs are in flight, and after the restart every input it
+    acknowledged is logged, as it was sent, in its session's sequence."""
+    bodies = reports(200)
+    database = tmp_path / "group.db"
+    acknowledged: dict[str, int] = {}
+    stop = threading.Event()
+    with server(database) as (url, process):
+        sessions = []
+        for _ in range(WRITERS):
+            created = httpx.post(f"{url}/v1/sessions", json=session_config()).json()
+            sessions.append((created["id"], {"Authorization": f"Bearer {created['token']}"}))
+            acknowledged[created["id"]] = 0
+
+        def write(sid: str, headers: dict[str, str]) -> None:
+            with httpx.Client(base_url=url, timeout=30) as client:
+                for body in bodies:
+                    if stop.is_set():
+                        return
+                    try:
+                        answer = client.post(
+                            f"/v1/sessions/{sid}/tracks", json=body, headers=headers
+                        )
+                    except httpx.TransportError:  # killed while this one was in flight
+                        return
+                    assert answer.status_code == 200, answer.text
+                    acknowledged[sid] = answer.json()["seq"]
+
+        threads = [threading.Thread(target=write, args=session) for session in sessions]
+        for thread in threads:
+            thread.start()
+        while sum(acknowledged.values()) < ACKNOWLEDGED_BEFORE_KILL and any(
+            thread.is_alive() for thread in threads
+        ):
+            time.sleep(0.005)
+        process.send_signal(signal.SIGKILL)
+        stop.set()
+        for thread in threads:
+            thread.join()
+        process.wait(timeout=START_TIMEOUT_S)
+    assert sum(acknowledged.values()) >= ACKNOWLEDGED_BEFORE_KILL
+
+    with server(database) as (url, _):
+        for sid, headers in sessions:
+            events = httpx.get(f"{url}/v1/sessions/{sid}/events", headers=headers).json()
+            seqs = [event["seq"] for event in events["events"]]
+            assert seqs == list(range(1, len(seqs) + 1))
+            assert len(seqs) >= acknowledged[sid]
+            logged = [TrackReport.model_validate(event["report"]) for event in events["events"]]
+            assert logged == [TrackReport.model_validate(body) for body in bodies[: len(seqs)]]
