@@ -138,6 +138,11 @@ ended`; when the session store (or, with Redis, its pub/sub connection) fails
 it closes with code 1013, reason `store unavailable`: subscribe again once
 `GET /readyz` answers 200. An input sent on `stream` while the store is down
 gets an `error` with the 503 `store-unavailable` problem and is not applied.
+An input sent to an instance that runs behind (its event loop later than
+`CREDAL_OVERLOAD_DELAY_MS` on average, 200 ms by default) gets an `error` with
+the 503 `overloaded` problem, refused before any work: it was not applied,
+and the connection stays open; send it again after the problem's
+`retry_after` seconds (on this connection, or to another instance).
 
 Clients and failures (the reference client is `app/commands/resilient.py`):
 

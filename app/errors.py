@@ -171,6 +171,26 @@ class StoreUnavailable(RetryLater):
         )
 
 
+class Overloaded(RetryLater):
+    """The instance runs behind (its event loop late by more than ``overload_delay_ms``): a new
+    input is refused before any work, so the inputs it accepts are answered in time."""
+
+    status = HTTPStatus.SERVICE_UNAVAILABLE
+    slug = "overloaded"
+    title = "Service overloaded"
+    retry_after_s = 1
+
+    def __init__(self, delay_ms: float, limit_ms: float) -> None:
+        super().__init__(
+            f"this instance runs {delay_ms:.0f} ms behind (limit overload_delay_ms = "
+            f"{limit_ms:g}): the input was not applied, send it again after Retry-After "
+            "(to any instance)",
+            type(self).retry_after_s,
+            limit="overload_delay_ms",
+            delay_ms=round(delay_ms),
+        )
+
+
 class SessionUnreadable(ServiceError):  # noqa: N818 - HTTP vocabulary
     """The store holds a session it cannot read (corrupt data): the session is quarantined.
 

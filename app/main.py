@@ -70,13 +70,14 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         app.openapi()  # built before serving: the first GET /openapi.json held the loop 250 ms
         store = open_store(settings.store, redis_prefix=settings.redis_prefix)
         app.state.store = store
-        registry = SessionRegistry(store, settings, service_metrics)
+        loop_lag = LoopLag(service_metrics.loop_lag, ceiling=2e-3 * settings.overload_delay_ms)
+        registry = SessionRegistry(store, settings, service_metrics, loop_lag=loop_lag)
         app.state.registry = registry
         collections = CollectionTimes(service_metrics.collections)
         collections.install()
         tasks = [
             asyncio.create_task(registry.run_expiry(), name="session-expiry"),
-            asyncio.create_task(LoopLag(service_metrics.loop_lag).run(), name="loop-lag"),
+            asyncio.create_task(loop_lag.run(), name="loop-lag"),
         ]
         # a store that answers is restored before the first request; one that is down is
         # retried in the background (the process starts and answers /healthz meanwhile)

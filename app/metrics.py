@@ -72,6 +72,7 @@ class ServiceMetrics:
     quarantined: Gauge
     rebuilds: Counter
     internal_errors: Counter
+    overloaded: Counter
     loop_lag: Histogram
     collections: Histogram
     detections: Counter
@@ -145,6 +146,12 @@ class ServiceMetrics:
             internal_errors=Counter(
                 "credal_internal_errors",
                 "Requests answered 500 internal-error (a bug; the log has each reference).",
+                registry=registry,
+            ),
+            overloaded=Counter(
+                "credal_inputs_refused_overloaded",
+                "Inputs refused (503 overloaded) because the event loop ran later than "
+                "overload_delay_ms (app.sessions.pipeline.InputPipeline.admit).",
                 registry=registry,
             ),
             loop_lag=Histogram(

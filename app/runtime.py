@@ -25,6 +25,7 @@ resumes when the last of them ends (cycles made meanwhile wait until then).
 from __future__ import annotations
 
 import gc
+import math
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -84,6 +85,12 @@ def without_collection(function: Callable[[], T]) -> Callable[[], T]:
     return paused
 
 
+LAG_WEIGHT = 0.25
+"""Weight of a new sample in :attr:`LoopLag.smoothed`: one stall moves it by a quarter of its
+length (of :attr:`LoopLag.ceiling` at most) and is forgotten within a few samples; a loop that
+stays behind (every sample long) reaches its lateness in a few samples (90 % after 8)."""
+
+
 class LoopLag:
     """Measures how late the event loop wakes a timer, every ``period`` seconds, into ``lag``.
 
@@ -93,17 +100,30 @@ class LoopLag:
     reads between S − ``period`` and S (``bench/bounds.py`` reads the histogram
     per route)."""
 
-    def __init__(self, lag: Histogram, period: float = 0.005) -> None:
+    def __init__(self, lag: Histogram, period: float = 0.005, ceiling: float = math.inf) -> None:
         self.lag = lag
         self.period = period
+        self.ceiling = ceiling
+        """The most a sample counts in :attr:`smoothed` (seconds)."""
+        self.smoothed = 0.0
+        """How late the loop runs now (seconds): the exponential moving average of the samples
+        (weight :data:`LAG_WEIGHT`, each at most :attr:`ceiling`), what the overload guard
+        reads (:meth:`~app.sessions.pipeline.InputPipeline.admit`). With the ceiling at twice
+        the guard's limit, one stall (a process the kernel left waiting for a CPU, a
+        collection) moves it half-way to the limit at most: only a loop late sample after
+        sample (3 at the ceiling, more below) crosses it."""
 
     async def run(self) -> None:
         """Sample until cancelled."""
         while True:
             started = time.perf_counter()
             await anyio.sleep(self.period)
-            late = max(0.0, time.perf_counter() - started - self.period)
-            self.lag.observe(late)
+            self.observe(max(0.0, time.perf_counter() - started - self.period))
+
+    def observe(self, late: float) -> None:
+        """One sample: the timer fired ``late`` seconds after it was due."""
+        self.lag.observe(late)
+        self.smoothed += LAG_WEIGHT * (min(late, self.ceiling) - self.smoothed)
 
 
 class CollectionTimes:

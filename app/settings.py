@@ -187,6 +187,14 @@ class Settings(BaseSettings):
         description="inputs kept in a session's log behind its latest snapshot; older ones are "
         "deleted after each snapshot (GET …/events then starts with that snapshot)",
     )
+    overload_delay_ms: float = Field(
+        200.0,
+        ge=0.0,
+        description="refuse new inputs (503 overloaded with Retry-After, a stream's error) while "
+        "the event loop runs later than this on average (app.runtime.LoopLag.smoothed), so "
+        "the inputs accepted are answered in time instead of every session falling behind; "
+        "0: never refuse",
+    )
     ws_messages_per_second: int = Field(
         1000,
         ge=1,

@@ -2,6 +2,7 @@
 
 One input (:meth:`InputPipeline.submit`):
 
+0. is refused (503 ``overloaded``) while the instance runs behind (:meth:`InputPipeline.admit`);
 1. checks that need only the config (limits, sensor, dimensions, labels: its kind's);
 2. under the session's lock, the engine applies it (in a worker thread unless the work
    is tiny); a refusal changes nothing;
@@ -33,7 +34,7 @@ from prometheus_client import Counter, Histogram
 
 from api_schemas.timing import TimeEpoch
 from app.cluster.quotas import input_work
-from app.errors import LimitExceeded, SessionNotFound, StoreUnavailable
+from app.errors import LimitExceeded, Overloaded, SessionNotFound, StoreUnavailable
 from app.inputs import DecodedKind, Input, SessionView
 from app.outputs import JSON, Output
 from app.outputs.text import dumps
@@ -106,7 +107,40 @@ class InputPipeline:
         against the session's config first, then its work against ``max_input_work`` (and
         ``max_explain_cells``) and its tenant's quotas. An input sent again with the
         ``idempotency_key`` of one already applied gets that first answer, and nothing is
-        applied (the session keeps its latest 256 keys' answers in memory)."""
+        applied (the session keeps its latest 256 keys' answers in memory). An overloaded
+        instance refuses it first (:meth:`admit`)."""
+        self.admit()
+        return await self._admitted(
+            session, submitted, explain=explain, output=output, idempotency_key=idempotency_key
+        )
+
+    def admit(self) -> None:
+        """Refuse a new input (:class:`~app.errors.Overloaded`: 503, ``Retry-After``) while the
+        event loop runs later than ``overload_delay_ms`` on average
+        (:attr:`app.runtime.LoopLag.smoothed`): before any check, quota or work, so nothing
+        changes. An instance that takes every input falls behind on all of its sessions at
+        once (answers late by seconds, in bursts); one that refuses what it cannot take in
+        time answers the inputs it accepts in time, and the refused ones go elsewhere or
+        come back after ``Retry-After``."""
+        limit_ms = self.registry.settings.overload_delay_ms
+        loop_lag = self.registry.loop_lag
+        if loop_lag is None or limit_ms <= 0:
+            return
+        delay_ms = 1e3 * loop_lag.smoothed
+        if delay_ms > limit_ms:
+            self.registry.metrics.overloaded.inc()
+            raise Overloaded(delay_ms, limit_ms)
+
+    async def _admitted(
+        self,
+        session: LiveSession,
+        submitted: Input,
+        *,
+        explain: bool = False,
+        output: Output = JSON,
+        idempotency_key: str | None = None,
+    ) -> str:
+        """:meth:`submit` once admitted."""
         items = submitted.items
         await compute(items, functools.partial(submitted.check, session.config))
         work = self.check_work(session, submitted, items, explain=explain)
@@ -163,12 +197,14 @@ class InputPipeline:
     ) -> str:
         """Decode ``data`` (a kind of :data:`~app.inputs.DECODED_KINDS`) into inputs, checked
         against the session's config, then submit each in order; the kind's answer (JSON text).
-        Malformed data or an input the session cannot take refuses the whole body first."""
+        Malformed data or an input the session cannot take refuses the whole body first, and an
+        overloaded instance the whole body (:meth:`admit`), never a part of it."""
+        self.admit()
         view = SessionView(session.config, session.last_time)
         decode = functools.partial(kind.decode, data, parameters, view)
         decoded = await compute(len(data) // DECODED_BYTES_PER_ITEM, decode)
         results = [
-            await self.submit(session, item, explain=explain, output=output)
+            await self._admitted(session, item, explain=explain, output=output)
             for item in decoded.inputs
         ]
         return kind.answer(decoded, results)

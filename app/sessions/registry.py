@@ -46,7 +46,7 @@ from app.inputs import DecodedKind, Input
 from app.metrics import ServiceMetrics
 from app.outputs import JSON, Output
 from app.outputs.json_results import track_fields
-from app.runtime import without_collection
+from app.runtime import LoopLag, without_collection
 from app.sessions.expiry import SessionExpiry
 from app.sessions.hub import SESSION_ENDED, SESSION_UNREADABLE, Ending, Subscriber
 from app.sessions.live import LiveSession, new_session, restore_snapshot
@@ -75,8 +75,11 @@ class SessionRegistry:
         fanout: ResultFanout | None = None,
         quotas: TenantQuotas | None = None,
         owner: str | None = None,
+        loop_lag: LoopLag | None = None,
     ) -> None:
         self.store = store
+        self.loop_lag = loop_lag
+        """How late the event loop runs (the overload guard's measure); None: never refused."""
         self.settings = settings
         self.metrics = metrics
         self.shared = store.shared

@@ -55,3 +55,25 @@ def test_the_live_server_exposes_its_loop_lag(live_server: LiveServer) -> None:
     ]
     assert count >= 5  # sampled every 5 ms since the server started
     assert 'credal_event_loop_lag_seconds_bucket{le="0.05"}' in text
+
+
+def test_the_smoothed_lag_needs_a_loop_late_sample_after_sample_to_cross_twice_its_ceiling() -> (
+    None
+):
+    """The overload guard's measure (limit 0.2 s, ceiling 0.4 s): an exponential moving average
+    with weight 1/4 of samples capped at the ceiling, computed here independently."""
+    lag = Histogram("lag2", "lag", buckets=LOOP_LAG_BUCKETS, registry=CollectorRegistry())
+    monitor = LoopLag(lag, ceiling=0.4)
+    monitor.observe(3.0)  # one long stall (a process left without a CPU): counts as 0.4
+    assert abs(monitor.smoothed - 0.1) < 1e-12
+    for _ in range(20):  # then a loop on time again
+        monitor.observe(0.0)
+    expected = 0.1 * 0.75**20
+    assert abs(monitor.smoothed - expected) < 1e-12
+    crossed = []
+    for _ in range(5):  # a loop that stays behind: 0.5 s a sample
+        monitor.observe(0.5)
+        expected = expected + 0.25 * (0.4 - expected)
+        crossed.append(monitor.smoothed > 0.2)
+        assert abs(monitor.smoothed - expected) < 1e-12
+    assert crossed == [False, False, True, True, True]
