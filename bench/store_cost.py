@@ -12,23 +12,34 @@ order flipping every round) so a drift of the shared machine's speed falls on
 both; each server's CPU (user + system, every thread) is read from
 ``/proc/<pid>/stat`` around its windows. Prints CPU per input for each store
 and sqlite's extra, over all windows and as the median over rounds of the
-difference between neighbouring windows; never asserts a time.
+difference between neighbouring windows.
+
+Then overload (issue 29, "refused, not spread"): :data:`OVERLOAD_SESSIONS` sensors
+on ``stream`` connections, each sending at a steady rate whatever the answers,
+:data:`OVERLOAD_FACTOR` times the rate just measured in all, first to a server
+with the default ``overload_delay_ms`` and then to one with the guard off:
+answered and refused inputs per second, and the latency (send to answer) of
+the answered ones. Never asserts a time.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import statistics
 import sys
 import tempfile
 import time
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import httpx
 import numpy as np
 import orjson
+from websockets.asyncio.client import connect
+from websockets.typing import Subprotocol
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -75,6 +86,8 @@ class Load:
         self.clients: list[httpx.AsyncClient] = []
         self.paths: list[str] = []
         self.sent = [0] * SESSIONS
+        self.refused = 0
+        """Inputs refused 503 ``overloaded`` (not counted as processed; sent again)."""
 
     async def open(self) -> None:
         async with httpx.AsyncClient(base_url=self.url) as admin:
@@ -109,6 +122,9 @@ class Load:
             while time.perf_counter() < stop:
                 body = scan(f"s{index}", self.sent[index])
                 answer = await self.clients[index].post(self.paths[index], content=body)
+                if answer.status_code == 503 and "overloaded" in answer.text:
+                    self.refused += 1
+                    continue
                 assert answer.status_code == 200, answer.text
                 self.sent[index] += 1
                 done += 1
@@ -131,8 +147,11 @@ class Load:
                 self.sent[index] += 1
 
 
-async def measure(servers: dict[str, tuple[str, int]], seconds: float) -> dict[str, list[float]]:
-    """Per store: CPU ms per input in every round, and inputs/s (the last entry)."""
+async def measure(
+    servers: dict[str, tuple[str, int]], seconds: float
+) -> tuple[dict[str, list[float]], int]:
+    """Per store: CPU ms per input over all windows, inputs/s, then CPU ms per input in every
+    round; and how many inputs were refused as overload (sent again)."""
     loads = {store: Load(url) for store, (url, _) in servers.items()}
     for load in loads.values():
         await load.open()
@@ -154,11 +173,119 @@ async def measure(servers: dict[str, tuple[str, int]], seconds: float) -> dict[s
             per_round[store].append(1e3 * used / max(done, 1))
     for load in loads.values():
         await load.close()
-    return {
+    per_store = {
         store: [1e3 * cpu[store] / max(inputs[store], 1), inputs[store] / elapsed[store]]
         + per_round[store]
         for store in servers
     }
+    return per_store, sum(load.refused for load in loads.values())
+
+
+OVERLOAD_SESSIONS = 40
+"""Stream sessions of the overload run, each a sensor sending at its own steady rate."""
+OVERLOAD_FACTOR = 2.0
+"""Offered load of the overload run, in multiples of the closed-loop capacity just measured."""
+OVERLOAD_SECONDS = 8.0
+QUOTAS_OFF = {
+    "CREDAL_TENANT_INPUTS_PER_SECOND": "1000000",
+    "CREDAL_TENANT_WORK_PER_MINUTE": "1000000000000",
+}
+"""Every sensor of the bench is one tenant (one loopback address): its quotas are lifted, so
+that what refuses inputs is the overload guard, not the tenant's fair share."""
+DRAIN_SECONDS = 30.0
+"""How long answers are awaited after the last input was sent."""
+
+
+@dataclass
+class Stream:
+    """What one sensor of the overload run saw."""
+
+    latencies_ms: list[float] = field(default_factory=list)
+    refused: int = 0
+    unanswered: int = 0
+
+
+async def sensor(url: str, index: int, rate: float, seconds: float) -> Stream:
+    """A detecting sensor on its own session and ``stream``: one scan every ``1 / rate`` s
+    whatever the answers (a sensor does not wait), answers read as they come."""
+    async with httpx.AsyncClient(base_url=url) as admin:
+        created = (await admin.post("/v1/sessions", json=config(f"s{index}"))).json()
+    address = url.replace("http://", "ws://") + f"/v1/sessions/{created['id']}/stream"
+    seen = Stream()
+    sent_at: dict[str, float] = {}
+    async with connect(
+        address, subprotocols=[Subprotocol("bearer"), Subprotocol(created["token"])], max_size=None
+    ) as socket:
+        await socket.recv()  # ack
+
+        async def send() -> None:
+            start = time.perf_counter() + index / (rate * OVERLOAD_SESSIONS)  # spread the phases
+            for number in range(round(seconds * rate)):
+                await asyncio.sleep(max(0.0, start + number / rate - time.perf_counter()))
+                body = orjson.loads(scan(f"s{index}", number))
+                sent_at[str(number)] = time.perf_counter()
+                await socket.send(orjson.dumps({"type": "detections", "ref": str(number), **body}))
+
+        async def read() -> None:
+            while len(seen.latencies_ms) + seen.refused < round(seconds * rate):
+                answer = orjson.loads(await socket.recv())
+                started = sent_at.pop(answer["ref"])
+                if answer["type"] == "result":
+                    seen.latencies_ms.append(1e3 * (time.perf_counter() - started))
+                else:
+                    assert answer["problem"]["status"] == 503, answer
+                    seen.refused += 1
+
+        reading = asyncio.create_task(read())
+        await send()
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(asyncio.shield(reading), DRAIN_SECONDS)
+        reading.cancel()
+        seen.unanswered = round(seconds * rate) - len(seen.latencies_ms) - seen.refused
+    return seen
+
+
+async def overload(url: str, offered: float) -> list[Stream]:
+    rate = offered / OVERLOAD_SESSIONS
+    return await asyncio.gather(
+        *(sensor(url, index, rate, OVERLOAD_SECONDS) for index in range(OVERLOAD_SESSIONS))
+    )
+
+
+def overload_run(capacity: float) -> None:
+    """The same steady load, above capacity, on a server with the default overload guard and
+    on one without (``CREDAL_OVERLOAD_DELAY_MS=0``); the latency of the answered inputs."""
+    offered = OVERLOAD_FACTOR * capacity
+    print(
+        f"\noverload: {OVERLOAD_SESSIONS} stream sessions (memory store), each a detecting sensor"
+        f" at a steady {offered / OVERLOAD_SESSIONS:.2f} Hz, {offered:.0f} scans/s in all"
+        f" ({OVERLOAD_FACTOR:g}× the closed-loop rate above) for {OVERLOAD_SECONDS:g} s;"
+        " defaults but the tenant quotas (lifted: every sensor here is one tenant)"
+    )
+    print(
+        f"{'overload_delay_ms':<18} {'answered/s':>10} {'refused/s':>9} {'p50 ms':>8}"
+        f" {'p99 ms':>8} {'unanswered':>10}"
+    )
+    for label, environment in (
+        ("200 (default)", QUOTAS_OFF),
+        ("0 (off)", QUOTAS_OFF | {"CREDAL_OVERLOAD_DELAY_MS": "0"}),
+    ):
+        port = free_port()
+        with running(service_command(port, "memory"), port, environment):
+            streams = asyncio.run(overload(f"http://127.0.0.1:{port}", offered))
+        latencies = sorted(value for stream in streams for value in stream.latencies_ms)
+        refused = sum(stream.refused for stream in streams)
+        unanswered = sum(stream.unanswered for stream in streams)
+        p50 = latencies[len(latencies) // 2] if latencies else float("nan")
+        p99 = (
+            latencies[min(len(latencies) - 1, round(0.99 * (len(latencies) - 1)))]
+            if latencies
+            else float("nan")
+        )
+        print(
+            f"{label:<18} {len(latencies) / OVERLOAD_SECONDS:10.0f} {refused / OVERLOAD_SECONDS:9.0f}"
+            f" {p50:8.0f} {p99:8.0f} {unanswered:10d}"
+        )
 
 
 def main() -> int:
@@ -182,7 +309,7 @@ def main() -> int:
                 "memory": (f"http://127.0.0.1:{memory_port}", memory.pid),
                 "sqlite": (f"http://127.0.0.1:{sqlite_port}", sqlite.pid),
             }
-            results = asyncio.run(measure(servers, arguments.seconds))
+            results, refused = asyncio.run(measure(servers, arguments.seconds))
     print(f"{'store':<8} {'CPU ms/input':>13} {'inputs/s':>9}   per round")
     for store, (cpu_ms, rate, *rounds) in results.items():
         shown = " ".join(f"{value:.2f}" for value in rounds)
@@ -196,6 +323,9 @@ def main() -> int:
         f"sqlite's extra CPU per input: {extra:.2f} ms over all windows, {paired:.2f} ms median"
         " of the rounds (neighbouring windows); goal ≤ 0.5 ms (issue 29)"
     )
+    if refused:
+        print(f"({refused} inputs were refused as overload and sent again)")
+    overload_run(min(results["memory"][1], results["sqlite"][1]))
     return 0
 
 

@@ -52,6 +52,7 @@ from app.http.errors import (
     InvalidFields,
     LimitExceeded,
     ServiceError,
+    SessionNotFound,
     StoreUnavailable,
     Unauthorized,
     error_message,
@@ -65,7 +66,7 @@ from app.outputs import JSON, Output
 from app.outputs.text import dumps
 from app.routes.fusion import output_of
 from app.runtime import collection_paused, without_collection
-from app.sessions.hub import STORE_UNAVAILABLE, Ending, Published
+from app.sessions.hub import SESSION_ENDED, STORE_UNAVAILABLE, Ending, Published
 from app.sessions.live import LiveSession
 from app.sessions.pipeline import result_message
 from app.sessions.registry import SessionRegistry
@@ -177,8 +178,9 @@ def gap_message(after: int, next_seq: int) -> str:
     return dumps({"type": "gap", "ref": None, "after": after, "next": next_seq})
 
 
-def _ack(session: LiveSession) -> str:
-    return dumps({"type": "ack", "ref": None, "seq": session.seq})
+def _ack(session: LiveSession, seq: int | None = None) -> str:
+    """The ``ack`` message: ``seq`` the session's latest (by default, as this instance has it)."""
+    return dumps({"type": "ack", "ref": None, "seq": session.seq if seq is None else seq})
 
 
 def _ref_of(document: object) -> str | None:
@@ -395,7 +397,16 @@ async def subscribe_session(websocket: WebSocket, sid: str) -> None:
         await websocket.close(code=STORE_UNAVAILABLE.code, reason=STORE_UNAVAILABLE.reason)
         return
     last = session.seq
-    await websocket.send_text(_ack(session))
+    if registry.shared:  # an input logged before the subscription may not have been
+        # published (Store.append: only where someone listens): ack the store's seq, read after
+        try:
+            last = max(last, await registry.io(registry.store.last_seq, session.id))
+        except (StoreUnavailable, SessionNotFound) as error:
+            registry.unsubscribe(session, subscriber)
+            ending = STORE_UNAVAILABLE if isinstance(error, StoreUnavailable) else SESSION_ENDED
+            await websocket.close(code=ending.code, reason=ending.reason)
+            return
+    await websocket.send_text(_ack(session, last))
 
     async def pump() -> None:
         """Every result, in order; a ``gap`` message before one that does not follow."""

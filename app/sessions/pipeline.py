@@ -70,6 +70,9 @@ class Step:
     logged: PlainObject
     engine_cpu_s: float
     time_epoch: TimeEpoch
+    listened: bool = False
+    """Whether its result had a listener through a shared store when it was logged
+    (:meth:`~app.stores.base.Store.append`): it is published through the store only then."""
 
     @property
     def result(self) -> str:
@@ -274,10 +277,11 @@ class InputPipeline:
                 await self.registry.cluster.refresh(session)
                 step = await self._apply_and_log(session, apply, sensor, items, kind)
             self._series(kind).inputs.inc()
-            if (
-                self.registry.shared
-            ):  # local subscribers too receive it through Redis (the text only)
-                await self.registry.cluster.publish(session, result_message(step.result))
+            if self.registry.shared:
+                # local subscribers too receive it through Redis (the text only), and only
+                # where someone listens: a subscriber that came later reads a later ``seq``
+                if step.listened:
+                    await self.registry.cluster.publish(session, result_message(step.result))
             elif len(session.hub):
                 session.hub.publish(
                     Published({kind: result_message(text) for kind, text in step.written.items()})
@@ -363,7 +367,7 @@ class InputPipeline:
         received_at = datetime.now(UTC)
         seq = session.seq + 1
         try:
-            await self.registry.io(
+            step.listened = await self.registry.io(
                 self.registry.store.append, session.id, seq, step.logged, received_at, size=size
             )
         except SequenceConflict:

@@ -235,8 +235,13 @@ class Store(Protocol):
 
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
-    ) -> None:
-        """Log an accepted input; returns only once it is durably committed."""
+    ) -> bool:
+        """Log an accepted input; returns only once it is durably committed, and whether the
+        session's results had a listener through the store then (a subscriber of its pub/sub
+        channel, on any instance): an instance sharing the store publishes the input's result
+        only if so. A subscriber subscribes before it reads the session's ``seq``, so an input
+        logged while no one listened precedes that ``seq``: it misses nothing. ``False`` for a
+        store that is not shared (its subscribers are the process's own: the session's hub)."""
         ...
 
     def last_seq(self, session_id: str) -> int:

@@ -121,12 +121,13 @@ class MemoryStore:
 
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
-    ) -> None:
+    ) -> bool:
         logged = _Stored(seq=seq, at=received_at, text=encode(entry_input))
         with self._lock:
             data = self._require(session_id)
             check_seq(session_id, seq, self._last_seq(data))
             data.log.append(logged)
+        return False
 
     def _require(self, session_id: str) -> _SessionData:
         data = self._live(session_id)

@@ -130,9 +130,10 @@ if through < 1 then return 0 end
 return redis.call('XTRIM', KEYS[3], 'MINID', '=', (through + 1) .. '-0')
 """
 
-# KEYS: session, log. ARGV: seq, received_at, input.
-# Replies {'appended'}, {'replayed'} (this very entry is already logged),
-# {'missing'} (no live session) or {'conflict', next_seq}.
+# KEYS: session, log. ARGV: seq, received_at, input, the session's results channel.
+# Replies {'appended', listeners}, {'replayed', listeners} (this very entry is already
+# logged), {'missing'} (no live session) or {'conflict', next_seq}; listeners: the channel's
+# subscribers now (a pattern subscription is not counted).
 _APPEND = """
 if redis.call('HGET', KEYS[1], 'deleted') ~= '0' then return {'missing'} end
 local last = tonumber(redis.call('HGET', KEYS[1], 'last_seq'))
@@ -140,13 +141,15 @@ local seq = tonumber(ARGV[1])
 if seq == last + 1 then
   redis.call('XADD', KEYS[2], ARGV[1] .. '-0', 'received_at', ARGV[2], 'input', ARGV[3])
   redis.call('HSET', KEYS[1], 'last_seq', ARGV[1])
-  return {'appended'}
+  return {'appended', tostring(redis.call('PUBSUB', 'NUMSUB', ARGV[4])[2])}
 end
 if seq == last then
   local logged = redis.call('XRANGE', KEYS[2], ARGV[1] .. '-0', ARGV[1] .. '-0')
   if #logged == 1 then
     local fields = logged[1][2]
-    if fields[2] == ARGV[2] and fields[4] == ARGV[3] then return {'replayed'} end
+    if fields[2] == ARGV[2] and fields[4] == ARGV[3] then
+      return {'replayed', tostring(redis.call('PUBSUB', 'NUMSUB', ARGV[4])[2])}
+    end
   end
 end
 return {'conflict', tostring(last + 1)}
@@ -358,12 +361,12 @@ class RedisStore:
 
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
-    ) -> None:
+    ) -> bool:
         text = dumps(entry_input)
         with self._reachable():
             reply: list[str] = self._append(
                 keys=[self.keys.session(session_id), self.keys.log(session_id)],
-                args=[seq, received_at.isoformat(), text],
+                args=[seq, received_at.isoformat(), text, self.keys.results(session_id)],
                 client=self._redis(),
             )
         outcome = reply[0]
@@ -371,6 +374,7 @@ class RedisStore:
             raise SessionNotFound(session_id)
         if outcome == "conflict":
             raise SequenceConflict(session_id, seq, int(reply[1]))
+        return int(reply[1]) > 0
 
     def _live_then(self, session_id: str, read: Callable[[Pipeline], object]) -> Any:
         """``read``'s reply, run in one MULTI after the live check; else SessionNotFound."""

@@ -20,7 +20,7 @@ name                           type    holds
                                        ``received_at`` and ``input`` (JSON)
 ``P:{sid}:snapshots``          hash    seq → snapshot JSON (the two latest)
 ``P:{sid}:lease``              string  the owner holding the session's lease (PX TTL)
-``P:{sid}:results`` (channel)  pubsub  result JSON of every applied input
+``P:{sid}:results`` (channel)  pubsub  result JSON of each input, while subscribed
 =============================  ======  ================================================
 
 Deleting a session unlinks its record, log and snapshots and removes it from

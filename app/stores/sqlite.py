@@ -337,7 +337,7 @@ class SqliteStore:
 
     def append(
         self, session_id: str, seq: int, entry_input: Mapping[str, Any], received_at: datetime
-    ) -> None:
+    ) -> bool:
         """Log an input; returns once the transaction holding it is committed (group commit:
         module docstring). Its own refusal (:class:`SequenceConflict`, 404) is raised to it
         alone; a failed commit to every input of the batch, none of which is then logged."""
@@ -349,6 +349,7 @@ class SqliteStore:
                 self._commit_queued()
         if pending.error is not None:
             raise pending.error
+        return False  # not shared: no listener through the store
 
     def _commit_queued(self) -> None:
         """One transaction (one fsync) for every append queued now (under the write lock)."""

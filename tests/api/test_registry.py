@@ -156,9 +156,9 @@ class ThreadRecordingStore(MemoryStore):
         self.blocking = blocking
         self.append_threads: list[int] = []
 
-    def append(self, *args: Any, **kwargs: Any) -> None:
+    def append(self, *args: Any, **kwargs: Any) -> bool:
         self.append_threads.append(threading.get_ident())
-        super().append(*args, **kwargs)
+        return super().append(*args, **kwargs)
 
 
 @pytest.mark.parametrize("blocking", [False, True])

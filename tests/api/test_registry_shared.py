@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import json
 import time
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
@@ -10,6 +11,7 @@ from datetime import UTC, datetime, timedelta
 from typing import Any
 
 import pytest
+import redis.asyncio
 
 from app.http.errors import SessionLeased
 from app.inputs import parse_input
@@ -115,5 +117,45 @@ def test_idle_expiry_spares_a_session_another_instance_keeps_busy() -> None:
             later = datetime.now(UTC) + timedelta(seconds=b.settings.session_idle_seconds + 1)
             assert await b.expire_idle(later) == []
             assert b.store.get_session(SID) is not None
+
+    asyncio.run(scenario())
+
+
+def test_results_are_published_only_while_someone_subscribes() -> None:
+    """A pattern subscription (which Redis does not count as a listener of the channel) sees
+    what the instances publish: nothing while no instance forwards the session's results,
+    every result while one does — and that subscriber receives each of them, in order."""
+    bodies = reports(5)
+
+    async def scenario() -> None:
+        async with two_instances() as (a, b):
+            watcher = redis.asyncio.Redis.from_url(REDIS_URL, decode_responses=True)
+            watching = watcher.pubsub()
+            await watching.psubscribe(a.store.keys.results("*"))  # type: ignore[attr-defined]
+
+            async def published() -> list[int]:
+                seqs = []
+                while (message := await watching.get_message(timeout=0.3)) is not None:
+                    if message["type"] == "pmessage":
+                        seqs.append(json.loads(message["data"])["result"]["seq"])
+                return seqs
+
+            try:
+                await feed(a, SID, bodies[:2])
+                assert await published() == []  # no one listens: nothing sent to Redis
+                session = await b.get(SID)
+                subscriber = await b.cluster.subscribe(session)
+                await feed(a, SID, bodies[2:4])
+                assert await published() == [3, 4]
+                received = [await subscriber.next() for _ in range(2)]
+                seqs = [json.loads(item.text)["result"]["seq"] for item in received]  # type: ignore[union-attr]
+                assert seqs == [3, 4]
+                b.cluster.unsubscribe(session, subscriber)
+                await asyncio.sleep(0.2)  # the forwarder's connection closes
+                await feed(a, SID, bodies[4:])
+                assert await published() == []
+            finally:
+                await watching.aclose()  # type: ignore[no-untyped-call]
+                await watcher.aclose()
 
     asyncio.run(scenario())

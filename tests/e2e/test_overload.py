@@ -6,7 +6,7 @@ A real server with ``CREDAL_OVERLOAD_DELAY_MS`` set far below what concurrent se
 cost (1 ms), so that it is saturated in a test's time; the senders ignore ``Retry-After``
 and keep sending. Each session's log must hold exactly the inputs answered 200 (or
 ``result``), in order: nothing of a refused one. Whether the answers stay timely is
-measured, not asserted here (``bench/store_cost.py --overload``).
+measured, not asserted here (``bench/store_cost.py``).
 """
 
 from __future__ import annotations
