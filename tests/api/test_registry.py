@@ -11,10 +11,13 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from prometheus_client import CollectorRegistry, Histogram
 
+from app.errors import Overloaded
 from app.inputs import parse_input
 from app.metrics import ServiceMetrics
 from app.outputs import JSON
+from app.runtime import LoopLag
 from app.sessions.hub import SESSION_ENDED, Hub, Published
 from app.sessions.live import new_session as live_session
 from app.sessions.registry import SessionRegistry
@@ -207,3 +210,38 @@ def test_sensors_joining_an_open_session_equal_the_same_sensors_configured() -> 
         assert await target.picture(rebuilt, None) == await target.picture(session, None)
 
     asyncio.run(scenario())
+
+
+def test_an_overloaded_instance_refuses_inputs_while_its_loop_runs_late() -> None:
+    """The guard reads the loop's smoothed lateness (set here by hand): above the limit (200 ms)
+    an input is refused (503, ``Retry-After``) and changes nothing; under it, applied."""
+    lag = LoopLag(Histogram("lag", "lag", registry=CollectorRegistry()))
+    target = SessionRegistry(
+        MemoryStore(), make_settings(overload_delay_ms=200), ServiceMetrics.create(), loop_lag=lag
+    )
+    new_session(target, session_config())
+    bodies = iter(reports(6))
+
+    async def scenario() -> list[str]:
+        session = await target.get("s1")
+        outcomes = []
+        for late_s in (0.0, 0.25, 0.201, 0.19, 0.5, 0.05):
+            lag.smoothed = late_s
+            seq = session.seq
+            try:
+                await target.submit(session, parse_input("tracks", next(bodies)))
+                outcomes.append("applied")
+            except Overloaded as refused:
+                assert refused.headers() == {"Retry-After": "1"}
+                assert session.seq == seq and target.store.last_seq("s1") == seq
+                outcomes.append("refused")
+        return outcomes
+
+    assert asyncio.run(scenario()) == [
+        "applied",
+        "refused",
+        "refused",
+        "applied",
+        "refused",
+        "applied",
+    ]
