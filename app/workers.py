@@ -34,6 +34,7 @@ START_GRACE_S = 10.0
 """A worker that exits sooner after its start failed to start (not restarted)."""
 STOP_TIMEOUT_S = 30.0
 POLL_S = 0.2
+PR_SET_PDEATHSIG = 1
 
 
 def usable_cores() -> int:
@@ -67,6 +68,7 @@ def serve_workers(settings: Settings, listening: socket.socket, count: int) -> i
     """Run ``count`` workers on ``listening`` until SIGTERM/SIGINT; the exit status."""
     directory = Path(tempfile.mkdtemp(prefix="credal-fusion-workers-"))
     command = [sys.executable, "-m", "app.workers", str(listening.fileno()), str(directory)]
+    command.append(str(os.getpid()))
     environment = _environment(settings)
     stopping = False
 
@@ -111,14 +113,27 @@ def serve_workers(settings: Settings, listening: socket.socket, count: int) -> i
     return status
 
 
+def _end_with_parent(parent: int) -> None:
+    """Have the kernel send this worker SIGTERM when its ``serve`` dies, even by SIGKILL (Linux
+    ``prctl(PR_SET_PDEATHSIG)``): no worker outlives it, serving on a socket nobody supervises."""
+    import ctypes
+
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+    if os.getppid() != parent:  # it died before the request (this one was adopted)
+        os.kill(os.getpid(), signal.SIGTERM)
+
+
 def main(argv: list[str]) -> int:
     """A worker: serve the application on the inherited socket ``argv[0]`` (a descriptor),
-    sharing the store with the workers meeting in the directory ``argv[1]``."""
+    sharing the store with the workers meeting in the directory ``argv[1]``, for as long as
+    its ``serve``, process ``argv[2]``, lives."""
     from app.cli import serve_socket
     from app.cluster.peers import WorkerGroup
     from app.settings import get_settings
 
-    descriptor, directory = argv
+    descriptor, directory, parent = argv
+    _end_with_parent(int(parent))
     listening = socket.socket(fileno=int(descriptor))
     return serve_socket(get_settings(), listening, WorkerGroup(Path(directory)))
 

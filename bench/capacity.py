@@ -264,6 +264,9 @@ class Cell:
     rss_mb: float
     errors: int
     window_s: float
+    sockets: tuple[int, ...] = ()
+    """Open sockets of each worker process at the window's end (how the kernel spread the
+    streams; with one process, empty)."""
 
     @property
     def kept_up(self) -> bool:
@@ -288,6 +291,7 @@ def measure(url: str, pids: list[int], sessions: int, rate: float, timing: Timin
     assert generator.stdout is not None
     marks: dict[str, float] = {}
     result: dict[str, Any] = {}
+    sockets: tuple[int, ...] = ()
     for line in generator.stdout:
         word = line.strip()
         if word in ("READY", "DONE"):
@@ -295,6 +299,7 @@ def measure(url: str, pids: list[int], sessions: int, rate: float, timing: Timin
             marks[f"{word}_at"] = time.perf_counter()
             if word == "DONE":
                 marks["rss"] = sum(rss_of(pid) for pid in pids) / 2**20
+                sockets = tuple(connections_of(pids[1:]))
         elif word.startswith("{"):
             result = json.loads(word)
     if generator.wait() != 0 or not result:
@@ -317,6 +322,7 @@ def measure(url: str, pids: list[int], sessions: int, rate: float, timing: Timin
         rss_mb=marks["rss"],
         errors=int(result["errors"]),
         window_s=timing.window_s,
+        sockets=sockets,
     )
 
 
@@ -392,7 +398,7 @@ def connections_of(pids: list[int]) -> list[int]:
 
 
 def main(arguments: argparse.Namespace) -> int:
-    grid = QUICK_GRID if arguments.quick else GRID
+    grid = QUICK_GRID if arguments.quick else arguments.grid or GRID
     timing = Timing(1.0, 1.0) if arguments.quick else Timing()
     configurations = [
         Configuration(store, workers)
@@ -402,6 +408,10 @@ def main(arguments: argparse.Namespace) -> int:
             else [("memory", 1), ("sqlite", 1), ("sqlite", 2), ("redis", 1), ("redis", 2)]
         )
         if store in arguments.stores
+        and (
+            not arguments.configurations
+            or f"{store}×{workers}" in [c.replace("x", "×") for c in arguments.configurations]
+        )
     ]
     print(describe_machine())
     print(
@@ -445,7 +455,8 @@ def show(name: str, cell: Cell) -> Cell:
     print(
         f"{name:13} {rate:>10} {cell.answered_per_s:8.0f} {cell.p50_ms:8.1f} {p99:>8} "
         f"{cell.cpu_ms_per_scan:7.2f}ms {cell.rss_mb:7.0f}  "
-        f"{'yes' if cell.within else 'no'}{'' if cell.kept_up else ' (falls behind)'}",
+        f"{'yes' if cell.within else 'no'}{'' if cell.kept_up else ' (falls behind)'}"
+        + (f"; sockets per worker {'/'.join(map(str, cell.sockets))}" if cell.sockets else ""),
         flush=True,
     )
     return cell
@@ -487,7 +498,20 @@ def parse(argv: list[str]) -> argparse.Namespace:
         default=["memory", "sqlite", "redis"],
         choices=["memory", "sqlite", "redis"],
     )
+    parser.add_argument(
+        "--grid", nargs="+", type=_cell, help="cells K×r instead of the issue's (e.g. 100x5)"
+    )
+    parser.add_argument(
+        "--configurations",
+        nargs="+",
+        help="store×workers to run (e.g. sqlite×2), default: every one",
+    )
     return parser.parse_args(argv)
+
+
+def _cell(text: str) -> tuple[int, float]:
+    sessions, rate = text.lower().replace("×", "x").split("x")
+    return int(sessions), float(rate)
 
 
 if __name__ == "__main__":

@@ -9,7 +9,8 @@ workers' links), and an input sent to B while A holds the session's lease is
 refused (503, ``Retry-After``), then applied by B once the lease lapses,
 continuing exactly: every result equals the one of an uninterrupted run in one
 process. Several clients posting to one session through both workers never
-break ``seq`` or the log.
+break ``seq`` or the log; and the workers end with their ``serve``, even when it is
+killed.
 """
 
 from __future__ import annotations
@@ -134,7 +135,7 @@ INPUTS_PER_CLIENT = 5
 def test_clients_of_both_workers_never_break_seq(tmp_path: Path) -> None:
     sensors = [f"sensor-{index}" for index in range(CLIENTS)]
     with instance(f"sqlite:{tmp_path / 'db'}", WORKERS) as (url, process):
-        worker_pids(process)
+        workers = worker_pids(process)
         created = httpx.post(f"{url}/v1/sessions", json=session_config(sensors)).json()
         sid, headers = created["id"], {"Authorization": f"Bearer {created['token']}"}
         start = threading.Barrier(CLIENTS)
@@ -176,3 +177,18 @@ def test_clients_of_both_workers_never_break_seq(tmp_path: Path) -> None:
                 r for results in answers.values() for r in results if r["seq"] == event["seq"]
             )
             assert result["sensor"] == event["report"]["sensor"]
+
+        process.send_signal(signal.SIGKILL)  # no worker outlives its serve, even killed
+        process.wait()
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while any(alive(pid) for pid in workers):
+            assert time.monotonic() < deadline, "a worker outlived its serve"
+            time.sleep(0.05)
+
+
+def alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return False
+    return state != "Z"
