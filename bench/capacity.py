@@ -77,6 +77,8 @@ WARMUP_SCANS = 5
 """Scans of each sensor before the window at least (four confirm a track: steady state)."""
 WINDOW_S = 6.0
 DRAIN_S = 5.0
+MAX_BEHIND_S = 2.0
+"""A sensor whose scans of the last 2 s are all unanswered skips the next (counted lost)."""
 """After the window: how long the scans sent in it may still be answered (later: lost)."""
 P99_LIMIT_MS = 50.0
 START_TIMEOUT_S = 180.0
@@ -160,6 +162,9 @@ class SensorLink:
     sent_at: list[float]
     answered: int = 0
     errors: int = 0
+    skipped: list[float] = field(default_factory=list)
+    """When scans fell due while :data:`MAX_BEHIND_S` of this sensor's were unanswered (not
+    sent: counted lost, so an overloaded cell leaves no backlog to the next one)."""
     heard: asyncio.Event = field(default_factory=asyncio.Event)
     """Set at each answer (a saturating sensor sends its next scan then)."""
 
@@ -207,10 +212,14 @@ async def load(url: str, sessions: int, rate: float, warmup_s: float, window_s: 
             if rate <= 0:
                 return await saturating(link)
             due = started + phase
+            behind = max(2, round(MAX_BEHIND_S * rate))
             while due < window_end:
                 await asyncio.sleep(max(0.0, due - time.perf_counter()))
-                link.sent_at.append(time.perf_counter())
-                await link.websocket.send(link.scans.next())
+                if len(link.sent_at) - link.answered >= behind:
+                    link.skipped.append(time.perf_counter())
+                else:
+                    link.sent_at.append(time.perf_counter())
+                    await link.websocket.send(link.scans.next())
                 due += 1.0 / rate
 
         async def reader(link: SensorLink) -> None:
@@ -244,7 +253,8 @@ async def load(url: str, sessions: int, rate: float, warmup_s: float, window_s: 
         ):
             await asyncio.sleep(0.05)
         in_window = sum(
-            sum(window_start <= sent < window_end for sent in link.sent_at) for link in links
+            sum(window_start <= sent < window_end for sent in [*link.sent_at, *link.skipped])
+            for link in links
         )
         for task in readers:
             task.cancel()
@@ -307,7 +317,9 @@ class Timing:
 
 
 def measure(url: str, pids: list[int], sessions: int, rate: float, timing: Timing) -> Cell:
-    """One cell: the load generator in its own process, the server's CPU and RSS from /proc."""
+    """One cell: the load generator in its own process, the server's CPU and RSS from /proc
+    (once the server is idle: the previous cell's sessions deleted)."""
+    settle(pids)
     command = [sys.executable, str(Path(__file__).resolve()), "--load", url]
     warmup_s = max(timing.warmup_s, WARMUP_SCANS / rate) if rate > 0 else timing.warmup_s
     command += [str(sessions), str(rate), str(warmup_s), str(timing.window_s)]
@@ -385,14 +397,12 @@ def serving(configuration: Configuration) -> Iterator[tuple[str, list[int]]]:
             assert time.monotonic() < deadline, "the workers did not start"
             time.sleep(0.1)
             pids = processes_of(process.pid)
-        if configuration.workers > 1:
-            settle(pids)
         yield f"http://127.0.0.1:{port}", pids
 
 
 def settle(pids: list[int], quiet_s: float = 1.0) -> None:
-    """Wait until the workers are idle (each one has finished starting: imports, restore),
-    so that every worker takes connections when the load starts."""
+    """Wait until the server's processes are idle: every worker has started (imports, restore:
+    each takes connections when the load starts) and the previous cell is done with."""
     deadline = time.monotonic() + 120
     before = cpu_of(pids)
     while time.monotonic() < deadline:
