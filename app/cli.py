@@ -17,9 +17,14 @@ import subprocess
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from app.commands.errors import CommandError, one_line
 from evaluation.catalogue import CATALOGUE
+
+if TYPE_CHECKING:
+    from app.cluster.peers import WorkerGroup
+    from app.settings import Settings
 
 
 def _serve(args: argparse.Namespace) -> int:
@@ -27,13 +32,41 @@ def _serve(args: argparse.Namespace) -> int:
 
     given = {
         name: value
-        for name in ("host", "port", "store", "access_log")
+        for name in ("host", "port", "store", "access_log", "workers")
         if (value := getattr(args, name)) is not None
     }
     settings = get_settings().model_copy(update=given)
     listening = _listen(settings.host, settings.port)  # a busy port: one line, no banner
     address = f"http://{settings.host}:{listening.getsockname()[1]}"
 
+    from app.stores import parse_store_url
+    from app.workers import serve_workers, worker_count
+
+    if settings.workers > 1 and parse_store_url(settings.store).kind == "memory":
+        raise CommandError(
+            f"the memory store is one process's: it cannot be shared by {settings.workers} "
+            "workers; use --workers 1, or a sqlite or redis store"
+        )
+    _check_store(settings.store, settings.redis_prefix)
+    workers = worker_count(settings)
+    print(
+        f"credal-fusion on {address}\n"
+        f"  live viewer: {address}/\n"
+        f"  API docs: {address}/docs\n"
+        f"  store: {settings.store}\n"
+        f"  workers: {workers}",
+        flush=True,
+    )
+    if workers > 1:
+        return serve_workers(settings, listening, workers)
+    return serve_socket(settings, listening)
+
+
+def serve_socket(
+    settings: Settings, listening: socket.socket, workers: WorkerGroup | None = None
+) -> int:
+    """Serve the application on ``listening`` until stopped (one process: the only one, or a
+    worker of ``workers``); uvicorn's exit status."""
     import uvicorn
 
     from app.http.keepalive import server_options
@@ -41,15 +74,7 @@ def _serve(args: argparse.Namespace) -> int:
     from app.main import create_app
     from app.runtime import tune_garbage_collector
 
-    _check_store(settings.store, settings.redis_prefix)
-    print(
-        f"credal-fusion on {address}\n"
-        f"  live viewer: {address}/\n"
-        f"  API docs: {address}/docs\n"
-        f"  store: {settings.store}",
-        flush=True,
-    )
-    application = create_app(settings)
+    application = create_app(settings, workers)
     tune_garbage_collector()
     raise_descriptor_limit()  # the connection limits decide, not the descriptor limit
     config = uvicorn.Config(
@@ -146,6 +171,12 @@ def _server_url(text: str) -> str:
 SERVER_HELP = "URL of a running service, e.g. http://127.0.0.1:8000 (or 127.0.0.1:8000: http)"
 
 
+def _workers(text: str) -> int:
+    if not text.isdigit():
+        raise argparse.ArgumentTypeError(f"a number of processes (0: one per core), not {text!r}")
+    return int(text)
+
+
 def _positive(text: str) -> float:
     value = float(text)
     if not value > 0:
@@ -208,6 +239,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--store",
         type=_store_url,
         help="memory | sqlite[:PATH] | redis[s]://HOST:PORT/DB (default: sqlite:data/credal-fusion.db, or CREDAL_STORE)",
+    )
+    serve.add_argument(
+        "--workers",
+        type=_workers,
+        help="worker processes sharing the sessions through the store, 0: one per usable "
+        "core (default: 1, or CREDAL_WORKERS; the memory store runs one)",
     )
     serve.add_argument(
         "--access-log",

@@ -13,6 +13,7 @@ from fastapi import FastAPI, Request, Response
 from fastapi.middleware.cors import CORSMiddleware
 from fastapi.routing import APIRoute
 
+from app.cluster.peers import WorkerGroup
 from app.http.body_limits import BodyLimits
 from app.http.errors import (
     SessionUnreadable,
@@ -59,8 +60,9 @@ def operation_id(route: APIRoute) -> str:
     return route.name
 
 
-def create_app(settings: Settings | None = None) -> FastAPI:
-    """Build the service application (the store opens in the lifespan, not here)."""
+def create_app(settings: Settings | None = None, workers: WorkerGroup | None = None) -> FastAPI:
+    """Build the service application (the store opens in the lifespan, not here); ``workers``:
+    the group of worker processes this one belongs to (``serve --workers``), sharing the store."""
     settings = settings or get_settings()
     service_metrics = ServiceMetrics.create()
 
@@ -71,7 +73,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         store = open_store(settings.store, redis_prefix=settings.redis_prefix)
         app.state.store = store
         loop_lag = LoopLag(service_metrics.loop_lag, ceiling=2e-3 * settings.overload_delay_ms)
-        registry = SessionRegistry(store, settings, service_metrics, loop_lag=loop_lag)
+        shared = {} if workers is None else await workers.join(store, settings)
+        registry = SessionRegistry(store, settings, service_metrics, loop_lag=loop_lag, **shared)
         app.state.registry = registry
         collections = CollectionTimes(service_metrics.collections)
         collections.install()

@@ -50,6 +50,12 @@ class Settings(BaseSettings):
     store: str = Field(
         DEFAULT_STORE, description="memory | sqlite[:PATH] | redis[s]://HOST:PORT/DB"
     )
+    workers: int = Field(
+        1,
+        ge=0,
+        description="worker processes of `serve`, sharing the sessions through the store "
+        "(sqlite or redis; the memory store is one process's): 0 is one per usable core",
+    )
     redis_prefix: str = Field(
         DEFAULT_PREFIX, min_length=1, description="start of every Redis key and channel name"
     )
@@ -206,7 +212,7 @@ class Settings(BaseSettings):
     lease_ttl_ms: int = Field(
         DEFAULT_LEASE_TTL_MS,
         ge=100,
-        description="redis store: an instance that stops renewing a session's lease loses it "
+        description="redis store or several workers: an instance that stops renewing a session's lease loses it "
         "after this long, and another instance takes the session over (a stream renews it "
         "every third of it)",
     )

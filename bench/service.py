@@ -140,8 +140,10 @@ def running(
     port: int,
     environment: Mapping[str, str] | None = None,
     ready: str = "/openapi.json",
+    start_timeout_s: float = START_TIMEOUT_S,
 ) -> Iterator[subprocess.Popen[bytes]]:
-    """``command`` serving on ``port`` once ``ready`` answers 200; terminated on exit."""
+    """``command`` serving on ``port`` once ``ready`` answers 200 (within ``start_timeout_s``);
+    terminated on exit."""
     process = subprocess.Popen(
         command,
         cwd=ROOT,
@@ -152,7 +154,7 @@ def running(
         stderr=subprocess.DEVNULL,
     )
     try:
-        deadline = time.monotonic() + START_TIMEOUT_S
+        deadline = time.monotonic() + start_timeout_s
         while True:
             try:
                 if httpx.get(f"http://127.0.0.1:{port}{ready}", timeout=1).status_code == 200:
@@ -165,7 +167,7 @@ def running(
         yield process
     finally:
         process.terminate()
-        process.wait(timeout=START_TIMEOUT_S)
+        process.wait(timeout=start_timeout_s)
 
 
 @contextmanager

@@ -1,4 +1,5 @@
-"""Session leases: two instances (two clients) share a session through the real Redis."""
+"""Session leases: two instances (two clients) share a session through the real Redis, and
+two worker processes through their leases file."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from app.cluster.lease import (
     new_owner_id,
     open_leases,
 )
+from app.cluster.peers import FileLeases
 from app.stores import MemoryStore, RedisStore, SequenceConflict, SessionRecord
 from tests.api.redis_support import REDIS_URL, redis_prefix, remaining_keys
 
@@ -26,8 +28,12 @@ EXPIRY_WAIT_S = 5.0
 LeasePair = tuple[SessionLeases, SessionLeases]
 
 
-@pytest.fixture(params=["redis", "local"])
+@pytest.fixture(params=["redis", "local", "workers"])
 def instances(request: pytest.FixtureRequest) -> Iterator[LeasePair]:
+    if request.param == "workers":  # two worker processes' views of one leases file
+        path = request.getfixturevalue("tmp_path") / "leases.db"
+        yield FileLeases(path), FileLeases(path)
+        return
     if request.param == "local":
         shared = LocalLeases()
         yield shared, shared

@@ -194,6 +194,15 @@ def test_serve_on_a_busy_port_is_one_line_and_no_banner() -> None:
     assert done.stdout == ""  # no banner
 
 
+def test_serve_refuses_workers_that_cannot_share_the_memory_store() -> None:
+    done = cli("serve", "--port", "0", "--store", "memory", "--workers", "2")
+    assert one_line_failure(done) == (
+        "credal-fusion serve: the memory store is one process's: it cannot be shared by 2 "
+        "workers; use --workers 1, or a sqlite or redis store"
+    )
+    assert done.stdout == ""
+
+
 HEAVY = ("numpy", "scipy", "core", "pydantic", "app.sessions", "app.main")
 
 
