@@ -18,6 +18,21 @@ from api_schemas.reports import DetectionReport, TrackReport
 from api_schemas.results import FusedFeatureCollection, StepResult
 
 ClientRef = Annotated[str, StringConstraints(min_length=1, max_length=128)]
+IDEMPOTENCY_KEY_MAX = 128
+IDEMPOTENCY_KEY_PATTERN = r"^[!-~]+$"
+"""An idempotency key: 1 to 128 visible ASCII characters (as the REST ``Idempotency-Key``)."""
+IdempotencyKey = Annotated[
+    str,
+    StringConstraints(
+        min_length=1, max_length=IDEMPOTENCY_KEY_MAX, pattern=IDEMPOTENCY_KEY_PATTERN
+    ),
+    Field(
+        description="names this input, as the REST Idempotency-Key header: sent again with the "
+        "same key (a resend after a lost answer or a reconnection), it is not applied twice and "
+        "its first result is sent again (an error 409 idempotency-key-reused if the key came "
+        "with another input); keys are kept with the session's log, so any instance knows them"
+    ),
+]
 
 
 class TracksMessage(TrackReport):
@@ -25,6 +40,7 @@ class TracksMessage(TrackReport):
 
     type: Literal["tracks"]
     ref: ClientRef | None = None
+    idempotency_key: IdempotencyKey | None = None
 
 
 class DetectionsMessage(DetectionReport):
@@ -32,6 +48,7 @@ class DetectionsMessage(DetectionReport):
 
     type: Literal["detections"]
     ref: ClientRef | None = None
+    idempotency_key: IdempotencyKey | None = None
 
 
 class ResultMessage(WireModel):

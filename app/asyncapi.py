@@ -158,8 +158,11 @@ Clients and failures (the reference client is `app/commands/resilient.py`):
   new `ack.seq`. A sender that keeps one input in flight at a time knows: if
   `ack.seq` is its last answered `seq` + 1, its pending input was applied
   (do not resend it); if it equals its last answered `seq`, it was lost: send
-  it again. Over REST, an `Idempotency-Key` makes a resend safe while the
-  instance that answered it lives.
+  it again. A message with an `idempotency_key` (the REST `Idempotency-Key`
+  header) can always be resent: it is logged with its input in the same store
+  write, so any instance, after a restart or a takeover, sends its first
+  `result` again instead of applying it twice (a session keeps its latest 256
+  keys).
 - While a `stream` is open, its instance renews the session's lease every
   third of the TTL; if another instance took the session over meanwhile, the
   stream closes with 1013 `session taken over`: reconnect.

@@ -30,8 +30,11 @@ anonymous attacker process beside it (:func:`attack`, from other loopback
 addresses: slowloris connections, 16 MB headers, a session flood, floods of
 the heaviest legal inputs and of explained ones). The honest sensors' p99
 latency and error rate must stay within 10 % of their run alone (exit 1
-otherwise). Both processes share the machine's cores with the server: the
-attacker's own CPU is in the comparison too.
+otherwise). The two kinds of phase alternate (:data:`CROWD_PHASES` of each), so a
+drift of the machine's other load falls on both. Both processes share the
+machine's cores with the server: each phase prints the CPU seconds of the
+server, the honest load and the attacker, and how long the server's event
+loop waited runnable for a CPU (the machine's share of the latency).
 """
 
 from __future__ import annotations
@@ -288,51 +291,109 @@ def attack(url: str, seconds: float) -> None:
         connection.close()
 
 
-def crowd() -> int:
-    """Honest load alone, then beside :func:`attack`: the honest p99 and error rate compared,
-    with the CPU seconds the server and the attacker spent in each phase."""
+CROWD_PHASES = 2
+"""Phases of each kind, alternating (alone, attacked, alone, attacked): the machine's other
+load drifts over minutes, and alternating shares the drift between the two kinds."""
+
+
+@dataclass
+class Phase:
+    """The honest load's account of one phase, and the CPU seconds each process spent in it."""
+
+    attacked: bool
+    latencies: list[float]
+    sent: int
+    failures: int
+    server_cpu: float
+    server_wait: float
+    honest_cpu: float
+    attacker_cpu: float
+
+
+def loop_thread_wait_s(pid: int) -> float:
+    """Seconds the server's event-loop (main) thread waited runnable for a CPU so far (Linux
+    ``schedstat``; NaN where there is none): the machine's share of its latency."""
+    try:
+        return int(Path(f"/proc/{pid}/task/{pid}/schedstat").read_text().split()[1]) / 1e9
+    except (OSError, IndexError, ValueError):
+        return float("nan")
+
+
+def crowd_phase(url: str, pid: int, attacked: bool, seconds: float) -> Phase:
+    """The honest load for ``seconds``, beside :func:`attack` if ``attacked``."""
     import multiprocessing
 
+    attacker = None
+    if attacked:
+        spawn = multiprocessing.get_context("spawn")
+        attacker = spawn.Process(target=attack, args=(url, seconds))
+        attacker.start()
+    server_cpu, server_wait = process_cpu_s(pid), loop_thread_wait_s(pid)
+    honest_cpu = time.process_time()
+    load = Load(url, time.monotonic() + seconds)
+    asyncio.run(load.run())
+    honest_cpu = time.process_time() - honest_cpu
+    server_cpu, server_wait = process_cpu_s(pid) - server_cpu, loop_thread_wait_s(pid) - server_wait
+    attacker_cpu = 0.0
+    if attacker is not None:
+        attacker_cpu = process_cpu_s(attacker.pid or 0)
+        attacker.join()
+    return Phase(
+        attacked,
+        load.latencies,
+        load.sent,
+        load.failures,
+        server_cpu,
+        server_wait,
+        honest_cpu,
+        attacker_cpu,
+    )
+
+
+def crowd() -> int:
+    """Honest load alone, then beside :func:`attack`, alternating (:data:`CROWD_PHASES` each):
+    the honest p99 and error rate compared, with the CPU seconds the server, the honest load
+    and the attacker spent in each phase, and the seconds the server's event loop waited for
+    a CPU (the machine's: 2 cores shared by every process here and any other)."""
     print(describe_machine())
-    rows = []
+    phases: list[Phase] = []
+    seconds = CROWD_SECONDS / CROWD_PHASES
     with tempfile.TemporaryDirectory(prefix="credal-soak-") as directory:
         database = Path(directory) / "crowd.db"
         settings = {"CREDAL_RATE_LIMIT": "1000/second"}
         with serving(f"sqlite:{database}", settings) as (url, pid):
-            for attacked in (False, True):
-                attacker = None
-                if attacked:
-                    spawn = multiprocessing.get_context("spawn")
-                    attacker = spawn.Process(target=attack, args=(url, CROWD_SECONDS))
-                    attacker.start()
-                server_cpu = process_cpu_s(pid)
-                load = Load(url, time.monotonic() + CROWD_SECONDS)
-                asyncio.run(load.run())
-                server_cpu = process_cpu_s(pid) - server_cpu
-                attacker_cpu = 0.0
-                if attacker is not None:
-                    attacker_cpu = process_cpu_s(attacker.pid or 0)
-                    attacker.join()
-                latencies = sorted(load.latencies)
-                rows.append(
-                    (
-                        attacked,
-                        len(latencies),
-                        load.failures / max(1, load.sent),
-                        latencies[len(latencies) // 2],
-                        latencies[int(0.99 * (len(latencies) - 1))],
-                        server_cpu,
-                        attacker_cpu,
-                    )
-                )
-    for attacked, count, errors, p50, p99, server_cpu, attacker_cpu in rows:
+            for _ in range(CROWD_PHASES):
+                for attacked in (False, True):
+                    phases.append(crowd_phase(url, pid, attacked, seconds))
+    print(
+        f"{CROWD_PHASES} phases of {seconds:.0f} s of each kind, alternating; CPU seconds per "
+        "phase (the server's, the honest load's, the attacker's) and the seconds the server's "
+        "event loop waited runnable for a CPU"
+    )
+    rows = []
+    for attacked in (False, True):
+        mine = [phase for phase in phases if phase.attacked == attacked]
         who = "honest + anonymous attacker" if attacked else "honest alone"
+        for phase in mine:
+            latencies = sorted(phase.latencies)
+            print(
+                f"  {who:28} {len(latencies):6d} inputs  p99 "
+                f"{latencies[int(0.99 * (len(latencies) - 1))] * 1000:7.1f} ms  CPU: server "
+                f"{phase.server_cpu:5.1f} s, honest {phase.honest_cpu:5.1f} s, attacker "
+                f"{phase.attacker_cpu:5.1f} s; server loop waiting for a CPU "
+                f"{phase.server_wait:5.1f} s"
+            )
+        latencies = sorted(latency for phase in mine for latency in phase.latencies)
+        sent = sum(phase.sent for phase in mine)
+        errors = sum(phase.failures for phase in mine) / max(1, sent)
+        p50 = latencies[len(latencies) // 2]
+        p99 = latencies[int(0.99 * (len(latencies) - 1))]
+        rows.append((errors, p99))
         print(
-            f"{who:28} {count:6d} inputs  errors {errors:.2%}  p50 {p50 * 1000:6.1f} ms  "
-            f"p99 {p99 * 1000:6.1f} ms  server CPU {server_cpu:5.1f} s  "
-            f"attacker CPU {attacker_cpu:5.1f} s"
+            f"{who:30} {len(latencies):6d} inputs  errors {errors:.2%}  p50 {p50 * 1000:6.1f} ms  "
+            f"p99 {p99 * 1000:6.1f} ms"
         )
-    (_, _, errors_alone, _, p99_alone, *_), (_, _, errors_attacked, _, p99_attacked, *_) = rows
+    (errors_alone, p99_alone), (errors_attacked, p99_attacked) = rows
     ok = p99_attacked <= 1.1 * p99_alone and errors_attacked <= 1.1 * errors_alone
     print(
         f"honest p99 × {p99_attacked / p99_alone:.2f}, errors {errors_alone:.2%} → "

@@ -136,6 +136,7 @@ class ClusterLink:
         session.seq = fresh.seq
         session.sensor_inputs = fresh.sensor_inputs
         session.last_input_at = fresh.last_input_at
+        session.answered, session.answered_chars = fresh.answered, fresh.answered_chars
         session.since_snapshot = 0
 
     async def publish(self, session: LiveSession, message: str) -> None:

@@ -74,6 +74,11 @@ class Output:
         """The answer's media type."""
         return self.format.media_type
 
+    @property
+    def name(self) -> str:
+        """The same in every process: the format's name, ``/geodetic`` with geodetic positions."""
+        return self.format.name + ("/geodetic" if self.geodetic is not None else "")
+
     def step(self, step: CoreStepResult, seq: int, warnings: Sequence[FieldWarning] = ()) -> str:
         """:meth:`OutputFormat.step`."""
         return self.format.step(step, seq, self.geodetic, warnings)

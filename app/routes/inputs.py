@@ -10,12 +10,14 @@ from fastapi import APIRouter, Header, Query, Request
 
 from api_schemas.base import WireModel
 from api_schemas.examples import json_body_examples
+from api_schemas.ws import IDEMPOTENCY_KEY_MAX, IDEMPOTENCY_KEY_PATTERN
 from app.http.deps import LiveSessionDep, RegistryDep
 from app.http.errors import problem_responses
 from app.http.requests import WireRoute
 from app.http.responses import JSONTextResponse
 from app.inputs import DECODED_KINDS, INPUT_KINDS, DecodedKind, Input, InputKind
 from app.routes.fusion import OutputFormat, OutputFrame, output_of, output_responses
+from app.sessions.live import IDEMPOTENCY_KEYS
 
 Explain = Annotated[
     bool,
@@ -29,11 +31,13 @@ IdempotencyKey = Annotated[
     Header(
         alias="Idempotency-Key",
         min_length=1,
-        max_length=128,
-        pattern=r"^[!-~]+$",
+        max_length=IDEMPOTENCY_KEY_MAX,
+        pattern=IDEMPOTENCY_KEY_PATTERN,
         description="names this input: sent again with the same key (a retry after a lost "
-        "answer), the same input is not applied twice, its first answer is given again (409 if "
-        "the key came with another input); the session remembers its latest 256 keys",
+        "answer, to this instance or another, before or after a restart), the same input is "
+        "not applied twice, its first answer is given again (409 if the key came with another "
+        f"input); the key is logged with the input, the session remembers its latest "
+        f"{IDEMPOTENCY_KEYS}",
     ),
 ]
 

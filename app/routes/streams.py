@@ -248,7 +248,12 @@ async def _answer(
     try:
         if session.closed:  # evicted (store down, or a failed step): the registry reloads it
             session = await registry.get(session.id)
-        result = await registry.submit(session, message_input(message), output=output)
+        result = await registry.submit(
+            session,
+            message_input(message),
+            output=output,
+            idempotency_key=message.idempotency_key,
+        )
     except Exception as error:  # every failure is answered; the connection stays open
         return error_message(problem_for(error, path), message.ref)
     return result_message(result, message.ref)

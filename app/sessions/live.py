@@ -28,6 +28,11 @@ from core.fusion.track import FusedTrack
 SNAPSHOT_FORMAT = 1
 IDEMPOTENCY_KEYS = 256
 """Answers kept per session for retried inputs (``Idempotency-Key``)."""
+IDEMPOTENCY_BYTES = 1024 * 1024
+"""Characters of those answers kept per session beyond the latest one (an answer is ~800 bytes
+per fused track): what they add to its memory and to each of its snapshots."""
+IDEMPOTENCY_FIELD = "idempotency"
+"""The logged input's field holding its key, fingerprint and first answer (:meth:`LiveSession.remember_logged`)."""
 
 
 @dataclass
@@ -53,8 +58,12 @@ class LiveSession:
     """How its inputs give their times: its first input's way (numbers, ``arbitrary``; RFC 3339
     timestamps, ``unix``; :mod:`api_schemas.timing`), ``None`` before it."""
     answered: OrderedDict[str, tuple[str, str]] = field(default_factory=OrderedDict)
-    """The answers to the latest inputs sent with an ``Idempotency-Key``: key → (the input's
-    fingerprint, the answer), at most :data:`IDEMPOTENCY_KEYS`, oldest first."""
+    """The answers to the latest inputs sent with an idempotency key: key → (the input's
+    fingerprint, the answer), at most :data:`IDEMPOTENCY_KEYS` and :data:`IDEMPOTENCY_BYTES`
+    (the latest is always kept), oldest first. Durable with the inputs they answer: each is
+    logged with its input (one store write) and snapshots keep them, so a restart or another
+    instance restores them (snapshot, then the log after it)."""
+    answered_chars: int = 0
 
     def answer_of(self, key: str, fingerprint: str) -> str | None:
         """The answer already given to the input of ``key`` (``None``: not seen); 409 if the
@@ -67,10 +76,29 @@ class LiveSession:
         return seen[1]
 
     def remember(self, key: str, fingerprint: str, answer: str) -> None:
-        """Keep the answer to the input of ``key`` (forgetting the oldest beyond the bound)."""
+        """Keep the answer to the input of ``key`` (forgetting the oldest beyond the bounds)."""
+        previous = self.answered.pop(key, None)
+        if previous is not None:
+            self.answered_chars -= len(previous[1])
         self.answered[key] = (fingerprint, answer)
-        while len(self.answered) > IDEMPOTENCY_KEYS:
-            self.answered.popitem(last=False)
+        self.answered_chars += len(answer)
+        while len(self.answered) > IDEMPOTENCY_KEYS or (
+            self.answered_chars > IDEMPOTENCY_BYTES and len(self.answered) > 1
+        ):
+            _, (_, dropped) = self.answered.popitem(last=False)
+            self.answered_chars -= len(dropped)
+
+    def remember_logged(self, logged: PlainObject) -> None:
+        """Keep the answer a logged input carries (:func:`idempotency_record`), if any."""
+        record = logged.get(IDEMPOTENCY_FIELD)
+        if isinstance(record, dict):
+            key, fingerprint, answer = (
+                record.get("key"),
+                record.get("fingerprint"),
+                record.get("answer"),
+            )
+            if isinstance(key, str) and isinstance(fingerprint, str) and isinstance(answer, str):
+                self.remember(key, fingerprint, answer)
 
     def epoch_of(self, time: float | str, where: Location = ("time",)) -> TimeEpoch:
         """The epoch of an input's ``time``: refused (422 at ``where``) unless it is the
@@ -160,6 +188,7 @@ class LiveSession:
             "sensor_inputs": dict(self.sensor_inputs),
             "last_input_at": None if self.last_input_at is None else self.last_input_at.isoformat(),
             "time_epoch": self.time_epoch,
+            "answered": [[key, *seen] for key, seen in self.answered.items()],
         }
 
 
@@ -210,3 +239,13 @@ def restore_snapshot(session: LiveSession, snapshot: Snapshot) -> None:
         session.time_epoch = epoch
     elif engine is not None and engine.time is not None:
         session.time_epoch = "arbitrary"
+    session.answered.clear()
+    session.answered_chars = 0
+    for key, fingerprint, answer in state.get("answered", []):  # absent before they were kept
+        session.remember(str(key), str(fingerprint), str(answer))
+
+
+def idempotency_record(key: str, fingerprint: str, answer: str) -> PlainObject:
+    """What a logged input keeps of its idempotency key (:data:`IDEMPOTENCY_FIELD`): read back
+    by :meth:`LiveSession.remember_logged` on replay; ``GET …/events`` leaves it out."""
+    return {"key": key, "fingerprint": fingerprint, "answer": answer}

@@ -40,7 +40,7 @@ from app.outputs import JSON, Output
 from app.outputs.text import dumps
 from app.plausibility import input_warnings
 from app.sessions.hub import SESSION_RELOADED, STORE_UNAVAILABLE, Published
-from app.sessions.live import LiveSession
+from app.sessions.live import IDEMPOTENCY_FIELD, LiveSession, idempotency_record
 from app.sessions.log import logged_input
 from app.sessions.translate import PlainObject
 from app.sessions.work import compute
@@ -81,6 +81,14 @@ class Step:
 
 
 @dataclass(frozen=True)
+class Once:
+    """An input's idempotency key and fingerprint (its kind, report, ``explain`` and output)."""
+
+    key: str
+    fingerprint: str
+
+
+@dataclass(frozen=True)
 class InputSeries:
     """The metrics of one kind of input (``tracks``, ``detections``)."""
 
@@ -110,8 +118,10 @@ class InputPipeline:
         against the session's config first, then its work against ``max_input_work`` (and
         ``max_explain_cells``) and its tenant's quotas. An input sent again with the
         ``idempotency_key`` of one already applied gets that first answer, and nothing is
-        applied (the session keeps its latest 256 keys' answers in memory). An overloaded
-        instance refuses it first (:meth:`admit`)."""
+        applied: the key, the input's fingerprint and its answer are logged with the input
+        (:data:`~app.sessions.live.IDEMPOTENCY_FIELD`), so a restart or another instance
+        knows them (the session keeps its latest 256, :data:`~app.sessions.live.IDEMPOTENCY_KEYS`).
+        An overloaded instance refuses it first (:meth:`admit`)."""
         self.admit()
         return await self._admitted(
             session, submitted, explain=explain, output=output, idempotency_key=idempotency_key
@@ -150,8 +160,10 @@ class InputPipeline:
         await self.registry.quotas.charge(session.record.tenant, work)
         once = None
         if idempotency_key is not None:
-            text = f"{explain}:{output}:{submitted.kind.tag}:{submitted.report.model_dump_json()}"
-            once = (idempotency_key, hashlib.sha256(text.encode()).hexdigest())
+            text = (
+                f"{explain}:{output.name}:{submitted.kind.tag}:{submitted.report.model_dump_json()}"
+            )
+            once = Once(idempotency_key, hashlib.sha256(text.encode()).hexdigest())
         return await self._submit(
             session, submitted, items, explain=explain, output=output, once=once
         )
@@ -220,7 +232,7 @@ class InputPipeline:
         *,
         explain: bool,
         output: Output,
-        once: tuple[str, str] | None = None,
+        once: Once | None = None,
     ) -> str:
         """Under the session lock: (lease,) apply, log durably, then publish and return the result.
 
@@ -230,15 +242,9 @@ class InputPipeline:
         """
         async with session.lock:
             if not session.closed:
-                answered = None if once is None else session.answer_of(*once)
-                if answered is not None:
-                    return answered
-                answer = await self._submit_locked(
-                    session, submitted, items, explain=explain, output=output
+                return await self._submit_locked(
+                    session, submitted, items, explain=explain, output=output, once=once
                 )
-                if once is not None:
-                    session.remember(*once, answer)
-                return answer
         return await self._submit(
             await self.registry.get(session.id),
             submitted,
@@ -256,8 +262,11 @@ class InputPipeline:
         *,
         explain: bool,
         output: Output,
+        once: Once | None = None,
     ) -> str:
-        """:meth:`_submit` once the session's lock is held."""
+        """:meth:`_submit` once the session's lock is held. A known idempotency key is looked
+        up once the session is the store's latest (after taking the lease, and again after
+        being overtaken): an instance that took the session over answers what the first did."""
         kind, sensor = submitted.kind.tag, submitted.sensor
         # this instance's subscribers are written for beside the step (with a shared store
         # they are fed the JSON text through Redis and convert it)
@@ -268,14 +277,20 @@ class InputPipeline:
         with anyio.CancelScope(shield=True):
             if self.registry.shared:
                 await self.registry.cluster.hold_lease(session)
+            answered = None if once is None else session.answer_of(once.key, once.fingerprint)
+            if answered is not None:
+                return answered
             try:
-                step = await self._apply_and_log(session, apply, sensor, items, kind)
+                step = await self._apply_and_log(session, apply, sensor, items, kind, once, output)
             except SequenceConflict:
                 if not self.registry.shared:
                     raise
                 # overtaken by another instance: rebuild from the store, apply once more
                 await self.registry.cluster.refresh(session)
-                step = await self._apply_and_log(session, apply, sensor, items, kind)
+                answered = None if once is None else session.answer_of(once.key, once.fingerprint)
+                if answered is not None:
+                    return answered
+                step = await self._apply_and_log(session, apply, sensor, items, kind, once, output)
             self._series(kind).inputs.inc()
             if self.registry.shared:
                 # local subscribers too receive it through Redis (the text only), and only
@@ -331,6 +346,7 @@ class InputPipeline:
                 logger.exception("session %s: replay of input %d failed", record.id, entry.seq)
             else:
                 session.engine, session.time_epoch = step.engine, step.time_epoch
+            session.remember_logged(entry.input)
             sensor = str(entry.input.get("report", {}).get("sensor", ""))
             session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
             session.seq = entry.seq
@@ -343,9 +359,11 @@ class InputPipeline:
         sensor: str,
         items: int,
         kind: str,
+        once: Once | None = None,
+        output: Output = JSON,
     ) -> Step:
-        """``apply()`` the input, append it to the log, then move the session on (else it is
-        rebuilt)."""
+        """``apply()`` the input, append it to the log (with its idempotency key and answer in
+        ``output``: one write), then move the session on (else it is rebuilt)."""
         started = time.perf_counter()
         size = items + len(session.tracks)
         engine_seq = None if session.engine is None else session.engine.seq
@@ -366,9 +384,13 @@ class InputPipeline:
         self._count_detections(_tally(step.engine, sensor), tallied)
         received_at = datetime.now(UTC)
         seq = session.seq + 1
+        logged = step.logged
+        if once is not None:
+            record = idempotency_record(once.key, once.fingerprint, step.written[output])
+            logged = {**logged, IDEMPOTENCY_FIELD: record}
         try:
             step.listened = await self.registry.io(
-                self.registry.store.append, session.id, seq, step.logged, received_at, size=size
+                self.registry.store.append, session.id, seq, logged, received_at, size=size
             )
         except SequenceConflict:
             if not self.registry.shared:
@@ -392,6 +414,8 @@ class InputPipeline:
         session.seq = seq
         session.last_input_at = received_at
         session.sensor_inputs[sensor] = session.sensor_inputs.get(sensor, 0) + 1
+        if once is not None:
+            session.remember(once.key, once.fingerprint, step.written[output])
         return step
 
     def _count_detections(self, after: ScanTally | None, before: ScanTally | None) -> None:
