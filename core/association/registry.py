@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from core.association import cheap_jpda, dang_han, denoeux, gnn, hachour, mercier
+from core.association import cheap_jpda, dang_han, denoeux, gnn, hachour, jpda, mercier
 from core.association.spec import MethodSpec, Scope
 from core.errors import InvalidInput
 
@@ -24,6 +24,7 @@ REGISTRY: dict[str, MethodSpec[Any]] = {
         mercier.SPEC,
         dang_han.SPEC,
         cheap_jpda.SPEC,
+        jpda.SPEC,
     )
 }
 """Every association method by name, in the order the wire lists them."""
