@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Generic, Literal, TypeVar
 
 from core.association.options import Options, check_keys, choice, exclusive, number
@@ -34,6 +34,8 @@ BOTH_SCOPES: frozenset[Scope] = frozenset({"track_to_track", "local"})
 LOCAL_ONLY: frozenset[Scope] = frozenset({"local"})
 
 Parsed = TypeVar("Parsed")
+MEMO_SIZE = 64
+"""Parsed configurations a spec keeps (:meth:`MethodSpec.parse`)."""
 
 
 @dataclass(frozen=True)
@@ -114,9 +116,16 @@ class MethodSpec(Generic[Parsed]):
     soft: bool = False
     summary: str = ""
 
-    @property
-    def option_names(self) -> tuple[str, ...]:
-        return tuple(option.name for option in self.options)
+    def __post_init__(self) -> None:
+        names = tuple(option.name for option in self.options)
+        object.__setattr__(self, "option_names", names)
+        object.__setattr__(self, "_memo", {})
+
+    option_names: tuple[str, ...] = field(init=False, repr=False, compare=False)
+    """The options' names, in declaration order."""
+    _memo: dict[tuple[tuple[str, type, object], ...], Parsed] = field(
+        init=False, repr=False, compare=False
+    )
 
     def option(self, name: str) -> OptionSpec:
         """The option called ``name`` (KeyError when the method has none)."""
@@ -131,11 +140,27 @@ class MethodSpec(Generic[Parsed]):
     def parse(self, options: Mapping[str, object]) -> Parsed:
         """The method's options object from ``options`` by their names, defaults filled in.
 
+        Parsing is pure and its result immutable: each configuration is parsed once
+        (:data:`MEMO_SIZE` of them per method; ``associate`` parses at every call).
+
         Raises
         ------
         OptionError
             Unknown option, two of an exclusive group, a value out of range or choice.
         """
+        try:
+            key = tuple(sorted((name, type(value), value) for name, value in options.items()))
+            hash(key)
+        except TypeError:  # a value that cannot be a key: parse it every time
+            return self._parse(options)
+        parsed = self._memo.get(key)
+        if parsed is None:
+            parsed = self._parse(options)
+            if len(self._memo) < MEMO_SIZE:
+                self._memo[key] = parsed
+        return parsed
+
+    def _parse(self, options: Mapping[str, object]) -> Parsed:
         check_keys(self.name, options, self.option_names)
         for group in self.exclusive:
             exclusive(self.name, options, group)

@@ -140,3 +140,12 @@ def test_a_method_that_gates_its_own_way_runs_in_the_local_tracker(
         ]
     assert outputs["gnn_combined"] == outputs["gnn"]
     assert any(any(step) for step in outputs["gnn"])
+
+
+def test_parsing_is_memoised_per_value_and_type() -> None:
+    """``associate`` parses at every call: a configuration is parsed once, but ``True`` is not
+    taken for the ``1`` it equals (a bool is refused where a number is due)."""
+    spec = REGISTRY["mercier"]
+    assert spec.parse({"alpha": 1}) is spec.parse({"alpha": 1})
+    with pytest.raises(OptionError, match="must be a number"):
+        spec.parse({"alpha": True})
