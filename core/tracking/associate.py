@@ -140,6 +140,12 @@ class DetectionAssociator:
             self._modified = ModifiedScale.of(steady.innovation, **kwargs)
             self._modified_sum = ModifiedScale.of(steady.innovation - self._noise, **kwargs)
 
+    @property
+    def soft(self) -> bool:
+        """The method weighs every gated detection (``cheap_jpda``): a PDA update, no hard
+        pairs to branch on or to read a range-rate from."""
+        return self._spec.soft
+
     def associate(
         self,
         sub: IMMPrediction,
