@@ -6,7 +6,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field
 
-from api_schemas.association import AssociationMethod
+from api_schemas.association import AnyAssociationMethod
 from api_schemas.base import FiniteFloat, Identifier, Label, Matrix, UnitFloat, Vector, WireModel
 from api_schemas.classification import FocalMass
 from api_schemas.timing import ANSWER_TIME
@@ -143,7 +143,7 @@ class ScoreMatrix(WireModel):
 class StepAssociation(WireModel):
     """The association decision of one step; ``matrix`` only with ``?explain=true``."""
 
-    method: AssociationMethod | Literal["cheap_jpda"]
+    method: AnyAssociationMethod
     pairs: list[FusedPair]
     new: list[Identifier]
     missed: list[Identifier]

@@ -8,49 +8,37 @@ local tracking (measurement-to-track) uses ``gnn`` with ``gate_probability``
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from numpy.typing import ArrayLike
 
 from core.association.assignment import SOLVERS, Solver
 from core.association.classes import check_classes
-from core.association.dang_han import DangHanOptions, associate_dang_han
-from core.association.denoeux import DenoeuxOptions, associate_denoeux
-from core.association.gnn import GnnOptions, associate_gnn
-from core.association.hachour import HachourOptions, associate_hachour
-from core.association.mercier import associate_mercier, mercier_options
 from core.association.problem import AssociationProblem
+from core.association.registry import REGISTRY, method_spec, methods
 from core.association.result import AssociationResult
+from core.association.spec import MethodSpec, Scope
 from core.belief import MassFunction
 from core.distance import DistanceModel, Estimates
 from core.errors import InvalidInput
 
 Side = Estimates | tuple[ArrayLike, ArrayLike | None]
 
-METHODS: dict[
-    str, tuple[Callable[[Mapping[str, object]], Any], Callable[..., AssociationResult]]
-] = {
-    "gnn": (GnnOptions.of, associate_gnn),
-    "denoeux": (DenoeuxOptions.of, associate_denoeux),
-    "hachour": (HachourOptions.of, associate_hachour),
-    "mercier": (mercier_options, associate_mercier),
-    "dang_han": (DangHanOptions.of, associate_dang_han),
-}
+METHODS: tuple[str, ...] = methods("track_to_track")
+"""The track-to-track methods (:mod:`core.association.registry`)."""
+LOCAL_METHODS: tuple[str, ...] = methods("local")
+"""The measurement-to-track methods of local tracking."""
 
-TRACK_TO_TRACK_DEFAULT = ("denoeux", {"gate_probability": 0.999, "alpha": 1.0}, "sum")
+TRACK_TO_TRACK_DEFAULT = "denoeux"
+"""The track-to-track method when the caller names none (§3.7), on its ``sum`` distance."""
+LOCAL_TRACKING_DEFAULT = "gnn"
+"""The local tracker's method when the configuration names none (§3.7)."""
 
-DEFAULT_DISTANCE: dict[str, str] = {
-    "gnn": "mean",
-    "denoeux": "sum",
-    "hachour": "mean",
-    "mercier": "mean",
-    "dang_han": "mean",
-}
-"""Track-to-track distance of each method when the caller names none: the
+DEFAULT_DISTANCE: dict[str, str] = {name: REGISTRY[name].distance for name in METHODS}
+"""Track-to-track distance of each method when the caller names none (its spec's): the
 ``mean`` covariance of [T2T] eq 1-2 for the methods compared there, ``sum``
 for the session default ``denoeux`` (docs/algorithms.md §3.7)."""
-LOCAL_TRACKING_DEFAULT = ("gnn", {"gate_probability": 0.999}, "innovation")
 
 
 def _side(side: Side, name: str) -> Estimates:
@@ -63,32 +51,35 @@ def _side(side: Side, name: str) -> Estimates:
 
 
 def resolve_method(
-    method: str, options: Mapping[str, object] | None, distance: str | DistanceModel
-) -> tuple[Callable[..., AssociationResult], Any, DistanceModel]:
-    """A method's runner, its parsed options and the distance model; refuses any of them by name.
+    method: str,
+    options: Mapping[str, object] | None,
+    distance: str | DistanceModel,
+    scope: Scope = "track_to_track",
+) -> tuple[MethodSpec[Any], Any, DistanceModel]:
+    """A method's spec, its parsed options and the distance model; refuses any of them by name.
 
     Raises
     ------
     InvalidInput
-        Unknown method or distance, invalid option (:class:`~core.errors.OptionError`).
+        Unknown method (of ``scope``) or distance, invalid option
+        (:class:`~core.errors.OptionError`).
     """
-    if method not in METHODS:
-        raise InvalidInput(f"unknown association method {method!r}; choose one of {list(METHODS)}")
-    parse, run = METHODS[method]
-    return run, parse(dict(options or {})), DistanceModel.of(distance)
+    spec = method_spec(method, scope)
+    return spec, spec.parse(dict(options or {})), DistanceModel.of(distance)
 
 
 def associate(
     known: Side,
     incoming: Side,
-    method: str = TRACK_TO_TRACK_DEFAULT[0],
+    method: str = TRACK_TO_TRACK_DEFAULT,
     options: Mapping[str, object] | None = None,
-    distance: str | DistanceModel = TRACK_TO_TRACK_DEFAULT[2],
+    distance: str | DistanceModel = "sum",
     known_classes: Sequence[MassFunction] | None = None,
     incoming_classes: Sequence[MassFunction] | None = None,
     *,
     solver: Solver = "lapjv",
     cluster: bool = True,
+    scope: Scope = "track_to_track",
 ) -> AssociationResult:
     """Associate known items (rows) with incoming items (columns).
 
@@ -97,7 +88,7 @@ def associate(
     known, incoming : Estimates or (states N × q, covariances N × q × q)
         For measurement-to-track use ``distance="innovation"``: known =
         (ẑ, S), incoming = (z, None); or :func:`associate_measurements`.
-    method : {"gnn", "denoeux", "hachour", "mercier", "dang_han"}
+    method : a method of ``scope`` (:data:`METHODS`)
         Default ``denoeux`` (§3.7).
     options : mapping
         The method's options, by their API names (see each method module).
@@ -111,6 +102,8 @@ def associate(
         Linear-assignment solver (lapjv is faster; scipy is the reference).
     cluster : bool
         Solve independent clusters separately (default; False for testing).
+    scope : {"track_to_track", "local"}
+        The methods allowed (:func:`associate_measurements` passes ``local``).
 
     Raises
     ------
@@ -121,7 +114,7 @@ def associate(
     """
     if solver not in SOLVERS:
         raise InvalidInput(f"solver must be one of {list(SOLVERS)}, got {solver!r}")
-    run, parsed, model = resolve_method(method, options, distance)
+    spec, parsed, model = resolve_method(method, options, distance, scope)
     known_side = _side(known, "known")
     incoming_side = _side(incoming, "incoming")
     check_classes(known_classes, incoming_classes, len(known_side), len(incoming_side))
@@ -134,14 +127,14 @@ def associate(
         solver=solver,
         cluster=cluster,
     )
-    return run(problem, parsed)
+    return spec.run(problem, parsed)
 
 
 def associate_measurements(
     predicted_measurements: ArrayLike,
     innovation_covariances: ArrayLike,
     measurements: ArrayLike,
-    method: str = LOCAL_TRACKING_DEFAULT[0],
+    method: str = LOCAL_TRACKING_DEFAULT,
     options: Mapping[str, object] | None = None,
     *,
     modified: DistanceModel | None = None,
@@ -160,4 +153,4 @@ def associate_measurements(
     model = modified if modified is not None else DistanceModel(covariance="innovation")
     if model.covariance != "innovation":
         raise InvalidInput("measurement-to-track association needs the 'innovation' covariance")
-    return associate(known, incoming, method, options, model, solver=solver)
+    return associate(known, incoming, method, options, model, solver=solver, scope="local")

@@ -26,14 +26,15 @@ score : {"belief", "betp"}
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from core.arrays import BoolArray, FloatArray, IntArray
-from core.association.options import Options, check_keys, choice
 from core.association.pairwise_evidence import EVIDENCE_OPTIONS, EvidenceOptions, score_rows
 from core.association.problem import AssociationProblem
 from core.association.result import AssociationResult, Diagnostics, ScoreMatrix, build_result
+from core.association.spec import BOTH_SCOPES, ChoiceOption, MethodSpec
 
 METHOD = "dang_han"
 
@@ -46,11 +47,9 @@ class DangHanOptions:
     score: str = "belief"
 
     @classmethod
-    def of(cls, options: Options) -> DangHanOptions:
-        check_keys(METHOD, options, (*EVIDENCE_OPTIONS, "score"))
-        score = choice(METHOD, options, "score", "belief", ("belief", "betp"))
-        shared = {k: v for k, v in options.items() if k != "score"}
-        return cls(EvidenceOptions.parse(METHOD, shared), score)
+    def of(cls, values: dict[str, Any]) -> DangHanOptions:
+        """The options from their parsed values (:data:`SPEC`)."""
+        return cls(EvidenceOptions.of(METHOD, values), values["score"])
 
 
 def best_partner(
@@ -124,4 +123,23 @@ def associate_dang_han(problem: AssociationProblem, options: DangHanOptions) -> 
         undefined=np.flatnonzero(~forward_defined).astype(np.int64),
         notes=notes,
     )
-    return build_result(METHOD, matched_known, matched_incoming, scores, diagnostics)
+    return build_result(METHOD, matched_known, matched_incoming, scores, diagnostics, pairs)
+
+
+SPEC = MethodSpec(
+    name=METHOD,
+    scopes=BOTH_SCOPES,
+    options=(
+        *EVIDENCE_OPTIONS,
+        ChoiceOption(
+            "score",
+            "belief",
+            ("belief", "betp"),
+            doc="decide by the maximum belief ([DH] eq 19) or by the pignistic probability",
+        ),
+    ),
+    build=DangHanOptions.of,
+    run=associate_dang_han,
+    distance="mean",
+    summary="Dang & Han's bidirectional evidential association ([DH] §3.4)",
+)

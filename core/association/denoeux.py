@@ -33,9 +33,9 @@ import numpy as np
 
 from core.arrays import FloatArray
 from core.association.assignment import max_gain_matching
-from core.association.options import Options, check_keys, exclusive, number
 from core.association.problem import AssociationProblem
 from core.association.result import AssociationResult, Diagnostics, ScoreMatrix, build_result
+from core.association.spec import BOTH_SCOPES, MethodSpec, NumberOption
 from core.distance import threshold_from_probability
 
 METHOD = "denoeux"
@@ -50,20 +50,6 @@ class DenoeuxOptions:
     gamma: float | None = None
     gate_probability: float | None = None
     alpha: float = 1.0
-
-    @classmethod
-    def of(cls, options: Options) -> DenoeuxOptions:
-        check_keys(METHOD, options, ("gamma", "gate_probability", "alpha"))
-        exclusive(METHOD, options, ("gamma", "gate_probability"))
-        gamma = number(METHOD, options, "gamma", None, low=0.0)
-        probability = number(
-            METHOD, options, "gate_probability", None, low=0.0, high=1.0, high_open=True
-        )
-        alpha = number(METHOD, options, "alpha", 1.0, low=0.0, high=1.0)
-        assert alpha is not None
-        if gamma is None and probability is None:
-            probability = DEFAULT_GATE_PROBABILITY
-        return cls(gamma, probability, alpha)
 
     def resolve_gamma(self, problem: AssociationProblem) -> float:
         """γ, given or from the gate probability (γ = ln 2 / T)."""
@@ -125,4 +111,27 @@ def associate_denoeux(problem: AssociationProblem, options: DenoeuxOptions) -> A
         largest_cluster=matching.largest_cluster,
         gate=gate,
     )
-    return build_result(METHOD, matching.rows, matching.cols, scores, diagnostics)
+    return build_result(METHOD, matching.rows, matching.cols, scores, diagnostics, pairs)
+
+
+SPEC = MethodSpec(
+    name=METHOD,
+    scopes=BOTH_SCOPES,
+    options=(
+        NumberOption("gamma", None, low=0.0, doc="γ of the pairwise evidence e^{−γD}"),
+        NumberOption(
+            "gate_probability",
+            DEFAULT_GATE_PROBABILITY,
+            low=0.0,
+            high=1.0,
+            high_open=True,
+            doc="γ = ln 2 / T, T = chi2.ppf(p, q) (doubled for the mean covariance)",
+        ),
+        NumberOption("alpha", 1.0, low=0.0, high=1.0, doc="reliability α of each pair's evidence"),
+    ),
+    exclusive=(("gamma", "gate_probability"),),
+    build=lambda values: DenoeuxOptions(**values),
+    run=associate_denoeux,
+    distance="sum",
+    summary="Credal association with parameter γ ([T2T] ref [7]); the track-to-track default",
+)

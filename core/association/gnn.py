@@ -24,9 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.association.assignment import max_gain_matching
-from core.association.options import Options, check_keys, exclusive, number
 from core.association.problem import AssociationProblem
 from core.association.result import AssociationResult, Diagnostics, ScoreMatrix, build_result
+from core.association.spec import BOTH_SCOPES, MethodSpec, NumberOption
 from core.distance import threshold_from_probability
 
 METHOD = "gnn"
@@ -39,18 +39,6 @@ class GnnOptions:
 
     threshold: float | None = None
     gate_probability: float | None = None
-
-    @classmethod
-    def of(cls, options: Options) -> GnnOptions:
-        check_keys(METHOD, options, ("threshold", "gate_probability"))
-        exclusive(METHOD, options, ("threshold", "gate_probability"))
-        threshold = number(METHOD, options, "threshold", None, low=0.0)
-        probability = number(
-            METHOD, options, "gate_probability", None, low=0.0, high=1.0, high_open=True
-        )
-        if threshold is None and probability is None:
-            probability = DEFAULT_GATE_PROBABILITY
-        return cls(threshold, probability)
 
     def resolve_threshold(self, problem: AssociationProblem) -> float:
         """T, from the threshold or the gate probability."""
@@ -96,4 +84,26 @@ def associate_gnn(problem: AssociationProblem, options: GnnOptions) -> Associati
         gate=threshold,
         notes=notes,
     )
-    return build_result(METHOD, matching.rows, matching.cols, scores, diagnostics)
+    return build_result(METHOD, matching.rows, matching.cols, scores, diagnostics, pairs)
+
+
+SPEC = MethodSpec(
+    name=METHOD,
+    scopes=BOTH_SCOPES,
+    options=(
+        NumberOption("threshold", None, low=0.0, doc="T, the maximum distance of a pair"),
+        NumberOption(
+            "gate_probability",
+            DEFAULT_GATE_PROBABILITY,
+            low=0.0,
+            high=1.0,
+            high_open=True,
+            doc="T = chi2.ppf(p, q), doubled for the mean covariance",
+        ),
+    ),
+    exclusive=(("threshold", "gate_probability"),),
+    build=lambda values: GnnOptions(**values),
+    run=associate_gnn,
+    distance="mean",
+    summary="Global Nearest Neighbour ([MTT] §4.2 Table 1)",
+)

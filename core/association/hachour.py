@@ -55,10 +55,10 @@ import numpy as np
 
 from core.arrays import FloatArray
 from core.association.assignment import max_gain_matching
-from core.association.options import Options, check_keys, choice, number
 from core.association.problem import AssociationProblem
 from core.association.result import AssociationResult, Diagnostics, ScoreMatrix, build_result
 from core.association.rows import RaggedRows
+from core.association.spec import BOTH_SCOPES, ChoiceOption, MethodSpec, NumberOption
 from core.belief import gbt_betp_rows
 from core.distance import CandidatePairs
 
@@ -74,24 +74,6 @@ class HachourOptions:
     likelihood: str = "density"
     maximise: str = "betp"
     plausibility_floor: float = DEFAULT_PLAUSIBILITY_FLOOR
-
-    @classmethod
-    def of(cls, options: Options) -> HachourOptions:
-        check_keys(METHOD, options, ("likelihood", "maximise", "plausibility_floor"))
-        likelihood = choice(METHOD, options, "likelihood", "density", ("density", "relative"))
-        maximise = choice(METHOD, options, "maximise", "betp", ("betp", "plausibility"))
-        floor = number(
-            METHOD,
-            options,
-            "plausibility_floor",
-            DEFAULT_PLAUSIBILITY_FLOOR,
-            low=0.0,
-            high=1.0,
-            low_open=False,
-            high_open=True,
-        )
-        assert floor is not None
-        return cls(likelihood, maximise, floor)
 
 
 def log_likelihood(pairs: CandidatePairs, likelihood: str) -> FloatArray:
@@ -195,4 +177,34 @@ def associate_hachour(problem: AssociationProblem, options: HachourOptions) -> A
         undefined=undefined,
         notes=notes,
     )
-    return build_result(METHOD, matching.rows, matching.cols, scores, diagnostics)
+    return build_result(METHOD, matching.rows, matching.cols, scores, diagnostics, pairs)
+
+
+SPEC = MethodSpec(
+    name=METHOD,
+    scopes=BOTH_SCOPES,
+    options=(
+        ChoiceOption(
+            "likelihood",
+            "density",
+            ("density", "relative"),
+            doc="G a density (Pl = min(G, 1)) or exp(−D/2) (unit-invariant)",
+        ),
+        ChoiceOption(
+            "maximise", "betp", ("betp", "plausibility"), doc="maximise Σ BetP (eq 7) or Σ Pl"
+        ),
+        NumberOption(
+            "plausibility_floor",
+            DEFAULT_PLAUSIBILITY_FLOOR,
+            low=0.0,
+            high=1.0,
+            low_open=False,
+            high_open=True,
+            doc="plausibilities below it count as 0 (bounds the distances solved)",
+        ),
+    ),
+    build=lambda values: HachourOptions(**values),
+    run=associate_hachour,
+    distance="mean",
+    summary="Parameterless credal assignment ([T2T] §3)",
+)

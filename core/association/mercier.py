@@ -27,18 +27,12 @@ from __future__ import annotations
 import numpy as np
 
 from core.association.assignment import max_gain_matching
-from core.association.options import Options, check_keys
 from core.association.pairwise_evidence import EVIDENCE_OPTIONS, EvidenceOptions, score_rows
 from core.association.problem import AssociationProblem
 from core.association.result import AssociationResult, Diagnostics, ScoreMatrix, build_result
+from core.association.spec import BOTH_SCOPES, MethodSpec
 
 METHOD = "mercier"
-
-
-def mercier_options(options: Options) -> EvidenceOptions:
-    """Validated options of :func:`associate_mercier`."""
-    check_keys(METHOD, options, EVIDENCE_OPTIONS)
-    return EvidenceOptions.parse(METHOD, options)
 
 
 def associate_mercier(problem: AssociationProblem, options: EvidenceOptions) -> AssociationResult:
@@ -75,4 +69,15 @@ def associate_mercier(problem: AssociationProblem, options: EvidenceOptions) -> 
         gate=gate,
         undefined=np.flatnonzero(~defined).astype(np.int64),
     )
-    return build_result(METHOD, matching.rows, matching.cols, scores, diagnostics)
+    return build_result(METHOD, matching.rows, matching.cols, scores, diagnostics, pairs)
+
+
+SPEC = MethodSpec(
+    name=METHOD,
+    scopes=BOTH_SCOPES,
+    options=EVIDENCE_OPTIONS,
+    build=lambda values: EvidenceOptions.of(METHOD, values),
+    run=associate_mercier,
+    distance="mean",
+    summary="Mercier's credal assignment: pairwise evidence, exact BetP, Hungarian step",
+)

@@ -45,13 +45,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from core.arrays import BoolArray, FloatArray, IntArray
-from core.association.options import Options, choice, number
 from core.association.problem import AssociationProblem
 from core.association.rows import RaggedRows
+from core.association.spec import ChoiceOption, NumberOption, OptionSpec
 from core.belief import pairwise_evidence_betp_rows
 from core.belief.gbt import leave_one_out_sums
 from core.distance import CandidatePairs, threshold_from_probability
@@ -185,7 +186,29 @@ DEFAULT_GATE_PROBABILITY = 0.999
 SCALES = ("gate", "fixed")
 """The similarity's scale (module docstring): γ = ln 2 / gate, or the fixed e^{−D/2}."""
 DEFAULT_SCALE = "gate"
-EVIDENCE_OPTIONS = ("alpha", "gate_probability", "evidence", "scale")
+EVIDENCE_OPTIONS: tuple[OptionSpec, ...] = (
+    NumberOption(
+        "alpha", DEFAULT_ALPHA, low=0.0, high=1.0, doc="reliability α of each pairwise source"
+    ),
+    NumberOption(
+        "gate_probability",
+        DEFAULT_GATE_PROBABILITY,
+        low=0.0,
+        high=1.0,
+        doc="each item's frame: its candidates with D ≤ chi2.ppf(p, q); 1 keeps every pair",
+    ),
+    ChoiceOption(
+        "evidence",
+        "fuzzy",
+        tuple(EVIDENCE_MODELS),
+        doc="pairwise evidence: fuzzy ([DH] eq 23–27) or likelihood (§3.4)",
+        pluggable=True,
+    ),
+    ChoiceOption(
+        "scale", DEFAULT_SCALE, SCALES, doc="similarity exp(−γD), γ = ln 2 / gate, or exp(−D/2)"
+    ),
+)
+"""The options of the pairwise evidence, shared by ``mercier`` and ``dang_han``."""
 
 
 @dataclass(frozen=True)
@@ -210,22 +233,14 @@ class EvidenceOptions:
     scale: str = DEFAULT_SCALE
 
     @classmethod
-    def parse(cls, method: str, options: Options) -> EvidenceOptions:
-        alpha = number(method, options, "alpha", DEFAULT_ALPHA, low=0.0, high=1.0)
-        probability = number(
-            method, options, "gate_probability", DEFAULT_GATE_PROBABILITY, low=0.0, high=1.0
-        )
-        assert alpha is not None and probability is not None
-        evidence = options.get("evidence", "fuzzy")
-        if not callable(evidence):
-            evidence = choice(method, options, "evidence", "fuzzy", tuple(EVIDENCE_MODELS))
-        scale = choice(method, options, "scale", DEFAULT_SCALE, SCALES)
-        if scale == "gate" and probability >= 1.0:
+    def of(cls, method: str, values: dict[str, Any]) -> EvidenceOptions:
+        """The options from their parsed values; ``scale`` ``gate`` needs a gate below 1."""
+        if values["scale"] == "gate" and values["gate_probability"] >= 1.0:
             raise OptionError(
                 f"{method}: option 'scale' 'gate' takes γ = ln 2 / gate from 'gate_probability', "
                 "which must then be below 1 (or use 'scale' 'fixed')"
             )
-        return cls(alpha, probability, evidence, scale)
+        return cls(values["alpha"], values["gate_probability"], values["evidence"], values["scale"])
 
     def gate(self, problem: AssociationProblem) -> float:
         """The frame's distance gate (inf for gate_probability = 1)."""

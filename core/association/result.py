@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from core.arrays import FloatArray, IntArray
+from core.distance import CandidatePairs
 
 STAR_ROW = "*:"
 """Prefix of the row ``*_t`` of [T2T] Table 1 in a labelled table: ``*:<incoming id>``."""
@@ -133,6 +134,9 @@ class AssociationResult:
         Known items matched with nothing (not observed), ascending.
     scores : ScoreMatrix
     diagnostics : Diagnostics
+    gated : CandidatePairs or None
+        The gated pairs the method decided on (their D, log|C|, and the plain D a local
+        tracker scores hits with); every run of a registered method sets it.
     """
 
     method: str
@@ -143,6 +147,7 @@ class AssociationResult:
     missed: IntArray
     scores: ScoreMatrix
     diagnostics: Diagnostics
+    gated: CandidatePairs | None = None
 
     @property
     def pairs(self) -> list[tuple[int, int, float]]:
@@ -163,8 +168,10 @@ def build_result(
     matched_incoming: IntArray,
     scores: ScoreMatrix,
     diagnostics: Diagnostics,
+    gated: CandidatePairs,
 ) -> AssociationResult:
-    """Fill in pair scores, new and missed items from a matching (sorted by known)."""
+    """Fill in pair scores, new and missed items from a matching (sorted by known); ``gated``:
+    the pairs the method decided on."""
     n_known, n_incoming = scores.shape
     order = np.argsort(matched_known, kind="stable")
     matched_known = matched_known[order].astype(np.int64)
@@ -187,4 +194,5 @@ def build_result(
         missed=np.flatnonzero(missed_mask).astype(np.int64),
         scores=scores,
         diagnostics=diagnostics,
+        gated=gated,
     )

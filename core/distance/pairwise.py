@@ -128,6 +128,9 @@ class CandidatePairs:
     log_det : ndarray, shape (P,)
         log|C| of each pair.
     n_known, n_incoming, dimension : int
+    plain : ndarray, shape (P,), or None
+        The unmodified D ([MTT] eq 15) when ``distance`` is modified or ranked otherwise
+        (a local tracker's gating, :mod:`core.tracking.gating`); None: ``distance`` is it.
     """
 
     rows: IntArray
@@ -137,9 +140,15 @@ class CandidatePairs:
     n_known: int
     n_incoming: int
     dimension: int
+    plain: FloatArray | None = None
 
     def __len__(self) -> int:
         return len(self.rows)
+
+    @property
+    def plain_distance(self) -> FloatArray:
+        """The unmodified D of each pair: the one a Gaussian likelihood ([MTT] eq 15) uses."""
+        return self.distance if self.plain is None else self.plain
 
     def select(self, keep: np.ndarray) -> CandidatePairs:
         """The pairs where ``keep`` is true (order kept)."""
@@ -151,6 +160,7 @@ class CandidatePairs:
             self.n_known,
             self.n_incoming,
             self.dimension,
+            None if self.plain is None else self.plain[keep],
         )
 
     def dense(self, fill: float = np.inf) -> FloatArray:

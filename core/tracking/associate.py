@@ -14,22 +14,23 @@ detections it used.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 from scipy.stats import chi2
 
 from core.arrays import BoolArray, FloatArray, IntArray
-from core.association.associate import METHODS
+from core.association import method_spec
+from core.association.cheap_jpda import CheapJpdaOptions
 from core.distance import ModifiedScale, steady_state_covariance
-from core.errors import TrackingError
+from core.errors import InvalidInput, TrackingError
 from core.lifecycle import ScoreModel
 from core.pipeline.gate import pair_positions
-from core.tracking.config import CHEAP_JPDA, LocalTrackerConfig
-from core.tracking.gating import ScanGating, TrackGatingProblem, gate_pairs
+from core.tracking.config import LocalTrackerConfig
+from core.tracking.gating import ScanGating, TrackGatingProblem
 from core.tracking.imm import IMMPrediction, IMMState, IMMUpdate, IMMUpdater
-from core.tracking.jpda import cheap_jpda_weights, clutter_bias, pda_update
+from core.tracking.jpda import clutter_bias, pda_update
 from core.tracking.models import ModelBank, position_indices, velocity_indices
 
 
@@ -115,29 +116,15 @@ class DetectionAssociator:
         self._h = bank.measurement.matrix
         self._noise = bank.measurement.noise_covariance
         self._q = bank.measurement.dim
-        self._method = config.association_method
-        options = dict(config.association_options)
-        if self._method == CHEAP_JPDA:
-            unknown = sorted(set(options) - {"bias", "gate_probability"})
-            if unknown:
-                raise TrackingError(f"cheap_jpda: unknown option(s) {unknown}")
-            probability = float(options.get("gate_probability", 0.999))  # type: ignore[arg-type]
-            if not 0.0 < probability < 1.0:
-                raise TrackingError("cheap_jpda: gate_probability must be in (0, 1)")
-            self._bias = float(
-                options.get(  # type: ignore[arg-type]
-                    "bias", clutter_bias(score.false_target_density, config.p_detect, probability)
-                )
-            )
-            self._jpda_gate = float(chi2.ppf(probability, self._q))
-            self._parsed_options: Any = None
-        elif self._method in METHODS:
-            self._parsed_options = METHODS[self._method][0](options)
-        else:
-            raise TrackingError(
-                f"unknown association method {self._method!r}; "
-                f"choose one of {[*METHODS, CHEAP_JPDA]}"
-            )
+        try:
+            self._spec = method_spec(config.association_method, "local")
+        except InvalidInput as error:
+            raise TrackingError(str(error)) from None
+        self._parsed_options: Any = self._spec.parse(dict(config.association_options))
+        if isinstance(self._parsed_options, CheapJpdaOptions) and self._parsed_options.bias is None:
+            probability = self._parsed_options.gate_probability
+            bias = clutter_bias(score.false_target_density, config.p_detect, probability)
+            self._parsed_options = replace(self._parsed_options, bias=bias)
         self._modified: ModifiedScale | None = None
         self._modified_sum: ModifiedScale | None = None
         if config.distance == "modified":
@@ -152,6 +139,12 @@ class DetectionAssociator:
             }
             self._modified = ModifiedScale.of(steady.innovation, **kwargs)
             self._modified_sum = ModifiedScale.of(steady.innovation - self._noise, **kwargs)
+
+    @property
+    def soft(self) -> bool:
+        """The method weighs every gated detection (``cheap_jpda``): a PDA update, no hard
+        pairs to branch on or to read a range-rate from."""
+        return self._spec.soft
 
     def associate(
         self,
@@ -170,7 +163,7 @@ class DetectionAssociator:
         assigned: each takes its closest gated detection of those left, and each other
         one makes a branch (:class:`Branches`); their detections stay free."""
         self._scan = self._score if score is None else score
-        if self._method == CHEAP_JPDA:
+        if self._spec.soft:
             return self._jpda(sub, z, own_noise)
         return self._method_and_update(sub, z, own_noise, first, branching)
 
@@ -326,15 +319,14 @@ class DetectionAssociator:
         if len(tracks) == 0 or len(detections) == 0:  # nothing to pair: no method run
             return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0)
         problem = TrackGatingProblem.of(gating, tracks, detections)
-        result = METHODS[self._method][1](problem, self._parsed_options)
+        result = self._spec.run(problem, self._parsed_options)
         rows, cols = result.pair_known, result.pair_incoming
         gain = np.zeros(0)
         if len(rows):
-            gated = problem.last["pairs"]
-            position = pair_positions(
-                gated.pairs.rows, gated.pairs.cols, len(detections), rows, cols
-            )
-            gain = self._hit_gain(gated.plain_distance[position], gated.pairs.log_det[position])
+            gated = result.gated
+            assert gated is not None  # every registered method returns its gated pairs
+            position = pair_positions(gated.rows, gated.cols, len(detections), rows, cols)
+            gain = self._hit_gain(gated.plain_distance[position], gated.log_det[position])
         return tracks[rows], detections[cols], gain
 
     def _jpda(self, sub: IMMPrediction, z: FloatArray, own_noise: FloatArray | None) -> Association:
@@ -345,31 +337,34 @@ class DetectionAssociator:
                 loc=("measurement_covariances", 0),
             )
         tracks = len(sub.means)
-        gated = gate_pairs(
-            sub, z, None, self._noise, self._jpda_gate, self.config.imm_distance, self._modified
+        gating = ScanGating(sub, z, None, self._noise, self.config.imm_distance, self._modified)
+        everything = TrackGatingProblem.of(
+            gating, np.arange(tracks, dtype=np.int64), np.arange(len(z), dtype=np.int64)
         )
-        rows, cols = gated.pairs.rows, gated.pairs.cols
-        log_g = -0.5 * (
-            gated.plain_distance + gated.pairs.log_det + self._q * math.log(2 * math.pi)
-        )
-        likelihoods = np.zeros((tracks, len(z)))
-        likelihoods[rows, cols] = np.exp(log_g)
-        weights, _ = cheap_jpda_weights(likelihoods, self._bias)
-        pair_weights = weights[rows, cols]
+        result = self._spec.run(everything, self._parsed_options)
+        gated = result.gated
+        assert gated is not None  # every registered method returns its gated pairs
+        rows, cols = gated.rows, gated.cols
+        weights = result.scores.dense()
+        pair_weights = result.scores.values
         keep = pair_weights > 0.0
         update = pda_update(self.bank, sub, z, rows[keep], cols[keep], pair_weights[keep])
         hit_gain = np.zeros(tracks)
-        best_rows = np.zeros(0, dtype=np.int64)
-        best_cols = np.zeros(0, dtype=np.int64)
         if np.any(keep):
-            # The most probable detection of each track scores it; each detection goes to its most probable track.
+            # The most probable detection of each track scores it.
             best_col = np.argmax(weights, axis=1)
             has = weights.max(axis=1) > 0.0
             chosen = np.flatnonzero(has)
             position = pair_positions(rows, cols, len(z), chosen, best_col[chosen])
             hit_gain[chosen] = self._hit_gain(
-                gated.plain_distance[position], gated.pairs.log_det[position]
+                gated.plain_distance[position], gated.log_det[position]
             )
-            best_cols = np.flatnonzero(weights.max(axis=0) > 0.0)
-            best_rows = np.argmax(weights[:, best_cols], axis=0).astype(np.int64)
-        return Association(update, best_rows, best_cols, hit_gain, np.unique(cols))
+        # each detection goes to its most probable track, in detection order
+        by_detection = np.argsort(result.pair_incoming, kind="stable")
+        return Association(
+            update,
+            result.pair_known[by_detection],
+            result.pair_incoming[by_detection],
+            hit_gain,
+            np.unique(cols),
+        )

@@ -115,9 +115,6 @@ DEFAULT_IMM_DISTANCE: ImmDistance = "gated_combined"
 DISTANCE_KINDS: tuple[DistanceKind, ...] = ("plain", "modified")
 INITIATIONS: tuple[Initiation, ...] = ("two_point", "single_point")
 
-CHEAP_JPDA = "cheap_jpda"
-"""The name of the cheap JPDA baseline ([DH] §2) among the association methods."""
-
 
 @dataclass(frozen=True)
 class ClassificationOptions:
@@ -220,12 +217,12 @@ class LocalTrackerConfig:
         classification: behaviours belong to the preset's models).
     measurement_noise : R (q × q) replacing the bank's; detections may also
         carry their own covariance in :meth:`LocalTracker.step`.
-    association_method : ``gnn`` (default), ``denoeux``, ``hachour``,
-        ``mercier``, ``dang_han`` or ``cheap_jpda``.
-    association_options : the method's options; ``cheap_jpda`` takes
-        ``bias`` (B of [DH] eq 16; default the PDA's clutter term from the life
-        cycle's ``false_target_density``, :func:`core.tracking.jpda.clutter_bias`)
-        and ``gate_probability``.
+    association_method : a method of the registry's ``local`` scope
+        (``core.association.methods("local")``): ``gnn`` (default), ``denoeux``,
+        ``hachour``, ``mercier``, ``dang_han``, ``cheap_jpda``, ``jpda``.
+    association_options : the method's options (its spec's); ``cheap_jpda``'s
+        ``bias`` (B of [DH] eq 16) defaults to the PDA's clutter term from the life
+        cycle's ``false_target_density`` (:func:`core.tracking.jpda.clutter_bias`).
     imm_distance, distance : see the module Readings.
     modified_beta, modified_k, modified_alpha : β, k, α of the modified distance.
     p_detect : P_D of the system's sensors (the track score), unless ``sensor_physics`` says.

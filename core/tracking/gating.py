@@ -50,16 +50,19 @@ class GatedPairs:
     pairs : CandidatePairs
         Rows are tracks, columns detections; ``distance`` is the distance the
         association decides on (modified when configured), ``log_det`` is
-        log|C| of the chosen model.
-    plain_distance : ndarray, shape (P,)
-        The unmodified D of each pair ([MTT] eq 15), for the track score.
+        log|C| of the chosen model, ``plain`` the unmodified D of each pair
+        ([MTT] eq 15), for the track score.
     models : ndarray of int64, shape (P,)
         The model of each pair (−1 with the ``combined`` distance).
     """
 
     pairs: CandidatePairs
-    plain_distance: FloatArray
     models: IntArray
+
+    @property
+    def plain_distance(self) -> FloatArray:
+        """The unmodified D of each pair ([MTT] eq 15)."""
+        return self.pairs.plain_distance
 
     def restricted(self, tracks: IntArray, detections: IntArray) -> GatedPairs:
         """The pairs of ``tracks`` × ``detections`` (ascending indices), renumbered by their
@@ -82,8 +85,9 @@ class GatedPairs:
             len(tracks),
             len(detections),
             pairs.dimension,
+            self.plain_distance[keep],
         )
-        return GatedPairs(reduced, self.plain_distance[keep], self.models[keep])
+        return GatedPairs(reduced, self.models[keep])
 
 
 def gate_pairs(
@@ -155,13 +159,14 @@ def gate_pairs(
             tracks,
             len(measurements),
             q,
+            plain[keep],
         )
-        return GatedPairs(reduced, plain[keep], chosen_models)
+        return GatedPairs(reduced, chosen_models)
     chosen = np.zeros(len(rows), dtype=np.int64) if per_row > 1 else np.full(len(rows), -1)
     reduced = CandidatePairs(
-        rows // per_row, cols, found.distance, found.log_det, tracks, len(measurements), q
+        rows // per_row, cols, found.distance, found.log_det, tracks, len(measurements), q, plain
     )
-    return GatedPairs(reduced, plain, chosen.astype(np.int64))
+    return GatedPairs(reduced, chosen.astype(np.int64))
 
 
 RANK_CAP = 1.0 - 1e-6
@@ -241,14 +246,13 @@ class TrackGatingProblem(AssociationProblem):
     """An association problem of some ``tracks`` × ``detections`` of a :class:`ScanGating`.
 
     ``known`` holds the model-combined ẑ, S of each of the tracks (for the methods
-    that only need sizes); :meth:`pairs` reads the scan's gating and remembers its
-    last answer in :attr:`last`.
+    that only need sizes); :meth:`pairs` reads the scan's gating (its pairs carry
+    the plain D the track score uses; a method's result returns the pairs it used).
     """
 
     gating: ScanGating | None = None
     tracks: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     detections: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    last: dict[str, GatedPairs] = field(default_factory=dict)
 
     @classmethod
     def of(cls, gating: ScanGating, tracks: IntArray, detections: IntArray) -> TrackGatingProblem:
@@ -271,9 +275,7 @@ class TrackGatingProblem(AssociationProblem):
     def pairs(self, gate: float) -> CandidatePairs:
         """Candidate pairs with D ≤ gate (closest model or combined)."""
         assert self.gating is not None
-        found = self.gating.pairs(gate, self.tracks, self.detections)
-        self.last["pairs"] = found
-        return found.pairs
+        return self.gating.pairs(gate, self.tracks, self.detections).pairs
 
     def smallest_log_det(self) -> float:
         """A lower bound of log|C| over every model row."""

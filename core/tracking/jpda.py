@@ -5,7 +5,8 @@ Soft association weights ([DH] eq 16)::
     β_tj = G_tj / (S_t + S_j − G_tj + B),   S_t = Σ_j G_tj,   S_j = Σ_t G_tj,
 
 with G_tj the Gaussian likelihood of detection j for track t inside the gate
-(0 outside) and B the bias (clutter density term, option ``bias``, ≥ 0).
+(0 outside) and B the bias (clutter density term, option ``bias``, ≥ 0); the weights
+and the method's spec are :mod:`core.association.cheap_jpda`'s.
 The probability that none of the detections is the track's is
 ``β_t0 = 1 − Σ_j β_tj`` (clipped at 0).
 
@@ -58,36 +59,6 @@ def clutter_bias(clutter_density: float, p_detect: float, gate_probability: floa
     if not (math.isfinite(clutter_density) and clutter_density > 0.0):
         raise TrackingError(f"clutter_density must be positive, got {clutter_density!r}")
     return clutter_density * (1.0 - p_detect * gate_probability) / p_detect
-
-
-def cheap_jpda_weights(likelihoods: FloatArray, bias: float) -> tuple[FloatArray, FloatArray]:
-    """Fitzgerald's weights ``β_tj`` and ``β_t0`` ([DH] eq 16; module docstring).
-
-    Parameters
-    ----------
-    likelihoods : ndarray, shape (T, m)
-        G_tj ≥ 0 (0 outside the gate).
-    bias : float
-        B ≥ 0.
-
-    Returns
-    -------
-    weights : ndarray, shape (T, m)
-    missed : ndarray, shape (T,)
-        β_t0 = max(0, 1 − Σ_j β_tj).
-    """
-    g = np.asarray(likelihoods, dtype=np.float64)
-    if g.ndim != 2 or np.any(~np.isfinite(g)) or np.any(g < 0.0):
-        raise TrackingError("cheap JPDA likelihoods must be a finite non-negative (T, m) matrix")
-    if not (math.isfinite(bias) and bias >= 0.0):
-        raise TrackingError(f"cheap JPDA bias must be >= 0, got {bias!r}")
-    per_track = g.sum(axis=1, keepdims=True)
-    per_detection = g.sum(axis=0, keepdims=True)
-    denominator = per_track + per_detection - g + bias
-    positive = g > 0.0
-    weights = np.where(positive, g / np.where(positive, denominator, 1.0), 0.0)
-    missed = np.clip(1.0 - weights.sum(axis=1), 0.0, 1.0)
-    return np.asarray(weights, dtype=np.float64), np.asarray(missed, dtype=np.float64)
 
 
 def pda_update(

@@ -98,7 +98,7 @@ from core.pipeline.predict import predict_bank, without_inputs
 from core.pipeline.rows import TrackRows
 from core.tracking.associate import Association, DetectionAssociator
 from core.tracking.clutter import ClutterEstimate, prior_gate
-from core.tracking.config import CHEAP_JPDA, LocalTrackerConfig
+from core.tracking.config import LocalTrackerConfig
 from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState
 from core.tracking.initiator import pair_seeds, single_point_initiation, two_point_initiation
 from core.tracking.presets import VELOCITY, TrackingPreset, VelocityConvention
@@ -204,9 +204,7 @@ class LocalTracker:
                 accumulation=chosen.accumulation,
             )
         # single-point starts branch on their second scan (docs/algorithms.md §8.3)
-        self._branching = config.initiation == "single_point" and (
-            config.association_method != CHEAP_JPDA
-        )
+        self._branching = config.initiation == "single_point" and (not self._associator.soft)
         self._coverage = config.coverage
         self._views = dict(config.fields_of_view)
         # The state: one row per live track.
@@ -597,8 +595,8 @@ class LocalTracker:
             return None
         if self.config.range_rate_of(sensor) is None:
             raise TrackingError("range_rates need a tracker configured with a range_rate model")
-        if self.config.association_method == CHEAP_JPDA:
-            raise TrackingError("cheap_jpda takes no range-rates")
+        if self._associator.soft:
+            raise TrackingError(f"{self.config.association_method} takes no range-rates")
         doppler = np.asarray(range_rates, dtype=np.float64).reshape(-1)
         if doppler.shape != (count,) or np.any(np.isinf(doppler)):
             raise TrackingError(f"range_rates must be {count} finite numbers (NaN: none)")

@@ -1,8 +1,9 @@
 """The wire's enums and defaults are the core's: a value added on one side fails here first.
 
 Each ``Literal`` of ``api_schemas`` that names a core concept is compared with
-the core's own list (its enum or its method table), and the defaults the wire
-fills in are compared with the core's defaults. ``openapi.json`` lists
+the core's own list (its enum). The association methods and their options are
+not here: the wire generates them from the core's registry (one source,
+``api_schemas.association``). ``openapi.json`` lists
 ``reason`` as an enum, from the same ``Literal``.
 """
 
@@ -14,12 +15,7 @@ from typing import Annotated, Any, get_args, get_origin
 
 import pytest
 
-from api_schemas.association import (
-    METHOD_DEFAULTS,
-    AssociationMethod,
-    ImmDistanceKind,
-    LocalAssociationMethod,
-)
+from api_schemas.association import ImmDistanceKind
 from api_schemas.config import (
     MeasurementModel,
     MotionModel,
@@ -39,16 +35,13 @@ from api_schemas.results import (
     TrackStatus,
 )
 from app.inputs.detections import core_detection_report
-from core.association import DEFAULT_DISTANCE, LOCAL_TRACKING_DEFAULT, TRACK_TO_TRACK_DEFAULT
-from core.association.associate import METHODS
-from core.association.denoeux import DEFAULT_GATE_PROBABILITY
 from core.belief.decision import DecisionState as CoreDecisionState
 from core.fusion.classes import ClassState
 from core.fusion.motion import MotionKind
 from core.fusion.state import StateFusion
 from core.lifecycle import StatusReason as CoreStatusReason
 from core.lifecycle import TrackStatus as CoreTrackStatus
-from core.tracking.config import CHEAP_JPDA, IMM_DISTANCES, INITIATIONS, LocalTrackerConfig
+from core.tracking.config import IMM_DISTANCES, INITIATIONS, LocalTrackerConfig
 from core.tracking.presets import PRESETS
 
 OPENAPI = Path(__file__).resolve().parents[2] / "openapi.json"
@@ -73,27 +66,12 @@ def test_classification_state_and_state_fusion_are_the_cores() -> None:
     assert values(StateFusionMethod) == {rule.value for rule in StateFusion}
 
 
-def test_association_methods_are_the_cores() -> None:
-    assert values(AssociationMethod) == set(METHODS)
-
-
-def test_wire_defaults_are_the_cores() -> None:
-    for method, distance in DEFAULT_DISTANCE.items():
-        assert METHOD_DEFAULTS[method]["distance"] == distance, method
-    method, options, _ = TRACK_TO_TRACK_DEFAULT
-    assert {key: METHOD_DEFAULTS[method][key] for key in options} == options
-    local_method, local_options, _ = LOCAL_TRACKING_DEFAULT
-    assert {key: METHOD_DEFAULTS[local_method][key] for key in local_options} == local_options
-    assert METHOD_DEFAULTS["denoeux"]["gate_probability"] == DEFAULT_GATE_PROBABILITY
-
-
 def test_decision_state_and_motion_models_are_the_cores() -> None:
     assert values(DecisionState) == {state.value for state in CoreDecisionState}
     assert field_values(MotionModel, "model") == {kind.value for kind in MotionKind}
 
 
 def test_local_tracking_vocabulary_is_the_cores() -> None:
-    assert values(LocalAssociationMethod) == {*METHODS, CHEAP_JPDA}
     assert values(ImmDistanceKind) == set(IMM_DISTANCES)
     assert values(TrackingPreset) == set(PRESETS)
     initiations = field_values(TwoPointInitiation, "kind") | field_values(

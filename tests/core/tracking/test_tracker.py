@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2, multivariate_normal, norm
 
+from core.association.cheap_jpda import dense_weights as cheap_jpda_weights
 from core.distance.modified import scale_factor
 from core.errors import TrackingError
 from core.lifecycle import LifeCycleConfig
@@ -22,7 +23,7 @@ from core.simulation.scenario import Scenario
 from core.tracking import IMMPredictor, IMMUpdater, ModelBank, two_point_initiation
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.imm import IMMState
-from core.tracking.jpda import cheap_jpda_weights, clutter_bias, pda_update
+from core.tracking.jpda import clutter_bias, pda_update
 from core.tracking.models import LinearMeasurementModel, constant_velocity
 from core.tracking.tracker import LocalTracker
 from evaluation.tracking import life_cycle
