@@ -453,7 +453,10 @@ class SessionEngine:
         distance, log_det = position_distances(
             states, covariances, incoming.states[cols], incoming.covariances[cols], self._position
         )
-        score = self.config.management.score_model(sensor.p_detect)
+        tracker = self.local_trackers.get(sensor.id)
+        # a sensor's local tracker scans as its first (only) sensor
+        own = None if tracker is None else tracker.clutter_density(tracker.config.sensors[0])
+        score = self.config.management.report_score(sensor.p_detect, own)
         return score.hit_increment(distance, log_det, len(self._position))
 
     def _record(
