@@ -360,6 +360,23 @@ class LifeCycleConfig:
         """The SPRT score of a sensor with detection probability ``p_detect`` (built once)."""
         return _score_model(self, p_detect)
 
+    def report_score(self, p_detect: float, source_clutter: float | None) -> ScoreModel:
+        """The fused layer's SPRT score of a source's track report (docs/algorithms.md §8.1).
+
+        β_FT is the layer's (set for its dimension), or the density of false tracks of the
+        source, ``source_clutter``, where that is smaller: a local tracker's track is a
+        detection of its sensor that passed the sensor's SPRT, so its false tracks are at
+        most as dense as the sensor's false detections (β_FT of its scans, given or
+        estimated). Without it, one false track per km³ (the layer's default in 3-D) makes
+        a true track's hit lower the score wherever the report and the fused prediction are
+        a few hundred metres uncertain (a 3-D radar at 50–100 km, a 12 s revisit), and three
+        such hits delete a fused track that every source holds.
+        """
+        score = self.score_model(p_detect)
+        if source_clutter is None or not source_clutter < score.false_target_density:
+            return score
+        return dataclasses.replace(score, false_target_density=source_clutter)
+
     def scan_score(self, p_detect: float, clutter_density: float) -> ScoreModel:
         """The SPRT score of one scan of a sensor with its own P_D and β_FT (given or
         estimated); β_NT is the configured one, or that β_FT when unset."""

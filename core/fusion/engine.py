@@ -453,7 +453,10 @@ class SessionEngine:
         distance, log_det = position_distances(
             states, covariances, incoming.states[cols], incoming.covariances[cols], self._position
         )
-        score = self.config.management.score_model(sensor.p_detect)
+        tracker = self.local_trackers.get(sensor.id)
+        # a sensor's local tracker scans as its first (only) sensor
+        own = None if tracker is None else tracker.clutter_density(tracker.config.sensors[0])
+        score = self.config.management.report_score(sensor.p_detect, own)
         return score.hit_increment(distance, log_det, len(self._position))
 
     def _record(
@@ -588,17 +591,20 @@ class SessionEngine:
         """Where ``sensor``'s silence about the tracks ``rows`` is a miss (§8.2).
 
         Only when no other source keeps the track up to date, and only if ``sensor``
-        has carried the track: a source that never reported a target — a cooperative
-        source's unequipped aircraft, a radar that has not picked it up — says
-        nothing about it. Once every source of the track has left it for
-        :data:`STALE_REVISITS` of its revisits (a source that stopped reporting at
-        all), any sensor's silence counts again, so that the track still ends.
+        carries the track — it updated it within :data:`STALE_REVISITS` of its revisit:
+        a source that never reported a target — a cooperative source's unequipped
+        aircraft, a radar that has not picked it up — says nothing about it, nor does
+        one that left it long ago (a radar whose horizon the aircraft went below).
+        Once every source of the track has left it for :data:`STALE_REVISITS` of its
+        revisits (a source that stopped reporting at all), any sensor's silence
+        counts again, so that the track still ends.
         """
         slot = self._table.slot(sensor)
         current = self._current(rows)
         others = np.delete(current, slot, axis=1).any(axis=1)
-        stale = ~self._current(rows, STALE_REVISITS).any(axis=1)
-        carried = self._table.present[rows, slot]
+        recent = self._current(rows, STALE_REVISITS)
+        stale = ~recent.any(axis=1)
+        carried = recent[:, slot]
         return np.asarray((carried | stale) & ~others, dtype=bool)
 
     def _status_by_sources(self, before: LifeState, after: LifeState, rows: IntArray) -> LifeState:

@@ -132,3 +132,20 @@ def test_the_default_ceiling_restarts_the_test_of_established_tracks_only() -> N
     assert confirmed.tolist() == [False, True, False]
     with pytest.raises(InvalidInput):
         LifeCycleConfig(score_ceiling=-7.0)  # under the delete threshold −6.9068
+
+
+def test_a_local_tracks_report_is_scored_against_its_sensors_false_detections() -> None:
+    """docs/algorithms.md §8.1: the fused layer's β_FT for a report is its own (one per km³
+    in 3-D), or the source sensor's β_FT where that is smaller."""
+    layer = LifeCycleConfig().for_dimension(3)
+    # a 3-D radar's local track 12 s after its last report: √|S| = 400³ m³, D = 3
+    distance, log_det = np.array([3.0]), np.array([6.0 * math.log(400.0)])
+    by_hand = {
+        density: math.log(0.9 / ((2.0 * math.pi) ** 1.5 * density * 400.0**3)) - 1.5
+        for density in (1e-9, 8.5e-15)
+    }
+    assert by_hand[1e-9] < 0.0 < by_hand[8.5e-15]  # the layer's own density: a true hit lowers L
+    for source, expected in ((None, 1e-9), (1e-6, 1e-9), (8.5e-15, 8.5e-15)):
+        score = layer.report_score(0.9, source)
+        assert score.false_target_density == expected
+        assert score.hit_increment(distance, log_det, 3)[0] == pytest.approx(by_hand[expected])

@@ -13,7 +13,7 @@ from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, StaleReport
 from core.fusion.classes import fuse_sensor_classes
 from core.fusion.config import FusionConfig, SensorSpec
-from core.fusion.engine import SessionEngine
+from core.fusion.engine import STALE_REVISITS, SessionEngine
 from core.fusion.motion import MotionModel, StateLayout
 from core.fusion.reports import ReportedTrack, TrackReport
 from core.geometry import PolygonView, Sector
@@ -187,6 +187,31 @@ def test_a_source_says_nothing_about_what_it_never_carried() -> None:
     # between radar scans the radar-only track's score never moves: three ADS-B lists say nothing
     assert len(scores) == 60
     assert all(scores[k] == scores[k - 1] for k in range(1, 60) if k % 4)
+
+
+def test_a_source_that_left_a_track_long_ago_says_nothing_about_it() -> None:
+    """§8.2: a radar that lost an aircraft (below its horizon) and still scans says nothing
+    about it once it has not updated the track for STALE_REVISITS of its revisit; two
+    ordinary misses of the source that holds it (ADS-B, every 2 s) then leave the track
+    with its id. Control: while the radar left it only recently, its silence counts."""
+
+    def run(lost_at: float) -> tuple[set[str], float]:
+        engine = SessionEngine(make_config(["radar", "adsb"]))
+        for step in range(40):
+            t = 2.0 * step
+            seen = t < lost_at
+            engine.apply(report("radar", t, *([("r1", moving(0.0, t))] if seen else [])))
+            held = not 60.0 <= t <= 62.0  # ADS-B misses the lists at 60.5 and 62.5
+            engine.apply(report("adsb", t + 0.5, *([("a1", moving(0.0, t + 0.5))] if held else [])))
+        return {track.id for track in engine.tracks}, engine.revisits["radar"]
+
+    ids, revisit = run(lost_at=20.0)  # the radar's last update at 18 s, 42 s before the misses
+    assert (60.5 - 18.0) / revisit > STALE_REVISITS
+    assert ids == {"F1"}
+    # control: the radar's last update at 54 s; at 64 s (5 revisits later) its silence is a
+    # third miss in a row (ADS-B at 60.5 and 62.5: ln 0.1 × 3 ≤ the delete threshold)
+    ids, _ = run(lost_at=56.0)
+    assert ids != {"F1"}
 
 
 def blind_zone_engine() -> SessionEngine:
