@@ -75,14 +75,28 @@ OFFLOAD_BYTES = 32 * 1024
 """Bodies larger than this are parsed and validated in a worker thread, not on the event loop."""
 
 
-def _validated(model: type[BaseModel], body: bytes) -> BaseModel:
-    """``body`` parsed and validated as ``model``; a :class:`RequestValidationError` if it is not."""
+Precheck = Callable[[Request, Any], None]
+"""A route's check of a large body's parsed document before it is validated (it raises to
+refuse): a refusal that needs only a count costs the parse, not the validation (the
+validation of a 2 000-track list is 20-130 ms of CPU, its parse 10 ms)."""
+PRECHECKS: dict[Callable[..., Any], Precheck] = {}
+"""Route endpoint → its :data:`Precheck` (:class:`WireRoute` applies it)."""
+
+
+def _parsed(body: bytes) -> Any:
+    """``body`` parsed as JSON; a :class:`RequestValidationError` if it is not JSON."""
     try:
-        document = parse_json(body.decode("utf-8"))
+        return parse_json(body.decode("utf-8"))
     except UnicodeDecodeError as error:
         raise json_error(f"body is not UTF-8 ({error.reason})", error.start) from None
     except json.JSONDecodeError as error:
         raise json_error(error.msg, error.pos) from None
+
+
+def _validated(model: type[BaseModel], body: bytes | Any, parsed: bool = False) -> BaseModel:
+    """``body`` parsed (unless ``parsed``: then it is the document) and validated as ``model``;
+    a :class:`RequestValidationError` if it is not."""
+    document = body if parsed else _parsed(body)
     try:
         return model.model_validate(document)
     except ValidationError as error:
@@ -126,6 +140,7 @@ class WireRoute(APIRoute):
     def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:
         handler = super().get_route_handler()
         model = body_model(self.endpoint)
+        precheck = PRECHECKS.get(self.endpoint)
         if model is not None:
             # an included route runs with its own dependant (fastapi 0.165, pinned)
             included = _effective_route_context_var.get()
@@ -139,7 +154,13 @@ class WireRoute(APIRoute):
                 body = await wire.body()
                 if len(body) > OFFLOAD_BYTES:
                     with collection_paused():
-                        validate = functools.partial(_validated, model, body)
+                        if precheck is None:
+                            validate = functools.partial(_validated, model, body)
+                        else:
+                            document = await anyio.to_thread.run_sync(_parsed, body)
+                            precheck(wire, document)
+                            validate = functools.partial(_validated, model, document, True)
+                            del document
                         wire._json = await anyio.to_thread.run_sync(validate)
                         del body, validate
                         response = await handler(wire)

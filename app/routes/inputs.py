@@ -4,6 +4,7 @@ the application: the routes iterate the registry, as the WebSocket, the log and 
 
 from __future__ import annotations
 
+import functools
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Header, Query, Request
@@ -13,8 +14,9 @@ from api_schemas.examples import json_body_examples
 from api_schemas.ws import IDEMPOTENCY_KEY_MAX, IDEMPOTENCY_KEY_PATTERN
 from app.http.deps import LiveSessionDep, RegistryDep
 from app.http.errors import problem_responses
-from app.http.requests import WireRoute
+from app.http.requests import PRECHECKS, WireRoute
 from app.http.responses import JSONTextResponse
+from app.http.security import hash_token
 from app.inputs import DECODED_KINDS, INPUT_KINDS, DecodedKind, Input, InputKind
 from app.routes.fusion import OutputFormat, OutputFrame, output_of, output_responses
 from app.sessions.live import IDEMPOTENCY_KEYS
@@ -42,6 +44,30 @@ IdempotencyKey = Annotated[
 ]
 
 
+TRUE_WORDS = frozenset({"1", "true", "yes", "on"})
+"""What FastAPI reads as a true boolean query parameter (case aside)."""
+
+
+def _work_precheck(tag: str, request: Request, document: Any) -> None:
+    """A large body's work checked on its parsed document, before it is validated: its items
+    counted against ``max_input_work`` (and ``max_explain_cells``) as the pipeline will
+    (:meth:`~app.sessions.pipeline.InputPipeline.check_work`, the same refusal). Only for the
+    session that the request's own token opens, held in memory; anything else is left to the
+    route (its authentication, its validation)."""
+    registry = request.app.state.registry
+    scheme, _, token = request.headers.get("authorization", "").partition(" ")
+    if scheme.lower() != "bearer" or not token.strip():
+        return
+    session = registry.session_of_token(hash_token(token.strip()))
+    if session is None or session.id != request.path_params.get("sid") or session.closed:
+        return
+    items = document.get(tag) if isinstance(document, dict) else None
+    sensor = document.get("sensor") if isinstance(document, dict) else None
+    if isinstance(items, list) and isinstance(sensor, str):
+        explain = request.query_params.get("explain", "").lower() in TRUE_WORDS
+        registry.pipeline.check_work(session, sensor, len(items), tag, explain=explain)
+
+
 def _submit_route(router: APIRouter, kind: InputKind[Any]) -> None:
     """``POST /v1/sessions/{sid}/{tag}`` for the input kind ``kind`` (its report as the body)."""
 
@@ -64,6 +90,7 @@ def _submit_route(router: APIRouter, kind: InputKind[Any]) -> None:
     submit.__annotations__["report"] = kind.report_model
     submit.__name__ = submit.__qualname__ = f"submit_{kind.tag}"
     submit.__doc__ = kind.description
+    PRECHECKS[submit] = functools.partial(_work_precheck, kind.tag)
     router.add_api_route(
         f"/{{sid}}/{kind.tag}",
         submit,

@@ -156,7 +156,9 @@ class InputPipeline:
         """:meth:`submit` once admitted."""
         items = submitted.items
         await compute(items, functools.partial(submitted.check, session.config))
-        work = self.check_work(session, submitted, items, explain=explain)
+        work = self.check_work(
+            session, submitted.sensor, items, submitted.kind.tag, explain=explain
+        )
         await self.registry.quotas.charge(session.record.tenant, work)
         once = None
         if idempotency_key is not None:
@@ -169,16 +171,17 @@ class InputPipeline:
         )
 
     def check_work(
-        self, session: LiveSession, submitted: Input, items: int, *, explain: bool
+        self, session: LiveSession, sensor: str, items: int, tag: str, *, explain: bool
     ) -> int:
-        """The input's work units (:func:`~app.cluster.quotas.input_work`), refused (422) beyond
-        ``max_input_work``, or beyond ``max_explain_cells`` for the matrix ``explain`` adds:
-        before any work."""
+        """The work units (:func:`~app.cluster.quotas.input_work`) of ``items`` items of kind
+        ``tag`` from ``sensor``, refused (422) beyond ``max_input_work``, or beyond
+        ``max_explain_cells`` for the matrix ``explain`` adds: before any work (for a large
+        REST body, before it is even validated: :mod:`app.routes.inputs`)."""
         known = len(session.tracks)
-        tracker = None if session.engine is None else session.engine.tracker_of(submitted.sensor)
+        tracker = None if session.engine is None else session.engine.tracker_of(sensor)
         known += 0 if tracker is None else tracker.n_tracks  # a detecting sensor's own tracks
         settings = self.registry.settings
-        where = (submitted.kind.tag,)  # the list of items is named as the kind (tracks, detections)
+        where = (tag,)  # the list of items is named as the kind (tracks, detections)
         work = input_work(items, known)
         if work > settings.max_input_work:
             raise LimitExceeded(

@@ -121,6 +121,11 @@ class SessionRegistry:
         self._tokens[session.record.token_hash] = session.id
         return session
 
+    def session_of_token(self, token_hash: str) -> LiveSession | None:
+        """The live session held in memory whose token hashes to ``token_hash``, if any."""
+        session_id = self._tokens.get(token_hash)
+        return None if session_id is None else self._sessions.get(session_id)
+
     def tenant_of_token(self, token_hash: str) -> str | None:
         """The tenant of the live session (held in memory) whose token hashes to ``token_hash``."""
         session_id = self._tokens.get(token_hash)
