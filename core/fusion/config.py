@@ -136,6 +136,9 @@ class FusionConfig:
                 tracker = LocalTrackerConfig.central(central, id_prefix=f"{self.central_source}:")
             except TrackingError as error:
                 raise InvalidInput(str(error), loc=("sensors",)) from None
+            # the session's surveillance region: a target between two sensors' views (and
+            # inside it) is in a blind zone, a phantom that hands over, not out of range (§8.9)
+            tracker = dataclasses.replace(tracker, region=self.region)
             object.__setattr__(self, "central_tracker", tracker)
         distance = self.distance or DEFAULT_DISTANCE.get(self.association_method, "sum")
         # a bad method, option or distance fails here, not at the first step that runs it
