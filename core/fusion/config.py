@@ -24,7 +24,8 @@ from core.lifecycle import LifeCycleConfig
 from core.tracking.config import LocalTrackerConfig
 
 CENTRAL_MIN_SENSORS = 2
-"""Detecting sensors (not flagged ``local_tracker``) from which a session tracks centrally."""
+"""Detecting sensors (not flagged ``local_tracker``) from which a session tracks centrally
+(a single detecting sensor keeps its own tracker: there is nothing to fuse centrally)."""
 CENTRAL_SOURCE = "central"
 """The fused layer's source id of the central tracker (:attr:`FusionConfig.central_source`)."""
 CENTRAL_P_DETECT = 1.0 - 1e-9
@@ -46,9 +47,9 @@ class SensorSpec:
         configuration (the session tracks them, docs/algorithms.md §4, §8.9); None for a
         sensor that sends track lists.
     local_tracker : a detecting sensor tracked on its own (its local tracker, then
-        track-to-track fusion; the default for now, docs/algorithms.md §8.9); False: its
-        detections go to the central tracker (:attr:`FusionConfig.central_tracker`) with
-        the other sensors' so flagged.
+        track-to-track fusion, docs/algorithms.md §8.9); False (default): its detections go
+        to the central tracker (:attr:`FusionConfig.central_tracker`) with the other
+        detecting sensors' not flagged, when there are two or more.
     """
 
     id: str
@@ -56,7 +57,7 @@ class SensorSpec:
     p_detect: float = 0.9
     fov: FieldOfView | None = None
     tracker: LocalTrackerConfig | None = None
-    local_tracker: bool = True
+    local_tracker: bool = False
 
     def __post_init__(self) -> None:
         if not self.id:

@@ -569,7 +569,9 @@ class SessionEngine:
         report on; an engine restored from an export without revisits learns each one
         again at that source's next report)."""
         last = self.last_report.get(sensor)
-        if last is not None:
+        # the central source reports every track it keeps at every step, however its sensors'
+        # scans interleave: no revisit, it is current on the tracks of its latest report (§8.9)
+        if last is not None and not self._is_central(sensor):
             self.revisits[sensor] = t - last
 
     def _current(self, rows: IntArray, revisits: float = OVERDUE_REVISITS) -> BoolArray:
