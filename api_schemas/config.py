@@ -309,12 +309,14 @@ class SensorConfig(WireModel):
         ),
     )
     local_tracker: bool = Field(
-        default=True,
+        default=False,
         description=(
-            "a detecting sensor tracked on its own: its local tracker, then track-to-track "
-            "fusion (default true for now); false: with two or more detecting sensors so "
-            "flagged, the session tracks all their detections together in one central "
-            "tracker, in time order (docs/algorithms.md §8.9)"
+            "true: a detecting sensor tracked on its own (its local tracker, then credal "
+            "track-to-track fusion of its confirmed tracks); false (default): with two or "
+            "more detecting sensors not flagged, the session tracks all their detections "
+            "together in one central tracker, in time order, a report up to 5 s late put "
+            "in its place (docs/algorithms.md §8.9); a session's only detecting sensor has "
+            "its own tracker either way"
         ),
     )
 

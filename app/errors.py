@@ -19,6 +19,7 @@ from api_schemas.issues import FieldIssue
 from api_schemas.limits import LIMIT_EXCEEDED
 from api_schemas.problem import FieldError
 from core.errors import StaleReport as CoreStaleReport
+from core.errors import stale_message
 
 MAX_LISTED_ERRORS = 50
 """Default of ``max_listed_errors``: a 422 lists at most this many errors (``error_count`` has all)."""
@@ -94,9 +95,13 @@ class StaleReport(Conflict):
     slug = "stale-report"
     title = "Stale report"
 
-    def __init__(self, sensor: str, time: float, last_time: float) -> None:
+    def __init__(
+        self, sensor: str, time: float, last_time: float, window: float | None = None
+    ) -> None:
         super().__init__(
-            f"report of sensor {sensor!r} at time {time!r} is not newer than its last accepted report at time {last_time!r}",
+            f"report of sensor {sensor!r} at time {time!r} is not newer than its last accepted report at time {last_time!r}"
+            if window is None
+            else stale_message(sensor, time, last_time, window),
             sensor=sensor,
             time=time,
             last_time=last_time,

@@ -7,20 +7,26 @@ each scanning once a second, 1/3 s after the previous one (staggered report time
 σ 1 / 2 / 1.5 m, P_D 0.9 / 0.7 / 0.8, each with Poisson clutter uniform over its
 coverage (the scene's clutter density). ``full``: every sensor covers the whole
 square; ``sectors``: the first covers the left two thirds, the third the right two
-thirds, the second all (the middle third is seen by all three).
+thirds, the second all (the middle third is seen by all three). ``3d``: the same in
+3-D (a CV model on each axis, targets in a box of the square's side and half its
+height), seen by three polar radars at different sites 4-5 km away (range, azimuth,
+elevation; σ_range 2 / 4 / 3 m and σ_angle 0.04° / 0.08° / 0.06°, about 3 / 6 / 5 m
+across at that range; the same P_D), clutter uniform over the box; the sessions get
+each radar's polar model and site, Stone Soup its ``CartesianToElevationBearingRange``
+with an extended Kalman updater.
 
 Runs, all on the same detections:
 
 - ``alone-k``: a session with sensor k only (its own local tracker: the service path);
-- ``fused``: one session with the three sensors flagged ``local_tracker: false``,
-  otherwise **defaults plus physics** (each
+- ``fused``: one session with the three sensors, **defaults plus physics** (each
   sensor's R, P_D, clutter density and field of view, the birth density and
   ``motion.q``; no velocity prior, no management knob): the central tracker
-  (docs/algorithms.md §8.9);
-- ``fused-t2t``: the same sensors with ``local_tracker: true`` (the default): each its own local
+  (docs/algorithms.md §8.9, the default path of detecting sensors);
+- ``fused-t2t``: the same sensors flagged ``local_tracker: true``: each its own local
   tracker, then credal track-to-track fusion (the path before issue 23);
 - ``ss-gnn`` / ``ss-jpda``: Stone Soup 1.9.1 fed every sensor's detections in time
-  order, each detection with its own sensor's ``LinearGaussian`` (its R); a scan
+  order, each detection with its own sensor's ``LinearGaussian`` (its R; in 3-D its polar
+  model, its PDA clutter density the box's converted at the box centre's range); a scan
   associates only the tracks inside its sensor's coverage; JPDA's ``PDAHypothesiser``
   is the scanning sensor's (its P_D and clutter density); ``MultiMeasurementInitiator``
   (min_points 2, the truth's velocity spread as prior), deletion after 3 s without an
@@ -36,7 +42,7 @@ Soup's GOSPA (c = 10 m, p = 1, α = 2), id switches by :func:`core.metrics.ident
 Goals (issue 23): fused ≤ 0.85× the best sensor alone and no more id switches; fused ≤
 Stone Soup's multi-sensor GNN and JPDA (tutorial and tuned).
 
-Run: ``.venv/bin/python bench/multisensor.py [~10 ~50] [full sectors]`` (several minutes
+Run: ``.venv/bin/python bench/multisensor.py [~10 ~50] [full sectors 3d]`` (several minutes
 on a quiet 2-core machine, most of it Stone Soup's JPDA on ~50).
 """
 
@@ -64,6 +70,9 @@ from stonesoup.hypothesiser.probability import PDAHypothesiser  # noqa: E402
 from stonesoup.initiator.simple import MultiMeasurementInitiator  # noqa: E402
 from stonesoup.measures import Mahalanobis  # noqa: E402
 from stonesoup.models.measurement.linear import LinearGaussian  # noqa: E402
+from stonesoup.models.measurement.nonlinear import (  # noqa: E402
+    CartesianToElevationBearingRange,
+)
 from stonesoup.models.transition.linear import (  # noqa: E402
     CombinedLinearGaussianTransitionModel,
     ConstantVelocity,
@@ -73,7 +82,7 @@ from stonesoup.types.detection import Clutter, TrueDetection  # noqa: E402
 from stonesoup.types.groundtruth import GroundTruthPath, GroundTruthState  # noqa: E402
 from stonesoup.types.state import GaussianState, State  # noqa: E402
 from stonesoup.types.track import Track  # noqa: E402
-from stonesoup.updater.kalman import KalmanUpdater  # noqa: E402
+from stonesoup.updater.kalman import ExtendedKalmanUpdater, KalmanUpdater  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
@@ -81,6 +90,8 @@ from machine import describe_machine  # noqa: E402
 from peers import _jpda_posterior, gospa_terms  # noqa: E402
 
 from api_schemas.config import SessionConfig  # noqa: E402
+from api_schemas.reports import DetectionReport as WireDetectionReport  # noqa: E402
+from app.inputs.detections import core_detection_report  # noqa: E402
 from app.sessions.translate import fusion_config  # noqa: E402
 from core.fusion.engine import SessionEngine  # noqa: E402
 from core.fusion.reports import DetectionReport  # noqa: E402
@@ -108,13 +119,19 @@ TUNED = (0.7, 1.5)
 among (3, 3), (1, 3), (0.7, 3), (0.7, 2), (0.7, 1.5)): a tentative track needs its second
 detection within the next two scans; rows ``ss-gnn*``, ``ss-jpda*``."""
 """Seeds not looked at while the central tracker was built."""
+RADARS: tuple[tuple[tuple[float, float, float], float, float], ...] = (
+    ((-3000.0, -3000.0, -1000.0), 2.0, 0.04),
+    ((3000.0, -3000.0, -1000.0), 4.0, 0.08),
+    ((0.0, 4000.0, -1000.0), 3.0, 0.06),
+)
+"""The 3-D scene's radars: (site m, σ_range m, σ_azimuth = σ_elevation degrees)."""
 
 
 @dataclass
 class Scan:
     sensor: int
     time: float
-    z: np.ndarray  # (m, 2), sorted
+    z: np.ndarray  # (m, 2), sorted; in 3-D (m, 3) of (range, azimuth°, elevation°)
     detections: set[Any]  # the same, as Stone Soup detections
 
 
@@ -128,6 +145,28 @@ class Scene:
     clutter_density: float
     birth_density: float
     targets: float = 0.0
+    axes: int = 2
+
+    @property
+    def positions(self) -> tuple[int, ...]:
+        return tuple(range(0, 2 * self.axes, 2))
+
+    @property
+    def polar(self) -> bool:
+        return self.axes == 3
+
+    def model(self, sensor: int) -> Any:
+        """Sensor ``sensor``'s Stone Soup measurement model."""
+        if not self.polar:
+            return measurement(SENSORS[sensor][0])
+        site, sigma_range, sigma_angle = RADARS[sensor]
+        angle = np.radians(sigma_angle) ** 2
+        return CartesianToElevationBearingRange(
+            ndim_state=6,
+            mapping=(0, 2, 4),
+            noise_covar=np.diag([angle, angle, sigma_range**2]),
+            translation_offset=np.array(site).reshape(3, 1),
+        )
 
     def truth_at(self, when: datetime.datetime) -> list[tuple[str, State]]:
         return [
@@ -141,8 +180,8 @@ class Scene:
         return [scan.time for scan in self.scans if scan.sensor == SUBSTEPS - 1]
 
 
-def transition() -> CombinedLinearGaussianTransitionModel:
-    return CombinedLinearGaussianTransitionModel([ConstantVelocity(Q), ConstantVelocity(Q)])
+def transition(axes: int = 2) -> CombinedLinearGaussianTransitionModel:
+    return CombinedLinearGaussianTransitionModel([ConstantVelocity(Q)] * axes)
 
 
 def measurement(sigma: float) -> LinearGaussian:
@@ -155,19 +194,19 @@ def birth(path: GroundTruthPath) -> int:
 
 
 def simulated_truth(
-    seed: int, side: float, targets: int, steps: int, dt: float
+    seed: int, side: float, targets: int, steps: int, dt: float, axes: int = 2
 ) -> Iterator[tuple[datetime.datetime, set[GroundTruthPath]]]:
     """What Stone Soup's ``MultiTargetGroundTruthSimulator`` does (its CV model's F and Q,
     ``targets`` at the start, births = deaths in the mean, births over the square's centre
     half), drawn from one seeded generator in a fixed order (the simulator draws in the
     order of a set of random uuids: its truth changes from run to run)."""
     rng = np.random.default_rng(seed)
-    model = transition()
+    model = transition(axes)
     f, q = (
         model.matrix(time_interval=datetime.timedelta(seconds=dt)),
         model.covar(time_interval=datetime.timedelta(seconds=dt)),
     )
-    spread = np.array([side / 4, VELOCITY_STD, side / 4, VELOCITY_STD])
+    spread = np.array([side / 4, VELOCITY_STD, side / 4, VELOCITY_STD, side / 8, 0.5][: 2 * axes])
     living: list[GroundTruthPath] = []
     number = 0
 
@@ -175,7 +214,7 @@ def simulated_truth(
         nonlocal number
         path = GroundTruthPath(id=f"t{number}")
         number += 1
-        path.append(GroundTruthState(rng.normal(0.0, spread).reshape(4, 1), timestamp=when))
+        path.append(GroundTruthState(rng.normal(0.0, spread).reshape(-1, 1), timestamp=when))
         return path
 
     when = START
@@ -185,9 +224,9 @@ def simulated_truth(
         when += datetime.timedelta(seconds=dt)
         living = [path for path in living if rng.random() >= DEATH * dt]
         for path in living:
-            state = f @ path[-1].state_vector + rng.multivariate_normal(np.zeros(4), q).reshape(
-                4, 1
-            )
+            state = f @ path[-1].state_vector + rng.multivariate_normal(
+                np.zeros(2 * axes), q
+            ).reshape(-1, 1)
             path.append(GroundTruthState(state, timestamp=when))
         living += [born(when) for _ in range(rng.poisson(targets * DEATH * dt))]
 
@@ -255,11 +294,107 @@ def build_scene(name: str, targets: int, seconds: int, layout: str) -> Scene:
     )
 
 
+def build_scene_3d(name: str, targets: int, seconds: int) -> Scene:
+    """The ``3d`` layout: the truth in 3-D, three polar radars at their sites (module
+    docstring); clutter uniform over the box (half the side high), seen as polar detections."""
+    seed = SEEDS[name] + 100
+    side = 400.0 * np.sqrt(targets / 10.0)
+    truth = simulated_truth(seed, side, targets, seconds * SUBSTEPS, 1.0 / SUBSTEPS, axes=3)
+    half = side / 2
+    low, high = np.array([-half, -half, -half / 2]), np.array([half, half, half / 2])
+    volume = float(np.prod(high - low))
+    density = targets * CLUTTER_PER_TARGET / volume
+    rng = np.random.default_rng(seed + 7)
+    scans: list[Scan] = []
+    paths: set[GroundTruthPath] = set()
+    counts = []
+    probe = Scene("", side, [], [], [], 0.0, 0.0, axes=3)
+    for step, (when, living) in enumerate(truth):
+        paths |= set(living)
+        counts.append(len(living))
+        k = step % SUBSTEPS
+        p_detect = SENSORS[k][1]
+        model = probe.model(k)
+        _, sigma_range, sigma_angle = RADARS[k]
+        sigmas = np.array([np.radians(sigma_angle), np.radians(sigma_angle), sigma_range])
+        found: list[tuple[np.ndarray, Any]] = []
+        for path in sorted(living, key=birth):
+            state = path[-1]
+            position = np.asarray(state.state_vector, dtype=float).ravel()[[0, 2, 4]]
+            if not np.all((low <= position) & (position <= high)):
+                continue
+            if rng.random() >= p_detect:
+                continue
+            polar = np.asarray(model.function(state, noise=False), dtype=float).ravel()
+            polar = polar + rng.normal(0.0, sigmas)
+            found.append(
+                (
+                    polar,
+                    TrueDetection(
+                        polar.reshape(3, 1),
+                        timestamp=when,
+                        measurement_model=model,
+                        groundtruth_path=path,
+                    ),
+                )
+            )
+        for _ in range(rng.poisson(density * volume)):
+            where = rng.uniform(low, high)
+            state = State(np.array([where[0], 0.0, where[1], 0.0, where[2], 0.0]).reshape(6, 1))
+            polar = np.asarray(model.function(state, noise=False), dtype=float).ravel()
+            found.append(
+                (polar, Clutter(polar.reshape(3, 1), timestamp=when, measurement_model=model))
+            )
+        found.sort(key=lambda item: (float(item[0][2]), float(item[0][1])))
+        # (elevation, bearing, range) → (range, azimuth° clockwise from north, elevation°)
+        z = np.array(
+            [
+                [item[0][2], (90.0 - np.degrees(item[0][1])) % 360.0, np.degrees(item[0][0])]
+                for item in found
+            ]
+        ).reshape(-1, 3)
+        scans.append(Scan(k, (when - START).total_seconds(), z, {item[1] for item in found}))
+    truths = sorted(paths, key=birth)
+    return Scene(
+        name=f"{name} 3d",
+        side=side,
+        truths=truths,
+        scans=scans,
+        covers=[(-half, half)] * 3,
+        clutter_density=density,
+        birth_density=max(targets * DEATH, 1e-3) / volume,
+        targets=float(np.mean(counts)),
+        axes=3,
+    )
+
+
 # ----------------------------------------------------------------- runs
 Estimates = list[tuple[str, np.ndarray]]
 
 
 def session_config(scene: Scene, sensors: list[int], local: bool) -> dict[str, Any]:
+    if scene.polar:
+        return {
+            "state": {"dim": 6, "position": [0, 2, 4], "velocity": [1, 3, 5]},
+            "motion": {"model": "constant_velocity", "q": Q},
+            "sensors": [
+                {
+                    "id": f"s{k}",
+                    "p_detect": SENSORS[k][1],
+                    "measurement": {
+                        "kind": "polar",
+                        "sigma_range": RADARS[k][1],
+                        "sigma_azimuth_deg": RADARS[k][2],
+                        "sigma_elevation_deg": RADARS[k][2],
+                    },
+                    "site": {"position": list(RADARS[k][0])},
+                    "clutter_density": scene.clutter_density,
+                    "local_tracker": local,
+                }
+                for k in sensors
+            ],
+            "tracking": {"time_interval": 1.0, "birth_density": scene.birth_density},
+        }
     half = float(scene.side / 2)
     return {
         "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
@@ -293,7 +428,7 @@ def session_run(scene: Scene, sensors: list[int], local: bool = False) -> list[E
     out: list[Estimates] = []
     for scan in scene.scans:
         if scan.sensor in sensors:
-            engine.apply_detections(DetectionReport(f"s{scan.sensor}", scan.time, scan.z))
+            engine.apply_detections(detection_report(scene, wire, scan))
         if scan.sensor == SUBSTEPS - 1:
             out.append(
                 [
@@ -305,7 +440,38 @@ def session_run(scene: Scene, sensors: list[int], local: bool = False) -> list[E
     return out
 
 
+def detection_report(scene: Scene, wire: SessionConfig, scan: Scan) -> DetectionReport:
+    """A scan as the core takes it: as given in 2-D; in 3-D its polar detections through the
+    service's conversion (``app.inputs.detections``: converted positions, each its own R)."""
+    if not scene.polar:
+        return DetectionReport(f"s{scan.sensor}", scan.time, scan.z)
+    body = {
+        "sensor": f"s{scan.sensor}",
+        "time": scan.time,
+        "detections": [
+            {"range": float(r), "azimuth_deg": float(a), "elevation_deg": float(e)}
+            for r, a, e in scan.z.tolist()
+        ],
+    }
+    return core_detection_report(WireDetectionReport.model_validate(body), wire)
+
+
+def clutter_in_measurement_space(scene: Scene, sensor: int) -> float:
+    """The PDA's clutter density in the sensor's measurement space: the scene's in 2-D; in
+    3-D the box's per m³ times the polar cell's volume element r² cos(elevation) at the box
+    centre (per rad² m)."""
+    if not scene.polar:
+        return scene.clutter_density
+    site = np.array(RADARS[sensor][0])
+    offset = -site
+    r = float(np.linalg.norm(offset))
+    cos_elevation = float(np.hypot(offset[0], offset[1]) / r)
+    return scene.clutter_density * r**2 * cos_elevation
+
+
 def inside(scene: Scene, sensor: int, state: Any) -> bool:
+    if scene.polar:
+        return True
     low, high = scene.covers[sensor]
     half = scene.side / 2
     x, y = float(state.state_vector[0]), float(state.state_vector[2])
@@ -318,15 +484,16 @@ def stone_soup_run(
     """Stone Soup's tutorial loop over every sensor's scans in time order (module docstring);
     ``deletion``: seconds without an update that delete a tentative and a confirmed track."""
     hold, delete = deletion
-    predictor = KalmanPredictor(transition())
-    updaters = [KalmanUpdater(measurement(sigma)) for sigma, _ in SENSORS]
+    predictor = KalmanPredictor(transition(scene.axes))
+    updater = ExtendedKalmanUpdater if scene.polar else KalmanUpdater
+    updaters = [updater(scene.model(k)) for k in range(len(SENSORS))]
     associators: list[Any] = []
     for k, (_, p_detect) in enumerate(SENSORS):
         if kind == "ss-jpda":
             hypothesiser: Any = PDAHypothesiser(
                 predictor=predictor,
                 updater=updaters[k],
-                clutter_spatial_density=scene.clutter_density,
+                clutter_spatial_density=clutter_in_measurement_space(scene, k),
                 prob_detect=p_detect,
             )
             hypothesiser = DistanceGater(hypothesiser, measure=Mahalanobis(), gate_threshold=16)
@@ -340,9 +507,9 @@ def stone_soup_run(
     deleter = UpdateTimeDeleter(time_since_update=datetime.timedelta(seconds=delete))
     initiator = MultiMeasurementInitiator(
         prior_state=GaussianState(
-            np.zeros((4, 1)), np.diag([0.0, VELOCITY_STD**2, 0.0, VELOCITY_STD**2])
+            np.zeros((2 * scene.axes, 1)), np.diag([0.0, VELOCITY_STD**2] * scene.axes)
         ),
-        measurement_model=measurement(SENSORS[0][0]),
+        measurement_model=scene.model(0),
         deleter=UpdateTimeDeleter(time_since_update=datetime.timedelta(seconds=hold)),
         data_associator=GNNWith2DAssignment(
             DistanceHypothesiser(predictor, updaters[0], Mahalanobis(), missed_distance=3)
@@ -406,12 +573,13 @@ def score(scene: Scene, estimates: list[Estimates]) -> Score:
     parts, assigned = gospa_terms(
         ((when, scene.truth_at(when), step) for when, step in zip(whens, estimates, strict=True)),
         cutoff=CUTOFF,
+        positions=scene.positions,
     )
     return Score(*parts, identity_switches(assigned))
 
 
 SCENES = {"~10": (10, 60), "~50": (50, 40)}
-LAYOUTS = ("full", "sectors")
+LAYOUTS = ("full", "sectors", "3d")
 
 
 def main() -> int:
@@ -432,7 +600,11 @@ def main() -> int:
     for name in names:
         targets, seconds = SCENES[name]
         for layout in layouts:
-            scene = build_scene(name, targets, seconds, layout)
+            scene = (
+                build_scene_3d(name, targets, seconds)
+                if layout == "3d"
+                else build_scene(name, targets, seconds, layout)
+            )
             runs: dict[str, list[Estimates]] = {
                 f"alone-{k}": session_run(scene, [k]) for k in range(len(SENSORS))
             }

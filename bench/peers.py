@@ -617,11 +617,13 @@ def confirmation_delay(assigned: list[dict[str, str | None]]) -> float:
 def gospa_terms(
     steps: Iterable[tuple[datetime.datetime, Sequence[tuple[str, Any]], Sequence[tuple[str, Any]]]],
     cutoff: float,
+    positions: tuple[int, ...] = (0, 2),
 ) -> tuple[np.ndarray, list[dict[str, str | None]]]:
-    """Stone Soup's GOSPA (c = ``cutoff``, p = 1, α = 2) averaged over ``steps`` of (time, truth
-    ``(id, GroundTruthState)``, estimates ``(id, state vector)``): its distance, localisation,
-    missed and false terms, and each step's truth id → assigned estimate id (for id switches)."""
-    metric = GOSPAMetric(c=cutoff, p=1, measure=Euclidean((0, 2)))
+    """Stone Soup's GOSPA (c = ``cutoff``, p = 1, α = 2, on the state's ``positions``) averaged
+    over ``steps`` of (time, truth ``(id, GroundTruthState)``, estimates ``(id, state
+    vector)``): its distance, localisation, missed and false terms, and each step's truth id →
+    assigned estimate id (for id switches)."""
+    metric = GOSPAMetric(c=cutoff, p=1, measure=Euclidean(positions))
     parts = np.zeros(4)
     assigned: list[dict[str, str | None]] = []
     for when, truth, estimates in steps:

@@ -69,20 +69,37 @@ class StaleReport(CredalError):  # noqa: N818 - a state of the input, named as t
     time : float
         The refused report's time.
     last_time : float
-        The time of the sensor's previous accepted report.
+        The time of the sensor's previous accepted report (with ``window``: of the central
+        tracker's latest scan).
+    window : float or None
+        The central tracker's reorder window the report is older than (§8.9), or None.
     """
 
     loc: Location = ("time",)
     """The refused field: the report's time."""
 
-    def __init__(self, sensor: str, time: float, last_time: float) -> None:
+    def __init__(
+        self, sensor: str, time: float, last_time: float, window: float | None = None
+    ) -> None:
         self.sensor = sensor
         self.time = time
         self.last_time = last_time
-        super().__init__(
+        self.window = window
+        super().__init__(stale_message(sensor, time, last_time, window))
+
+
+def stale_message(sensor: str, time: float, last_time: float, window: float | None) -> str:
+    """Why a report is stale: not newer than its sensor's previous report, or (``window``)
+    older than the central tracker's latest scan by more than its reorder window (§8.9)."""
+    if window is None:
+        return (
             f"report of sensor {sensor!r} at time {time!r} is not newer than its previous "
             f"report at time {last_time!r}"
         )
+    return (
+        f"report of sensor {sensor!r} at time {time!r} is older than the central tracker's "
+        f"latest scan at time {last_time!r} by more than its reorder window of {window:g} s"
+    )
 
 
 class ModelConfigError(InvalidInput):

@@ -110,7 +110,7 @@ class InputKind(ABC, Generic[ReportT]):
         try:
             step = self.run(engine, report, config, explain)
         except CoreStaleReport as stale:
-            raise StaleReport(stale.sensor, stale.time, stale.last_time) from None
+            raise StaleReport(stale.sensor, stale.time, stale.last_time, stale.window) from None
         return Applied(step, time.thread_time() - started)
 
 

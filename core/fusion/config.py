@@ -24,7 +24,8 @@ from core.lifecycle import LifeCycleConfig
 from core.tracking.config import LocalTrackerConfig
 
 CENTRAL_MIN_SENSORS = 2
-"""Detecting sensors (not flagged ``local_tracker``) from which a session tracks centrally."""
+"""Detecting sensors (not flagged ``local_tracker``) from which a session tracks centrally
+(a single detecting sensor keeps its own tracker: there is nothing to fuse centrally)."""
 CENTRAL_SOURCE = "central"
 """The fused layer's source id of the central tracker (:attr:`FusionConfig.central_source`)."""
 CENTRAL_P_DETECT = 1.0 - 1e-9
@@ -46,9 +47,9 @@ class SensorSpec:
         configuration (the session tracks them, docs/algorithms.md §4, §8.9); None for a
         sensor that sends track lists.
     local_tracker : a detecting sensor tracked on its own (its local tracker, then
-        track-to-track fusion; the default for now, docs/algorithms.md §8.9); False: its
-        detections go to the central tracker (:attr:`FusionConfig.central_tracker`) with
-        the other sensors' so flagged.
+        track-to-track fusion, docs/algorithms.md §8.9); False (default): its detections go
+        to the central tracker (:attr:`FusionConfig.central_tracker`) with the other
+        detecting sensors' not flagged, when there are two or more.
     """
 
     id: str
@@ -56,7 +57,7 @@ class SensorSpec:
     p_detect: float = 0.9
     fov: FieldOfView | None = None
     tracker: LocalTrackerConfig | None = None
-    local_tracker: bool = True
+    local_tracker: bool = False
 
     def __post_init__(self) -> None:
         if not self.id:
@@ -136,6 +137,9 @@ class FusionConfig:
                 tracker = LocalTrackerConfig.central(central, id_prefix=f"{self.central_source}:")
             except TrackingError as error:
                 raise InvalidInput(str(error), loc=("sensors",)) from None
+            # the session's surveillance region: a target between two sensors' views (and
+            # inside it) is in a blind zone, a phantom that hands over, not out of range (§8.9)
+            tracker = dataclasses.replace(tracker, region=self.region)
             object.__setattr__(self, "central_tracker", tracker)
         distance = self.distance or DEFAULT_DISTANCE.get(self.association_method, "sum")
         # a bad method, option or distance fails here, not at the first step that runs it

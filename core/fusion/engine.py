@@ -65,6 +65,7 @@ from core.fusion.associate import Decision, associate_report
 from core.fusion.classes import ClassAssessment, accumulate_likelihoods, fuse_sensor_classes
 from core.fusion.config import FusionConfig, SensorSpec
 from core.fusion.detections import local_track_report
+from core.fusion.reorder import ReorderBuffer
 from core.fusion.reports import (
     AssociationView,
     DetectionReport,
@@ -100,9 +101,11 @@ from core.pipeline.handover import hand_over_pairs
 from core.pipeline.rows import TrackRows, ended
 from core.tracking.tracker import LocalTracker
 
-EXPORT_VERSION = 2
-"""2: the central tracker's state (``central``, §8.9). A version-1 export restores with an
-empty central tracker (its sessions' detecting sensors were tracked one by one: their
+EXPORT_VERSION = 3
+"""3: the central tracker's reorder buffer (``central`` is its state before the oldest
+buffered scan and the buffered scans, :meth:`ReorderBuffer.export`); 2: the central tracker's
+state (``central``, §8.9), which restores with an empty buffer. A version-1 export restores
+with an empty central tracker (its sessions' detecting sensors were tracked one by one: their
 local trackers are dropped, the fused tracks go on and end as their sources' silence says)."""
 OVERDUE_REVISITS = 2.5
 """A source is overdue on a fused track after this many of its revisits without updating it:
@@ -136,6 +139,8 @@ class SessionEngine:
             None if config.central_tracker is None else LocalTracker(config.central_tracker)
         )
         """The central tracker over the detections of several sensors (§8.9), or None."""
+        self.reorder = ReorderBuffer()
+        """The central tracker's recent scans, to put a late one in its place (§8.9)."""
         layout = config.motion.layout
         self._position = np.asarray(layout.position, dtype=np.int64)
         self._coverage = config.coverage
@@ -255,20 +260,16 @@ class SessionEngine:
         """One sensor's detections through the central tracker (§8.9), then the fusion step.
 
         The central tracker takes every centrally tracked sensor's detections in time
-        order (two sensors may report at the same instant; a report older than the
-        tracker's latest is stale). Each detection's class evidence is discounted by its
+        order (two sensors may report at the same instant): a report a little older than
+        the tracker's latest is put in its place by the reorder buffer
+        (:mod:`core.fusion.reorder`), one older than its window is stale; the fused layer
+        then takes the tracker's tracks at its latest time. Each detection's class evidence is discounted by its
         sensor's reliability ([MTT] eq 7) before it enters its track's class mass. Every
         track the tracker keeps (confirmed, coasting or phantom) is the track list of the
         central source at every step, so a fused track it carries follows it: confirmed
         at once, ended when the tracker ends it.
         """
         check_time(report.time)
-        latest = [self.last_report.get(sensor.id), central.time]
-        last = max((t for t in latest if t is not None), default=None)
-        if last is not None and (
-            report.time < last or report.time == self.last_report.get(sensor.id)
-        ):
-            raise StaleReport(sensor.id, report.time, last)
         check_detection_magnitudes(report)
         masses = report.class_masses
         if masses is not None and sensor.reliability < 1.0:
@@ -277,19 +278,21 @@ class SessionEngine:
             )
         source = self.config.central_source
         with self._transaction(central):
-            scan = central.step(
+            scan = self.reorder.step(
+                central,
                 report.time,
+                sensor.id,
                 report.measurements,
                 report.covariances,
-                sensor=sensor.id,
                 range_rates=report.range_rates,
                 class_masses=masses,
             )
             tracks = local_track_report(
                 central, scan, self.config.motion.layout, self.config.classes, every=True
             )
-            result = self._apply(TrackReport(source, report.time, tracks), explain)
-            self.last_report[sensor.id] = report.time
+            result = self._apply(TrackReport(source, scan.time, tracks), explain)
+            last = self.last_report.get(sensor.id, report.time)
+            self.last_report[sensor.id] = max(last, report.time)
             return dataclasses.replace(result, sensor=sensor.id)
 
     @contextmanager
@@ -305,6 +308,7 @@ class SessionEngine:
         last_report, tracks, revisits = dict(self.last_report), self.tracks, dict(self.revisits)
         checkpoint, rows = self._table.checkpoint(), self._rows.rows
         saved = None if tracker is None else tracker.checkpoint()
+        buffered = self.reorder.scans
         fields = [track.checkpoint() for track in tracks]
         self.tracks = list(tracks)
         try:
@@ -318,6 +322,7 @@ class SessionEngine:
             self._table.rollback(checkpoint)
             if tracker is not None and saved is not None:
                 tracker.rollback(saved)
+            self.reorder.scans = buffered
             raise
 
     def _apply(self, report: TrackReport, explain: bool) -> StepResult:
@@ -567,7 +572,9 @@ class SessionEngine:
         report on; an engine restored from an export without revisits learns each one
         again at that source's next report)."""
         last = self.last_report.get(sensor)
-        if last is not None:
+        # the central source reports every track it keeps at every step, however its sensors'
+        # scans interleave: no revisit, it is current on the tracks of its latest report (§8.9)
+        if last is not None and not self._is_central(sensor):
             self.revisits[sensor] = t - last
 
     def _current(self, rows: IntArray, revisits: float = OVERDUE_REVISITS) -> BoolArray:
@@ -871,7 +878,7 @@ class SessionEngine:
             "local_trackers": {
                 sensor: tracker.export() for sensor, tracker in sorted(self.local_trackers.items())
             },
-            "central": None if self.central is None else self.central.export(),
+            "central": None if self.central is None else self.reorder.export(self.central),
         }
 
     def _kinematics(self, track: FusedTrack) -> Kinematics:
@@ -888,10 +895,10 @@ class SessionEngine:
     def restore(cls, config: FusionConfig, state: dict[str, Any]) -> SessionEngine:
         """Rebuild an engine from :meth:`export`'s output and the same configuration.
 
-        Version 1 has no central tracker (:data:`EXPORT_VERSION`); an unknown version is
-        refused.
+        Version 1 has no central tracker, version 2 no reorder buffer (:data:`EXPORT_VERSION`);
+        an unknown version is refused.
         """
-        if state.get("version") not in (1, EXPORT_VERSION):
+        if state.get("version") not in (1, 2, EXPORT_VERSION):
             raise InvalidInput(f"unknown engine export version {state.get('version')!r}")
         engine = cls(config)
         engine.seq = int(state["seq"])
@@ -937,7 +944,11 @@ class SessionEngine:
         if central is not None:
             if config.central_tracker is None:
                 raise InvalidInput("exported state has a central tracker, the config none")
-            engine.central = LocalTracker.restore(config.central_tracker, central)
+            if state["version"] == 2:
+                engine.central = LocalTracker.restore(config.central_tracker, central)
+            else:
+                engine.central = LocalTracker.restore(config.central_tracker, central["tracker"])
+                engine.reorder = ReorderBuffer.restore(engine.central, central)
         for sensor, plain in state["local_trackers"].items():
             if config.tracked_centrally(sensor):
                 continue  # a version-1 export of a sensor now tracked centrally

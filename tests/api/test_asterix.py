@@ -29,6 +29,7 @@ from fastapi.testclient import TestClient
 
 from app.inputs.asterix_decoder import IsolatedDecoder
 from app.main import create_app
+from core.fusion.reorder import REORDER_WINDOW
 from tests.api.asterix_encoding import (
     FL_LSB,
     FOOT,
@@ -116,6 +117,62 @@ def test_the_sample_recording_accounts_for_every_report() -> None:
         outcomes = list(outcome_of.values())
         assert outcomes.count("duplicate") == 128 - len(distinct) == 64
         assert outcomes.count("no_position") == sum("I040" not in r for r in distinct.values())
+
+
+def test_the_sample_recording_as_it_arrives_is_tracked_centrally() -> None:
+    """The recording's packets posted as they arrive, each to its radar's sensor: the
+    radars' reports interleave out of time order (one radar's plots lag another's by up
+    to 1.45 s), which the central tracker's reorder buffer puts in place (docs/algorithms.md
+    §8.9): no report is refused, and every plot with a position is a detection. A report
+    older than the window is a 409 that names the window."""
+    recording = Path(asterix.get_sample_file("cat_034_048.pcap")).read_bytes()
+    payloads = list(dict.fromkeys(udp_payloads(recording)))  # the recording sends each twice
+    polar = {"kind": "polar", "sigma_range": 70.0, "sigma_azimuth_deg": 0.08}
+    decoded = [asterix.parse(payload, verbose=False) for payload in payloads]
+    sources = sorted(
+        {(r["I010"]["SAC"]["val"], r["I010"]["SIC"]["val"]) for d in decoded for r in d}
+    )
+    config = {
+        "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+        "sensors": [
+            {"id": f"r{sac}-{sic}", "measurement": polar, "local_tracker": False}
+            for sac, sic in sources
+        ],
+    }
+    # independently of the service: each packet's plots with a position, and how late its
+    # median time is against the latest time of the packets before it
+    positioned, latest, lags = 0, -math.inf, []
+    for records in decoded:
+        times = sorted(
+            r["I140"]["ToD"]["val"] for r in records if r["category"] == 48 and "I040" in r
+        )
+        positioned += len(times)
+        if times:
+            median = times[(len(times) - 1) // 2]
+            lags.append(latest - median)
+            latest = max(latest, median)
+    assert 1.0 < max(lags) < REORDER_WINDOW and sum(lag > 0 for lag in lags) > 20
+    with TestClient(create_app(make_settings(max_body_bytes=1 << 20))) as client:
+        sid, auth = _session(client, config)
+        detections = 0
+        for payload, records in zip(payloads, decoded, strict=True):
+            sac, sic = records[0]["I010"]["SAC"]["val"], records[0]["I010"]["SIC"]["val"]
+            answer = _post(client, sid, auth, payload, sensor=f"r{sac}-{sic}")
+            assert answer.status_code == 200, answer.text
+            outcomes = [entry["outcome"] for entry in answer.json()["records"]]
+            assert "stale" not in outcomes
+            detections += outcomes.count("detection")
+        assert detections == positioned
+        events = client.get(f"/v1/sessions/{sid}/events", headers=auth).json()["events"]
+        assert sum(len(event["report"]["detections"]) for event in events) == positioned
+        late = {
+            "sensor": f"r{sources[0][0]}-{sources[0][1]}",
+            "time": latest - REORDER_WINDOW - 1.0,
+            "detections": [{"range": 50_000.0, "azimuth_deg": 10.0}],
+        }
+        refused = client.post(f"/v1/sessions/{sid}/detections", json=late, headers=auth)
+        assert refused.status_code == 409, refused.text
+        assert "reorder window" in refused.json()["detail"]
 
 
 def _truth(time: float) -> list[np.ndarray]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 from pathlib import Path
@@ -39,6 +40,26 @@ def test_simulate_overtaking_keeps_the_identity_through_the_blind_zone(
 ) -> None:
     assert main(["simulate", "overtaking", "--quiet"]) == 0
     assert "identity switches: 0" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("local", [False, True])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_overtaking_keeps_the_fused_id_through_the_blind_zone_on_either_path(
+    local: bool, seed: int
+) -> None:
+    """Rear sensor, blind zone, front sensor ([HZ] §6 Fig 6): the central tracker (the
+    session's region makes the gap a blind zone, where its track is a phantom that the
+    front sensor's new track hands over to) and the per-sensor trackers with track-to-track
+    fusion both keep vehicle 1's fused id (docs/algorithms.md §8.9)."""
+    run = build("overtaking", seed=seed)
+    config = {
+        **run.config,
+        "sensors": [{**sensor, "local_tracker": local} for sensor in run.config["sensors"]],
+    }
+    results = list(run_locally(config, run.inputs))
+    summary = simulate.summarise(dataclasses.replace(run, config=config), results)
+    assert "identity switches: 0" in summary
+    assert "1: ['F1']" in summary
 
 
 def test_a_scenario_gives_the_same_results_through_a_server(live_server: LiveServer) -> None:

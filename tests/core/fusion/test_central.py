@@ -12,6 +12,7 @@ from core.errors import InvalidInput, StaleReport
 from core.fusion.config import FusionConfig, SensorSpec
 from core.fusion.engine import SessionEngine
 from core.fusion.motion import MotionModel
+from core.fusion.reorder import REORDER_WINDOW
 from core.fusion.reports import DetectionReport, ReportedTrack, StepResult, TrackReport
 from core.geometry import Sector
 from core.lifecycle import LifeCycleConfig
@@ -195,18 +196,108 @@ def test_central_export_restore_continues_exactly() -> None:
     for k in range(9, 16):
         restored.apply_detections(DetectionReport("ab"[k % 2], float(k), measured[k]))
     assert json.dumps(restored.export()) == json.dumps(uninterrupted.export())
-    assert restored.export()["version"] == 2 and restored.export()["central"] is not None
+    assert restored.export()["version"] == 3 and restored.export()["central"] is not None
 
 
 def test_central_time_order_same_instant_and_refusals() -> None:
     engine = SessionEngine(session(detecting("a"), detecting("b")))
     engine.apply_detections(DetectionReport("a", 1.0, STARTS))
     engine.apply_detections(DetectionReport("b", 1.0, STARTS))  # the same instant: fine
+    engine.apply_detections(DetectionReport("a", 7.0, STARTS))
     before = json.dumps(engine.export())
     with pytest.raises(StaleReport):
-        engine.apply_detections(DetectionReport("b", 1.0, STARTS))  # b's own time again
-    with pytest.raises(StaleReport):
-        engine.apply_detections(DetectionReport("a", 0.5, STARTS))  # before the tracker's time
+        engine.apply_detections(DetectionReport("a", 7.0, STARTS))  # a's own time again
+    with pytest.raises(StaleReport, match="reorder window of 5 s") as refused:
+        # older than the tracker's latest by more than the window
+        engine.apply_detections(DetectionReport("b", 7.0 - REORDER_WINDOW - 0.5, STARTS))
+    assert refused.value.window == REORDER_WINDOW and refused.value.last_time == 7.0
     with pytest.raises(InvalidInput, match="central tracker's source"):
         engine.apply(TrackReport("central", 2.0, (ReportedTrack("x", np.zeros(4), np.eye(4)),)))
     assert json.dumps(engine.export()) == before
+
+
+def staggered(seconds: int, seed: int) -> list[tuple[str, float, np.ndarray]]:
+    """Three sensors scanning once a second, 1/3 s apart, in time order: (sensor, time, z)."""
+    measured = scans(3 * seconds, seed=seed)
+    return [("abc"[k % 3], k / 3.0, z / 1.0) for k, z in enumerate(measured)]
+
+
+def jittered(inputs: list[tuple[str, float, np.ndarray]]) -> list[tuple[str, float, np.ndarray]]:
+    """The same scans in an arrival order where sensor c's reach the centre 2 s late and b's
+    1 s late, each sensor's own in its time order (sorted by arrival, ties by time)."""
+    delay = {"a": 0.0, "b": 1.0, "c": 2.0}
+    return sorted(inputs, key=lambda scan: (scan[1] + delay[scan[0]], scan[1]))
+
+
+def central_session() -> FusionConfig:
+    return session(detecting("a"), detecting("b", p_detect=0.7, sigma=20.0), detecting("c"))
+
+
+def test_late_scans_within_the_window_give_the_tracker_of_the_scans_in_time_order() -> None:
+    """Reports that interleave out of time order (by up to 2 s) are taken, not refused, and the
+    central tracker ends where the same scans in time order take it (independent run)."""
+    inputs = staggered(12, seed=3)
+    arrival = jittered(inputs)
+    assert arrival != inputs  # some scans do come late
+    in_order, late = SessionEngine(central_session()), SessionEngine(central_session())
+    for sensor, time, z in inputs:
+        in_order.apply_detections(DetectionReport(sensor, time, z))
+    for sensor, time, z in arrival:
+        late.apply_detections(DetectionReport(sensor, time, z))
+    assert late.central is not None and in_order.central is not None
+    assert json.dumps(late.central.export()) == json.dumps(in_order.central.export())
+    # and both targets are confirmed fused tracks at the end
+    truth = STARTS + VELOCITIES * (len(inputs) - 1)  # scans(): k-th scan at k s of motion
+    shown = [t for t in late.picture() if t.status.value == "confirmed"]
+    for target in truth:
+        assert any(np.hypot(*(t.state[[0, 2]] - target)) < 50.0 for t in shown)
+
+
+def test_export_restore_with_scans_in_the_buffer_continues_exactly() -> None:
+    arrival = jittered(staggered(10, seed=4))
+    uninterrupted = SessionEngine(central_session())
+    for sensor, time, z in arrival:
+        uninterrupted.apply_detections(DetectionReport(sensor, time, z))
+    engine = SessionEngine(central_session())
+    for sensor, time, z in arrival[:17]:
+        engine.apply_detections(DetectionReport(sensor, time, z))
+    exported = json.loads(json.dumps(engine.export()))
+    assert exported["central"]["scans"]  # the buffer travels with the export
+    restored = SessionEngine.restore(central_session(), exported)
+    assert json.dumps(restored.export()) == json.dumps(engine.export())
+    for sensor, time, z in arrival[17:]:
+        restored.apply_detections(DetectionReport(sensor, time, z))
+    assert json.dumps(restored.export()) == json.dumps(uninterrupted.export())
+
+
+def test_a_refused_late_scan_changes_nothing() -> None:
+    engine = SessionEngine(central_session())
+    for sensor, time, z in staggered(8, seed=5):
+        engine.apply_detections(DetectionReport(sensor, time, z))
+    before = json.dumps(engine.export())
+    with pytest.raises(StaleReport):
+        engine.apply_detections(DetectionReport("b", 1.0, STARTS))
+    with pytest.raises(StaleReport):  # b's scan of that time is in the buffer already
+        engine.apply_detections(DetectionReport("b", 7.0 + 1 / 3, STARTS))
+    with pytest.raises(InvalidInput):  # a bad late scan rolls the re-processing back
+        engine.apply_detections(DetectionReport("c", 6.5, np.full((1, 2), np.nan)))
+    assert json.dumps(engine.export()) == before
+
+
+def test_a_version_2_export_restores_its_central_tracker_with_an_empty_buffer() -> None:
+    engine = SessionEngine(central_session())
+    for sensor, time, z in staggered(6, seed=6):
+        engine.apply_detections(DetectionReport(sensor, time, z))
+    assert engine.central is not None
+    old = json.loads(json.dumps(engine.export())) | {
+        "version": 2,
+        "central": json.loads(json.dumps(engine.central.export())),
+    }
+    restored = SessionEngine.restore(central_session(), old)
+    assert restored.central is not None and restored.reorder.scans == ()
+    assert json.dumps(restored.central.export()) == json.dumps(engine.central.export())
+    # its next scan in time order continues as the uninterrupted engine's
+    z = scans(1, seed=7)[0]
+    for one in (engine, restored):
+        one.apply_detections(DetectionReport("a", 6.0, z))
+    assert json.dumps(restored.central.export()) == json.dumps(engine.central.export())
