@@ -241,7 +241,8 @@ class Store(Protocol):
         channel, on any instance): an instance sharing the store publishes the input's result
         only if so. A subscriber subscribes before it reads the session's ``seq``, so an input
         logged while no one listened precedes that ``seq``: it misses nothing. ``False`` for a
-        store that is not shared (its subscribers are the process's own: the session's hub)."""
+        store that is not shared (its subscribers are the process's own: the session's hub);
+        ``True`` for one shared that cannot count listeners (sqlite among a serve's workers)."""
         ...
 
     def last_seq(self, session_id: str) -> int:

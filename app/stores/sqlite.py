@@ -349,7 +349,9 @@ class SqliteStore:
                 self._commit_queued()
         if pending.error is not None:
             raise pending.error
-        return False  # not shared: no listener through the store
+        # shared by the worker processes of one serve (app.cluster.peers), the file cannot
+        # count their subscribers: every result goes to the other workers
+        return self.shared
 
     def _commit_queued(self) -> None:
         """One transaction (one fsync) for every append queued now (under the write lock)."""
