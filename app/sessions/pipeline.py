@@ -103,6 +103,8 @@ class InputPipeline:
     def __init__(self, registry: SessionRegistry) -> None:
         self.registry = registry
         self._input_series: dict[str, InputSeries] = {}
+        self.in_flight = 0
+        """Inputs admitted and not yet answered (the overload guard's queue: :meth:`admit`)."""
 
     async def submit(
         self,
@@ -123,21 +125,27 @@ class InputPipeline:
         knows them (the session keeps its latest 256, :data:`~app.sessions.live.IDEMPOTENCY_KEYS`).
         An overloaded instance refuses it first (:meth:`admit`)."""
         self.admit()
-        return await self._admitted(
-            session, submitted, explain=explain, output=output, idempotency_key=idempotency_key
-        )
+        self.in_flight += 1
+        try:
+            return await self._admitted(
+                session, submitted, explain=explain, output=output, idempotency_key=idempotency_key
+            )
+        finally:
+            self.in_flight -= 1
 
     def admit(self) -> None:
         """Refuse a new input (:class:`~app.errors.Overloaded`: 503, ``Retry-After``) while the
         event loop runs later than ``overload_delay_ms`` on average
-        (:attr:`app.runtime.LoopLag.smoothed`): before any check, quota or work, so nothing
-        changes. An instance that takes every input falls behind on all of its sessions at
+        (:attr:`app.runtime.LoopLag.smoothed`) and other inputs are still being applied: before
+        any check, quota or work, so nothing changes. An input that finds none in flight is
+        never refused: a client that waits for each answer cannot overload the instance, and
+        the lateness is then the machine's other load, which a refusal would not relieve. An instance that takes every input falls behind on all of its sessions at
         once (answers late by seconds, in bursts); one that refuses what it cannot take in
         time answers the inputs it accepts in time, and the refused ones go elsewhere or
         come back after ``Retry-After``."""
         limit_ms = self.registry.settings.overload_delay_ms
         loop_lag = self.registry.loop_lag
-        if loop_lag is None or limit_ms <= 0:
+        if loop_lag is None or limit_ms <= 0 or self.in_flight == 0:
             return
         delay_ms = 1e3 * loop_lag.smoothed
         if delay_ms > limit_ms:
@@ -218,6 +226,22 @@ class InputPipeline:
         Malformed data or an input the session cannot take refuses the whole body first, and an
         overloaded instance the whole body (:meth:`admit`), never a part of it."""
         self.admit()
+        self.in_flight += 1
+        try:
+            return await self._decoded(session, kind, data, parameters, explain, output)
+        finally:
+            self.in_flight -= 1
+
+    async def _decoded(
+        self,
+        session: LiveSession,
+        kind: DecodedKind[Any],
+        data: bytes,
+        parameters: Any,
+        explain: bool,
+        output: Output,
+    ) -> str:
+        """:meth:`submit_decoded` once admitted."""
         view = SessionView(session.config, session.last_time)
         decode = functools.partial(kind.decode, data, parameters, view)
         decoded = await compute(len(data) // DECODED_BYTES_PER_ITEM, decode)
