@@ -19,7 +19,6 @@ import json
 import os
 import signal
 import subprocess
-import threading
 import time
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
@@ -29,8 +28,9 @@ from typing import Any
 import httpx
 from websockets.sync.client import connect
 
-from tests.api.scenario import reports, session_config, track_report
+from tests.api.scenario import reports, session_config
 from tests.e2e.service_process import instance
+from tests.e2e.test_concurrency import applied_once_in_order, clients_at_once
 from tests.e2e.test_two_instances import uninterrupted
 
 LEASE_TTL_MS = 400
@@ -138,45 +138,15 @@ def test_clients_of_both_workers_never_break_seq(tmp_path: Path) -> None:
         workers = worker_pids(process)
         created = httpx.post(f"{url}/v1/sessions", json=session_config(sensors)).json()
         sid, headers = created["id"], {"Authorization": f"Bearer {created['token']}"}
-        start = threading.Barrier(CLIENTS)
-        answers: dict[str, list[dict[str, Any]]] = {sensor: [] for sensor in sensors}
-        failures: list[BaseException] = []
-
-        def client(sensor: str, index: int) -> None:
-            try:
-                with httpx.Client(base_url=url, headers=headers, timeout=60) as http:
-                    start.wait()
-                    for step in range(INPUTS_PER_CLIENT):
-                        body = track_report(sensor, 1.0 + step, seed=index * 100 + step, targets=2)
-                        answer, _ = post_until_applied(http, f"/v1/sessions/{sid}/tracks", body)
-                        assert answer.status_code == 200, answer.text
-                        answers[sensor].append(answer.json())
-            except BaseException as error:
-                failures.append(error)
-
-        threads = [
-            threading.Thread(target=client, args=(sensor, index))
-            for index, sensor in enumerate(sensors)
-        ]
-        for thread in threads:
-            thread.start()
-        for thread in threads:
-            thread.join()
-        assert not failures, failures
-
-        total = CLIENTS * INPUTS_PER_CLIENT
-        seqs = sorted(result["seq"] for results in answers.values() for result in results)
-        assert seqs == list(range(1, total + 1))  # each seq answered once: no input twice
-        events = httpx.get(f"{url}/v1/sessions/{sid}/events", headers=headers).json()["events"]
-        assert [event["seq"] for event in events] == list(range(1, total + 1))
-        for sensor in sensors:  # each client's inputs logged once each, in its order
-            logged = [e["report"]["time"] for e in events if e["report"]["sensor"] == sensor]
-            assert logged == [1.0 + step for step in range(INPUTS_PER_CLIENT)]
-        for event in events:  # the answer with seq n is the result of the logged input n
-            result = next(
-                r for results in answers.values() for r in results if r["seq"] == event["seq"]
-            )
-            assert result["sensor"] == event["report"]["sensor"]
+        answers = clients_at_once(
+            url,
+            sid,
+            headers,
+            sensors,
+            INPUTS_PER_CLIENT,
+            lambda http, path, body: post_until_applied(http, path, body)[0],
+        )
+        applied_once_in_order(url, sid, headers, answers, INPUTS_PER_CLIENT)
 
         process.send_signal(signal.SIGKILL)  # no worker outlives its serve, even killed
         process.wait()
