@@ -222,7 +222,14 @@ class SqliteStore:
 
     @contextmanager
     def _write(self) -> Iterator[sqlite3.Connection]:
-        with self._write_lock, _faults():
+        with self._write_lock, self._transaction() as connection:
+            yield connection
+
+    @contextmanager
+    def _transaction(self) -> Iterator[sqlite3.Connection]:
+        """One ``BEGIN IMMEDIATE`` … ``COMMIT`` on this thread's connection (rolled back on any
+        error), sqlite's operational errors as StoreUnavailable; the caller holds the write lock."""
+        with _faults():
             connection = self._connection()
             connection.execute("BEGIN IMMEDIATE")
             try:
@@ -359,22 +366,12 @@ class SqliteStore:
             batch, self._queue = self._queue, []
         committed = False
         try:
-            with _faults():
-                connection = self._connection()
-                connection.execute("BEGIN IMMEDIATE")
-                try:
-                    rows = self._checked_rows(connection, batch)
-                    connection.executemany(
-                        "INSERT INTO inputs (session_id, seq, received_at, input)"
-                        " VALUES (?, ?, ?, ?)",
-                        rows,
-                    )
-                except BaseException:
-                    if connection.in_transaction:
-                        connection.execute("ROLLBACK")
-                    raise
-                connection.execute("COMMIT")
-                committed = True
+            with self._transaction() as connection:
+                connection.executemany(
+                    "INSERT INTO inputs (session_id, seq, received_at, input) VALUES (?, ?, ?, ?)",
+                    self._checked_rows(connection, batch),
+                )
+            committed = True
         except Exception as error:  # nothing of the batch is logged
             for pending in batch:
                 pending.error = error
