@@ -24,7 +24,8 @@ import functools
 import hashlib
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import TYPE_CHECKING, Any
@@ -124,12 +125,18 @@ class InputPipeline:
         (:data:`~app.sessions.live.IDEMPOTENCY_FIELD`), so a restart or another instance
         knows them (the session keeps its latest 256, :data:`~app.sessions.live.IDEMPOTENCY_KEYS`).
         An overloaded instance refuses it first (:meth:`admit`)."""
-        self.admit()
-        self.in_flight += 1
-        try:
+        with self._admission():
             return await self._admitted(
                 session, submitted, explain=explain, output=output, idempotency_key=idempotency_key
             )
+
+    @contextmanager
+    def _admission(self) -> Iterator[None]:
+        """An input admitted (:meth:`admit`), counted in :attr:`in_flight` until answered."""
+        self.admit()
+        self.in_flight += 1
+        try:
+            yield
         finally:
             self.in_flight -= 1
 
@@ -139,10 +146,11 @@ class InputPipeline:
         (:attr:`app.runtime.LoopLag.smoothed`) and other inputs are still being applied: before
         any check, quota or work, so nothing changes. An input that finds none in flight is
         never refused: a client that waits for each answer cannot overload the instance, and
-        the lateness is then the machine's other load, which a refusal would not relieve. An instance that takes every input falls behind on all of its sessions at
-        once (answers late by seconds, in bursts); one that refuses what it cannot take in
-        time answers the inputs it accepts in time, and the refused ones go elsewhere or
-        come back after ``Retry-After``."""
+        the lateness is then the machine's other load, which a refusal would not relieve. An
+        instance that takes every input falls behind on all of its sessions at once (answers
+        late by seconds, in bursts); one that refuses what it cannot take in time answers the
+        inputs it accepts in time, and the refused ones go elsewhere or come back after
+        ``Retry-After``."""
         limit_ms = self.registry.settings.overload_delay_ms
         loop_lag = self.registry.loop_lag
         if loop_lag is None or limit_ms <= 0 or self.in_flight == 0:
@@ -225,31 +233,15 @@ class InputPipeline:
         against the session's config, then submit each in order; the kind's answer (JSON text).
         Malformed data or an input the session cannot take refuses the whole body first, and an
         overloaded instance the whole body (:meth:`admit`), never a part of it."""
-        self.admit()
-        self.in_flight += 1
-        try:
-            return await self._decoded(session, kind, data, parameters, explain, output)
-        finally:
-            self.in_flight -= 1
-
-    async def _decoded(
-        self,
-        session: LiveSession,
-        kind: DecodedKind[Any],
-        data: bytes,
-        parameters: Any,
-        explain: bool,
-        output: Output,
-    ) -> str:
-        """:meth:`submit_decoded` once admitted."""
-        view = SessionView(session.config, session.last_time)
-        decode = functools.partial(kind.decode, data, parameters, view)
-        decoded = await compute(len(data) // DECODED_BYTES_PER_ITEM, decode)
-        results = [
-            await self._admitted(session, item, explain=explain, output=output)
-            for item in decoded.inputs
-        ]
-        return kind.answer(decoded, results)
+        with self._admission():
+            view = SessionView(session.config, session.last_time)
+            decode = functools.partial(kind.decode, data, parameters, view)
+            decoded = await compute(len(data) // DECODED_BYTES_PER_ITEM, decode)
+            results = [
+                await self._admitted(session, item, explain=explain, output=output)
+                for item in decoded.inputs
+            ]
+            return kind.answer(decoded, results)
 
     async def _submit(
         self,
