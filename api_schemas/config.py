@@ -33,6 +33,7 @@ from api_schemas.base import (
 from api_schemas.issues import FieldIssue, raise_issues
 from api_schemas.limits import MAX_SENSORS, bounded
 from api_schemas.linalg import check_covariance
+from core.models import TRANSITION_MODELS
 from core.numerics import MAX_MAGNITUDE
 
 MAX_STATE_DIM = 64
@@ -48,17 +49,29 @@ TrackingPreset = Literal["aircraft", "pedestrian"]
 
 
 class StateLayout(WireModel):
-    """The state vector: its dimension and which components are positions and velocities."""
+    """The state vector: its dimension and which components are positions, velocities and
+    accelerations."""
 
     dim: Annotated[int, Field(ge=1, le=MAX_STATE_DIM)]
     position: Annotated[list[StateIndex], Field(min_length=1, max_length=3)]
     velocity: Annotated[list[StateIndex], Field(max_length=3)] = Field(default_factory=list)
+    acceleration: Annotated[list[StateIndex], Field(max_length=3)] = Field(
+        default_factory=list,
+        description=(
+            "the acceleration component of each axis, in the order of position (the singer "
+            "motion model carries them); empty (the default): none"
+        ),
+    )
 
     @model_validator(mode="after")
     def _indices_consistent(self) -> Self:
         issues: list[FieldIssue] = []
         seen: set[int] = set()
-        for field, indices in (("position", self.position), ("velocity", self.velocity)):
+        for field, indices in (
+            ("position", self.position),
+            ("velocity", self.velocity),
+            ("acceleration", self.acceleration),
+        ):
             for index, component in enumerate(indices):
                 if component >= self.dim:
                     issues.append(
@@ -83,6 +96,15 @@ class StateLayout(WireModel):
                     self.velocity,
                 )
             )
+        if self.acceleration and len(self.acceleration) != len(self.velocity):
+            issues.append(
+                FieldIssue(
+                    ("acceleration",),
+                    f"{len(self.acceleration)} acceleration components for "
+                    f"{len(self.velocity)} velocity components",
+                    self.acceleration,
+                )
+            )
         if issues:
             raise_issues("StateLayout", issues)
         return self
@@ -91,7 +113,7 @@ class StateLayout(WireModel):
 class MotionModel(WireModel):
     """The fused tracks' motion model used to predict them between reports."""
 
-    model: Literal["constant_velocity", "constant_position"] = "constant_velocity"
+    model: Literal["constant_velocity", "constant_position", "singer"] = "constant_velocity"
     q: PositiveFloat | None = Field(
         default=None,
         le=MAX_MAGNITUDE,  # q·Δt³ stays finite for every Δt of legal times (core.numerics)
@@ -106,6 +128,46 @@ class MotionModel(WireModel):
             "pedestrian 8), else 1"
         ),
     )
+    manoeuvre_time: PositiveFloat | None = Field(
+        default=None,
+        le=MAX_MAGNITUDE,
+        description=(
+            "singer only: the manoeuvre time constant τ (s), the correlation time of the "
+            "acceleration (Singer 1970: lazy turn 60 s, evasive manoeuvre 10-20 s, "
+            "atmospheric turbulence 1 s). null (the default): 20 s"
+        ),
+    )
+    acceleration_std: PositiveFloat | None = Field(
+        default=None,
+        le=MAX_MAGNITUDE,
+        description=(
+            "singer only: the acceleration's standard deviation σ_m (m/s²) per axis. null "
+            "(the default): 18.9, Singer's σ_m² = A_max²/3 (1 + 4 P_max − P_0) for an "
+            "aircraft's A_max = 4 g, P_max = 0.05, P_0 = 0.5"
+        ),
+    )
+
+    @model_validator(mode="after")
+    def _parameters_of_the_model(self) -> Self:
+        """Each parameter goes with the models that have it."""
+        singer = ("manoeuvre_time", "acceleration_std")
+        given = self.model_fields_set
+        issues = [
+            FieldIssue((name,), f"{name} is a parameter of the singer model", getattr(self, name))
+            for name in singer
+            if name in given and getattr(self, name) is not None and self.model != "singer"
+        ]
+        if self.model == "singer" and self.q is not None:
+            issues.append(
+                FieldIssue(
+                    ("q",),
+                    "the singer model takes manoeuvre_time and acceleration_std, not q",
+                    self.q,
+                )
+            )
+        if issues:
+            raise_issues("MotionModel", issues)
+        return self
 
 
 FovFrame = Literal["session", "sensor"]
@@ -616,17 +678,37 @@ class SessionConfig(WireModel):
                     self.region.frame,
                 )
             )
-        if self.motion.model == "constant_velocity" and not self.state.velocity:
-            issues.append(
-                FieldIssue(
-                    ("state", "velocity"),
-                    "the constant_velocity motion model needs the velocity components",
-                    self.state.velocity,
-                )
-            )
+        issues.extend(self._motion_issues())
         if issues:
             raise_issues("SessionConfig", issues)
         return self
+
+    def _motion_issues(self) -> list[FieldIssue]:
+        """The state carries the components the motion model moves; the local trackers of
+        detecting sensors have positions and velocities only."""
+        model = self.motion.model
+        issues = [
+            FieldIssue(
+                ("state", kind),
+                f"the {model} motion model needs the {kind} components",
+                getattr(self.state, kind),
+            )
+            for kind in TRANSITION_MODELS[model]().components
+            if not getattr(self.state, kind)
+        ]
+        detecting = [
+            index for index, sensor in enumerate(self.sensors) if sensor.measurement is not None
+        ]
+        if "acceleration" in TRANSITION_MODELS[model]().components and detecting:
+            issues.append(
+                FieldIssue(
+                    ("sensors", detecting[0], "measurement"),
+                    f"sensors that send detections are tracked with positions and velocities "
+                    f"only; the {model} motion model is for sessions of track lists",
+                    None,
+                )
+            )
+        return issues
 
     def _class_behaviour_issues(self) -> list[FieldIssue]:
         """``tracking.class_behaviours`` names exactly the session's classes, with a preset."""

@@ -48,7 +48,7 @@ from core.belief import Frame, MassFunction
 from core.errors import InvalidInput, TotalConflict
 from core.fusion.classes import accumulate_likelihoods
 from core.fusion.config import FusionConfig, SensorSpec
-from core.fusion.motion import MotionKind, MotionModel, StateLayout
+from core.fusion.motion import MotionModel, StateLayout
 from core.fusion.state import StateFusion
 from core.geometry import FieldOfView, PolygonView, Sector
 from core.lifecycle import LifeCycleConfig
@@ -344,6 +344,17 @@ def motion_density(config: SessionConfig) -> float:
     return chosen.manoeuvre_density()
 
 
+def motion_parameters(config: SessionConfig) -> dict[str, float]:
+    """The parameters of the session's motion model: ``q`` (:func:`motion_density`) of the
+    white-noise models, the given ones of the singer model (left out: its defaults,
+    :mod:`core.models.singer`)."""
+    if config.motion.model != "singer":
+        return {"q": motion_density(config)}
+    return config.motion.model_dump(
+        include={"manoeuvre_time", "acceleration_std"}, exclude_none=True
+    )
+
+
 def method_options(options: AssociationOptions) -> dict[str, object]:
     """The core method options of a resolved wire options object."""
     return {
@@ -363,10 +374,9 @@ def fusion_config(config: SessionConfig, extra_sensors: Iterable[str] = ()) -> F
         dim=config.state.dim,
         position=tuple(config.state.position),
         velocity=tuple(config.state.velocity),
+        acceleration=tuple(config.state.acceleration),
     )
-    motion = MotionModel(
-        layout=layout, kind=MotionKind(config.motion.model), q=motion_density(config)
-    )
+    motion = MotionModel(layout, config.motion.model, **motion_parameters(config))
     sensors = [sensor_spec(sensor, index, config) for index, sensor in enumerate(config.sensors)]
     sensors += [SensorSpec(id=sensor_id) for sensor_id in extra_sensors]
     thresholds = config.tracking.thresholds

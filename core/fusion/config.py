@@ -17,10 +17,10 @@ from core.association.associate import resolve_method
 from core.belief import Frame
 from core.errors import InvalidInput, TrackingError
 from core.fusion.detections import check_layout_for_detections
-from core.fusion.motion import MotionModel
 from core.fusion.state import StateFusion
 from core.geometry import Coverage, FieldOfView, PolygonView
 from core.lifecycle import LifeCycleConfig
+from core.models import MappedMotion
 from core.tracking.config import LocalTrackerConfig
 
 CENTRAL_MIN_SENSORS = 2
@@ -98,7 +98,7 @@ class FusionConfig:
         detecting sensor has its own local tracker.
     """
 
-    motion: MotionModel
+    motion: MappedMotion
     sensors: tuple[SensorSpec, ...]
     classes: Frame | None = None
     association_method: str = "denoeux"

@@ -36,9 +36,9 @@ import numpy as np
 from core.arrays import FloatArray
 from core.belief import Frame
 from core.errors import InvalidInput
-from core.fusion.motion import StateLayout
 from core.fusion.reports import ReportedTrack
 from core.lifecycle import TrackStatus
+from core.models import StateLayout
 from core.tracking.models import ModelBank
 from core.tracking.track import LocalTrack, TrackerStep
 from core.tracking.tracker import LocalTracker

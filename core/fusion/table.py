@@ -28,8 +28,8 @@ import numpy as np
 
 from core.arrays import BoolArray, FloatArray, IntArray
 from core.errors import InvalidInput
-from core.fusion.motion import MotionModel
 from core.fusion.state import StateFusion, fuse_information, fusion_weights
+from core.models import MappedMotion
 from core.pipeline.predict import predict_estimates
 
 KEPT_TIMES = 2
@@ -87,7 +87,7 @@ _ESTIMATE_ARRAYS = ("states", "covariances", "times", "present")
 class EstimateTable:
     """Every fused track's latest estimate from each sensor, and their fusion at a time."""
 
-    def __init__(self, sensors: Sequence[str], motion: MotionModel, rule: StateFusion) -> None:
+    def __init__(self, sensors: Sequence[str], motion: MappedMotion, rule: StateFusion) -> None:
         self.slots = {sensor: slot for slot, sensor in enumerate(sensors)}
         self.motion = motion
         self.rule = StateFusion(rule)
@@ -217,7 +217,7 @@ class EstimateTable:
         Raises
         ------
         InvalidInput
-            The prediction to ``time`` overflows (``MotionModel.predict``).
+            The prediction to ``time`` overflows (``MappedMotion.predict``).
         """
         kept = self._kept_at(time)
         need = rows[~kept.fused_ok[rows]]

@@ -13,7 +13,7 @@ from dataclasses import replace
 import numpy as np
 
 from core.arrays import FloatArray, IntArray
-from core.fusion.motion import MotionModel
+from core.models import MappedMotion
 from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState
 from core.tracking.models import ModelBank
 
@@ -39,12 +39,12 @@ def predict_bank(predictor: IMMPredictor, state: IMMState, elapsed: float) -> IM
 
 
 def predict_estimates(
-    motion: MotionModel, states: FloatArray, covariances: FloatArray, dt: FloatArray
+    motion: MappedMotion, states: FloatArray, covariances: FloatArray, dt: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
     """Estimates (n, d), (n, d, d) predicted by their own Δt (n,) ([T2T] Fig 2; §6.4, §7.1).
 
     Δt = 0: the estimate as it is, its covariance symmetrised (P + Pᵀ)/2; a
-    negative Δt predicts backwards (a late report, ``MotionModel.predict``).
+    negative Δt predicts backwards (a late report, ``MappedMotion.predict``).
     """
     predicted, predicted_cov = states.copy(), covariances.copy()
     now = dt == 0.0
