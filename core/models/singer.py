@@ -81,8 +81,11 @@ ACCELERATION_STD = singer_acceleration_std(MAX_ACCELERATION)
 SERIES_BELOW = 1.0
 """Below this ``x = αΔt`` the entries come from their Taylor series."""
 
-SERIES_TERMS = 24
-"""Terms of each series: the first left out is below 1/24! ≈ 1.6e-24 of the sum at x < 1."""
+SERIES_TERMS = 20
+"""Terms of each series: the first left out is below 1/20! ≈ 4e-19 of the sum at |x| < 1."""
+
+_Q_POWERS = np.array([5.0, 4.0, 3.0, 3.0, 2.0, 1.0])
+"""The power p of Δt of each entry of :data:`_ENTRIES` (q̃ = bracket / (2 α^p))."""
 
 # Each bracket of the module docstring as terms (coefficient, m, k): c x^m e^{−k x},
 # with the power p of x it is divided by (x^p / α^p = Δt^p).
@@ -113,31 +116,44 @@ def _series(terms: tuple[Term, ...], power: int, halve: bool) -> FloatArray:
     return np.array([float(c) for c in coefficients])
 
 
-_Q_SERIES = {entry: _series(terms, power, True) for entry, (terms, power) in _BRACKETS.items()}
-_F13_SERIES = _series(_F13[0], _F13[1], False)
+_ENTRIES = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
+"""The upper triangle of Q, in the order of the columns of :data:`_SERIES`."""
+
+_SERIES = np.stack(
+    [_series(*_BRACKETS[entry], halve=True) for entry in _ENTRIES] + [_series(*_F13, halve=False)],
+    axis=1,
+)
+"""Taylor coefficients (SERIES_TERMS, 7): the six q̃ entries over Δt^p, then F13 over Δt²."""
 
 
-def _polynomial(coefficients: FloatArray, x: FloatArray) -> FloatArray:
+def _near(x: FloatArray) -> FloatArray:
+    """The seven series at ``x`` of shape S + (7,) (one x per column), by Horner's rule:
+    elementwise, so that an entry's bits do not depend on the batch it is computed in."""
     result = np.zeros_like(x)
-    for c in coefficients[::-1]:
-        result = result * x + c
+    for row in _SERIES[::-1]:
+        result = result * x + row
     return result
 
 
-def _closed(entry: tuple[int, int], x: FloatArray, e: FloatArray) -> FloatArray:
-    """The bracket of ``entry`` over ``2 x^p`` (module docstring), for x ≥ 1."""
+def _far(x: FloatArray) -> FloatArray:
+    """The seven closed forms at ``x`` of shape S + (7,), |x| ≥ 1 (module docstring)."""
+    e = np.exp(-x)
     e2 = e * e
-    if entry == (0, 0):
-        return (1 - e2 + 2 * x + 2 * x**3 / 3 - 2 * x**2 - 4 * x * e) / (2 * x**5)
-    if entry == (0, 1):
-        return (e2 + 1 - 2 * e + 2 * x * e - 2 * x + x**2) / (2 * x**4)
-    if entry == (0, 2):
-        return (1 - e2 - 2 * x * e) / (2 * x**3)
-    if entry == (1, 1):
-        return (4 * e - 3 - e2 + 2 * x) / (2 * x**3)
-    if entry == (1, 2):
-        return (e2 + 1 - 2 * e) / (2 * x**2)
-    return (1 - e2) / (2 * x)
+    x2 = x * x
+    x3 = x2 * x
+    every = np.stack(  # (S, 7 columns of x, 7 formulas): each column keeps its own formula
+        [
+            (1 - e2 + 2 * x + 2 * x3 / 3 - 2 * x2 - 4 * x * e) / (2 * x2 * x3),
+            (e2 + 1 - 2 * e + 2 * x * e - 2 * x + x2) / (2 * x2 * x2),
+            (1 - e2 - 2 * x * e) / (2 * x3),
+            (4 * e - 3 - e2 + 2 * x) / (2 * x3),
+            (e2 + 1 - 2 * e) / (2 * x2),
+            (1 - e2) / (2 * x),
+            (x - 1 + e) / x2,
+        ],
+        axis=-1,
+    )
+    return np.diagonal(every, axis1=-2, axis2=-1)
 
 
 @dataclass(frozen=True)
@@ -180,34 +196,24 @@ class Singer:
         """F(Δt) and Q(|Δt|) of ``[p, v, a]`` (module docstring)."""
         dt = np.asarray(dt, dtype=np.float64)
         alpha = self.damping
-        x = alpha * dt
         span = np.abs(dt)
-        x_span = alpha * span
-        near = x_span < SERIES_BELOW
-        transition = np.zeros((*dt.shape, 3, 3))
-        transition[..., 0, 0] = transition[..., 1, 1] = 1.0
-        transition[..., 0, 1] = dt
-        with np.errstate(over="ignore", invalid="ignore"):
-            e = np.exp(-x)
-            # (1 − e)/α = Δt (1 − e^{−x})/x; −expm1(−x)/x is exact to the last digits
-            ratio = np.where(x == 0.0, 1.0, -np.expm1(-x) / np.where(x == 0.0, 1.0, x))
-            transition[..., 1, 2] = dt * ratio
-            far = np.where(np.abs(x) < SERIES_BELOW, 1.0, x)
-            transition[..., 0, 2] = dt**2 * np.where(
-                np.abs(x) < SERIES_BELOW,
-                _polynomial(_F13_SERIES, x),
-                (x - 1 + e) / far**2,
-            )
-            transition[..., 2, 2] = e
-            e_span = np.exp(-x_span)
-            far_span = np.where(near, 1.0, x_span)
+        x = alpha * span
+        # the seven scaled entries: the six of Q at x = α|Δt|, F13 at the signed x = αΔt
+        # (backwards, F(−Δt) = F(Δt)⁻¹); each by its series below 1, its closed form above
+        signed = alpha * dt
+        x = np.concatenate([np.repeat(x[..., None], 6, axis=-1), signed[..., None]], axis=-1)
+        near = np.abs(x) < SERIES_BELOW
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            scaled = np.where(near, _near(np.where(near, x, 0.0)), _far(np.where(near, 1.0, x)))
+            upper = self.q * span[..., None] ** _Q_POWERS * scaled[..., :6]
             noise = np.empty((*dt.shape, 3, 3))
-            for (i, j), coefficients in _Q_SERIES.items():
-                power = 5 - i - j
-                scaled = np.where(
-                    near,
-                    _polynomial(coefficients, x_span),
-                    _closed((i, j), far_span, e_span),
-                )
-                noise[..., i, j] = noise[..., j, i] = self.q * span**power * scaled
+            for column, (i, j) in enumerate(_ENTRIES):
+                noise[..., i, j] = noise[..., j, i] = upper[..., column]
+            transition = np.zeros((*dt.shape, 3, 3))
+            transition[..., 0, 0] = transition[..., 1, 1] = 1.0
+            transition[..., 0, 1] = dt
+            transition[..., 0, 2] = dt**2 * scaled[..., 6]
+            # (1 − e^{−αΔt})/α = −expm1(−αΔt)/α: exact to the last digits both ways
+            transition[..., 1, 2] = -np.expm1(-signed) / alpha
+            transition[..., 2, 2] = np.exp(-signed)
         return transition, noise
