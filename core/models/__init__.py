@@ -1,4 +1,4 @@
-"""Motion models as interfaces (docs/algorithms.md §4.1).
+"""Motion models as interfaces (docs/algorithms.md §7.6).
 
 - :mod:`core.models.transition` — the protocol of one axis's motion
   (:class:`TransitionModel`: components and ``matrices(dt)`` → F, Q batched

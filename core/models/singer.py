@@ -1,4 +1,4 @@
-"""The Singer model: a manoeuvre as an exponentially correlated acceleration.
+"""The Singer model: a manoeuvre as an exponentially correlated acceleration (docs/algorithms.md §7.6).
 
 Singer (1970) models a manned target's acceleration along each axis as a
 first-order Gauss–Markov process of time constant ``τ`` (the manoeuvre time)
@@ -6,15 +6,15 @@ and variance ``σ_m²``::
 
     ȧ(t) = −α a(t) + w(t),   α = 1/τ,   E[w(t) w(t')] = 2 α σ_m² δ(t − t')
 
-([Singer] eq 3–5; Bar-Shalom, Li & Kirubarajan 2001, §8.2.3; Li & Jilkov 2003,
-§IV.A). The block of one axis is ``[p, v, a]``; with ``x = αΔt`` and
-``e = e^{−x}`` ([Singer] eq 11; Li & Jilkov eq 40)::
+([Singer]; Li & Jilkov 2003, Part I, its section on the Singer model). The
+block of one axis is ``[p, v, a]``; with ``x = αΔt`` and ``e = e^{−x}``, the
+discrete transition and the covariance of its noise ([Singer]) are::
 
     F = [[1, Δt, (x − 1 + e)/α²],
          [0, 1,  (1 − e)/α],
          [0, 0,  e]]
 
-and ``Q = 2 α σ_m² q̃`` with ([Singer] eq 12–13; Li & Jilkov eq 41)::
+and ``Q = 2 α σ_m² q̃`` with::
 
     q̃11 = (1 − e² + 2x + 2x³/3 − 2x² − 4x e) / (2α⁵)
     q̃12 = (e² + 1 − 2e + 2x e − 2x + x²) / (2α⁴)
@@ -23,20 +23,26 @@ and ``Q = 2 α σ_m² q̃`` with ([Singer] eq 12–13; Li & Jilkov eq 41)::
     q̃23 = (e² + 1 − 2e) / (2α²)
     q̃33 = (1 − e²) / (2α)
 
-(Stone Soup's ``Singer(damping_coeff=α, noise_diff_coeff=2 α σ_m²)``). Each
-bracket cancels to its leading power of ``x`` (up to x⁵ for q̃11), so below
-``x = 1`` the entries are evaluated from their Taylor series instead, whose
-coefficients are worked exactly from the exponential series when the module
-loads (:func:`_series`); above it the closed form loses at most a few digits
-of 10⁻¹⁶. A long gap (``x`` large) is the exponentials' limit: the
-acceleration forgotten (``e → 0``), F and Q finite.
+— ``Q = q ∫₀^Δt F(t) e₃ e₃ᵀ F(t)ᵀ dt`` with ``q = 2 α σ_m²`` (Stone Soup's
+``Singer(damping_coeff=α, noise_diff_coeff=q)``, which integrates it
+numerically; the tests hold the two, and Van Loan's matrix exponential, to
+each other). The papers' equation and section numbers are not quoted: their
+text was not at hand to check them. Each bracket cancels to its leading power of ``x``
+(up to x⁵ for q̃11), so below ``|x| = 1`` the entries are evaluated from
+their Taylor series instead, whose coefficients are worked exactly from the
+exponential series when the module loads (:func:`_series`); above it the
+closed form loses at most a few digits of 10⁻¹⁶. A long gap (``x`` large) is
+the exponentials' limit: the acceleration forgotten (``e → 0``), F and Q
+finite.
 
 Defaults (aircraft, :data:`MANOEUVRE_TIME`, :data:`ACCELERATION_STD`):
-``τ = 20 s``, Singer's evasive manoeuvre ("lazy turn 60 s, evasive
-manoeuvre 10–20 s, atmospheric turbulence 1 s", [Singer] §II), and
-``σ_m² = A_max²/3 (1 + 4 P_max − P_0)`` ([Singer] eq 2) with
-``A_max = 4 g`` (the largest manoeuvre of the aircraft preset's bank),
-``P_max = 0.05`` and ``P_0 = 0.5``: ``σ_m = 0.483 A_max = 18.9 m/s²``.
+``τ = 20 s``, Singer's evasive manoeuvre (he suggests about 60 s for a lazy
+turn, 10–20 s for an evasive manoeuvre, about 1 s for atmospheric
+turbulence), and Singer's ``σ_m² = A_max²/3 (1 + 4 P_max − P_0)`` (the
+variance of his density: 0 with probability P_0, ±A_max with P_max each,
+uniform between) with ``A_max = 4 g`` (the largest manoeuvre of the aircraft
+preset's bank), ``P_max = 0.05`` and ``P_0 = 0.5``:
+``σ_m = 0.483 A_max = 18.9 m/s²``.
 """
 
 from __future__ import annotations

@@ -17,15 +17,15 @@ Implementations:
 
 - :class:`ConstantVelocity` — the discretised continuous white-noise
   acceleration model of spectral density ``q`` (Bar-Shalom, Li & Kirubarajan
-  2001, §6.2.2, eq 6.2.2-12): ``F = [[1, Δt], [0, 1]]``,
+  2001, §6.2.2): ``F = [[1, Δt], [0, 1]]``,
   ``Q = q [[Δt³/3, Δt²/2], [Δt²/2, Δt]]`` (Stone Soup's
   ``ConstantVelocity(noise_diff_coeff=q)``).
 - :class:`ConstantPosition` — ``F = 1``, ``Q = q Δt`` (Stone Soup's
   ``RandomWalk``).
-- :class:`Singer` — the acceleration an exponentially correlated (first-order
-  Gauss–Markov) process, ``ȧ = −α a + w`` with ``α = 1/τ`` (Singer 1970, eq 3;
-  Bar-Shalom, Li & Kirubarajan §8.2.3). ``F`` and ``Q`` are exponentials in
-  ``αΔt``, not polynomials in Δt (module :mod:`core.models.singer`).
+- :class:`~core.models.singer.Singer` — the acceleration an exponentially
+  correlated (first-order Gauss–Markov) process, ``ȧ = −α a + w`` with
+  ``α = 1/τ`` (Singer 1970). ``F`` and ``Q`` are exponentials in ``αΔt``, not
+  polynomials in Δt (module :mod:`core.models.singer`).
 
 The papers' IMM banks (:mod:`core.tracking.models`) are polynomial models of
 the same interface over the whole ``[x, ẋ, y, ẏ(, z, ż)]`` state.
@@ -90,7 +90,7 @@ class ConstantVelocity:
 
     def matrices(self, dt: FloatArray) -> tuple[FloatArray, FloatArray]:
         """``F = [[1, Δt], [0, 1]]``, ``Q = q [[|Δt|³/3, |Δt|²/2], [|Δt|²/2, |Δt|]]``
-        (Bar-Shalom et al. eq 6.2.2-12)."""
+        (Bar-Shalom et al. §6.2.2)."""
         dt = np.asarray(dt, dtype=np.float64)
         transition = np.zeros((*dt.shape, 2, 2))
         transition[..., 0, 0] = transition[..., 1, 1] = 1.0

@@ -59,6 +59,8 @@ k−1)`` (rows sum to 1; the same convention as filterpy's ``IMMEstimator.M``).
 
 from __future__ import annotations
 
+import functools
+import math
 import threading
 from collections import OrderedDict
 from collections.abc import Mapping, Sequence
@@ -85,6 +87,9 @@ AXES = (1, 2, 3)
 
 KEPT_STEPS = 4
 """Time steps whose stacked bank matrices :meth:`ModelBank.at` keeps."""
+
+KEPT_BANKS = 64
+"""Distinct banks (models and mode transitions) whose computed parts are kept and shared."""
 
 
 def position_indices(axes: int) -> tuple[int, ...]:
@@ -241,8 +246,7 @@ class MotionModel:
                 f"model {self.name!r}: need 1 to 3 axes, one speed and one acceleration each "
                 f"(got {len(self.speeds)} speeds, {len(self.acceleration)} accelerations)"
             )
-        values = np.array([*self.acceleration, *self.speeds], dtype=np.float64)
-        if not np.all(np.isfinite(values)):
+        if not all(math.isfinite(v) for v in (*self.acceleration, *self.speeds)):
             raise ModelConfigError(f"model {self.name!r}: accelerations and speeds must be finite")
         _check_noise_intensity(self.noise_intensity, self.name)
         if self.noise not in NOISE_FORMS:
@@ -304,10 +308,17 @@ def input_matrix(time_interval: float, axes: int = 2) -> FloatArray:
     return b
 
 
-def _check_axes(values: FloatArray, name: str) -> tuple[float, ...]:
-    if values.ndim != 1 or len(values) not in AXES:
-        raise ModelConfigError(f"{name} must have 1 to 3 components, got shape {values.shape}")
-    return tuple(float(v) for v in values)
+def _finite_axes(values: Any, name: str) -> tuple[float, ...]:
+    """One finite number per axis, 1 to 3 of them (plain Python: a preset builds 13 models)."""
+    try:
+        items = tuple(float(v) for v in values)
+    except (TypeError, ValueError):
+        raise ModelConfigError(f"{name} must be a finite vector") from None
+    if not all(math.isfinite(v) for v in items):
+        raise ModelConfigError(f"{name} must be a finite vector")
+    if len(items) not in AXES:
+        raise ModelConfigError(f"{name} must have 1 to 3 components, got shape ({len(items)},)")
+    return items
 
 
 def acceleration_input(
@@ -331,10 +342,7 @@ def acceleration_input(
     noise : the form of Q(Δt) (module docstring).
     """
     _check_positive(time_interval, "time_interval")
-    u = np.asarray(acceleration, dtype=np.float64)
-    if u.ndim != 1 or not np.all(np.isfinite(u)):
-        raise ModelConfigError(f"model {name!r} acceleration must be a finite vector")
-    values = _check_axes(u, f"model {name!r} acceleration")
+    values = _finite_axes(acceleration, f"model {name!r} acceleration")
     return MotionModel(
         name=name,
         time_interval=float(time_interval),
@@ -371,10 +379,7 @@ def speed_model(
     vertical axis a plain constant velocity.
     """
     _check_positive(time_interval, "time_interval")
-    s = np.asarray(speeds, dtype=np.float64)
-    if s.ndim != 1 or not np.all(np.isfinite(s)):
-        raise ModelConfigError(f"model {name!r} speeds must be a finite vector")
-    values = _check_axes(s, f"model {name!r} speeds")
+    values = _finite_axes(speeds, f"model {name!r} speeds")
     return MotionModel(
         name=name,
         time_interval=float(time_interval),
@@ -472,6 +477,65 @@ def _power_basis(transition: FloatArray) -> tuple[FloatArray, FloatArray, FloatA
     return np.clip(values, 0.0, None), vectors, inverse
 
 
+class _BankCore:
+    """What a bank computes from its models and mode transitions alone: the closed forms'
+    coefficients, the eigenbasis of Π, the matrices at ΔT and the last :data:`KEPT_STEPS`
+    steps asked for. Banks of the same models and Π share one (:func:`_bank_core`): a
+    tracker rebuilt from its configuration (a restored session) builds none of it again.
+    """
+
+    def __init__(self, models: tuple[MotionModel, ...], transition: FloatArray) -> None:
+        self.structure = _structure(
+            np.array([m.speeds for m in models], dtype=np.float64),
+            np.array([m.acceleration for m in models], dtype=np.float64),
+            np.array([m.noise_intensity for m in models], dtype=np.float64),
+            [m.noise for m in models],
+        )
+        self.mode_transition = transition
+        self.power = _power_basis(transition)
+        self.nominal = _evaluate(self.structure, models[0].time_interval)
+        self.kept: OrderedDict[float, tuple[MotionMatrices, FloatArray]] = OrderedDict()
+        self.lock = threading.Lock()  # shared by every tracker of one configuration
+
+    def at(self, step: float, interval: float) -> tuple[MotionMatrices, FloatArray]:
+        """The models and ``Π(Δt)`` at the checked step Δt (``interval``: the nominal ΔT)."""
+        with self.lock:
+            kept = self.kept
+            found = kept.get(step)
+            if found is not None:
+                kept.move_to_end(step)
+                return found
+            matrices = _evaluate(self.structure, step)
+            found = (matrices, self._transition_power(step / interval))
+            kept[step] = found
+            if len(kept) > KEPT_STEPS:
+                kept.popitem(last=False)
+            return found
+
+    def _transition_power(self, scans: float) -> FloatArray:
+        if scans == 1.0:
+            power = np.array(self.mode_transition, dtype=np.float64)
+        elif scans == 0.0:
+            power = np.eye(len(self.mode_transition))
+        else:
+            values, vectors, inverse = self.power
+            with np.errstate(under="ignore"):
+                power = (vectors * values**scans) @ inverse
+            power = np.clip(power, 0.0, None)
+            power /= power.sum(axis=1, keepdims=True)
+        power.flags.writeable = False
+        return power
+
+
+@functools.lru_cache(maxsize=KEPT_BANKS)
+def _bank_core(models: tuple[MotionModel, ...], parameters: bytes, transition: bytes) -> _BankCore:
+    del parameters  # part of the key only
+    r = len(models)
+    matrix = np.frombuffer(transition, dtype=np.float64).reshape(r, r).copy()
+    matrix.flags.writeable = False
+    return _BankCore(models, matrix)
+
+
 @dataclass(frozen=True)
 class ModelBank:
     """The models of an IMM with their shared measurement model and mode transitions.
@@ -494,14 +558,7 @@ class ModelBank:
     transitions: FloatArray = field(init=False, repr=False, compare=False)
     input_offsets: FloatArray = field(init=False, repr=False, compare=False)
     process_noises: FloatArray = field(init=False, repr=False, compare=False)
-    _structure: tuple[FloatArray, FloatArray, FloatArray, FloatArray] = field(
-        init=False, repr=False, compare=False
-    )
-    _power: tuple[FloatArray, FloatArray, FloatArray] = field(init=False, repr=False, compare=False)
-    _kept: OrderedDict[float, tuple[MotionMatrices, FloatArray]] = field(
-        init=False, repr=False, compare=False
-    )
-    _lock: threading.Lock = field(init=False, repr=False, compare=False)
+    _core: _BankCore = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if not self.models:
@@ -525,20 +582,16 @@ class ModelBank:
             raise ModelConfigError(f"mode transition must be a finite ({r}, {r}) matrix")
         if np.any(transition < 0.0) or np.any(np.abs(transition.sum(axis=1) - 1.0) > 1e-9):
             raise ModelConfigError("mode transition rows must be non-negative and sum to 1")
-        structure = _structure(
-            np.array([m.speeds for m in self.models], dtype=np.float64),
-            np.array([m.acceleration for m in self.models], dtype=np.float64),
-            np.array([m.noise_intensity for m in self.models], dtype=np.float64),
-            [m.noise for m in self.models],
+        parameters = np.array(
+            [(m.time_interval, m.noise_intensity, *m.acceleration, *m.speeds) for m in self.models],
+            dtype=np.float64,
         )
-        object.__setattr__(self, "_structure", structure)
-        object.__setattr__(self, "_power", _power_basis(transition))
-        object.__setattr__(self, "_kept", OrderedDict())
-        object.__setattr__(self, "_lock", threading.Lock())
-        nominal = _evaluate(structure, interval)
-        object.__setattr__(self, "transitions", nominal.transition)
-        object.__setattr__(self, "input_offsets", nominal.input_offset)
-        object.__setattr__(self, "process_noises", nominal.process_noise)
+        # the parameters' bytes keep apart what == would not (0.0 and −0.0)
+        core = _bank_core(self.models, parameters.tobytes(), transition.tobytes())
+        object.__setattr__(self, "_core", core)
+        object.__setattr__(self, "transitions", core.nominal.transition)
+        object.__setattr__(self, "input_offsets", core.nominal.input_offset)
+        object.__setattr__(self, "process_noises", core.nominal.process_noise)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -578,33 +631,7 @@ class ModelBank:
         return self._at(dt)[1]
 
     def _at(self, dt: float) -> tuple[MotionMatrices, FloatArray]:
-        step = _check_step(dt)
-        with self._lock:  # a bank may be shared by the trackers of one configuration
-            kept = self._kept
-            found = kept.get(step)
-            if found is not None:
-                kept.move_to_end(step)
-                return found
-            matrices = _evaluate(self._structure, step)
-            found = (matrices, self._transition_power(step / self.time_interval))
-            kept[step] = found
-            if len(kept) > KEPT_STEPS:
-                kept.popitem(last=False)
-            return found
-
-    def _transition_power(self, scans: float) -> FloatArray:
-        if scans == 1.0:
-            power = np.array(self.mode_transition, dtype=np.float64)
-        elif scans == 0.0:
-            power = np.eye(self.n_models)
-        else:
-            values, vectors, inverse = self._power
-            with np.errstate(under="ignore"):
-                power = (vectors * values**scans) @ inverse
-            power = np.clip(power, 0.0, None)
-            power /= power.sum(axis=1, keepdims=True)
-        power.flags.writeable = False
-        return power
+        return self._core.at(_check_step(dt), self.time_interval)
 
     @classmethod
     def from_config(cls, config: Mapping[str, Any]) -> ModelBank:

@@ -29,6 +29,7 @@ from stonesoup.models.transition.linear import (
 )
 
 from core.errors import InvalidInput
+from core.fusion.motion import MotionKind
 from core.models import (
     TRANSITION_MODELS,
     ConstantPosition,
@@ -184,3 +185,7 @@ def test_every_registered_model_has_defaults_and_starts_with_a_position() -> Non
         model = build()
         assert isinstance(model, TransitionModel), name
         assert model.components[0] == "position", name
+
+
+def test_the_sessions_model_names_are_the_registrys() -> None:
+    assert {kind.value for kind in MotionKind} == set(TRANSITION_MODELS)
