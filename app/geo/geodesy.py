@@ -141,13 +141,16 @@ def block_transform(
     state_dim: int,
     position_indices: tuple[int, ...],
     velocity_indices: tuple[int, ...],
+    acceleration_indices: tuple[int, ...] = (),
 ) -> FloatArray:
-    """``T`` (N, n, n): each rotation (N, d, d) on the position and on the velocity components."""
+    """``T`` (N, n, n): each rotation (N, d, d) on the position, the velocity and the
+    acceleration components."""
     count, d = rotations.shape[0], rotations.shape[-1]
-    if len(position_indices) != d or (velocity_indices and len(velocity_indices) != d):
+    derivatives = (velocity_indices, acceleration_indices)
+    if len(position_indices) != d or any(len(i) not in (0, d) for i in derivatives):
         raise ValueError(f"layout has {len(position_indices)} position components, rotation {d}")
     transform = np.broadcast_to(np.eye(state_dim), (count, state_dim, state_dim)).copy()
-    for indices in (position_indices, velocity_indices):
+    for indices in (position_indices, *derivatives):
         if indices:
             block = np.ix_(range(count), indices, indices)
             transform[block] = rotations
@@ -161,15 +164,18 @@ def sensor_to_session(
     velocity_indices: tuple[int, ...],
     site: FloatArray,
     heading_deg: float,
+    acceleration_indices: tuple[int, ...] = (),
 ) -> tuple[FloatArray, FloatArray]:
     """Tracks in a sensor's own frame (origin at ``site``, turned by its heading) → session frame.
 
-    ``x_s = site + H x``, ``v_s = H v``, ``P_s = T P Tᵀ`` with H of
+    ``x_s = site + H x``, ``v_s = H v``, ``a_s = H a``, ``P_s = T P Tᵀ`` with H of
     :func:`heading_rotation`; shapes (N, n) and (N, n, n).
     """
     d = len(position_indices)
     turn = np.broadcast_to(heading_rotation(heading_deg, d), (len(states), d, d))
-    transform = block_transform(turn, states.shape[-1], position_indices, velocity_indices)
+    transform = block_transform(
+        turn, states.shape[-1], position_indices, velocity_indices, acceleration_indices
+    )
     moved = np.einsum("tij,tj->ti", transform, states)
     moved[:, list(position_indices)] += np.asarray(site, dtype=np.float64)[:d]
     return moved, rotate_covariances(transform, covariances)
@@ -181,12 +187,14 @@ def geodetic_to_session(
     covariances: FloatArray,
     position_indices: tuple[int, ...],
     velocity_indices: tuple[int, ...],
+    acceleration_indices: tuple[int, ...] = (),
 ) -> tuple[FloatArray, FloatArray]:
     """Tracks whose positions are (lat°, lon°[, alt m]) → session frame.
 
-    Velocities are east/north/up at the point and the covariance is in the
-    local ENU metres (and m/s) at the point; both are turned by the rotation
-    between the point's tangent plane and the session's. In a 2-D session
+    Velocities (and accelerations) are east/north/up at the point and the
+    covariance is in the local ENU metres (and m/s, m/s²) at the point; all are
+    turned by the rotation between the point's tangent plane and the
+    session's. In a 2-D session
     (positions lat, lon) the point is taken at the origin's altitude and the
     horizontal block of the rotation is used: the vertical it drops is below
     1e-4 of the horizontal within 100 km of the origin.
@@ -196,7 +204,9 @@ def geodetic_to_session(
     altitude = positions[:, 2] if d == 3 else np.full(len(states), frame.alt)
     enu = frame.from_geodetic(positions[:, 0], positions[:, 1], altitude)
     rotation = frame.rotation_from(positions[:, 0], positions[:, 1])[:, :d, :d]
-    transform = block_transform(rotation, states.shape[-1], position_indices, velocity_indices)
+    transform = block_transform(
+        rotation, states.shape[-1], position_indices, velocity_indices, acceleration_indices
+    )
     moved = np.einsum("tij,tj->ti", transform, states)
     moved[:, list(position_indices)] = enu[:, :d]
     return moved, rotate_covariances(transform, covariances)

@@ -107,15 +107,18 @@ def session_frame_report(report: TrackReport, config: SessionConfig) -> CoreTrac
     states = np.array([track.state for track in core.tracks]).reshape(-1, dim)
     covariances = np.array([track.covariance for track in core.tracks]).reshape(-1, dim, dim)
     position, velocity = tuple(config.state.position), tuple(config.state.velocity)
+    acceleration = tuple(config.state.acceleration)
     if report.frame == "sensor":
         site, heading = sensor_site(config.sensor(report.sensor), session_origin(config))
         states, covariances = sensor_to_session(
-            states, covariances, position, velocity, site, heading
+            states, covariances, position, velocity, site, heading, acceleration
         )
     else:
         frame = session_origin(config)
         assert frame is not None  # checked against the config before
-        states, covariances = geodetic_to_session(frame, states, covariances, position, velocity)
+        states, covariances = geodetic_to_session(
+            frame, states, covariances, position, velocity, acceleration
+        )
     tracks = tuple(
         dataclasses.replace(track, state=state, covariance=covariance)
         for track, state, covariance in zip(core.tracks, states, covariances, strict=True)

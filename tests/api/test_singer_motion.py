@@ -127,3 +127,39 @@ def test_singer_defaults_need_no_tuning(live_server: LiveServer) -> None:
     with httpx.Client(base_url=live_server.url) as client:
         created = client.post("/v1/sessions", json=_session({"model": "singer"}))
     assert created.status_code == 201, created.text
+
+
+def test_a_sensor_frame_track_has_its_acceleration_turned_with_its_velocity(
+    live_server: LiveServer,
+) -> None:
+    """A sensor at (1000, 2000) heading 90°: its y axis is the session's x (the rule of
+    tests/api/test_sensor_frames.py). A track at y = 300 m, ẏ = 10 m/s, ÿ = 3 m/s² in its
+    frame is at x = 1300 m, ẋ = 10 m/s, ẍ = 3 m/s² in the session's."""
+    config = {
+        "state": LAYOUT,
+        "motion": {"model": "singer"},
+        "sensors": [{"id": "own", "site": {"position": [1000.0, 2000.0], "heading_deg": 90.0}}],
+    }
+    with httpx.Client(base_url=live_server.url) as client:
+        created = client.post("/v1/sessions", json=config)
+        assert created.status_code == 201, created.text
+        sid, headers = created.json()["id"], {"Authorization": f"Bearer {created.json()['token']}"}
+        body = {
+            "sensor": "own",
+            "time": 1.0,
+            "frame": "sensor",
+            "tracks": [
+                {
+                    "id": "t",
+                    "state": [0.0, 300.0, 0.0, 10.0, 0.0, 3.0],
+                    "covariance": np.diag([25.0, 25.0, 1.0, 1.0, 4.0, 4.0]).tolist(),
+                }
+            ],
+        }
+        answer = client.post(f"/v1/sessions/{sid}/tracks", json=body, headers=headers)
+        assert answer.status_code == 200, answer.text
+        (track,) = answer.json()["tracks"]
+    np.testing.assert_allclose(track["state"], [1300.0, 2000.0, 10.0, 0.0, 3.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(
+        np.diag(track["covariance"]), [25.0, 25.0, 1.0, 1.0, 4.0, 4.0], atol=1e-9
+    )
