@@ -22,6 +22,7 @@ from __future__ import annotations
 import enum
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import shapely
@@ -117,11 +118,18 @@ class PolygonView:
         if not shapely.Polygon(self.vertices).is_valid:
             raise InvalidInput("polygon field of view is not a simple polygon (edges cross)")
 
+    @cached_property
+    def _shape(self) -> shapely.Polygon:
+        """The polygon, built and prepared once per view (not once per step: a session
+        keeps its views)."""
+        polygon = shapely.Polygon(self.vertices)
+        shapely.prepare(polygon)
+        return polygon
+
     def contains(self, points: FloatArray) -> BoolArray:
         """True where a position is inside the polygon or on its boundary."""
         array = _as_points(points)
-        polygon = shapely.Polygon(self.vertices)
-        inside = shapely.intersects_xy(polygon, array[:, 0], array[:, 1])
+        inside = shapely.intersects_xy(self._shape, array[:, 0], array[:, 1])
         return np.asarray(inside, dtype=np.bool_)
 
     def in_range(self, points: FloatArray) -> BoolArray:
@@ -160,13 +168,15 @@ class Coverage:
         array = _as_points(points)
         if any(view is None for view in self.views):  # a sensor that sees everywhere
             return np.full(len(array), int(Visibility.VISIBLE), dtype=np.int64)
-        visible = self.sees(array).any(axis=0)
+        sees = self.sees(array)
+        visible = sees.any(axis=0)
         if self.region is not None:
             surveyed = self.region.contains(array)
         else:
-            ranges = [
-                np.ones(len(array), dtype=np.bool_) if view is None else view.in_range(array)
-                for view in self.views
+            ranges = [  # a polygon's range is what it sees: not looked up twice
+                seen if isinstance(view, PolygonView) else view.in_range(array)
+                for view, seen in zip(self.views, sees, strict=True)
+                if view is not None
             ]
             stacked = np.asarray(ranges, dtype=np.bool_).reshape(len(self.views), len(array))
             surveyed = np.asarray(stacked.any(axis=0), dtype=np.bool_)

@@ -33,14 +33,12 @@ from __future__ import annotations
 
 import math
 import time
-import uuid
+from collections import deque
 from collections.abc import Callable
 
 from limits import RateLimitItem, RateLimitItemPerSecond
 from limits.aio.storage import MemoryStorage
 from limits.aio.strategies import SlidingWindowCounterRateLimiter
-from limits.storage import MemoryStorage as ThreadSafeMemoryStorage
-from limits.strategies import MovingWindowRateLimiter
 from starlette.responses import Response
 from starlette.types import ASGIApp, Receive, Scope, Send
 from starlette.websockets import WebSocket
@@ -167,18 +165,22 @@ async def _deny_websocket(scope: Scope, receive: Receive, send: Send, response: 
         await websocket.close(code=1008, reason="rate limit exceeded")
 
 
-MESSAGES = MovingWindowRateLimiter(ThreadSafeMemoryStorage())
-"""The message counts of every WebSocket connection of the process (one key each)."""
-
-
 class MessageRate:
     """At most ``per_second`` messages in any one-second window of one WebSocket connection
-    (``ws_messages_per_second``): the ``limits`` library's moving window, as for HTTP."""
+    (``ws_messages_per_second``): a moving window, as the ``limits`` library's for HTTP, kept
+    by the connection itself: the times of its latest ``per_second`` messages admitted. (The
+    library's threaded memory storage started a timer thread every 10 ms under load, about
+    one per scan, each taking the GIL from the event loop.)"""
 
     def __init__(self, per_second: int) -> None:
-        self.item = RateLimitItemPerSecond(per_second)
-        self.key = f"ws-connection:{uuid.uuid4().hex}"
+        self.per_second = per_second
+        self._admitted: deque[float] = deque(maxlen=per_second)
 
     def admit(self) -> bool:
-        """Count one message; ``False`` if it is beyond the rate (it is then not counted)."""
-        return MESSAGES.hit(self.item, self.key)
+        """Count one message; ``False`` if it is beyond the rate (it is then not counted):
+        when the ``per_second``-th latest message admitted is less than a second old."""
+        now = time.monotonic()
+        if len(self._admitted) == self.per_second and self._admitted[0] >= now - 1.0:
+            return False
+        self._admitted.append(now)
+        return True

@@ -114,22 +114,33 @@ def local_track_report(
     """The confirmed local tracks updated in a scan, on the session's layout, with their
     class mass; ``every``: every track the tracker keeps (confirmed, coasting or phantom,
     updated or not: the central tracker's, docs/algorithms.md §8.9)."""
-    order = list(local_order(layout))
+    order = np.array(local_order(layout), dtype=np.int64)
     preset = tracker.preset
     headings = preset is not None and preset.velocity_convention == "heading"
     updated = set(step.updated)
-    reported = []
-    for track in step.tracks:
-        if every:
-            if track.status not in KEPT:
-                continue
-        elif track.status is not TrackStatus.CONFIRMED or track.id not in updated:
-            continue
-        local_state, local_covariance = _in_velocity_convention(tracker.bank, headings, track)
-        state = np.zeros(layout.dim)
-        covariance = np.zeros((layout.dim, layout.dim))
-        state[order] = local_state
-        covariance[np.ix_(order, order)] = local_covariance
-        mass = track.class_mass if classes is not None else None
-        reported.append(ReportedTrack(track.id, state, covariance, class_mass=mass))
-    return tuple(reported)
+    kept = [
+        track
+        for track in step.tracks
+        if (
+            track.status in KEPT
+            if every
+            else track.status is TrackStatus.CONFIRMED and track.id in updated
+        )
+    ]
+    if not kept:
+        return ()
+    local = [_in_velocity_convention(tracker.bank, headings, track) for track in kept]
+    # every track placed on the layout at once (copies: no reported array is the tracker's)
+    states = np.zeros((len(kept), layout.dim))
+    covariances = np.zeros((len(kept), layout.dim, layout.dim))
+    states[:, order] = np.stack([state for state, _ in local])
+    covariances[:, order[:, None], order[None, :]] = np.stack([cov for _, cov in local])
+    return tuple(
+        ReportedTrack(
+            track.id,
+            state,
+            covariance,
+            class_mass=track.class_mass if classes is not None else None,
+        )
+        for track, state, covariance in zip(kept, states, covariances, strict=True)
+    )

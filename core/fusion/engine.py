@@ -589,7 +589,7 @@ class SessionEngine:
         times = table.times[rows]
         within = np.where(
             np.isfinite(revisit),
-            self.time - times <= revisits * np.nan_to_num(revisit),
+            self.time - times <= revisits * revisit,  # NaN (not known): the other branch
             times >= latest,
         )
         return np.asarray(table.present[rows] & within, dtype=bool)

@@ -201,6 +201,10 @@ class SensorPhysics:
             )
 
 
+NO_PHYSICS = SensorPhysics()
+"""A sensor without a data sheet of its own: the tracker's (one instance, not one per look-up)."""
+
+
 @dataclass(frozen=True)
 class LocalTrackerConfig:
     """Everything a :class:`~core.tracking.tracker.LocalTracker` needs (module Readings).
@@ -421,7 +425,7 @@ class LocalTrackerConfig:
 
     def physics(self, sensor: str) -> tuple[float, float | None]:
         """``(P_D, β_FT or None: estimate it)`` of a sensor's scans."""
-        own = self.sensor_physics.get(sensor, SensorPhysics())
+        own = self.sensor_physics.get(sensor, NO_PHYSICS)
         p_detect = self.p_detect if own.p_detect is None else own.p_detect
         clutter = own.clutter_density
         return p_detect, self.life_cycle.false_target_density if clutter is None else clutter
@@ -429,12 +433,12 @@ class LocalTrackerConfig:
     def noise(self, sensor: str) -> FloatArray | None:
         """R of ``sensor``'s detections without their own covariance, when it is not the
         bank's (``sensor_physics``); None: the bank's."""
-        own = self.sensor_physics.get(sensor, SensorPhysics()).measurement_noise
+        own = self.sensor_physics.get(sensor, NO_PHYSICS).measurement_noise
         return None if own is None else np.array(own, dtype=np.float64)
 
     def range_rate_of(self, sensor: str) -> RangeRateModel | None:
         """The range-rate model of ``sensor``'s detections (its own, else the tracker's)."""
-        own = self.sensor_physics.get(sensor, SensorPhysics()).range_rate
+        own = self.sensor_physics.get(sensor, NO_PHYSICS).range_rate
         return self.range_rate if own is None else own
 
     def tracking_preset(self) -> TrackingPreset | None:

@@ -754,7 +754,9 @@ class LocalTracker:
                 starts,
                 numbers,
                 score.initial,
-                recent=RecentDetections.first(time, z[starts], noises[starts]),
+                recent=None
+                if self._recent is None
+                else RecentDetections.first(time, z[starts], noises[starts]),
             )
             return len(starts)
         sensor_index = self.config.sensors.index(sensor)
