@@ -139,10 +139,16 @@ it closes with code 1013, reason `store unavailable`: subscribe again once
 `GET /readyz` answers 200. An input sent on `stream` while the store is down
 gets an `error` with the 503 `store-unavailable` problem and is not applied.
 An input sent to an instance that runs behind (its event loop later than
-`CREDAL_OVERLOAD_DELAY_MS` on average, 200 ms by default) gets an `error` with
-the 503 `overloaded` problem, refused before any work: it was not applied,
-and the connection stays open; send it again after the problem's
-`retry_after` seconds (on this connection, or to another instance).
+`CREDAL_OVERLOAD_DELAY_MS` on average, 200 ms by default, while its tenant
+holds at least its share of the inputs in flight), or one that waited longer
+than `CREDAL_MAX_QUEUE_MS` (500 ms by default) for its step while other
+inputs' steps ran, gets an `error` with the 503 `overloaded` problem (its
+`limit` names which), refused before its step: it was not applied, and the
+connection stays open; send it again after the problem's `retry_after`
+seconds (on this connection, or to another instance). A tenant with
+`CREDAL_TENANT_MAX_IN_FLIGHT` inputs in flight on the instance gets an `error`
+with a 429 `limit-exceeded` problem naming `tenant_max_in_flight` for the
+next, also unapplied.
 
 Clients and failures (the reference client is `app/commands/resilient.py`):
 

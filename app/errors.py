@@ -176,23 +176,42 @@ class StoreUnavailable(RetryLater):
         )
 
 
-class Overloaded(RetryLater):
-    """The instance runs behind (its event loop late by more than ``overload_delay_ms``): a new
-    input is refused before any work, so the inputs it accepts are answered in time."""
+class Overload(RetryLater):
+    """An input refused because the instance could not answer it in time (503 ``overloaded``,
+    ``Retry-After``), before it was applied: ``limit`` names the measure that refused it."""
 
     status = HTTPStatus.SERVICE_UNAVAILABLE
     slug = "overloaded"
     title = "Service overloaded"
     retry_after_s = 1
+    AFTER = "the input was not applied, send it again after Retry-After (to any instance)"
+
+
+class Overloaded(Overload):
+    """The instance runs behind (its event loop late by more than ``overload_delay_ms``): a new
+    input is refused before any work, so the inputs it accepts are answered in time."""
 
     def __init__(self, delay_ms: float, limit_ms: float) -> None:
         super().__init__(
             f"this instance runs {delay_ms:.0f} ms behind (limit overload_delay_ms = "
-            f"{limit_ms:g}): the input was not applied, send it again after Retry-After "
-            "(to any instance)",
+            f"{limit_ms:g}): {self.AFTER}",
             type(self).retry_after_s,
             limit="overload_delay_ms",
             delay_ms=round(delay_ms),
+        )
+
+
+class TooLate(Overload):
+    """An input that waited longer than ``max_queue_ms`` for its step (for the event loop, its
+    session's lock, its tenant's turn): refused before it is applied rather than answered late."""
+
+    def __init__(self, queued_ms: float, limit_ms: float) -> None:
+        super().__init__(
+            f"this input waited {queued_ms:.0f} ms for its turn (limit max_queue_ms = "
+            f"{limit_ms:g}): {self.AFTER}",
+            type(self).retry_after_s,
+            limit="max_queue_ms",
+            queued_ms=round(queued_ms),
         )
 
 

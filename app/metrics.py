@@ -73,6 +73,7 @@ class ServiceMetrics:
     rebuilds: Counter
     internal_errors: Counter
     overloaded: Counter
+    refused_waiting: Counter
     loop_lag: Histogram
     collections: Histogram
     detections: Counter
@@ -152,6 +153,14 @@ class ServiceMetrics:
                 "credal_inputs_refused_overloaded",
                 "Inputs refused (503 overloaded) because the event loop ran later than "
                 "overload_delay_ms (app.sessions.pipeline.InputPipeline.admit).",
+                registry=registry,
+            ),
+            refused_waiting=Counter(
+                "credal_inputs_refused_waiting",
+                "Inputs refused before their step by the limit on waiting inputs it names: "
+                "max_queue_ms (503 overloaded: it waited too long to be answered in time) or "
+                "tenant_max_in_flight (429: its tenant had that many waiting or applied).",
+                ("limit",),
                 registry=registry,
             ),
             loop_lag=Histogram(

@@ -201,6 +201,22 @@ class Settings(BaseSettings):
         "the inputs accepted are answered in time instead of every session falling behind; "
         "0: never refuse",
     )
+    max_queue_ms: float = Field(
+        500.0,
+        ge=0.0,
+        description="refuse an input (503 overloaded with Retry-After, a stream's error) that "
+        "has waited longer than this since its last byte was read (for the event loop, its "
+        "session's lock, its tenant's turn) when its engine step would start: before it is "
+        "applied or logged, rather than answering it late; an input with no other in flight "
+        "is not refused; 0: never refuse",
+    )
+    tenant_max_in_flight: int = Field(
+        256,
+        ge=1,
+        description="inputs of one tenant in flight on one instance (admitted, not yet "
+        "answered: waiting for their turn or being applied); one more: 429 with Retry-After. "
+        "The tenants' steps are taken round-robin (app.sessions.turns)",
+    )
     ws_messages_per_second: int = Field(
         1000,
         ge=1,

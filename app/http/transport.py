@@ -51,6 +51,7 @@ from app.http.errors import (
     problem_for,
 )
 from app.http.responses import dumps
+from app.sessions.work import Receipt, receipt
 from app.settings import TransportLimits
 
 DRAIN_SECONDS = 2.0
@@ -59,6 +60,19 @@ DRAIN_SECONDS = 2.0
 HEAD_DRAIN_BYTES = 256 * 1024
 """The rest of a head too large read and discarded before closing (the client reads the 431
 meanwhile): a header bomb is not read whole, as an oversize body is (up to 8 MiB)."""
+
+
+RECEIVED_AT = "credal.received_at"
+"""The scope key of the :class:`~app.sessions.work.Receipt` of a request, taken when its last
+byte was read: the start of its wait for an answer (``max_queue_ms``,
+:meth:`~app.sessions.pipeline.InputPipeline.submit`)."""
+
+
+def received_at(scope: Any) -> Receipt | None:
+    """The :data:`RECEIVED_AT` receipt of the request of ``scope`` (``None`` if it was not read
+    by :class:`GuardedHttpProtocol`, as under the in-process test client)."""
+    stamp = scope.get(RECEIVED_AT)
+    return stamp if isinstance(stamp, Receipt) else None
 
 
 LISTEN_BACKLOG = 256
@@ -330,6 +344,7 @@ class GuardedHttpProtocol(HttpToolsProtocol):
         super().on_headers_complete()
 
     def on_message_complete(self) -> None:
+        self.scope[RECEIVED_AT] = receipt()  # type: ignore[literal-required]
         super().on_message_complete()
         self.in_head = True  # what follows is the next request's head
         self.head_bytes = 0

@@ -17,6 +17,7 @@ from app.http.errors import problem_responses
 from app.http.requests import PRECHECKS, WireRoute
 from app.http.responses import JSONTextResponse
 from app.http.security import hash_token
+from app.http.transport import received_at
 from app.inputs import DECODED_KINDS, INPUT_KINDS, DecodedKind, Input, InputKind
 from app.routes.fusion import OutputFormat, OutputFrame, output_of, output_responses
 from app.sessions.live import IDEMPOTENCY_KEYS
@@ -72,6 +73,7 @@ def _submit_route(router: APIRouter, kind: InputKind[Any]) -> None:
     """``POST /v1/sessions/{sid}/{tag}`` for the input kind ``kind`` (its report as the body)."""
 
     async def submit(
+        request: Request,
         report: WireModel,
         session: LiveSessionDep,
         registry: RegistryDep,
@@ -83,7 +85,12 @@ def _submit_route(router: APIRouter, kind: InputKind[Any]) -> None:
         output = output_of(session.config, format, frame)  # refused before anything is applied
         submitted = Input(kind, report)
         answer = await registry.submit(
-            session, submitted, explain=explain, output=output, idempotency_key=idempotency_key
+            session,
+            submitted,
+            explain=explain,
+            output=output,
+            idempotency_key=idempotency_key,
+            received_at=received_at(request.scope),
         )
         return JSONTextResponse(answer, media_type=output.media_type)
 
@@ -119,7 +126,13 @@ def _decoded_route(router: APIRouter, kind: DecodedKind[Any]) -> None:
         data = await request.body()
         return JSONTextResponse(
             await registry.submit_decoded(
-                session, kind, data, parameters, explain=explain, output=output
+                session,
+                kind,
+                data,
+                parameters,
+                explain=explain,
+                output=output,
+                received_at=received_at(request.scope),
             )
         )
 

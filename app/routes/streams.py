@@ -70,6 +70,7 @@ from app.sessions.hub import SESSION_ENDED, STORE_UNAVAILABLE, Ending, Published
 from app.sessions.live import LiveSession
 from app.sessions.pipeline import result_message
 from app.sessions.registry import SessionRegistry
+from app.sessions.work import Receipt, receipt
 
 router = APIRouter(prefix="/v1/sessions", route_class=WireRoute)
 logger = logging.getLogger("credal_fusion.streams")
@@ -233,10 +234,11 @@ async def _answer(
     text: str,
     path: str,
     output: Output = JSON,
+    received_at: Receipt | None = None,
 ) -> str:
     """The one answer (``result`` or ``error``) to one client message (its result written as
-    ``output``). A message larger than ``OFFLOAD_BYTES`` is parsed and
-    validated in a worker thread, as a REST body is."""
+    ``output``; ``received_at``: when the reader took it). A message
+    larger than ``OFFLOAD_BYTES`` is parsed and validated in a worker thread, as a REST body is."""
     read = functools.partial(_client_message, text, path, registry.settings.max_listed_errors)
     if len(text) > OFFLOAD_BYTES:
         with collection_paused():
@@ -253,6 +255,7 @@ async def _answer(
             message_input(message),
             output=output,
             idempotency_key=message.idempotency_key,
+            received_at=received_at,
         )
     except Exception as error:  # every failure is answered; the connection stays open
         return error_message(problem_for(error, path), message.ref)
@@ -272,6 +275,7 @@ async def _decoded_answer(
     data: bytes,
     path: str,
     output: Output,
+    received_at: Receipt | None = None,
 ) -> str:
     """The answer to a binary message: bytes of a decoded kind (``?decode=TAG``, default the
     first registered), with that kind's parameters in the connection's query."""
@@ -298,7 +302,9 @@ async def _decoded_answer(
             ) from None
         if session.closed:
             session = await registry.get(session.id)
-        answer = await registry.submit_decoded(session, kind, data, parameters, output=output)
+        answer = await registry.submit_decoded(
+            session, kind, data, parameters, output=output, received_at=received_at
+        )
     except Exception as error:  # every failure is answered; the connection stays open
         return error_message(problem_for(error, path), None)
     return f'{{"type":"{kind.tag}_result","ref":null,"result":{answer}}}'
@@ -324,6 +330,9 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
         async with send:
             while True:
                 incoming = await websocket.receive()
+                # the protocol reads no further message until this one is taken: the wait
+                # counted against max_queue_ms starts here (a backlog stays in TCP's buffers)
+                received = receipt()
                 if incoming["type"] == "websocket.disconnect":
                     return
                 text = incoming.get("text")
@@ -351,9 +360,9 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
                         path,
                     )
                 elif text is None:
-                    answer = await _decoded_answer(websocket, session, data, path, output)
+                    answer = await _decoded_answer(websocket, session, data, path, output, received)
                 else:
-                    answer = await _answer(session, registry, text, path, output)
+                    answer = await _answer(session, registry, text, path, output, received)
                 await send.send(answer)
 
     async def writer() -> None:

@@ -2,10 +2,13 @@
 
 One input (:meth:`InputPipeline.submit`):
 
-0. is refused (503 ``overloaded``) while the instance runs behind (:meth:`InputPipeline.admit`);
+0. is refused (503 ``overloaded``) while the instance runs behind, or (429) beyond its
+   tenant's ``tenant_max_in_flight`` (:meth:`InputPipeline.admit`);
 1. checks that need only the config (limits, sensor, dimensions, labels: its kind's);
-2. under the session's lock, the engine applies it (in a worker thread unless the work
-   is tiny); a refusal changes nothing;
+2. under the session's lock, in its tenant's turn (:mod:`app.sessions.turns`: the tenants
+   take the engine steps round-robin), the engine applies it (in a worker thread unless the
+   work is tiny) — unless it has waited longer than ``max_queue_ms`` since it was received
+   (503 ``overloaded``: it would be answered late); a refusal changes nothing;
 3. the input is appended to the store — durably for sqlite — and only then is
    the result returned and published. Steps 2–3 are shielded from
    cancellation (a client that goes away cannot leave the engine ahead of the
@@ -28,6 +31,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import UTC, datetime
+from http import HTTPStatus
 from typing import TYPE_CHECKING, Any
 
 import anyio
@@ -35,7 +39,7 @@ from prometheus_client import Counter, Histogram
 
 from api_schemas.timing import TimeEpoch
 from app.cluster.quotas import input_work
-from app.errors import LimitExceeded, Overloaded, SessionNotFound, StoreUnavailable
+from app.errors import LimitExceeded, Overloaded, SessionNotFound, StoreUnavailable, TooLate
 from app.inputs import DecodedKind, Input, SessionView
 from app.outputs import JSON, Output
 from app.outputs.text import dumps
@@ -44,7 +48,8 @@ from app.sessions.hub import SESSION_RELOADED, STORE_UNAVAILABLE, Published
 from app.sessions.live import IDEMPOTENCY_FIELD, LiveSession, idempotency_record
 from app.sessions.log import logged_input
 from app.sessions.translate import PlainObject
-from app.sessions.work import compute
+from app.sessions.turns import Turns
+from app.sessions.work import Receipt, StepCount, compute, receipt
 from app.stores import LogEntry, SequenceConflict, Snapshot
 from core.fusion.engine import SessionEngine
 from core.tracking.track import ScanTally
@@ -90,6 +95,16 @@ class Once:
 
 
 @dataclass(frozen=True)
+class Arrival:
+    """Whose an input is (its session's tenant) and when it was received."""
+
+    tenant: str
+    received: Receipt | None
+    """``None``: not to be refused for its wait (the later inputs of a decoded body, accepted
+    with its first)."""
+
+
+@dataclass(frozen=True)
 class InputSeries:
     """The metrics of one kind of input (``tracks``, ``detections``)."""
 
@@ -106,6 +121,10 @@ class InputPipeline:
         self._input_series: dict[str, InputSeries] = {}
         self.in_flight = 0
         """Inputs admitted and not yet answered (the overload guard's queue: :meth:`admit`)."""
+        self.tenant_in_flight: dict[str, int] = {}
+        """The same per tenant (tenants with none are not kept)."""
+        self.turns = Turns()
+        """The engine steps, taken round-robin between tenants (:mod:`app.sessions.turns`)."""
 
     async def submit(
         self,
@@ -115,6 +134,7 @@ class InputPipeline:
         explain: bool = False,
         output: Output = JSON,
         idempotency_key: str | None = None,
+        received_at: Receipt | None = None,
     ) -> str:
         """Apply one input (of any kind: :mod:`app.inputs`), log it durably, publish its
         result, and return the answer to its sender (text of ``output``). It is checked
@@ -124,46 +144,103 @@ class InputPipeline:
         applied: the key, the input's fingerprint and its answer are logged with the input
         (:data:`~app.sessions.live.IDEMPOTENCY_FIELD`), so a restart or another instance
         knows them (the session keeps its latest 256, :data:`~app.sessions.live.IDEMPOTENCY_KEYS`).
-        An overloaded instance refuses it first (:meth:`admit`)."""
-        with self._admission():
+        An overloaded instance refuses it first (:meth:`admit`), and one that has kept it
+        waiting longer than ``max_queue_ms`` since ``received_at`` (when its last byte was
+        read: :func:`app.http.transport.received_at`; default: now) refuses it before its step
+        (:meth:`check_queue_time`)."""
+        arrival = Arrival(session.record.tenant, received_at or receipt())
+        with self._admission(arrival.tenant):
             return await self._admitted(
-                session, submitted, explain=explain, output=output, idempotency_key=idempotency_key
+                session,
+                submitted,
+                arrival,
+                explain=explain,
+                output=output,
+                idempotency_key=idempotency_key,
             )
 
     @contextmanager
-    def _admission(self) -> Iterator[None]:
-        """An input admitted (:meth:`admit`), counted in :attr:`in_flight` until answered."""
-        self.admit()
+    def _admission(self, tenant: str) -> Iterator[None]:
+        """An input of ``tenant`` admitted (:meth:`admit`), counted in :attr:`in_flight` and
+        :attr:`tenant_in_flight` until answered."""
+        self.admit(tenant)
         self.in_flight += 1
+        self.tenant_in_flight[tenant] = self.tenant_in_flight.get(tenant, 0) + 1
         try:
             yield
         finally:
             self.in_flight -= 1
+            left = self.tenant_in_flight[tenant] - 1
+            if left:
+                self.tenant_in_flight[tenant] = left
+            else:
+                del self.tenant_in_flight[tenant]
 
-    def admit(self) -> None:
-        """Refuse a new input (:class:`~app.errors.Overloaded`: 503, ``Retry-After``) while the
-        event loop runs later than ``overload_delay_ms`` on average
-        (:attr:`app.runtime.LoopLag.smoothed`) and other inputs are still being applied: before
-        any check, quota or work, so nothing changes. An input that finds none in flight is
-        never refused: a client that waits for each answer cannot overload the instance, and
-        the lateness is then the machine's other load, which a refusal would not relieve. An
-        instance that takes every input falls behind on all of its sessions at once (answers
+    def admit(self, tenant: str) -> None:
+        """Refuse a new input of ``tenant`` before any check, quota or work, so that nothing
+        changes:
+
+        - with 429 ``tenant_max_in_flight`` (``Retry-After``) when the tenant already has that
+          many inputs in flight on this instance (waiting for their turn or being applied):
+          a flooding tenant queues no more than that, whatever its connections;
+        - with 503 ``overloaded`` (:class:`~app.errors.Overloaded`, ``Retry-After``) while the
+          event loop runs later than ``overload_delay_ms`` on average
+          (:attr:`app.runtime.LoopLag.smoothed`) and the tenant holds at least its even share
+          of the inputs in flight (its own × the tenants with inputs in flight, itself
+          included, ≥ all of them). An input that finds none in flight is never refused: a
+          client that waits for each answer cannot overload the instance, and the lateness is
+          then the machine's other load, which a refusal would not relieve; nor is one of a
+          tenant below its share: the tenants sending most are refused first, and one
+          tenant's flood cannot have another's sensor refused.
+
+        An instance that takes every input falls behind on all of its sessions at once (answers
         late by seconds, in bursts); one that refuses what it cannot take in time answers the
         inputs it accepts in time, and the refused ones go elsewhere or come back after
         ``Retry-After``."""
-        limit_ms = self.registry.settings.overload_delay_ms
+        settings = self.registry.settings
+        mine = self.tenant_in_flight.get(tenant, 0)
+        if mine >= settings.tenant_max_in_flight:
+            self.registry.metrics.refused_waiting.labels("tenant_max_in_flight").inc()
+            raise LimitExceeded(
+                "tenant_max_in_flight",
+                settings.tenant_max_in_flight,
+                mine + 1,
+                what="inputs of this tenant in flight on this instance (waiting or applied); "
+                "send the next once one is answered",
+                status=HTTPStatus.TOO_MANY_REQUESTS,
+                retry_after_s=1,
+            )
+        limit_ms = settings.overload_delay_ms
         loop_lag = self.registry.loop_lag
         if loop_lag is None or limit_ms <= 0 or self.in_flight == 0:
             return
+        tenants = len(self.tenant_in_flight) + (mine == 0)
         delay_ms = 1e3 * loop_lag.smoothed
-        if delay_ms > limit_ms:
+        if delay_ms > limit_ms and mine * tenants >= self.in_flight:
             self.registry.metrics.overloaded.inc()
             raise Overloaded(delay_ms, limit_ms)
+
+    def check_queue_time(self, received: Receipt) -> None:
+        """Refuse an input about to be applied (:class:`~app.errors.TooLate`: 503 ``overloaded``,
+        ``Retry-After``) that has waited longer than ``max_queue_ms`` since it was ``received``
+        (for the event loop, its session's lock, its tenant's turn) while other inputs' steps
+        ran: applied now, it would be answered late, and every input behind it later still.
+        Nothing of it was applied or logged. An input whose wait saw no other step start is
+        not refused: it waited for the machine's other processes, which a refusal would not
+        relieve."""
+        limit_ms = self.registry.settings.max_queue_ms
+        if limit_ms <= 0 or received.steps_since() == 0:
+            return
+        queued_ms = 1e3 * (time.monotonic() - received.at)
+        if queued_ms > limit_ms:
+            self.registry.metrics.refused_waiting.labels("max_queue_ms").inc()
+            raise TooLate(queued_ms, limit_ms)
 
     async def _admitted(
         self,
         session: LiveSession,
         submitted: Input,
+        arrival: Arrival,
         *,
         explain: bool = False,
         output: Output = JSON,
@@ -183,7 +260,7 @@ class InputPipeline:
             )
             once = Once(idempotency_key, hashlib.sha256(text.encode()).hexdigest())
         return await self._submit(
-            session, submitted, items, explain=explain, output=output, once=once
+            session, submitted, items, arrival, explain=explain, output=output, once=once
         )
 
     def check_work(
@@ -228,18 +305,28 @@ class InputPipeline:
         *,
         explain: bool = False,
         output: Output = JSON,
+        received_at: Receipt | None = None,
     ) -> str:
         """Decode ``data`` (a kind of :data:`~app.inputs.DECODED_KINDS`) into inputs, checked
         against the session's config, then submit each in order; the kind's answer (JSON text).
         Malformed data or an input the session cannot take refuses the whole body first, and an
-        overloaded instance the whole body (:meth:`admit`), never a part of it."""
-        with self._admission():
+        overloaded instance the whole body (:meth:`admit`; ``max_queue_ms`` is checked before
+        its first input's step), never a part of it."""
+        tenant = session.record.tenant
+        first = Arrival(tenant, received_at or receipt())
+        with self._admission(tenant):
             view = SessionView(session.config, session.last_time)
             decode = functools.partial(kind.decode, data, parameters, view)
             decoded = await compute(len(data) // DECODED_BYTES_PER_ITEM, decode)
             results = [
-                await self._admitted(session, item, explain=explain, output=output)
-                for item in decoded.inputs
+                await self._admitted(
+                    session,
+                    item,
+                    first if index == 0 else Arrival(tenant, None),
+                    explain=explain,
+                    output=output,
+                )
+                for index, item in enumerate(decoded.inputs)
             ]
             return kind.answer(decoded, results)
 
@@ -248,6 +335,7 @@ class InputPipeline:
         session: LiveSession,
         submitted: Input,
         items: int,
+        arrival: Arrival,
         *,
         explain: bool,
         output: Output,
@@ -262,12 +350,13 @@ class InputPipeline:
         async with session.lock:
             if not session.closed:
                 return await self._submit_locked(
-                    session, submitted, items, explain=explain, output=output, once=once
+                    session, submitted, items, arrival, explain=explain, output=output, once=once
                 )
         return await self._submit(
             await self.registry.get(session.id),
             submitted,
             items,
+            arrival,
             explain=explain,
             output=output,
             once=once,
@@ -278,6 +367,7 @@ class InputPipeline:
         session: LiveSession,
         submitted: Input,
         items: int,
+        arrival: Arrival,
         *,
         explain: bool,
         output: Output,
@@ -300,7 +390,9 @@ class InputPipeline:
             if answered is not None:
                 return answered
             try:
-                step = await self._apply_and_log(session, apply, sensor, items, kind, once, output)
+                step = await self._apply_and_log(
+                    session, apply, sensor, items, kind, arrival, once, output
+                )
             except SequenceConflict:
                 if not self.registry.shared:
                     raise
@@ -309,7 +401,9 @@ class InputPipeline:
                 answered = None if once is None else session.answer_of(once.key, once.fingerprint)
                 if answered is not None:
                     return answered
-                step = await self._apply_and_log(session, apply, sensor, items, kind, once, output)
+                step = await self._apply_and_log(
+                    session, apply, sensor, items, kind, arrival, once, output
+                )
             self._series(kind).inputs.inc()
             if self.registry.shared:
                 # local subscribers too receive it through Redis (the text only), and only
@@ -378,17 +472,23 @@ class InputPipeline:
         sensor: str,
         items: int,
         kind: str,
+        arrival: Arrival,
         once: Once | None = None,
         output: Output = JSON,
     ) -> Step:
-        """``apply()`` the input, append it to the log (with its idempotency key and answer in
+        """``apply()`` the input in its tenant's turn (unless it has waited too long:
+        :meth:`check_queue_time`), append it to the log (with its idempotency key and answer in
         ``output``: one write), then move the session on (else it is rebuilt)."""
-        started = time.perf_counter()
         size = items + len(session.tracks)
         engine_seq = None if session.engine is None else session.engine.seq
         tallied = _tally(session.engine, sensor)
         try:
-            step = await compute(size, apply)
+            async with self.turns.turn(arrival.tenant, alone=self.in_flight <= 1):
+                if arrival.received is not None:
+                    self.check_queue_time(arrival.received)
+                StepCount.started += 1
+                started = time.perf_counter()
+                step = await compute(size, apply)
         except BaseException:
             if session.engine is not None and session.engine.seq != engine_seq:
                 # the last defence: steps are transactions, so a refused input that changed

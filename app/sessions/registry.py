@@ -52,7 +52,7 @@ from app.sessions.hub import SESSION_ENDED, SESSION_UNREADABLE, Ending, Subscrib
 from app.sessions.live import LiveSession, new_session, restore_snapshot
 from app.sessions.pipeline import InputPipeline
 from app.sessions.translate import PlainObject
-from app.sessions.work import TINY_WORK, compute
+from app.sessions.work import TINY_WORK, Receipt, compute
 from app.settings import Settings
 from app.stores import SessionLoad, SessionRecord, Store
 
@@ -292,10 +292,16 @@ class SessionRegistry:
         explain: bool = False,
         output: Output = JSON,
         idempotency_key: str | None = None,
+        received_at: Receipt | None = None,
     ) -> str:
         """:meth:`InputPipeline.submit`."""
         return await self.pipeline.submit(
-            session, submitted, explain=explain, output=output, idempotency_key=idempotency_key
+            session,
+            submitted,
+            explain=explain,
+            output=output,
+            idempotency_key=idempotency_key,
+            received_at=received_at,
         )
 
     async def submit_decoded(
@@ -307,10 +313,11 @@ class SessionRegistry:
         *,
         explain: bool = False,
         output: Output = JSON,
+        received_at: Receipt | None = None,
     ) -> str:
         """:meth:`InputPipeline.submit_decoded`."""
         return await self.pipeline.submit_decoded(
-            session, kind, data, parameters, explain=explain, output=output
+            session, kind, data, parameters, explain=explain, output=output, received_at=received_at
         )
 
     async def current(self, session: LiveSession) -> LiveSession:

@@ -19,13 +19,15 @@ ADMIN_TOKEN = "admin-token-for-tests-0123456789"
 
 def make_settings(**overrides: object) -> Settings:
     """Test settings: memory store, a known admin token, small limits, and no overload guard
-    (it reads the event loop's lateness, which on a loaded test machine is the machine's:
-    the tests of the guard set ``overload_delay_ms`` themselves)."""
+    nor queue-time limit (they read the event loop's lateness and the inputs' waits, which on
+    a loaded test machine are the machine's: their tests set ``overload_delay_ms`` and
+    ``max_queue_ms`` themselves)."""
     values: dict[str, object] = {
         "store": "memory",
         "admin_token": ADMIN_TOKEN,
         "max_body_bytes": 64 * 1024,
         "overload_delay_ms": 0,
+        "max_queue_ms": 0,
     }
     values.update(overrides)
     return Settings.model_validate(values)

@@ -215,20 +215,35 @@ def test_sensors_joining_an_open_session_equal_the_same_sensors_configured() -> 
 def test_an_overloaded_instance_refuses_inputs_while_its_loop_runs_late() -> None:
     """The guard reads the loop's smoothed lateness (set here by hand): above the limit (200 ms)
     an input is refused (503, ``Retry-After``) and changes nothing; under it, applied. An input
-    that finds no other in flight is applied however late the loop runs."""
+    that finds no other in flight is applied however late the loop runs, and so is one of a
+    tenant holding less than its even share of the inputs in flight (its own × the tenants
+    with inputs in flight, itself included, < all of them: hand-worked per row)."""
     lag = LoopLag(Histogram("lag", "lag", registry=CollectorRegistry()))
     target = SessionRegistry(
         MemoryStore(), make_settings(overload_delay_ms=200), ServiceMetrics.create(), loop_lag=lag
     )
-    new_session(target, session_config())
-    bodies = iter(reports(6))
+    record = new_session(target, session_config())
+    mine = record.tenant
+    bodies = iter(reports(9))
+    rows = [  # (lateness s, in flight per tenant)
+        (0.0, {mine: 1}),
+        (0.25, {mine: 1}),
+        (0.201, {mine: 1}),
+        (0.19, {mine: 1}),
+        (0.5, {}),
+        (0.5, {mine: 1}),
+        (0.5, {"other": 3}),  # 0 × 2 < 3: below its share
+        (0.5, {mine: 1, "other": 1}),  # 1 × 2 ≥ 2: its share
+        (0.5, {mine: 1, "other": 2, "third": 3}),  # 1 × 3 < 6
+    ]
 
     async def scenario() -> list[str]:
         session = await target.get("s1")
         outcomes = []
-        for late_s, others in ((0.0, 1), (0.25, 1), (0.201, 1), (0.19, 1), (0.5, 0), (0.5, 1)):
+        for late_s, in_flight in rows:
             lag.smoothed = late_s
-            target.pipeline.in_flight = others
+            target.pipeline.tenant_in_flight = dict(in_flight)
+            target.pipeline.in_flight = sum(in_flight.values())
             seq = session.seq
             try:
                 await target.submit(session, parse_input("tracks", next(bodies)))
@@ -246,4 +261,7 @@ def test_an_overloaded_instance_refuses_inputs_while_its_loop_runs_late() -> Non
         "applied",
         "applied",
         "refused",
+        "applied",
+        "refused",
+        "applied",
     ]

@@ -63,7 +63,9 @@ def instance(
     store: str, environment: dict[str, str] | None = None
 ) -> Iterator[tuple[str, subprocess.Popen[bytes]]]:
     """``credal-fusion serve --store STORE`` with the admin token of the tests (and
-    ``environment``'s ``CREDAL_*`` settings); yields its URL and process, stopped on exit."""
+    ``environment``'s ``CREDAL_*`` settings); yields its URL and process, stopped on exit.
+    ``CREDAL_MAX_QUEUE_MS`` is 0 unless given: concurrent clients on a loaded test machine
+    would see inputs refused for waiting (the machine's lateness); its tests set it."""
     port = free_port()
     process = subprocess.Popen(
         [
@@ -71,7 +73,9 @@ def instance(
             *("--port", str(port), "--store", store, "--no-access-log"),
         ],
         cwd=ROOT,
-        env=os.environ | {"CREDAL_ADMIN_TOKEN": ADMIN_TOKEN} | (environment or {}),
+        env=os.environ
+        | {"CREDAL_ADMIN_TOKEN": ADMIN_TOKEN, "CREDAL_MAX_QUEUE_MS": "0"}
+        | (environment or {}),
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
     )
