@@ -404,6 +404,23 @@ class LifeCycleConfig:
         """Largest score an established track keeps (+inf without a ceiling)."""
         return math.inf if self.score_ceiling is None else self.score_ceiling
 
+    def sensor_misses(self, p_detect: float) -> int | None:
+        """The misses in a row of one sensor of detection probability ``p_detect`` that take
+        an established track from the score ceiling to the delete threshold:
+        ``⌈(ceiling − ln(β/(1 − α))) / −ln(1 − P_D)⌉`` ([MTT] §4.3; 3 at P_D 0.9 with the
+        ceiling 0, 6 with the paper profile's), None without a ceiling.
+
+        A sensor whose misses in a row reach it while the track lives (other sensors kept
+        it) has shown that it does not see the target — below its horizon, out of its
+        range, a target it never detected — and its further silence says nothing about
+        it until it detects it again (docs/algorithms.md §8.9). Alone, a sensor's run
+        this long has deleted the track: a single sensor's misses always count.
+        """
+        if self.score_ceiling is None:
+            return None
+        drop = self.score_ceiling - self.delete_threshold
+        return max(1, math.ceil(drop / -math.log1p(-p_detect) - 1e-9))
+
     @property
     def phantom_lifetime(self) -> float:
         """Longest time in a blind zone: the maximum distance at the minimum speed ([HZ] §5.1)."""

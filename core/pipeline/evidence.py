@@ -32,6 +32,15 @@ def coasting_misses(status: IntArray, seen: BoolArray, detected: BoolArray) -> B
     return np.asarray(seen & ~detected & established(status), dtype=np.bool_)
 
 
+def sensor_miss_runs(runs: IntArray, column: int, seen: BoolArray, detected: BoolArray) -> IntArray:
+    """Each row's misses in a row of every sensor (n, sensors) after a scan of the sensor
+    ``column``: 0 where it detected the row, one more where it should have seen the row
+    (``seen``: its field of view, not occluded) and did not (docs/algorithms.md §8.9)."""
+    after = runs.copy()
+    after[:, column] = np.where(detected, 0, runs[:, column] + (seen & ~detected))
+    return after
+
+
 def seen_by(
     view: FieldOfView | None, positions: FloatArray, status: IntArray, radius: float
 ) -> tuple[BoolArray, BoolArray]:

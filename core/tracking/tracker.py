@@ -92,7 +92,13 @@ from core.lifecycle import (
     hand_over,
     initiated,
 )
-from core.pipeline.evidence import coasting_misses, coverage_codes, hits, seen_by
+from core.pipeline.evidence import (
+    coasting_misses,
+    coverage_codes,
+    hits,
+    seen_by,
+    sensor_miss_runs,
+)
 from core.pipeline.handover import hand_over_pairs
 from core.pipeline.predict import predict_bank, without_inputs
 from core.pipeline.rows import TrackRows
@@ -112,8 +118,8 @@ from core.tracking.track import (
     plain_floats,
 )
 
-EXPORT_VERSION = 3
-"""3: each track's ``misses`` in a row, each sensor's clutter estimate and tally;
+EXPORT_VERSION = 4
+"""4: each track's misses in a row of every sensor (``sensor_misses``); 3: each track's ``misses`` in a row, each sensor's clutter estimate and tally;
 2: the seeds' covariances (``seed_covariances``). An older export restores with no
 misses, empty estimates and tallies, and (version 1) its seeds with the bank's R, the R
 they were started with then."""
@@ -224,6 +230,13 @@ class LocalTracker:
         self._seed_noises: FloatArray = np.zeros((0, self._q, self._q))
         self._seed_times: FloatArray = np.zeros(0)
         self._seed_sensors: IntArray = np.zeros(0, dtype=np.int64)
+        # per track and sensor (column of config.sensors): its misses in a row (§8.9)
+        self._sensor_misses: IntArray = np.zeros((0, len(config.sensors)), dtype=np.int64)
+        # per sensor: the run after which its silence about an established track is no miss
+        self._miss_limits = {
+            name: config.life_cycle.sensor_misses(config.physics(name)[0])
+            for name in config.sensors
+        }
         # per sensor: the clutter estimate (when β_FT is not given) and what was done
         self._clutter = {name: ClutterEstimate.empty(self._q) for name in config.sensors}
         self.tallies: dict[str, ScanTally] = {name: ScanTally() for name in config.sensors}
@@ -363,6 +376,8 @@ class LocalTracker:
         seen, hidden = seen_by(
             self._views[sensor_name], positions, status, self.config.life_cycle.occlusion_radius
         )
+        column = self.config.sensors.index(sensor_name)
+        counted = seen & self._carried(column, sensor_name, status)
         candidates = np.flatnonzero((status != PHANTOM) & self._can_be_hit(prediction, score))
         association = self._associator.associate(
             prediction
@@ -398,12 +413,12 @@ class LocalTracker:
                 time=time,
                 detected=detected,
                 hit_increment=gain,
-                seen=seen,
+                seen=counted,
                 miss_increment=score.miss_increment,
                 # log|S|: A_G of the tracks that coast through a miss
                 gate_log_det=(
                     np.linalg.slogdet(gates)[1]
-                    if np.any(coasting_misses(status, seen, detected))
+                    if np.any(coasting_misses(status, counted, detected))
                     else np.zeros(len(status))
                 ),
                 gate_dim=self._q,
@@ -413,6 +428,7 @@ class LocalTracker:
             ),
         )
         self._rows = self._rows.living(life)
+        self._sensor_misses = sensor_miss_runs(self._sensor_misses, column, seen, detected)
         # Per-detection assignment (by track number for now).
         numbers = np.full(len(z), -1, dtype=np.int64)
         numbers[association.cols] = self._rows.numbers[candidates[association.rows]]
@@ -602,6 +618,17 @@ class LocalTracker:
             raise TrackingError(f"range_rates must be {count} finite numbers (NaN: none)")
         return doppler
 
+    def _carried(self, column: int, sensor: str, status: IntArray) -> BoolArray:
+        """Rows whose miss by ``sensor`` (column ``column``) counts: every tentative one, and
+        the established ones it has not missed :meth:`LifeCycleConfig.sensor_misses` times
+        in a row (docs/algorithms.md §8.9)."""
+        limit = self._miss_limits[sensor]
+        if limit is None:
+            return np.ones(len(status), dtype=bool)
+        return np.asarray(
+            ~established(status) | (self._sensor_misses[:, column] < limit), dtype=np.bool_
+        )
+
     # ---------------------------------------------------------- predict
     def _can_be_hit(self, prediction: IMMPrediction, scan: ScoreModel) -> BoolArray:
         """Tracks a detection could keep alive: the largest hit increment they could get
@@ -715,6 +742,9 @@ class LocalTracker:
         self._state = _replaced(self._state, keepers, self._state.select(newcomers))
         if self._recent is not None:
             self._recent = self._recent.replace(keepers, self._recent.select(newcomers))
+        runs = self._sensor_misses.copy()  # the newcomer's detections are the latest
+        runs[keepers] = np.minimum(runs[keepers], runs[newcomers])
+        self._sensor_misses = runs
         self._rows = self._rows.living(
             hand_over(life, keepers, newcomers, StatusReason.MERGED_INTO_PHANTOM)
         )
@@ -849,6 +879,9 @@ class LocalTracker:
         )
         self.next_number += count
         self._state = _concatenate(self._state, state)
+        self._sensor_misses = np.concatenate(
+            [self._sensor_misses, np.zeros((count, len(self.config.sensors)), dtype=np.int64)]
+        )
         if self.classifier is not None and self._classes is not None:
             self._classes = self._classes.concatenate(self.classifier.initial(count))
             self._combine_evidence(np.arange(len(self._rows) - count, len(self._rows)), detections)
@@ -916,6 +949,7 @@ class LocalTracker:
     def _keep(self, rows: IntArray) -> None:
         self._rows = self._rows.select(rows)
         self._state = self._state.select(rows)
+        self._sensor_misses = self._sensor_misses[rows]
         if self._classes is not None:
             self._classes = self._classes.select(rows)
         if self._recent is not None:
@@ -936,6 +970,7 @@ class LocalTracker:
                 "empty_gate_probability": plain_floats(life.empty_gate[row]),
                 "phantom_since": plain_floats(life.phantom_since[row]),
                 "misses": int(life.misses[row]),
+                "sensor_misses": self._sensor_misses[row].tolist(),
                 "means": plain_floats(self._state.means[row]),
                 "covariances": plain_floats(self._state.covariances[row]),
                 "log_mode_probabilities": plain_floats(self._state.log_mode_probabilities[row]),
@@ -971,7 +1006,7 @@ class LocalTracker:
     def restore(cls, config: LocalTrackerConfig, plain: dict[str, Any]) -> LocalTracker:
         """Rebuild a tracker from :meth:`export`'s output and the same configuration."""
         version = plain.get("version")
-        if version not in (1, 2, EXPORT_VERSION):
+        if version not in (1, 2, 3, EXPORT_VERSION):
             raise TrackingError(f"unknown tracker export version {version!r}")
         tracker = cls(config)
         tracker.time = None if plain["time"] is None else float(float_array(plain["time"]))
@@ -983,7 +1018,7 @@ class LocalTracker:
             if version != 1
             else np.broadcast_to(tracker._noise, (len(tracker._seeds), q, q)).copy()
         )
-        if version == EXPORT_VERSION:
+        if version >= 3:
             tracker._clutter = {
                 name: ClutterEstimate.from_plain(plain["clutter"][name]) for name in config.sensors
             }
@@ -1008,6 +1043,10 @@ class LocalTracker:
             misses=np.array([e.get("misses", 0) for e in entries], dtype=np.int64),
         )
         tracker._rows = TrackRows(np.array([e["number"] for e in entries], dtype=np.int64), life)
+        sensors = len(config.sensors)  # an older export: no sensor's misses yet
+        tracker._sensor_misses = np.array(
+            [e.get("sensor_misses", [0] * sensors) for e in entries], dtype=np.int64
+        ).reshape(-1, sensors)
         tracker._state = IMMState(
             float_array([e["means"] for e in entries]).reshape(-1, r, n),
             float_array([e["covariances"] for e in entries]).reshape(-1, r, n, n),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -119,7 +120,11 @@ def test_fusing_a_sensor_with_itself_changes_nothing() -> None:
     alone, central = feed(single, ["a"], measured), feed(twice, ["a", "b"], measured)
     mine, theirs = single.tracker_of("a"), twice.central
     assert mine is not None and theirs is not None
-    assert json.dumps(theirs.export()["tracks"]) == json.dumps(mine.export()["tracks"])
+    # every field but each sensor's own misses in a row (one column per sensor, §8.9)
+    tracks = [theirs.export()["tracks"], mine.export()["tracks"]]
+    for track in tracks[0] + tracks[1]:
+        del track["sensor_misses"]
+    assert json.dumps(tracks[0]) == json.dumps(tracks[1])
     assert theirs.next_number == mine.next_number
     # and the fused pictures agree on the targets' tracks at every step (a false track that
     # coasts is shown predicted by the fused layer's model alone, by the central tracker's
@@ -301,3 +306,37 @@ def test_a_version_2_export_restores_its_central_tracker_with_an_empty_buffer() 
     for one in (engine, restored):
         one.apply_detections(DetectionReport("a", 6.0, z))
     assert json.dumps(restored.central.export()) == json.dumps(engine.central.export())
+
+
+def test_a_sensor_that_never_detects_a_track_stops_counting_after_its_run() -> None:
+    """Sensor a detects a target at every scan; sensor c (P_D 0.9, no field of view) scans
+    between them and never does. Each of c's first ⌈ln(β/(1 − α)) / ln(1 − P_D)⌉ = 3 misses
+    costs the track ln(1 − 0.9) ([MTT] §4.3, from the score a's hit left); after them c has
+    shown it does not see the target and its silence costs nothing, while a's own miss still
+    does (§8.9)."""
+    engine = SessionEngine(session(detecting("a"), detecting("c")))
+    central = engine.central
+    assert central is not None
+    limit = -math.log(1e-3 / (1.0 - 1e-3)) / -math.log(1.0 - 0.9)
+    assert math.ceil(limit) == 3
+
+    def target() -> dict[str, Any]:
+        """The central track with the most hits (a start's branches may live beside it)."""
+        tracks: list[dict[str, Any]] = central.export()["tracks"]
+        return max(tracks, key=lambda track: (track["hits"], -track["number"]))
+
+    costs = []
+    for k in range(6):
+        engine.apply_detections(DetectionReport("a", float(k), STARTS[:1] + VELOCITIES[:1] * k))
+        before = target()
+        engine.apply_detections(DetectionReport("c", k + 0.5, np.zeros((0, 2))))
+        after = target()
+        assert after["number"] == before["number"]
+        costs.append(after["score"] - before["score"])
+    assert after["status"] == "confirmed"  # c's fourth to sixth misses do not coast it
+    assert costs == pytest.approx([math.log(0.1)] * 3 + [0.0] * 3, abs=1e-12)
+    engine.apply_detections(DetectionReport("a", 6.0, np.zeros((0, 2))))
+    missed = target()
+    assert missed["number"] == after["number"]
+    assert missed["score"] - after["score"] == pytest.approx(math.log(0.1), abs=1e-12)
+    assert missed["status"] == "coasting"

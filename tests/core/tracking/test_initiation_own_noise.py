@@ -131,7 +131,7 @@ def test_seed_covariances_survive_export_and_restore_exactly() -> None:
     uninterrupted = [json.dumps(whole.step(*s).to_plain(), sort_keys=True) for s in scans]
     first.step(*scans[0])
     saved = json.loads(json.dumps(first.export()))
-    assert saved["version"] == 3 and len(saved["seed_covariances"]) == 2
+    assert saved["version"] == 4 and len(saved["seed_covariances"]) == 2
     restored = LocalTracker.restore(first.config, saved)
     continued = [json.dumps(restored.step(*s).to_plain(), sort_keys=True) for s in scans[1:]]
     assert continued == uninterrupted[1:]
@@ -156,4 +156,4 @@ def test_a_version_1_export_restores_its_seeds_with_the_bank_noise() -> None:
     assert outputs[0] == outputs[1]
     assert any("confirmed" in line for line in outputs[0])
     with pytest.raises(TrackingError, match="version"):
-        LocalTracker.restore(seeded_with_bank_noise.config, {**old, "version": 4})
+        LocalTracker.restore(seeded_with_bank_noise.config, {**old, "version": 5})
