@@ -37,6 +37,14 @@ class SensorTrack(WireModel):
     state: StateVector
     covariance: Matrix
     classification: ClassEvidence | None = None
+    coasted: bool = Field(
+        default=False,
+        description=(
+            "true: the source did not update this track in its latest scan (its local "
+            "track is coasting, the state is its prediction): its miss of the track, not "
+            "a new estimate (docs/algorithms.md §8.10)"
+        ),
+    )
 
     @model_validator(mode="after")
     def _covariance_matches_state(self) -> Self:

@@ -24,6 +24,12 @@ Runs, all on the same detections:
   (docs/algorithms.md §8.9, the default path of detecting sensors);
 - ``fused-t2t``: the same sensors flagged ``local_tracker: true``: each its own local
   tracker, then credal track-to-track fusion (the path before issue 23);
+- ``lists`` (``lists-<method>``): the sensors as **track-list sources**: each sensor's
+  own session (``alone-k``) posts its confirmed and coasting tracks (coasting ones flagged
+  ``coasted``) at its scan to one session of three track-list sources (each its P_D and
+  field of view), the default association method (each method); ``lists-rst``: the same,
+  each source starting afresh once (its tracks lost, its ids numbered from F1 again: at
+  half the run, 5 s and 10 s later);
 - ``ss-gnn`` / ``ss-jpda``: Stone Soup 1.9.1 fed every sensor's detections in time
   order, each detection with its own sensor's ``LinearGaussian`` (its R; in 3-D its polar
   model, its PDA clutter density the box's converted at the box centre's range); a scan
@@ -40,7 +46,8 @@ by its predictor, a session's by ``picture``), confirmed and coasting tracks, by
 Soup's GOSPA (c = 10 m, p = 1, α = 2), id switches by :func:`core.metrics.identity_switches`.
 
 Goals (issue 23): fused ≤ 0.85× the best sensor alone and no more id switches; fused ≤
-Stone Soup's multi-sensor GNN and JPDA (tutorial and tuned).
+Stone Soup's multi-sensor GNN and JPDA (tutorial and tuned); track lists fused ≤ 1.0× the
+best sensor alone and no more id switches, and no more after the sources' restarts.
 
 Run: ``.venv/bin/python bench/multisensor.py [~10 ~50] [full sectors 3d]`` (several minutes
 on a quiet 2-core machine, most of it Stone Soup's JPDA on ~50).
@@ -89,15 +96,18 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from machine import describe_machine  # noqa: E402
 from peers import _jpda_posterior, gospa_terms  # noqa: E402
 
-from api_schemas.config import SessionConfig  # noqa: E402
+from api_schemas.config import AssociationConfig, SessionConfig  # noqa: E402
 from api_schemas.reports import DetectionReport as WireDetectionReport  # noqa: E402
 from app.inputs.detections import core_detection_report  # noqa: E402
 from app.sessions.translate import fusion_config  # noqa: E402
+from core.association import METHODS  # noqa: E402
 from core.fusion.engine import SessionEngine  # noqa: E402
-from core.fusion.reports import DetectionReport  # noqa: E402
+from core.fusion.reports import DetectionReport, ReportedTrack, TrackReport  # noqa: E402
 from core.metrics import identity_switches  # noqa: E402
 
 START = datetime.datetime(2026, 1, 1)
+DEFAULT_METHOD = AssociationConfig.model_fields["method"].default
+"""The track-to-track association method of a session that names none (row ``lists``)."""
 Q = 0.05  # m²/s³, Stone Soup ConstantVelocity noise_diff_coeff (bench/peers.py)
 SUBSTEPS = 3
 """Sensors, and truth steps per second: sensor k scans at whole seconds + k/3 s."""
@@ -440,6 +450,71 @@ def session_run(scene: Scene, sensors: list[int], local: bool = False) -> list[E
     return out
 
 
+def track_list_config(scene: Scene, method: str) -> dict[str, Any]:
+    """The session of the three sensors as track-list sources: each its P_D and field of
+    view (the physics of a source that sends tracks), association ``method``."""
+    config = session_config(scene, list(range(len(SENSORS))), local=False)
+    for sensor in config["sensors"]:
+        for detecting in ("measurement", "site", "clutter_density", "local_tracker"):
+            sensor.pop(detecting, None)
+    config["association"] = {"method": method}
+    return config
+
+
+def track_list_run(
+    scene: Scene,
+    method: str = "denoeux",
+    restarts: dict[int, float] | None = None,
+    coasted: bool = True,
+) -> list[Estimates]:
+    """Each sensor's own single-sensor session (``alone-k``) posts its confirmed and coasting
+    tracks (its picture at its scan) as a track list to one session of three track-list
+    sources. ``restarts``: sensor k's session starts afresh at that time (its tracks lost,
+    its ids numbered from F1 again)."""
+    wires = [
+        SessionConfig.model_validate(session_config(scene, [k], False)) for k in range(len(SENSORS))
+    ]
+    sources = [SessionEngine(fusion_config(wire)) for wire in wires]
+    fused = SessionEngine(
+        fusion_config(SessionConfig.model_validate(track_list_config(scene, method)))
+    )
+    pending = dict(restarts or {})
+    out: list[Estimates] = []
+    for scan in scene.scans:
+        k = scan.sensor
+        if k in pending and scan.time >= pending[k]:
+            del pending[k]
+            sources[k] = SessionEngine(fusion_config(wires[k]))
+        source = sources[k]
+        source.apply_detections(detection_report(scene, wires[k], scan))
+        tracks = tuple(
+            ReportedTrack(
+                t.id,
+                np.asarray(t.state),
+                np.asarray(t.covariance),
+                coasted=coasted and t.status.value == "coasting",
+            )
+            for t in source.picture(scan.time)
+            if t.status.value in LIVE
+        )
+        fused.apply(TrackReport(f"s{k}", scan.time, tracks))
+        if k == SUBSTEPS - 1:
+            out.append(
+                [
+                    (t.id, np.asarray(t.state))
+                    for t in fused.picture(scan.time)
+                    if t.status.value in LIVE
+                ]
+            )
+    return out
+
+
+def restarts(seconds: int) -> dict[int, float]:
+    """When each source of ``lists-rst`` starts afresh: the first at half the run, the
+    others 5 s and 10 s later."""
+    return {k: seconds / 2 + 5.0 * k for k in range(len(SENSORS))}
+
+
 def detection_report(scene: Scene, wire: SessionConfig, scan: Scan) -> DetectionReport:
     """A scan as the core takes it: as given in 2-D; in 3-D its polar detections through the
     service's conversion (``app.inputs.detections``: converted positions, each its own R)."""
@@ -610,6 +685,10 @@ def main() -> int:
             }
             runs["fused"] = session_run(scene, list(range(len(SENSORS))))
             runs["fused-t2t"] = session_run(scene, list(range(len(SENSORS))), local=True)
+            for method in METHODS:
+                label = "lists" if method == DEFAULT_METHOD else f"lists-{method}"
+                runs[label] = track_list_run(scene, method)
+            runs["lists-rst"] = track_list_run(scene, restarts=restarts(seconds))
             for kind in ("ss-gnn", "ss-jpda"):
                 runs[kind] = stone_soup_run(scene, kind)
                 runs[f"{kind}*"] = stone_soup_run(scene, kind, TUNED)
@@ -635,6 +714,15 @@ def main() -> int:
                 *(
                     (f"fused ≤ {kind}", fused.gospa <= scores[kind].gospa)
                     for kind in ("ss-gnn", "ss-jpda", "ss-gnn*", "ss-jpda*")
+                ),
+            ]
+            lists = scores["lists"]
+            checks += [
+                (f"lists ≤ 1.0× best alone ({best})", lists.gospa <= scores[best].gospa),
+                (f"lists id switches ≤ {best}'s", lists.switches <= scores[best].switches),
+                (
+                    "lists-rst id switches ≤ lists'",
+                    scores["lists-rst"].switches <= lists.switches,
                 ),
             ]
             for text, ok in checks:

@@ -25,3 +25,5 @@ def test_the_scene_is_deterministic_and_each_sensor_sees_its_own_cover() -> None
     central = bench.session_run(first, [0, 1, 2])
     local = bench.session_run(first, [0, 1, 2], local=True)
     assert len(central) == len(local) == 6  # one picture a second
+    lists = bench.track_list_run(first, restarts={0: 3.0})
+    assert len(lists) == 6

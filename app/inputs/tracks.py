@@ -80,6 +80,7 @@ def reported_track(track: SensorTrack, frame: Frame | None) -> ReportedTrack:
         covariance=np.asarray(track.covariance, dtype=np.float64),
         class_mass=mass,
         class_likelihoods=likelihoods,
+        coasted=track.coasted,
     )
 
 

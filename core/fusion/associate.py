@@ -15,8 +15,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
-from core.arrays import FloatArray, IntArray
+from core.arrays import BoolArray, FloatArray, IntArray
 from core.association import ScoreMatrix, associate
 from core.belief import MassFunction
 from core.distance import Estimates, chi2_quantile
@@ -34,6 +35,11 @@ CONTINUITY_GATE_PROBABILITY = 1.0 - 1e-9
 """Gate of track continuity: a sensor's own track id is strong evidence, so the
 gate only catches a sensor that reuses an id for another object (not the
 1-in-1000 noise excursion a 0.999 gate rejects at every thousandth report)."""
+RENUMBERING_ODDS = 1e3
+"""Odds at which a source's ids are taken to have changed their meaning (a source that
+restarted and numbers its tracks afresh, a local id swap): the report's tracks fit the
+fused tracks in another order this much better than in the order of their ids
+(:func:`_renumbered`)."""
 
 
 @dataclass(frozen=True)
@@ -64,13 +70,15 @@ def associate_report(
     report: TrackReport,
     incoming: Estimates,
     classify: Classify,
+    established: BoolArray,
 ) -> Decision:
     """The report's tracks with the live fused tracks (``states``, ``covariances``: fused
-    and predicted to the report time): continuity first (when on), then the session's
-    method on what is left (the decision's rows index ``live``)."""
+    and predicted to the report time; ``established``: confirmed or coasting): continuity
+    first (when on), then the session's method on what is left (the decision's rows index
+    ``live``)."""
     incoming_states, incoming_covariances = incoming.states, incoming.covariances
     assert incoming_covariances is not None
-    kept = _continuity(config, live, states, covariances, report, incoming)
+    kept = _continuity(config, live, states, covariances, report, incoming, established)
     kept_rows = set(kept.values())
     rows = np.array([row for row in range(len(live)) if row not in kept_rows], dtype=np.int64)
     cols = np.array([col for col in range(len(report.tracks)) if col not in kept], dtype=np.int64)
@@ -122,13 +130,15 @@ def _continuity(
     covariances: FloatArray,
     report: TrackReport,
     incoming: Estimates,
+    established: BoolArray,
 ) -> dict[int, int]:
     """Report tracks the sensor keeps reporting under the id it gave a fused track.
 
     ``{report column: fused row}`` for every report track whose (sensor, id)
-    is the latest estimate of a live fused track and still passes the χ²
-    gate (:data:`CONTINUITY_GATE_PROBABILITY`) on the ``sum`` distance;
-    empty when continuity is off.
+    is the latest estimate of a live fused track, still passes the χ²
+    gate (:data:`CONTINUITY_GATE_PROBABILITY`) on the ``sum`` distance and, where it
+    binds an established track, is not renumbered (:func:`_renumbered`); empty when
+    continuity is off.
     """
     if not config.track_continuity:
         return {}
@@ -148,7 +158,60 @@ def _continuity(
     )
     gate = chi2_quantile(CONTINUITY_GATE_PROBABILITY, config.dim)
     passed = distance <= gate
-    return dict(zip(cols[passed].tolist(), rows[passed].tolist(), strict=True))
+    cols, rows = cols[passed], rows[passed]
+    # ids are tested where they bind established tracks (a tentative track's start may
+    # be off: its own next report joining it is the duplicate merge's business)
+    tested = np.flatnonzero(established[rows])
+    among = np.flatnonzero(established)
+    kept = np.ones(len(cols), dtype=bool)
+    kept[tested] = ~_renumbered(
+        states[among],
+        covariances[among],
+        incoming,
+        cols[tested],
+        np.searchsorted(among, rows[tested]),
+    )
+    return dict(zip(cols[kept].tolist(), rows[kept].tolist(), strict=True))
+
+
+def _renumbered(
+    states: FloatArray,
+    covariances: FloatArray,
+    incoming: Estimates,
+    cols: IntArray,
+    rows: IntArray,
+) -> BoolArray:
+    """The continuity pairs (report track ``cols[k]``, live fused track ``rows[k]``) whose ids
+    no longer mean what they meant: a generalised likelihood-ratio test of "the ids kept
+    their meaning" against the best pairing of the same report tracks with the live fused
+    tracks (``states``, ``covariances``) by state.
+
+    D_ids = Σ D of the pairs as the ids bind them, D_best the least Σ D of any pairing of
+    those report tracks with distinct live fused tracks (``sum`` covariance; a linear
+    assignment). Each pairing is a Gaussian hypothesis, so the best pairing is
+    exp((D_ids − D_best)/2) times as likely (the determinants of its pairs differ little
+    from the ids' pairs' and are left out); above :data:`RENUMBERING_ODDS` the pairs it
+    moves are left to the association by state: a source that restarted and numbers its
+    tracks from 1 again, a local tracker that swapped two ids. Two targets crossing, whose
+    states fit either pairing, keep their ids.
+    """
+    count, live = len(cols), len(states)
+    moved = np.zeros(count, dtype=bool)
+    if count == 0 or live < 2:
+        return moved
+    assert incoming.covariances is not None
+    by_col, by_row = np.repeat(cols, live), np.tile(np.arange(live), count)
+    distances, _ = mahalanobis(
+        incoming.states[by_col] - states[by_row],
+        incoming.covariances[by_col] + covariances[by_row],
+    )
+    matrix = distances.reshape(count, live)  # [continuity pair, live fused track]
+    pairs, best = linear_sum_assignment(matrix)
+    kept = matrix[np.arange(count), rows].sum()
+    if kept - matrix[pairs, best].sum() <= 2.0 * np.log(RENUMBERING_ODDS):
+        return moved
+    moved[pairs] = best != rows[pairs]
+    return moved
 
 
 def _association_classes(

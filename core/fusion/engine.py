@@ -90,6 +90,7 @@ from core.lifecycle import (
     StatusReason,
     TrackStatus,
     advance,
+    established,
     hand_over,
     initiated,
     reason_code,
@@ -340,24 +341,31 @@ class SessionEngine:
             report,
             incoming,
             self._classify,
+            established(self._rows.rows.life.status[live]),
         )
 
         rows = np.array([pair[0] for pair in decision.pairs], dtype=np.int64)
         cols = np.array([pair[1] for pair in decision.pairs], dtype=np.int64)
+        # a track its source coasted is that source's miss, not an estimate (§8.10)
+        coasted = np.array([track.coasted for track in report.tracks], dtype=bool)
+        missed_by_source = np.zeros(len(live), dtype=bool)
+        missed_by_source[rows[coasted[cols]]] = True
+        rows, cols = rows[~coasted[cols]], cols[~coasted[cols]]
+        new = np.asarray(decision.new, dtype=np.int64)
         increments = (
             np.zeros(len(rows))  # the central tracker's tracks passed its test already (§8.9)
             if self._is_central(report.sensor)
             else self._hit_increments(states[rows], covariances[rows], incoming, cols, sensor)
         )
         self._record(live[rows], cols, report, incoming)  # update
-        created = self._start(np.asarray(decision.new, dtype=np.int64), report, incoming)
+        created = self._start(new[~coasted[new]], report, incoming)
 
         self.time = t if self.time is None else max(self.time, t)
         self._learn_revisit(report.sensor, t)
         self.last_report[report.sensor] = t
         self.seq += 1
         terminated, confirmed = self._life_cycle(
-            sensor, live, states, covariances, rows, increments
+            sensor, live, states, covariances, rows, increments, missed_by_source
         )
         status = self._rows.rows.life.status
         fresh = np.concatenate([confirmed, created[status[created] == CONFIRMED]])
@@ -512,12 +520,15 @@ class SessionEngine:
         covariances: FloatArray,
         hit_rows: IntArray,
         increments: FloatArray,
+        missed_by_source: BoolArray,
     ) -> tuple[IntArray, IntArray]:
         """:func:`core.lifecycle.advance` over every track that is not terminated.
 
         Hits and misses are the step's (the ``live`` rows at the report time:
-        ``states``, ``covariances`` as predicted before the update); coverage is
-        looked at at the fusion time. Returns the rows terminated and confirmed by it.
+        ``states``, ``covariances`` as predicted before the update; ``missed_by_source``:
+        the live tracks the report coasted, a miss wherever the sensor sees, §8.10);
+        coverage is looked at at the fusion time. Returns the rows terminated and
+        confirmed by it.
         """
         assert self.time is not None
         management = self.config.management
@@ -539,7 +550,7 @@ class SessionEngine:
             seen[at], hidden[at] = seen_by(
                 sensor.fov, states[:, position], live_status, management.occlusion_radius
             )
-            seen[at] &= self._silence_counts(live, sensor.id)
+            seen[at] &= self._silence_counts(live, sensor.id) | missed_by_source
             missed = np.flatnonzero(coasting_misses(live_status, seen[at], detected[at]))
             if len(missed):
                 gate_log_det[at[missed]] = self._gate_log_dets(live[missed], covariances[missed])

@@ -16,7 +16,9 @@ class ReportedTrack:
 
     ``class_mass`` is the sensor's own class belief; ``class_likelihoods``
     one step of class evidence (per class of the session frame, in [0, 1]).
-    At most one of the two.
+    At most one of the two. ``coasted``: the source did not update the track in
+    its latest scan (its prediction; MATLAB's ``objectTrack.IsCoasted``): a miss of
+    that source, not an estimate (docs/algorithms.md §8.10).
     """
 
     id: str
@@ -24,6 +26,7 @@ class ReportedTrack:
     covariance: FloatArray
     class_mass: MassFunction | None = None
     class_likelihoods: FloatArray | None = None
+    coasted: bool = False
 
 
 @dataclass(frozen=True)
