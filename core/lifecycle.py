@@ -564,6 +564,9 @@ class Evidence:
         None for a single-sensor layer.
     densities : the step's (ρ_FA, ρ_NT) for the gate volume ([HZ] §4.2), or None for
         the configuration's.
+    velocity_measured : whether each track's detections have measured its velocity (a
+        tentative track that has not, e.g. of several sensors' detections of one instant,
+        is not confirmed: docs/algorithms.md §8.3); None: every track's.
     """
 
     time: float
@@ -577,6 +580,7 @@ class Evidence:
     occluded: BoolArray
     sensors: IntArray | None = None
     densities: tuple[float, float] | None = None
+    velocity_measured: BoolArray | None = None
 
 
 # ------------------------------------------------------------------ visibility
@@ -648,6 +652,7 @@ def advance(
        hit with ≤ initiation_hits hits)
        coasting, empty gate < termination p.,  terminated     gate_emptiness
        ≥ termination_misses misses in a row
+       (the confirmations: only of a track whose velocity is measured, when given)
        tentative, reported by ≥ 2 sensors      confirmed      second_sensor
        tentative, min_points hits and L ≥ 0    confirmed      min_points
        tentative, score ≥ confirm threshold    confirmed      score_confirmed
@@ -727,6 +732,8 @@ def advance(
             StatusReason.GATE_EMPTINESS,
         )
     tentative = status == TENTATIVE
+    if evidence.velocity_measured is not None:  # a position alone is no track yet (§8.3)
+        tentative = tentative & evidence.velocity_measured
     if evidence.sensors is not None:
         decide(tentative & (evidence.sensors >= 2), CONFIRMED, StatusReason.SECOND_SENSOR)
     if config.min_points is not None:

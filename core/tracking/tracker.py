@@ -141,12 +141,14 @@ START_PASS = 2
 """The pass of the single-point starts (:func:`_passes`), which branch instead."""
 
 
-def _passes(life: LifeState) -> IntArray:
-    """The association pass of each track (docs/algorithms.md §4 "Assignment"): the
-    established first, then the tentative tracks with two hits or more, then the starts
-    of one detection, whose first gate is the velocity prior's and would take the others'
-    detections in one assignment on D."""
-    return np.where(established(life.status), 0, np.where(life.hits >= 2, 1, START_PASS))
+def _passes(life: LifeState, measured: BoolArray) -> IntArray:
+    """The association pass of each track (docs/algorithms.md §4 "Assignment", §8.3): the
+    established first, then the tentative tracks with two hits or more, then the starts:
+    the tracks of one detection, and those whose detections have not measured their
+    velocity (``measured`` False: several sensors' detections of one instant), whose gate
+    is the velocity prior's and would take the others' detections in one assignment on D."""
+    started = (life.hits >= 2) & measured
+    return np.where(established(life.status) & measured, 0, np.where(started, 1, START_PASS))
 
 
 def _concatenate(first: IMMState, second: IMMState) -> IMMState:
@@ -237,6 +239,9 @@ class LocalTracker:
             name: config.life_cycle.sensor_misses(config.physics(name)[0])
             for name in config.sensors
         }
+        # each track's one instant while its detections all share it (several sensors of one
+        # instant), -inf once they span two: its velocity is then measured (§8.3)
+        self._instants: FloatArray = np.zeros(0)
         # per sensor: the clutter estimate (when β_FT is not given) and what was done
         self._clutter = {name: ClutterEstimate.empty(self._q) for name in config.sensors}
         self.tallies: dict[str, ScanTally] = {name: ScanTally() for name in config.sensors}
@@ -366,8 +371,9 @@ class LocalTracker:
         claimed_any = bool(np.any(established(self._rows.life.status)))
         score = self._scan_score(sensor_name, z, noises, counted=not claimed_any)
         prediction = predict_bank(self.predictor, self._state, elapsed)
+        passes = _passes(self._rows.life, self._instants == -np.inf)
         if self._branching:  # §8.3: a start's second detection is its velocity, not a manoeuvre
-            starts = np.flatnonzero(_passes(self._rows.life) == START_PASS)
+            starts = np.flatnonzero(passes == START_PASS)
             prediction = without_inputs(prediction, self.bank, starts, elapsed)
         positions, gates = prediction.combined_measurement()
         before = self._rows.life
@@ -385,7 +391,7 @@ class LocalTracker:
             else _select_prediction(prediction, candidates),
             z,
             own_noise,
-            _passes(before.select(candidates)),
+            passes[candidates],
             score,
             branching=START_PASS if self._branching else None,
         )
@@ -403,9 +409,25 @@ class LocalTracker:
                 ),
             )
         self._update(prediction, candidates, association, (time, z, noises))
+        # §8.3: a start that a detection left without a velocity (one instant) took it as a
+        # second position, and a start of its own would duplicate it
+        hit_rows = candidates[association.rows]
+        previous = self._instants
+        moved = np.zeros(len(status), dtype=bool)
+        moved[hit_rows] = previous[hit_rows] != time
+        self._instants = np.where(moved, -np.inf, previous)
+        measured = self._instants == -np.inf
+        own_instant = association.cols[~measured[hit_rows]]
         self._combine_evidence(candidates[association.rows], association.cols)
         hit = association.update.detected
         detected, gain = hits(len(status), candidates[hit], association.hit_gain[hit])
+        # §8.3: the starts of several detections of one instant are scored as one start
+        # from here: their velocity is what their next detection measures, and the other
+        # sensors' agreement on where they are is no evidence for it
+        excess = np.where(
+            (passes == START_PASS) & (before.hits >= 2), before.score - score.initial, 0.0
+        )
+        gain = gain - np.maximum(excess, 0.0)
         life, newly_confirmed = advance(
             self.config.life_cycle,
             before,
@@ -425,6 +447,7 @@ class LocalTracker:
                 visibility=codes,
                 occluded=hidden,
                 densities=(score.false_target_density, score.new_target_density),
+                velocity_measured=measured,
             ),
         )
         self._rows = self._rows.living(life)
@@ -446,8 +469,9 @@ class LocalTracker:
                 split.state,
                 split.cols,
                 numbers,
-                before.score[parents] + split.gain,
+                before.score[parents] - np.maximum(excess[parents], 0.0) + split.gain,
                 hits=2,
+                instant=np.where(previous[parents] == time, time, -np.inf),
                 recent=None
                 if self._recent is None  # the start's first detection, then the branch's
                 else self._recent.select(parents).latest_replaced(
@@ -456,6 +480,7 @@ class LocalTracker:
             )
         free = np.ones(len(z), dtype=bool)
         free[association.used] = False  # a start's detections start tracks too (§8.3)
+        free[own_instant] = False
         started = self._initiate(time, sensor_name, z, noises, free, numbers, score)
         tally = self._tally(before, life, len(z), joined, started, newly_confirmed)
         self._count(sensor_name, tally, z[~claimed], noises[~claimed], counted=not claimed_any)
@@ -787,6 +812,7 @@ class LocalTracker:
                 recent=None
                 if self._recent is None
                 else RecentDetections.first(time, z[starts], noises[starts]),
+                instant=time,
             )
             return len(starts)
         sensor_index = self.config.sensors.index(sensor)
@@ -858,13 +884,16 @@ class LocalTracker:
         numbers: IntArray,
         start: float | FloatArray,
         hits: int = 1,
+        instant: float | FloatArray = -np.inf,
         recent: RecentDetections | None = None,
     ) -> None:
-        """New tentative tracks of ``detections``; ``recent``: their detections so far
-        (with the calibrated classification)."""
+        """New tentative tracks of ``detections``; ``instant``: the one instant of their
+        detections (-inf: they span two); ``recent``: their detections so far (with the
+        calibrated classification)."""
         count = len(detections)
         if count == 0:
             return
+        self._instants = np.concatenate([self._instants, np.broadcast_to(instant, (count,))])
         if self._recent is not None:
             self._recent = self._recent.concatenate(
                 RecentDetections.empty(count, self._q) if recent is None else recent
@@ -948,6 +977,7 @@ class LocalTracker:
 
     def _keep(self, rows: IntArray) -> None:
         self._rows = self._rows.select(rows)
+        self._instants = self._instants[rows]
         self._state = self._state.select(rows)
         self._sensor_misses = self._sensor_misses[rows]
         if self._classes is not None:
@@ -974,6 +1004,7 @@ class LocalTracker:
                 "means": plain_floats(self._state.means[row]),
                 "covariances": plain_floats(self._state.covariances[row]),
                 "log_mode_probabilities": plain_floats(self._state.log_mode_probabilities[row]),
+                "instant": plain_floats(self._instants[row]),
                 "classification": None,
             }
             if self.classifier is not None and self._classes is not None:
@@ -1047,6 +1078,10 @@ class LocalTracker:
         tracker._sensor_misses = np.array(
             [e.get("sensor_misses", [0] * sensors) for e in entries], dtype=np.int64
         ).reshape(-1, sensors)
+        # an export without them: a start of one detection at the export's time
+        tracker._instants = float_array(
+            [e.get("instant", -np.inf if e["hits"] >= 2 else plain["time"]) for e in entries]
+        ).reshape(-1)
         tracker._state = IMMState(
             float_array([e["means"] for e in entries]).reshape(-1, r, n),
             float_array([e["covariances"] for e in entries]).reshape(-1, r, n, n),
