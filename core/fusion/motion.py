@@ -2,12 +2,12 @@
 
 The model of one axis comes from :data:`core.models.TRANSITION_MODELS` by its
 API name, and :class:`~core.models.layout.MappedMotion` places it on the
-session's layout (docs/algorithms.md §4.1). ``constant_velocity`` is the
+session's layout (docs/algorithms.md §7.6). ``constant_velocity`` is the
 discretised continuous white-noise acceleration model of spectral density
 ``q`` (Bar-Shalom, Li & Kirubarajan §6.2.2), the one meaning of the session's
-``motion.q``, shared by the local constant-velocity model of a session that
-tracks detections without a preset (:mod:`core.tracking.models`,
-``noise="continuous"``); ``singer`` is Singer's model
+``motion.q``, the meaning too of the local constant-velocity model of a
+session that tracks detections without a preset (:mod:`core.tracking.models`,
+``noise="continuous"``, with its own arithmetic, §7.6); ``singer`` is Singer's model
 (:mod:`core.models.singer`). Every Δt is one closed-form step; components of
 no axis block are kept constant.
 

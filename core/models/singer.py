@@ -1,4 +1,4 @@
-"""The Singer model: a manoeuvre as an exponentially correlated acceleration (docs/algorithms.md §7.6).
+"""Singer's model: a manoeuvre as a correlated acceleration (docs/algorithms.md §7.6).
 
 Singer (1970) models a manned target's acceleration along each axis as a
 first-order Gauss–Markov process of time constant ``τ`` (the manoeuvre time)

@@ -85,8 +85,9 @@ POSITION_INDICES = (0, 2)
 AXES = (1, 2, 3)
 """Numbers of position axes a model may have."""
 
-KEPT_STEPS = 4
-"""Time steps whose stacked bank matrices :meth:`ModelBank.at` keeps."""
+KEPT_STEPS = 16
+"""Time steps whose stacked bank matrices :meth:`ModelBank.at` keeps, for every tracker of
+one bank together (each sensor's scan interval, and their jitter)."""
 
 KEPT_BANKS = 64
 """Distinct banks (models and mode transitions) whose computed parts are kept and shared."""
