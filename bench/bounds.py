@@ -43,6 +43,7 @@ from websockets.sync.client import connect
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from machine import describe_machine, machine_load
 from service import free_port, running, server, server_process, service_command
 
 from api_schemas.limits import WireLimits
@@ -581,6 +582,7 @@ def main() -> int:
     crowd_only = "--crowd" in sys.argv[1:]
     global SERVER_PID
     if crowd_only:
+        print(f"{describe_machine()}; {machine_load()}")
         with server_process(service_command(port), port) as (url, SERVER_PID):
             rows.append(baseline := idle(url))
             rows += crowd_rows(url)
@@ -733,12 +735,17 @@ def print_rows(rows: list[dict[str, Any]], baseline: dict[str, Any]) -> None:
             f"{row['healthz_failures']:8}  {row['server_cpu_s']:12.2f}  "
             f"{row['server_wait_s']:13.2f}  {row.get('note', '')}"
         )
-    worst = max(row["healthz_max_ms"] for row in rows)
+    slowest = max(rows, key=lambda row: row["healthz_max_ms"])
+    worst = slowest["healthz_max_ms"]
     worst_lag = max(row["loop_lag_ms"] for row in rows)
     print(
         f"slowest /healthz during any route: {worst:.1f} ms (target {TARGET_HEALTHZ_MS:.0f} ms; "
         f"idle in this run: max {baseline['healthz_max_ms']:.1f} ms, "
-        f"p50 {baseline['healthz_p50_ms']:.1f} ms)\n"
+        f"p50 {baseline['healthz_p50_ms']:.1f} ms), during {slowest['route']!r}: the server's "
+        f"event loop ran {slowest['worst_server_cpu_ms']:.1f} ms of it and waited "
+        f"{slowest['worst_server_wait_ms']:.1f} ms for a CPU, the poller waited "
+        f"{slowest['worst_poller_wait_ms']:.1f} ms for one (waits: the machine's other load; "
+        f"{machine_load()})\n"
         f"longest event-loop stall during any route: ≤ {worst_lag:.0f} ms "
         f"(target {TARGET_LOOP_LAG_MS:.0f} ms; the server's credal_event_loop_lag_seconds "
         "histogram, read before and after each route: the bound of the highest bucket reached)"

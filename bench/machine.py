@@ -28,6 +28,13 @@ def describe_machine() -> str:
     )
 
 
+def machine_load() -> str:
+    """The machine's load average (1, 5, 15 min) and its cores: a load above the cores means
+    runnable processes waited for a CPU (every latency measured then includes that wait)."""
+    one, five, fifteen = os.getloadavg()
+    return f"load average {one:.1f} {five:.1f} {fifteen:.1f} on {os.cpu_count()} cores"
+
+
 def median_ms(
     call: Callable[[], object], *, repeat: int = 15, budget_s: float = 2.0, minimum: int = 3
 ) -> float:
