@@ -25,9 +25,10 @@ Runs, all on the same detections:
 - ``fused-t2t``: the same sensors flagged ``local_tracker: true``: each its own local
   tracker, then credal track-to-track fusion (the path before issue 23);
 - ``lists`` (``lists-<method>``): the sensors as **track-list sources**: each sensor's
-  own session (``alone-k``) posts its confirmed and coasting tracks (coasting ones flagged
-  ``coasted``) at its scan to one session of three track-list sources (each its P_D and
-  field of view), the default association method (each method); ``lists-rst``: the same,
+  own session (``alone-k``) posts its confirmed and coasting tracks at its scan (those the
+  scan did not update flagged ``coasted``) to one session of three track-list sources
+  (each its P_D and field of view), the default association method (each method);
+  ``lists-rst``: the same,
   each source starting afresh once (its tracks lost, its ids numbered from F1 again: at
   half the run, 5 s and 10 s later);
 - ``ss-gnn`` / ``ss-jpda``: Stone Soup 1.9.1 fed every sensor's detections in time
@@ -469,7 +470,8 @@ def track_list_run(
 ) -> list[Estimates]:
     """Each sensor's own single-sensor session (``alone-k``) posts its confirmed and coasting
     tracks (its picture at its scan) as a track list to one session of three track-list
-    sources. ``restarts``: sensor k's session starts afresh at that time (its tracks lost,
+    sources, a track its scan did not update flagged ``coasted`` (``coasted`` False: none
+    flagged). ``restarts``: sensor k's session starts afresh at that time (its tracks lost,
     its ids numbered from F1 again)."""
     wires = [
         SessionConfig.model_validate(session_config(scene, [k], False)) for k in range(len(SENSORS))
@@ -492,7 +494,7 @@ def track_list_run(
                 t.id,
                 np.asarray(t.state),
                 np.asarray(t.covariance),
-                coasted=coasted and t.status.value == "coasting",
+                coasted=coasted and max(source.time for source in t.sources) < scan.time,
             )
             for t in source.picture(scan.time)
             if t.status.value in LIVE
