@@ -686,7 +686,7 @@ def main() -> int:
     names = [name for name in SCENES if name in chosen] or list(SCENES)
     layouts = [layout for layout in LAYOUTS if layout in chosen] or list(LAYOUTS)
     header = (
-        f"{'scene':>12} {'targets':>7} {'run':>10} {'GOSPA':>7} {'loc':>6} {'miss':>6} "
+        f"{'scene':>12} {'targets':>7} {'run':>14} {'GOSPA':>7} {'loc':>6} {'miss':>6} "
         f"{'false':>6} {'idsw':>5} {'/best':>6}"
     )
     for name in names:
@@ -718,7 +718,7 @@ def main() -> int:
             print(header)
             for label, result in scores.items():
                 print(
-                    f"{scene.name:>12} {scene.targets:7.1f} {label:>10} {result.gospa:7.2f} "
+                    f"{scene.name:>12} {scene.targets:7.1f} {label:>14} {result.gospa:7.2f} "
                     f"{result.localisation:6.2f} {result.missed:6.2f} {result.false:6.2f} "
                     f"{result.switches:5d} {result.gospa / scores[best].gospa:6.2f}"
                 )
