@@ -371,6 +371,7 @@ class SessionEngine:
         fresh = np.concatenate([confirmed, created[status[created] == CONFIRMED]])
         terminated = self._hand_over_to_phantoms(fresh, terminated)  # hand-over
         terminated = self._absorb_duplicates(terminated, created)
+        terminated = self._join_duplicates(terminated, live[rows], report.sensor)
         return self._result(report, decision, live, terminated, explain)  # and keep the rows
 
     # ------------------------------------------------------------ checks
@@ -719,17 +720,50 @@ class SessionEngine:
         established_rows = np.flatnonzero(((status == CONFIRMED) | (status == COASTING)) & ~fresh)
         return self._merge(established_rows, tentative, StatusReason.DUPLICATE, terminated)
 
+    def _join_duplicates(self, terminated: IntArray, updated: IntArray, sensor: str) -> IntArray:
+        """An established track that duplicates another established track joins the older.
+
+        A source whose track is off its own covariance (a local tracker that lags a
+        turn) can start a fused track beside the one the other sources hold, which
+        min_points confirms; once its reports fit the other track, the two are one
+        object that no source reports twice. Each established track this report
+        updated is gated (GNN, ``sum`` distance, ``gate_probability``) against the
+        established tracks the report's source is not current on; a pair no source is
+        current on both of (§8.6) is merged, the older id kept (§8.10).
+        """
+        status = self._rows.rows.life.status
+        alive = np.ones(len(status), dtype=bool)
+        alive[terminated] = False
+        is_established = established(status) & alive
+        newcomers = updated[is_established[updated]]
+        if len(newcomers) == 0:
+            return terminated
+        every = np.arange(len(status))
+        current = self._current(every)
+        candidates = is_established & ~current[:, self._table.slot(sensor)]
+        candidates[newcomers] = False
+        return self._merge(
+            np.flatnonzero(candidates),
+            newcomers,
+            StatusReason.DUPLICATE,
+            terminated,
+            carried=current,
+        )
+
     def _merge(
         self,
         keepers: IntArray,
         newcomers: IntArray,
         reason: StatusReason,
         terminated: IntArray,
+        carried: BoolArray | None = None,
     ) -> IntArray:
         """Gate ``newcomers`` against ``keepers`` (GNN, ``sum`` distance); merge disjoint pairs.
 
         The keeper keeps its id, takes the newcomer's estimates and becomes
         (or stays) confirmed; the newcomer is terminated with ``reason``.
+        Disjoint: no sensor carries both (``carried``, (rows, sensors); default: has an
+        estimate of both); with ``carried`` given, the older of a pair keeps its id.
         Returns ``terminated`` and the newcomers merged.
         """
         if len(keepers) == 0 or len(newcomers) == 0 or self.time is None:
@@ -741,17 +775,28 @@ class SessionEngine:
             self.config.management.gate_probability,
         )
         # a sensor that reports both as distinct objects knows better
-        disjoint = ~np.any(
-            table.present[keepers[known]] & table.present[newcomers[incoming]], axis=1
-        )
+        carries = table.present if carried is None else carried
+        disjoint = ~np.any(carries[keepers[known]] & carries[newcomers[incoming]], axis=1)
         keeper_rows, newcomer_rows = keepers[known[disjoint]], newcomers[incoming[disjoint]]
         if len(keeper_rows) == 0:
             return terminated
+        if carried is not None:
+            numbers = self._rows.rows.numbers
+            older = numbers[newcomer_rows] < numbers[keeper_rows]
+            keeper_rows, newcomer_rows = (
+                np.where(older, newcomer_rows, keeper_rows),
+                np.where(older, keeper_rows, newcomer_rows),
+            )
         for keeper_row, newcomer_row in zip(
             keeper_rows.tolist(), newcomer_rows.tolist(), strict=True
         ):
             keeper, newcomer = self.tracks[keeper_row], self.tracks[newcomer_row]
             for sensor_id, estimate in newcomer.estimates.items():
+                slot = table.slot(sensor_id)
+                if table.present[keeper_row, slot] and (
+                    table.times[keeper_row, slot] >= table.times[newcomer_row, slot]
+                ):
+                    continue  # the keeper's estimate of that sensor is the newer
                 keeper.set_estimate(sensor_id, estimate)
                 table.move(newcomer_row, keeper_row, sensor_id)
         self._rows.rows = self._rows.rows.living(

@@ -110,3 +110,34 @@ def test_a_track_its_source_coasts_is_that_sources_miss() -> None:
     after = [entry for entry in scores if entry[0] >= 10.5]
     assert [entry[2] for entry in after] == pytest.approx(expected)
     assert after[-1][1] == "terminated" and all(e[1] != "terminated" for e in after[:-1])
+
+
+def test_a_sources_off_track_that_started_a_second_fused_track_joins_the_first() -> None:
+    """One target. s1's first report is 8 m off with a 1 m σ (a local track that lags) and
+    its later ones close in on the target (0.7× the offset a second): outside the
+    association's gate, the first starts a second fused track, which s1's next report
+    confirms (min_points) and keeps by continuity — each report fits it about as well as
+    the first track. The two are one object that no source reports twice: the younger
+    joins the older, whose id (F1) the target keeps to the end with both sources'
+    estimates. Before issue 23 two established tracks never merged: F2 followed the same
+    target to the end."""
+    engine = SessionEngine(make_config(["s0", "s1"]))
+    tight = np.diag([1.0, 0.25, 1.0, 0.25])
+
+    def state(t: float) -> np.ndarray:
+        return np.array([2.0 * t, 2.0, 0.0, 0.0])
+
+    shown: list[set[str]] = []
+    for step in range(12):
+        t = float(step)
+        engine.apply(TrackReport("s0", t, (ReportedTrack("a", state(t), tight),)))
+        if step >= 3:
+            off = np.array([0.0, 0.0, 8.0 * 0.7 ** (step - 3), 0.0])
+            s1 = (ReportedTrack("b", state(t + 0.5) + off, tight),)
+            result = engine.apply(TrackReport("s1", t + 0.5, s1))
+            shown.append({view.id for view in result.tracks if view.status.value == "confirmed"})
+    assert engine.next_number == 3  # s1's first report did start a second fused track
+    assert shown[-5:] == [{"F1"}] * 5
+    (track,) = engine.tracks
+    assert track.id == "F1" and set(track.estimates) == {"s0", "s1"}
+    assert track.estimates["s1"].track == "b"
