@@ -638,13 +638,18 @@ class LocalTracker:
         return doppler
 
     def _carried(self, column: int, status: IntArray) -> BoolArray:
-        """Rows whose miss by the sensor of ``column`` counts: every tentative one, and the
-        established ones it carries — it has detected them and not missed them
-        :meth:`LifeCycleConfig.sensor_misses` times in a row since (docs/algorithms.md §8.9)."""
+        """Rows whose miss by the sensor of ``column`` counts: every tentative one, every
+        one with at most ``initiation_hits`` hits (a young track is tested by every scan
+        that could see it), and the established ones it carries — it has detected them and
+        not missed them :meth:`LifeCycleConfig.sensor_misses` times in a row since
+        (docs/algorithms.md §8.9)."""
         if self._counting[column]:
             return np.ones(len(status), dtype=bool)
+        young = self._rows.life.hits <= self.config.life_cycle.initiation_hits
         return np.asarray(
-            ~established(status) | (self._sensor_misses[:, column] < self._miss_limits[column]),
+            ~established(status)
+            | young
+            | (self._sensor_misses[:, column] < self._miss_limits[column]),
             dtype=np.bool_,
         )
 

@@ -350,15 +350,28 @@ def test_a_sensor_that_stops_detecting_a_track_stops_counting_after_its_run() ->
     assert missed["status"] == "coasting"
 
 
-def test_a_sensor_that_never_detected_a_track_says_nothing_about_it() -> None:
+def test_a_sensor_that_never_detected_a_track_says_nothing_about_it_once_it_is_held() -> None:
+    """Sensor d never detects the target a detects at every scan. While the track is young
+    (at most ``initiation_hits`` = 3 hits) d's empty scan costs it ln(1 − 0.9), as every
+    scan that could see it; once a has held it for four hits, d's silence costs nothing
+    (§8.9)."""
     engine = SessionEngine(session(detecting("a"), detecting("d")))
-    for k in range(4):
+    costs = []
+    for k in range(5):
         engine.apply_detections(on_target("a", float(k)))
-    before = central_target(engine)
-    engine.apply_detections(DetectionReport("d", 3.5, np.zeros((0, 2))))
-    after = central_target(engine)
-    assert before["status"] == after["status"] == "confirmed"
-    assert after["score"] == before["score"]
+        before = central_target(engine)
+        engine.apply_detections(DetectionReport("d", k + 0.5, np.zeros((0, 2))))
+        after = central_target(engine)
+        assert after["number"] == before["number"]
+        costs.append((before["hits"], after["score"] - before["score"]))
+    assert after["status"] == "confirmed"
+    assert costs == [
+        (1, pytest.approx(math.log(0.1), abs=1e-12)),
+        (2, pytest.approx(math.log(0.1), abs=1e-12)),
+        (3, pytest.approx(math.log(0.1), abs=1e-12)),
+        (4, 0.0),
+        (5, 0.0),
+    ]
 
 
 def test_a_track_another_sensor_just_detected_waits_for_its_next_scan() -> None:
