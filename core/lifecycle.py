@@ -567,6 +567,10 @@ class Evidence:
     velocity_measured : whether each track's detections have measured its velocity (a
         tentative track that has not, e.g. of several sensors' detections of one instant,
         is not confirmed: docs/algorithms.md §8.3); None: every track's.
+    vouched : tracks another sensor detected at its latest scan, which is not overdue
+        (a central tracker's, docs/algorithms.md §8.9): an established one is not ended
+        by its score or its empty gate before that sensor's next scan, and its score
+        stays at the delete threshold at least; None: none.
     """
 
     time: float
@@ -581,6 +585,7 @@ class Evidence:
     sensors: IntArray | None = None
     densities: tuple[float, float] | None = None
     velocity_measured: BoolArray | None = None
+    vouched: BoolArray | None = None
 
 
 # ------------------------------------------------------------------ visibility
@@ -632,7 +637,8 @@ def advance(
 
     1. score: a hit adds its ΔL, a miss (seen, not detected, not a phantom)
        ln(1 − P_D) and one to the track's misses in a row; clamped at
-       :attr:`LifeCycleConfig.score_ceiling`;
+       :attr:`LifeCycleConfig.score_ceiling`; an established track ``vouched`` for
+       by another sensor not below the delete threshold;
     2. a coasting track that is hit is confirmed again (``reacquired``); a
        confirmed one that misses coasts (``missed``); a coasting miss multiplies
        the empty-gate probability by ``1 − (ρ_FA + ρ_NT) A_G`` ([HZ] §4.2);
@@ -649,9 +655,11 @@ def advance(
        occluded, established                   phantom        occluded
        occluded, tentative                     terminated     occluded
        score ≤ delete threshold (not a start  terminated     score_deleted
-       hit with ≤ initiation_hits hits)
+       hit with ≤ initiation_hits hits, not
+       vouched for)
        coasting, empty gate < termination p.,  terminated     gate_emptiness
-       ≥ termination_misses misses in a row
+       ≥ termination_misses misses in a row,
+       not vouched for
        (the confirmations: only of a track whose velocity is measured, when given)
        tentative, reported by ≥ 2 sensors      confirmed      second_sensor
        tentative, min_points hits and L ≥ 0    confirmed      min_points
@@ -674,6 +682,10 @@ def advance(
         config.ceiling,
     )
     score = np.minimum(score + np.where(missed, evidence.miss_increment, 0.0), ceiling)
+    held = np.zeros(len(status), dtype=bool)
+    if evidence.vouched is not None:
+        held = evidence.vouched & established(status)
+        score = np.where(held, np.maximum(score, config.delete_threshold), score)
     hits = state.hits + detected.astype(np.int64)
     misses = np.where(detected, 0, state.misses + missed.astype(np.int64))
     reason = state.reason
@@ -722,12 +734,17 @@ def advance(
             decide(hidden & (status == TENTATIVE), TERMINATED, why)
     # a start hit in this scan is tested by its next detections, not deleted (§8.3)
     starting = (status == TENTATIVE) & detected & (hits <= config.initiation_hits)
-    decide((score <= config.delete_threshold) & ~starting, TERMINATED, StatusReason.SCORE_DELETED)
+    decide(
+        (score <= config.delete_threshold) & ~starting & ~held,
+        TERMINATED,
+        StatusReason.SCORE_DELETED,
+    )
     if config.termination_probability > 0.0:
         decide(
             (status == COASTING)
             & (empty_gate < config.termination_probability)
-            & (misses >= config.termination_misses),
+            & (misses >= config.termination_misses)
+            & ~held,
             TERMINATED,
             StatusReason.GATE_EMPTINESS,
         )

@@ -119,10 +119,15 @@ from core.tracking.track import (
 )
 
 EXPORT_VERSION = 4
-"""4: each track's misses in a row of every sensor (``sensor_misses``); 3: each track's ``misses`` in a row, each sensor's clutter estimate and tally;
+"""4: each track's misses in a row of every sensor (``sensor_misses``) and whether each
+sensor's latest scan that could see it detected it (``sensor_detected_last``), each
+sensor's last two scan times (``scan_times``); 3: each track's ``misses`` in a row, each sensor's clutter estimate and tally;
 2: the seeds' covariances (``seed_covariances``). An older export restores with no
 misses, empty estimates and tallies, and (version 1) its seeds with the bank's R, the R
 they were started with then."""
+VOUCH_REVISITS = 1.5
+"""A sensor's latest scan vouches for the tracks it detected until this many of its revisits
+have passed (its next scan is overdue: a sensor that stopped scanning vouches for nothing)."""
 SEED_NOISE_GATE = 0.999
 """Gate probability of the measurement-noise part of the seed distance bound."""
 
@@ -232,16 +237,22 @@ class LocalTracker:
         self._seed_noises: FloatArray = np.zeros((0, self._q, self._q))
         self._seed_times: FloatArray = np.zeros(0)
         self._seed_sensors: IntArray = np.zeros(0, dtype=np.int64)
-        # per track and sensor (column of config.sensors): its misses in a row (§8.9)
-        self._sensor_misses: IntArray = np.zeros((0, len(config.sensors)), dtype=np.int64)
-        # per sensor: the run after which its silence about an established track is no miss
-        self._miss_limits = {
-            name: config.life_cycle.sensor_misses(config.physics(name)[0])
-            for name in config.sensors
-        }
         # each track's one instant while its detections all share it (several sensors of one
         # instant), -inf once they span two: its velocity is then measured (§8.3)
         self._instants: FloatArray = np.zeros(0)
+        # per sensor: the run after which its silence about an established track is no miss
+        limits = [
+            config.life_cycle.sensor_misses(config.physics(name)[0]) for name in config.sensors
+        ]
+        self._miss_limits = np.array([0 if n is None else n for n in limits], dtype=np.int64)
+        self._counting = np.array([n is None for n in limits])  # no ceiling: every miss counts
+        # per track and sensor (column of config.sensors), §8.9: its misses in a row since it
+        # last detected the track (its limit: never), and whether its latest scan that could
+        # see the track detected it
+        self._sensor_misses: IntArray = np.zeros((0, len(config.sensors)), dtype=np.int64)
+        self._vouching: BoolArray = np.zeros((0, len(config.sensors)), dtype=bool)
+        # per sensor: its previous and latest scan times (NaN: none yet)
+        self._scan_times: FloatArray = np.full((len(config.sensors), 2), np.nan)
         # per sensor: the clutter estimate (when β_FT is not given) and what was done
         self._clutter = {name: ClutterEstimate.empty(self._q) for name in config.sensors}
         self.tallies: dict[str, ScanTally] = {name: ScanTally() for name in config.sensors}
@@ -298,6 +309,7 @@ class LocalTracker:
             raise
         finally:
             self.__dict__.pop("_evidence", None)
+            self.__dict__.pop("_column", None)
 
     def _class_evidence(
         self, class_masses: Sequence[MassFunction | None] | None
@@ -382,8 +394,8 @@ class LocalTracker:
         seen, hidden = seen_by(
             self._views[sensor_name], positions, status, self.config.life_cycle.occlusion_radius
         )
-        column = self.config.sensors.index(sensor_name)
-        counted = seen & self._carried(column, sensor_name, status)
+        column = self._column = self.config.sensors.index(sensor_name)
+        counted = seen & self._carried(column, status)
         candidates = np.flatnonzero((status != PHANTOM) & self._can_be_hit(prediction, score))
         association = self._associator.associate(
             prediction
@@ -448,10 +460,17 @@ class LocalTracker:
                 occluded=hidden,
                 densities=(score.false_target_density, score.new_target_density),
                 velocity_measured=measured,
+                vouched=self._vouched(column, time),
             ),
         )
         self._rows = self._rows.living(life)
         self._sensor_misses = sensor_miss_runs(self._sensor_misses, column, seen, detected)
+        vouching = self._vouching.copy()
+        vouching[:, column] = detected
+        self._vouching = vouching
+        scan_times = self._scan_times.copy()
+        scan_times[column] = (scan_times[column, 1], time)
+        self._scan_times = scan_times
         # Per-detection assignment (by track number for now).
         numbers = np.full(len(z), -1, dtype=np.int64)
         numbers[association.cols] = self._rows.numbers[candidates[association.rows]]
@@ -643,16 +662,32 @@ class LocalTracker:
             raise TrackingError(f"range_rates must be {count} finite numbers (NaN: none)")
         return doppler
 
-    def _carried(self, column: int, sensor: str, status: IntArray) -> BoolArray:
-        """Rows whose miss by ``sensor`` (column ``column``) counts: every tentative one, and
-        the established ones it has not missed :meth:`LifeCycleConfig.sensor_misses` times
-        in a row (docs/algorithms.md §8.9)."""
-        limit = self._miss_limits[sensor]
-        if limit is None:
+    def _carried(self, column: int, status: IntArray) -> BoolArray:
+        """Rows whose miss by the sensor of ``column`` counts: every tentative one, every
+        one with at most ``initiation_hits`` hits (a young track is tested by every scan
+        that could see it), and the established ones it carries — it has detected them and
+        not missed them :meth:`LifeCycleConfig.sensor_misses` times in a row since
+        (docs/algorithms.md §8.9)."""
+        if self._counting[column]:
             return np.ones(len(status), dtype=bool)
+        young = self._rows.life.hits <= self.config.life_cycle.initiation_hits
         return np.asarray(
-            ~established(status) | (self._sensor_misses[:, column] < limit), dtype=np.bool_
+            ~established(status)
+            | young
+            | (self._sensor_misses[:, column] < self._miss_limits[column]),
+            dtype=np.bool_,
         )
+
+    def _vouched(self, column: int, time: float) -> BoolArray:
+        """Rows that another sensor than the scanning one (``column``) detected at its latest
+        scan that could see them, if that scan is not overdue: not older than
+        :data:`VOUCH_REVISITS` of its revisit (known from its second scan on;
+        docs/algorithms.md §8.9)."""
+        previous, latest = self._scan_times[:, 0], self._scan_times[:, 1]
+        revisit = latest - previous
+        fresh = np.isfinite(revisit) & (time - latest <= VOUCH_REVISITS * revisit)
+        fresh[column] = False
+        return np.asarray((self._vouching & fresh).any(axis=1), dtype=np.bool_)
 
     # ---------------------------------------------------------- predict
     def _can_be_hit(self, prediction: IMMPrediction, scan: ScoreModel) -> BoolArray:
@@ -770,6 +805,9 @@ class LocalTracker:
         runs = self._sensor_misses.copy()  # the newcomer's detections are the latest
         runs[keepers] = np.minimum(runs[keepers], runs[newcomers])
         self._sensor_misses = runs
+        vouching = self._vouching.copy()
+        vouching[keepers] = vouching[newcomers]
+        self._vouching = vouching
         self._rows = self._rows.living(
             hand_over(life, keepers, newcomers, StatusReason.MERGED_INTO_PHANTOM)
         )
@@ -887,9 +925,9 @@ class LocalTracker:
         instant: float | FloatArray = -np.inf,
         recent: RecentDetections | None = None,
     ) -> None:
-        """New tentative tracks of ``detections``; ``instant``: the one instant of their
-        detections (-inf: they span two); ``recent``: their detections so far (with the
-        calibrated classification)."""
+        """New tentative tracks of ``detections`` of the scanning sensor (``self._column``);
+        ``instant``: the one instant of their detections (-inf: they span two); ``recent``:
+        their detections so far (with the calibrated classification)."""
         count = len(detections)
         if count == 0:
             return
@@ -908,9 +946,13 @@ class LocalTracker:
         )
         self.next_number += count
         self._state = _concatenate(self._state, state)
-        self._sensor_misses = np.concatenate(
-            [self._sensor_misses, np.zeros((count, len(self.config.sensors)), dtype=np.int64)]
-        )
+        # detected by the scanning sensor only: the others do not carry it yet (§8.9)
+        runs = np.tile(self._miss_limits, (count, 1))
+        runs[:, self._column] = 0
+        vouching = np.zeros((count, len(self.config.sensors)), dtype=bool)
+        vouching[:, self._column] = True
+        self._sensor_misses = np.concatenate([self._sensor_misses, runs])
+        self._vouching = np.concatenate([self._vouching, vouching])
         if self.classifier is not None and self._classes is not None:
             self._classes = self._classes.concatenate(self.classifier.initial(count))
             self._combine_evidence(np.arange(len(self._rows) - count, len(self._rows)), detections)
@@ -980,6 +1022,7 @@ class LocalTracker:
         self._instants = self._instants[rows]
         self._state = self._state.select(rows)
         self._sensor_misses = self._sensor_misses[rows]
+        self._vouching = self._vouching[rows]
         if self._classes is not None:
             self._classes = self._classes.select(rows)
         if self._recent is not None:
@@ -1001,6 +1044,7 @@ class LocalTracker:
                 "phantom_since": plain_floats(life.phantom_since[row]),
                 "misses": int(life.misses[row]),
                 "sensor_misses": self._sensor_misses[row].tolist(),
+                "sensor_detected_last": self._vouching[row].tolist(),
                 "means": plain_floats(self._state.means[row]),
                 "covariances": plain_floats(self._state.covariances[row]),
                 "log_mode_probabilities": plain_floats(self._state.log_mode_probabilities[row]),
@@ -1030,6 +1074,7 @@ class LocalTracker:
             "seed_sensors": self._seed_sensors.tolist(),
             "clutter": {name: estimate.to_plain() for name, estimate in self._clutter.items()},
             "tallies": {name: tally.to_plain() for name, tally in self.tallies.items()},
+            "scan_times": plain_floats(self._scan_times),
             "tracks": tracks,
         }
 
@@ -1074,7 +1119,7 @@ class LocalTracker:
             misses=np.array([e.get("misses", 0) for e in entries], dtype=np.int64),
         )
         tracker._rows = TrackRows(np.array([e["number"] for e in entries], dtype=np.int64), life)
-        sensors = len(config.sensors)  # an older export: no sensor's misses yet
+        sensors = len(config.sensors)  # an older export: every sensor carries every track
         tracker._sensor_misses = np.array(
             [e.get("sensor_misses", [0] * sensors) for e in entries], dtype=np.int64
         ).reshape(-1, sensors)
@@ -1082,6 +1127,11 @@ class LocalTracker:
         tracker._instants = float_array(
             [e.get("instant", -np.inf if e["hits"] >= 2 else plain["time"]) for e in entries]
         ).reshape(-1)
+        tracker._vouching = np.array(
+            [e.get("sensor_detected_last", [False] * sensors) for e in entries], dtype=bool
+        ).reshape(-1, sensors)
+        if "scan_times" in plain:
+            tracker._scan_times = float_array(plain["scan_times"]).reshape(sensors, 2)
         tracker._state = IMMState(
             float_array([e["means"] for e in entries]).reshape(-1, r, n),
             float_array([e["covariances"] for e in entries]).reshape(-1, r, n, n),

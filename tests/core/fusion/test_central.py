@@ -122,10 +122,10 @@ def test_fusing_a_sensor_with_itself_changes_nothing() -> None:
     alone, central = feed(single, ["a"], measured), feed(twice, ["a", "b"], measured)
     mine, theirs = single.tracker_of("a"), twice.central
     assert mine is not None and theirs is not None
-    # every field but each sensor's own misses in a row (one column per sensor, §8.9)
+    # every field but each sensor's own record of the track (one column per sensor, §8.9)
     tracks = [theirs.export()["tracks"], mine.export()["tracks"]]
     for track in tracks[0] + tracks[1]:
-        del track["sensor_misses"]
+        del track["sensor_misses"], track["sensor_detected_last"]
     assert json.dumps(tracks[0]) == json.dumps(tracks[1])
     assert theirs.next_number == mine.next_number
     # and the fused pictures agree on the targets' tracks at every step (a false track that
@@ -147,7 +147,8 @@ def test_fusing_a_sensor_with_itself_changes_nothing() -> None:
 
 def test_misses_count_only_where_the_scanning_sensor_could_see() -> None:
     """A track outside sensor b's field of view keeps its score through b's empty scans; a
-    sensor b that sees everywhere costs it ln(1 − P_D of b) per empty scan ([MTT] §4.3)."""
+    sensor b that sees everywhere, and has detected the track, costs it ln(1 − P_D of b)
+    per empty scan ([MTT] §4.3)."""
     far = Sector(
         origin=(0.0, -50_000.0),
         heading_deg=-90.0,
@@ -162,6 +163,8 @@ def test_misses_count_only_where_the_scanning_sensor_could_see() -> None:
         truth = STARTS[:1]
         for k in range(4):
             engine.apply_detections(DetectionReport("a", float(k), truth + VELOCITIES[:1] * k))
+            if k == 2 and fov is None:  # b carries the track: it detected it (§8.9)
+                engine.apply_detections(on_target("b", 2.5))
         before = {t["number"]: t for t in central.export()["tracks"]}
         confirmed = [n for n, t in before.items() if t["status"] == "confirmed"]
         assert len(confirmed) == 1
@@ -310,35 +313,40 @@ def test_a_version_2_export_restores_its_central_tracker_with_an_empty_buffer() 
     assert json.dumps(restored.central.export()) == json.dumps(engine.central.export())
 
 
-def test_a_sensor_that_never_detects_a_track_stops_counting_after_its_run() -> None:
+def central_target(engine: SessionEngine) -> dict[str, Any]:
+    """The central track with the most hits (a start's branches may live beside it)."""
+    assert engine.central is not None
+    tracks: list[dict[str, Any]] = engine.central.export()["tracks"]
+    return max(tracks, key=lambda track: (track["hits"], -track["number"]))
+
+
+def on_target(sensor: str, time: float) -> DetectionReport:
+    return DetectionReport(sensor, time, STARTS[:1] + VELOCITIES[:1] * time)
+
+
+def test_a_sensor_that_stops_detecting_a_track_stops_counting_after_its_run() -> None:
     """Sensor a detects a target at every scan; sensor c (P_D 0.9, no field of view) scans
-    between them and never does. Each of c's first ⌈ln(β/(1 − α)) / ln(1 − P_D)⌉ = 3 misses
-    costs the track ln(1 − 0.9) ([MTT] §4.3, from the score a's hit left); after them c has
-    shown it does not see the target and its silence costs nothing, while a's own miss still
-    does (§8.9)."""
+    between them and detects it once, then never. Each of c's first
+    ⌈ln(β/(1 − α)) / ln(1 − P_D)⌉ = 3 misses costs the track ln(1 − 0.9) ([MTT] §4.3,
+    from the score a's hit left); after them c has shown it does not see the target and
+    its silence costs nothing, while a's own miss still does (§8.9)."""
     engine = SessionEngine(session(detecting("a"), detecting("c")))
-    central = engine.central
-    assert central is not None
     limit = -math.log(1e-3 / (1.0 - 1e-3)) / -math.log(1.0 - 0.9)
     assert math.ceil(limit) == 3
-
-    def target() -> dict[str, Any]:
-        """The central track with the most hits (a start's branches may live beside it)."""
-        tracks: list[dict[str, Any]] = central.export()["tracks"]
-        return max(tracks, key=lambda track: (track["hits"], -track["number"]))
-
+    engine.apply_detections(on_target("a", 0.0))
+    engine.apply_detections(on_target("c", 0.5))
     costs = []
-    for k in range(6):
-        engine.apply_detections(DetectionReport("a", float(k), STARTS[:1] + VELOCITIES[:1] * k))
-        before = target()
+    for k in range(1, 7):
+        engine.apply_detections(on_target("a", float(k)))
+        before = central_target(engine)
         engine.apply_detections(DetectionReport("c", k + 0.5, np.zeros((0, 2))))
-        after = target()
-        assert after["number"] == before["number"]
+        after = central_target(engine)
+        assert after["number"] == before["number"] and before["status"] == "confirmed"
         costs.append(after["score"] - before["score"])
     assert after["status"] == "confirmed"  # c's fourth to sixth misses do not coast it
     assert costs == pytest.approx([math.log(0.1)] * 3 + [0.0] * 3, abs=1e-12)
-    engine.apply_detections(DetectionReport("a", 6.0, np.zeros((0, 2))))
-    missed = target()
+    engine.apply_detections(DetectionReport("a", 7.0, np.zeros((0, 2))))
+    missed = central_target(engine)
     assert missed["number"] == after["number"]
     assert missed["score"] - after["score"] == pytest.approx(math.log(0.1), abs=1e-12)
     assert missed["status"] == "coasting"
@@ -416,3 +424,84 @@ def test_a_close_pair_seen_by_three_sensors_at_one_instant_keeps_its_ids() -> No
     results = [close_pair_switches(seed, apart=30.0, stagger=0.0) for seed in range(6)]
     assert sum(switches for switches, _ in results) == 0, results
     assert max(most for _, most in results) == 2, results
+
+
+def test_a_sensor_that_never_detected_a_track_says_nothing_about_it_once_it_is_held() -> None:
+    """Sensor d never detects the target a detects at every scan. While the track is young
+    (at most ``initiation_hits`` = 3 hits) d's empty scan costs it ln(1 − 0.9), as every
+    scan that could see it; once a has held it for four hits, d's silence costs nothing
+    (§8.9)."""
+    engine = SessionEngine(session(detecting("a"), detecting("d")))
+    costs = []
+    for k in range(5):
+        engine.apply_detections(on_target("a", float(k)))
+        before = central_target(engine)
+        engine.apply_detections(DetectionReport("d", k + 0.5, np.zeros((0, 2))))
+        after = central_target(engine)
+        assert after["number"] == before["number"]
+        costs.append((before["hits"], after["score"] - before["score"]))
+    assert after["status"] == "confirmed"
+    assert costs == [
+        (1, pytest.approx(math.log(0.1), abs=1e-12)),
+        (2, pytest.approx(math.log(0.1), abs=1e-12)),
+        (3, pytest.approx(math.log(0.1), abs=1e-12)),
+        (4, 0.0),
+        (5, 0.0),
+    ]
+
+
+def test_a_track_another_sensor_just_detected_waits_for_its_next_scan() -> None:
+    """Sensor e (a slow radar: scans at 0.5 and 3.5 s) detected the target at its latest
+    scan; sensor a (1 s) then misses it three times: 3 ln(1 − 0.9) = −6.908 is below the
+    delete threshold ln(β/(1 − α)) = −6.907, which ends a track a alone carries
+    ([MTT] §4.3), but this one waits at the threshold for e's next scan, whose miss ends
+    it (§8.9)."""
+    engine = SessionEngine(session(detecting("a"), detecting("e")))
+    engine.apply_detections(on_target("a", 0.0))
+    engine.apply_detections(on_target("e", 0.5))
+    for k in range(1, 4):
+        engine.apply_detections(on_target("a", float(k)))
+    engine.apply_detections(on_target("e", 3.5))
+    number = central_target(engine)["number"]
+    for k in range(4, 7):
+        engine.apply_detections(DetectionReport("a", float(k), np.zeros((0, 2))))
+    waiting = central_target(engine)
+    threshold = math.log(1e-3 / (1.0 - 1e-3))
+    assert 3 * math.log(0.1) < threshold
+    assert waiting["number"] == number and waiting["status"] == "coasting"
+    assert waiting["score"] == pytest.approx(threshold, abs=1e-12)
+    assert engine.central is not None
+    engine.apply_detections(DetectionReport("e", 6.5, np.zeros((0, 2))))
+    assert number not in [t["number"] for t in engine.central.export()["tracks"]]
+    assert engine.central.tallies["e"].ended_reasons == {"score_deleted": 1}
+    # a alone: the third miss ends it
+    alone = SessionEngine(session(detecting("a"), detecting("e")))
+    for k in range(4):
+        alone.apply_detections(on_target("a", float(k)))
+    for k in range(4, 7):
+        alone.apply_detections(DetectionReport("a", float(k), np.zeros((0, 2))))
+    assert alone.central is not None
+    assert alone.central.tallies["a"].ended_reasons == {"score_deleted": 1}
+
+
+def test_a_clutter_born_tentative_track_is_refuted_by_every_sensor_that_could_see_it() -> None:
+    """One false detection of sensor a starts a tentative track at L₀ = ln(β_NT/β_FT) = 0
+    (β_NT unset: β_FT); the empty scans of b, c and a that follow, which never detected
+    it, each cost ln(1 − 0.9): the third takes it to 3 ln 0.1 = −6.908 ≤ ln(β/(1 − α)) =
+    −6.907 and deletes it ([MTT] §4.3) — a tentative track is tested by every scan that
+    could see it (§8.9), not only by its own sensor's."""
+    engine = SessionEngine(session(detecting("a"), detecting("b"), detecting("c")))
+    central = engine.central
+    assert central is not None
+    engine.apply_detections(DetectionReport("a", 0.0, np.array([[1000.0, 2000.0]])))
+    (started,) = central.export()["tracks"]
+    assert started["status"] == "tentative" and started["score"] == 0.0
+    scores = []
+    for sensor, time in (("b", 1 / 3), ("c", 2 / 3)):
+        engine.apply_detections(DetectionReport(sensor, time, np.zeros((0, 2))))
+        (track,) = central.export()["tracks"]
+        scores.append(track["score"])
+    assert scores == pytest.approx([math.log(0.1), 2 * math.log(0.1)], abs=1e-12)
+    engine.apply_detections(DetectionReport("a", 1.0, np.zeros((0, 2))))
+    assert central.export()["tracks"] == []
+    assert central.tallies["a"].refuted == 1
