@@ -146,13 +146,15 @@ START_PASS = 2
 """The pass of the single-point starts (:func:`_passes`), which branch instead."""
 
 
-def _passes(life: LifeState, measured: BoolArray) -> IntArray:
+def _passes(life: LifeState, measured: BoolArray, refined: BoolArray) -> IntArray:
     """The association pass of each track (docs/algorithms.md §4 "Assignment", §8.3): the
-    established first, then the tentative tracks with two hits or more, then the starts:
-    the tracks of one detection, and those whose detections have not measured their
-    velocity (``measured`` False: several sensors' detections of one instant), whose gate
-    is the velocity prior's and would take the others' detections in one assignment on D."""
-    started = (life.hits >= 2) & measured
+    established first, then the tentative tracks with two hits or more, then the starts,
+    which share the detections left: the tracks of one detection, whose gate is the
+    velocity prior's and would take the others' detections in one assignment on D; those
+    of several detections of one instant (``measured`` False), whose velocity is still the
+    prior's; and the tentative tracks hit at this instant already (``refined``), which a
+    detection of it can refine but not test."""
+    started = (life.hits >= 2) & measured & ~refined
     return np.where(established(life.status) & measured, 0, np.where(started, 1, START_PASS))
 
 
@@ -237,9 +239,9 @@ class LocalTracker:
         self._seed_noises: FloatArray = np.zeros((0, self._q, self._q))
         self._seed_times: FloatArray = np.zeros(0)
         self._seed_sensors: IntArray = np.zeros(0, dtype=np.int64)
-        # each track's one instant while its detections all share it (several sensors of one
-        # instant), -inf once they span two: its velocity is then measured (§8.3)
-        self._instants: FloatArray = np.zeros(0)
+        # each track's first and latest detection times: its velocity is measured once they
+        # differ (several sensors' detections of one instant measure none, §8.3)
+        self._detection_times: FloatArray = np.zeros((0, 2))
         # per sensor: the run after which its silence about an established track is no miss
         limits = [
             config.life_cycle.sensor_misses(config.physics(name)[0]) for name in config.sensors
@@ -383,7 +385,10 @@ class LocalTracker:
         claimed_any = bool(np.any(established(self._rows.life.status)))
         score = self._scan_score(sensor_name, z, noises, counted=not claimed_any)
         prediction = predict_bank(self.predictor, self._state, elapsed)
-        passes = _passes(self._rows.life, self._instants == -np.inf)
+        first, latest = self._detection_times.T
+        # §8.3: at an instant it was hit at, a tentative track's detections are positions
+        refined = (self._rows.life.status == TENTATIVE) & (latest == time)
+        passes = _passes(self._rows.life, latest > first, refined)
         if self._branching:  # §8.3: a start's second detection is its velocity, not a manoeuvre
             starts = np.flatnonzero(passes == START_PASS)
             prediction = without_inputs(prediction, self.bank, starts, elapsed)
@@ -421,25 +426,19 @@ class LocalTracker:
                 ),
             )
         self._update(prediction, candidates, association, (time, z, noises))
-        # §8.3: a start that a detection left without a velocity (one instant) took it as a
-        # second position, and a start of its own would duplicate it
         hit_rows = candidates[association.rows]
-        previous = self._instants
-        moved = np.zeros(len(status), dtype=bool)
-        moved[hit_rows] = previous[hit_rows] != time
-        self._instants = np.where(moved, -np.inf, previous)
-        measured = self._instants == -np.inf
-        own_instant = association.cols[~measured[hit_rows]]
+        # §8.3: a tentative track's or start's detection of an instant it was hit at is one
+        # more position of it, and a start of its own would duplicate it
+        repeated = association.cols[refined[hit_rows]]
+        latest = latest.copy()
+        latest[hit_rows] = time
+        self._detection_times = np.stack([first, latest], axis=1)
         self._combine_evidence(candidates[association.rows], association.cols)
         hit = association.update.detected
         detected, gain = hits(len(status), candidates[hit], association.hit_gain[hit])
-        # §8.3: the starts of several detections of one instant are scored as one start
-        # from here: their velocity is what their next detection measures, and the other
-        # sensors' agreement on where they are is no evidence for it
-        excess = np.where(
-            (passes == START_PASS) & (before.hits >= 2), before.score - score.initial, 0.0
-        )
-        gain = gain - np.maximum(excess, 0.0)
+        # §8.3: and it scores one detection of each instant (the sensors agreeing on where it
+        # is say nothing of how it moves, which its next instant tests)
+        gain = np.where(refined, 0.0, gain)
         life, newly_confirmed = advance(
             self.config.life_cycle,
             before,
@@ -459,7 +458,7 @@ class LocalTracker:
                 visibility=codes,
                 occluded=hidden,
                 densities=(score.false_target_density, score.new_target_density),
-                velocity_measured=measured,
+                velocity_measured=latest > first,
                 vouched=self._vouched(column, time),
             ),
         )
@@ -488,9 +487,9 @@ class LocalTracker:
                 split.state,
                 split.cols,
                 numbers,
-                before.score[parents] - np.maximum(excess[parents], 0.0) + split.gain,
+                before.score[parents] + np.where(refined[parents], 0.0, split.gain),
                 hits=2,
-                instant=np.where(previous[parents] == time, time, -np.inf),
+                times=(first[parents], time),
                 recent=None
                 if self._recent is None  # the start's first detection, then the branch's
                 else self._recent.select(parents).latest_replaced(
@@ -499,7 +498,7 @@ class LocalTracker:
             )
         free = np.ones(len(z), dtype=bool)
         free[association.used] = False  # a start's detections start tracks too (§8.3)
-        free[own_instant] = False
+        free[repeated] = False
         started = self._initiate(time, sensor_name, z, noises, free, numbers, score)
         tally = self._tally(before, life, len(z), joined, started, newly_confirmed)
         self._count(sensor_name, tally, z[~claimed], noises[~claimed], counted=not claimed_any)
@@ -847,10 +846,10 @@ class LocalTracker:
                 starts,
                 numbers,
                 score.initial,
+                times=(time, time),
                 recent=None
                 if self._recent is None
                 else RecentDetections.first(time, z[starts], noises[starts]),
-                instant=time,
             )
             return len(starts)
         sensor_index = self.config.sensors.index(sensor)
@@ -899,6 +898,7 @@ class LocalTracker:
                     numbers,
                     start_score[order],
                     hits=2,
+                    times=(first_times, time),
                     recent=RecentDetections(
                         np.stack([first_times, np.full(len(starts), time)], axis=1),
                         np.stack([first[order], z[starts]], axis=1),
@@ -922,16 +922,20 @@ class LocalTracker:
         numbers: IntArray,
         start: float | FloatArray,
         hits: int = 1,
-        instant: float | FloatArray = -np.inf,
+        *,
+        times: tuple[float | FloatArray, float],
         recent: RecentDetections | None = None,
     ) -> None:
         """New tentative tracks of ``detections`` of the scanning sensor (``self._column``);
-        ``instant``: the one instant of their detections (-inf: they span two); ``recent``:
-        their detections so far (with the calibrated classification)."""
+        ``times``: the times of their first and latest detections; ``recent``: their
+        detections so far (with the calibrated classification)."""
         count = len(detections)
         if count == 0:
             return
-        self._instants = np.concatenate([self._instants, np.broadcast_to(instant, (count,))])
+        first, latest = (np.broadcast_to(time, (count,)) for time in times)
+        self._detection_times = np.concatenate(
+            [self._detection_times, np.stack([first, latest], axis=1)]
+        )
         if self._recent is not None:
             self._recent = self._recent.concatenate(
                 RecentDetections.empty(count, self._q) if recent is None else recent
@@ -1019,7 +1023,7 @@ class LocalTracker:
 
     def _keep(self, rows: IntArray) -> None:
         self._rows = self._rows.select(rows)
-        self._instants = self._instants[rows]
+        self._detection_times = self._detection_times[rows]
         self._state = self._state.select(rows)
         self._sensor_misses = self._sensor_misses[rows]
         self._vouching = self._vouching[rows]
@@ -1048,7 +1052,7 @@ class LocalTracker:
                 "means": plain_floats(self._state.means[row]),
                 "covariances": plain_floats(self._state.covariances[row]),
                 "log_mode_probabilities": plain_floats(self._state.log_mode_probabilities[row]),
-                "instant": plain_floats(self._instants[row]),
+                "detection_times": plain_floats(self._detection_times[row]),
                 "classification": None,
             }
             if self.classifier is not None and self._classes is not None:
@@ -1123,15 +1127,22 @@ class LocalTracker:
         tracker._sensor_misses = np.array(
             [e.get("sensor_misses", [0] * sensors) for e in entries], dtype=np.int64
         ).reshape(-1, sensors)
-        # an export without them: a start of one detection at the export's time
-        tracker._instants = float_array(
-            [e.get("instant", -np.inf if e["hits"] >= 2 else plain["time"]) for e in entries]
-        ).reshape(-1)
         tracker._vouching = np.array(
             [e.get("sensor_detected_last", [False] * sensors) for e in entries], dtype=bool
         ).reshape(-1, sensors)
         if "scan_times" in plain:
             tracker._scan_times = float_array(plain["scan_times"]).reshape(sensors, 2)
+        # an export without them: each track's detections span two instants, or (a start of
+        # one detection) are of the export's time
+        tracker._detection_times = float_array(
+            [
+                e.get(
+                    "detection_times",
+                    [-math.inf if e["hits"] >= 2 else plain["time"], plain["time"]],
+                )
+                for e in entries
+            ]
+        ).reshape(-1, 2)
         tracker._state = IMMState(
             float_array([e["means"] for e in entries]).reshape(-1, r, n),
             float_array([e["covariances"] for e in entries]).reshape(-1, r, n, n),

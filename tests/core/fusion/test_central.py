@@ -418,9 +418,11 @@ def close_pair_switches(seed: int, apart: float, stagger: float) -> tuple[int, i
 
 
 def test_a_close_pair_seen_by_three_sensors_at_one_instant_keeps_its_ids() -> None:
-    """Three sensors' detections of one instant measure no velocity: the tracks they start
-    are starts until a later detection (docs/algorithms.md §8.3), so a close pair keeps its
-    ids and no duplicate track is confirmed (checked against the truth)."""
+    """Three sensors' detections of one instant measure no velocity: a tentative track's
+    detections of one instant are positions of it, tested at its next instant
+    (docs/algorithms.md §8.3), so a close pair 30 m apart keeps its ids and gets no
+    duplicate track (checked against the truth; before, a target confirmed at one instant
+    took its neighbour's detection when its own was missed)."""
     results = [close_pair_switches(seed, apart=30.0, stagger=0.0) for seed in range(6)]
     assert sum(switches for switches, _ in results) == 0, results
     assert max(most for _, most in results) == 2, results

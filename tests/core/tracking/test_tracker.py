@@ -253,6 +253,26 @@ def test_export_restore_continues_exactly(name: str, cut: int) -> None:
     )
 
 
+@pytest.mark.parametrize(("cut", "starts"), [(1, True), (75, False)])
+def test_an_export_without_detection_times_continues_exactly(cut: int, starts: bool) -> None:
+    """An export of before the tracks' detection times (docs/algorithms.md §8.3) restores
+    them from its hits and time (a start of one detection: the export's time; more: two
+    instants): a single sensor's run continues with the same outputs."""
+    scenario = aircraft_scenario(seed=1)
+    config = LocalTrackerConfig()
+    whole, first = LocalTracker(config), LocalTracker(config)
+    uninterrupted = [_plain(whole.step(s.time, s.measurements)) for s in scenario.scans]
+    for scan in scenario.scans[:cut]:
+        first.step(scan.time, scan.measurements)
+    saved = json.loads(json.dumps(first.export()))
+    assert saved["tracks"] and all((t["hits"] == 1) == starts for t in saved["tracks"])
+    for track in saved["tracks"]:
+        del track["detection_times"]
+    restored = LocalTracker.restore(config, saved)
+    continued = [_plain(restored.step(s.time, s.measurements)) for s in scenario.scans[cut:]]
+    assert continued == uninterrupted[cut:]
+
+
 def test_same_inputs_same_outputs() -> None:
     scenario = overtaking_scenario(seed=4)
     config = road_config(scenario, region=rectangle(((-10.0, 10.0), (-40.0, 60.0))))
