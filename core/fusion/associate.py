@@ -136,9 +136,9 @@ def _continuity(
 
     ``{report column: fused row}`` for every report track whose (sensor, id)
     is the latest estimate of a live fused track, still passes the χ²
-    gate (:data:`CONTINUITY_GATE_PROBABILITY`) on the ``sum`` distance and, where it
-    binds an established track, is not renumbered (:func:`_renumbered`); empty when
-    continuity is off.
+    gate (:data:`CONTINUITY_GATE_PROBABILITY`) on the ``sum`` distance and, for a source
+    that posts track lists, where it binds an established track, is not renumbered
+    (:func:`_renumbered`); empty when continuity is off.
     """
     if not config.track_continuity:
         return {}
@@ -159,8 +159,12 @@ def _continuity(
     gate = chi2_quantile(CONTINUITY_GATE_PROBABILITY, config.dim)
     passed = distance <= gate
     cols, rows = cols[passed], rows[passed]
-    # ids are tested where they bind established tracks (a tentative track's start may
-    # be off: its own next report joining it is the duplicate merge's business)
+    if config.source(report.sensor).tracker is not None or report.sensor == config.central_source:
+        # the session's own trackers (a local one, the central one) never renumber behind
+        # its back: their ids are not tested
+        return dict(zip(cols.tolist(), rows.tolist(), strict=True))
+    # a track-list source's ids are tested where they bind established tracks (a tentative
+    # track's start may be off: its own next report joining it is the duplicate merge's)
     tested = np.flatnonzero(established[rows])
     among = np.flatnonzero(established)
     kept = np.ones(len(cols), dtype=bool)
