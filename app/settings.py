@@ -207,8 +207,8 @@ class Settings(BaseSettings):
         description="refuse an input (503 overloaded with Retry-After, a stream's error) that "
         "has waited longer than this since its last byte was read (for the event loop, its "
         "session's lock, its tenant's turn) when its engine step would start: before it is "
-        "applied or logged, rather than answering it late; an input with no other in flight "
-        "is not refused; 0: never refuse",
+        "applied or logged, rather than answering it late; an input during whose wait no other "
+        "input's step started is not refused; 0: never refuse",
     )
     tenant_max_in_flight: int = Field(
         256,

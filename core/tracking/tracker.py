@@ -120,7 +120,7 @@ from core.tracking.track import (
 
 EXPORT_VERSION = 4
 """4: each track's misses in a row of every sensor (``sensor_misses``) and whether each
-sensor's latest scan that could see it detected it (``sensor_detected_last``), each
+sensor's latest scan detected it (``sensor_detected_last``), each
 sensor's last two scan times (``scan_times``); 3: each track's ``misses`` in a row, each sensor's clutter estimate and tally;
 2: the seeds' covariances (``seed_covariances``). An older export restores with no
 misses, empty estimates and tallies, and (version 1) its seeds with the bank's R, the R
@@ -249,8 +249,8 @@ class LocalTracker:
         self._miss_limits = np.array([0 if n is None else n for n in limits], dtype=np.int64)
         self._counting = np.array([n is None for n in limits])  # no ceiling: every miss counts
         # per track and sensor (column of config.sensors), §8.9: its misses in a row since it
-        # last detected the track (its limit: never), and whether its latest scan that could
-        # see the track detected it
+        # last detected the track (its limit: never), and whether its latest scan (wherever
+        # it looked: a scan that could not see the track withdraws the vouch) detected it
         self._sensor_misses: IntArray = np.zeros((0, len(config.sensors)), dtype=np.int64)
         self._vouching: BoolArray = np.zeros((0, len(config.sensors)), dtype=bool)
         # per sensor: its previous and latest scan times (NaN: none yet)
@@ -679,7 +679,7 @@ class LocalTracker:
 
     def _vouched(self, column: int, time: float) -> BoolArray:
         """Rows that another sensor than the scanning one (``column``) detected at its latest
-        scan that could see them, if that scan is not overdue: not older than
+        scan (wherever it looked), if that scan is not overdue: not older than
         :data:`VOUCH_REVISITS` of its revisit (known from its second scan on;
         docs/algorithms.md §8.9)."""
         previous, latest = self._scan_times[:, 0], self._scan_times[:, 1]
@@ -807,6 +807,9 @@ class LocalTracker:
         vouching = self._vouching.copy()
         vouching[keepers] = vouching[newcomers]
         self._vouching = vouching
+        times = self._detection_times.copy()  # the keeper's first, the newcomer's latest
+        times[keepers, 1] = times[newcomers, 1]
+        self._detection_times = times
         self._rows = self._rows.living(
             hand_over(life, keepers, newcomers, StatusReason.MERGED_INTO_PHANTOM)
         )

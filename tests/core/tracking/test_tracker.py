@@ -540,3 +540,26 @@ def test_established_tracks_take_their_detections_before_tentative_ones() -> Non
     after = tracker.step(3.0, [z])
     assert after.assignment == ("L1",)
     assert (after.track("L1").status.value, after.track("L3").hits) == ("confirmed", 1)
+
+
+def test_a_phantom_reacquired_by_hand_over_takes_the_time_of_its_latest_detection() -> None:
+    """[HZ] §5.1 on §6 Fig 6c's overtaking vehicle: the newcomer the front sensor confirms
+    is handed over to the phantom; the kept track's latest detection time is the newcomer's,
+    the time of the scan that reacquired it (the scenario's clock), its first its own."""
+    scenario = overtaking_scenario(seed=0)
+    config = road_config(scenario, region=rectangle(((-10.0, 10.0), (-40.0, 60.0))))
+    tracker = LocalTracker(config)
+    shown: dict[str, tuple[float, str]] = {}  # each track's first output time, latest status
+    for scan in scenario.scans:
+        output = tracker.step(scan.time, scan.measurements, sensor=sensor_of(config, scan))
+        for track in output.tracks:
+            first, previous = shown.get(track.id, (scan.time, ""))
+            if previous == "phantom" and track.reason.value == "reacquired":
+                number = int(track.id.removeprefix(config.id_prefix))
+                entry = next(e for e in tracker.export()["tracks"] if e["number"] == number)
+                earliest, latest = entry["detection_times"]
+                assert latest == pytest.approx(scan.time)
+                assert earliest <= first < scan.time - 5.0
+                return
+            shown[track.id] = (first, track.status.value)
+    pytest.fail("no phantom was reacquired")
