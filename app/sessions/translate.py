@@ -52,10 +52,10 @@ from core.fusion.motion import MotionModel, StateLayout
 from core.fusion.state import StateFusion
 from core.geometry import FieldOfView, PolygonView, Sector
 from core.lifecycle import LifeCycleConfig
+from core.models.measurement import LinearGaussian, MeasurementModel, Polar
 from core.tracking.config import DEFAULT_IMM_DISTANCE, ClassificationOptions, LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
 from core.tracking.presets import MIN_MANOEUVRE_DENSITY, preset, with_classes
-from core.tracking.range_rate import RangeRateModel
 
 PlainObject = dict[str, Any]
 
@@ -254,16 +254,49 @@ def class_behaviours(config: SessionConfig) -> dict[str, tuple[str, ...]] | None
     return ordered
 
 
-def range_rate_model(
-    config: SessionConfig, sensor: SensorConfig, axes: int
-) -> RangeRateModel | None:
-    """A polar sensor's range-rate model (its site, ``sigma_range_rate``), or None without σ:
-    the detections' ``range_rate`` then stays unused."""
+def range_rate_model(config: SessionConfig, sensor: SensorConfig, axes: int) -> Polar | None:
+    """A polar sensor's model when it measures the range-rate (``sigma_range_rate``), else
+    None: the detections' ``range_rate`` then stays unused."""
+    model = measurement_model(config, sensor)
+    return model if isinstance(model, Polar) and model.velocity_mapping is not None else None
+
+
+def measurement_model(config: SessionConfig, sensor: SensorConfig) -> MeasurementModel | None:
+    """A detecting sensor's measurement model of its local tracker's ``[x, ẋ, …]`` state
+    (:mod:`core.models.measurement`); None for a sensor that sends track lists.
+
+    A polar sensor's site and axes are in the session frame: azimuth and elevation
+    are measured in the site's own ENU axes, turned into the session's at a
+    geodetic site (``R_origin R_siteᵀ``, exact: :mod:`app.geo.geodesy`; the tilt
+    between the two planes is 0.009° per km from the origin). The angles' σ are
+    given in degrees on the wire, radians in the core.
+    """
     noise = sensor.measurement
-    if not isinstance(noise, PolarMeasurement) or noise.sigma_range_rate is None:
+    axes = len(config.state.position)
+    state_dim = 2 * axes
+    if isinstance(noise, CartesianMeasurement):
+        return LinearGaussian.mapped(state_dim, range(0, state_dim, 2), np.asarray(noise.r))
+    if not isinstance(noise, PolarMeasurement):
         return None
-    site, _ = sensor_site(sensor, session_origin(config))
-    return RangeRateModel(tuple(float(x) for x in site[:axes]), noise.sigma_range_rate)
+    origin = session_origin(config)  # once, for the site and its axes
+    site, _ = sensor_site(sensor, origin)
+    variances = [noise.sigma_range**2, np.radians(noise.sigma_azimuth_deg) ** 2]
+    if axes == 3:
+        assert noise.sigma_elevation_deg is not None  # config-checked
+        variances.append(np.radians(noise.sigma_elevation_deg) ** 2)
+    if noise.sigma_range_rate is not None:
+        variances.append(noise.sigma_range_rate**2)
+    return Polar.of_axes(site[:axes], variances, site_axes(sensor, origin, axes))
+
+
+def site_axes(sensor: SensorConfig, origin: LocalFrame | None, dimension: int) -> np.ndarray | None:
+    """Rotation (d × d) from the ENU axes at a geodetic site to the session's at ``origin``
+    (``None`` at a session-frame ``position``: the sensor measures in the session's axes)."""
+    site = sensor.site
+    if site is None or site.lat is None or site.lon is None or origin is None:
+        return None
+    rotation: np.ndarray = origin.rotation_from(site.lat, site.lon)[0][:dimension, :dimension]
+    return rotation
 
 
 POLAR_REFERENCE_RANGE = 50_000.0
@@ -276,7 +309,7 @@ def polar_reference_noise(
     """The R a polar sensor's tracker uses where a detection's own covariance is not passed.
 
     Every polar detection is gated, scored, updated and starts its tracks
-    with its own converted covariance (:mod:`app.geo.polar`,
+    with its own converted covariance (:meth:`core.models.measurement.Polar.converted`,
     :mod:`core.tracking.initiator`); the bank's R is left only where a
     track has no detection: the gate volume of a coasting track and the
     zero-step prediction of a second scan at the same time. That R is the
