@@ -356,7 +356,7 @@ class Polar:
         Jacobian of that map at the measured point (the converted-measurement Kalman
         filter, Bar-Shalom, Li & Kirubarajan 2001 §1.6 / Lerro & Bar-Shalom 1993); then
         turned into the tracker's axes and placed at the site. Why not an EKF:
-        docs/algorithms.md §4.7.
+        docs/algorithms.md §7.7.
         """
         z = np.asarray(measurements, dtype=np.float64).reshape(-1, self.ndim_meas)
         rho = z[:, 0]
