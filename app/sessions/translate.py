@@ -52,7 +52,7 @@ from core.fusion.motion import MotionModel, StateLayout
 from core.fusion.state import StateFusion
 from core.geometry import FieldOfView, PolygonView, Sector
 from core.lifecycle import LifeCycleConfig
-from core.models.measurement import LinearGaussian, MeasurementModel, Polar
+from core.models.measurement import MEASUREMENT_MODELS, MeasurementModel, Polar
 from core.tracking.config import DEFAULT_IMM_DISTANCE, ClassificationOptions, LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
 from core.tracking.presets import MIN_MANOEUVRE_DENSITY, preset, with_classes
@@ -261,32 +261,45 @@ def range_rate_model(config: SessionConfig, sensor: SensorConfig, axes: int) -> 
     return model if isinstance(model, Polar) and model.velocity_mapping is not None else None
 
 
+MODEL_CACHE_SIZE = 1024
+"""Measurement models kept built (:func:`measurement_model`)."""
+
+_MODELS: dict[tuple[int, int], tuple[SessionConfig, SensorConfig, MeasurementModel | None]] = {}
+"""By the identity of a (validated, never changed) session config and its sensor; the entry
+holds both, so that neither identity is reused while it is kept."""
+
+
 def measurement_model(config: SessionConfig, sensor: SensorConfig) -> MeasurementModel | None:
+    """A detecting sensor's measurement model (:func:`build_measurement_model`), built once
+    per session configuration: every detection report of the sensor takes it from here."""
+    key = (id(config), id(sensor))
+    entry = _MODELS.get(key)
+    if entry is None:
+        if len(_MODELS) >= MODEL_CACHE_SIZE:
+            _MODELS.clear()
+        entry = _MODELS[key] = (config, sensor, build_measurement_model(config, sensor))
+    return entry[2]
+
+
+def build_measurement_model(config: SessionConfig, sensor: SensorConfig) -> MeasurementModel | None:
     """A detecting sensor's measurement model of its local tracker's ``[x, ẋ, …]`` state
     (:mod:`core.models.measurement`); None for a sensor that sends track lists.
 
     A polar sensor's site and axes are in the session frame: azimuth and elevation
     are measured in the site's own ENU axes, turned into the session's at a
     geodetic site (``R_origin R_siteᵀ``, exact: :mod:`app.geo.geodesy`; the tilt
-    between the two planes is 0.009° per km from the origin). The angles' σ are
-    given in degrees on the wire, radians in the core.
+    between the two planes is 0.009° per km from the origin). The model is the
+    registry's of the sensor's ``measurement.kind``
+    (:data:`core.models.measurement.MEASUREMENT_MODELS`).
     """
     noise = sensor.measurement
-    axes = len(config.state.position)
-    state_dim = 2 * axes
-    if isinstance(noise, CartesianMeasurement):
-        return LinearGaussian.mapped(state_dim, range(0, state_dim, 2), np.asarray(noise.r))
-    if not isinstance(noise, PolarMeasurement):
+    if noise is None:
         return None
+    axes = len(config.state.position)
     origin = session_origin(config)  # once, for the site and its axes
     site, _ = sensor_site(sensor, origin)
-    variances = [noise.sigma_range**2, np.radians(noise.sigma_azimuth_deg) ** 2]
-    if axes == 3:
-        assert noise.sigma_elevation_deg is not None  # config-checked
-        variances.append(np.radians(noise.sigma_elevation_deg) ** 2)
-    if noise.sigma_range_rate is not None:
-        variances.append(noise.sigma_range_rate**2)
-    return Polar.of_axes(site[:axes], variances, site_axes(sensor, origin, axes))
+    build = MEASUREMENT_MODELS[noise.kind]
+    return build(site[:axes], site_axes(sensor, origin, axes), **noise.model_dump(exclude={"kind"}))
 
 
 def site_axes(sensor: SensorConfig, origin: LocalFrame | None, dimension: int) -> np.ndarray | None:

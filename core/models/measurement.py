@@ -23,10 +23,11 @@ positions and covariances (:meth:`Polar.converted`, the converted-measurement
 Kalman filter) and its range-rate as a sequential extended update
 (:mod:`core.tracking.range_rate`, with :meth:`Polar.range_rate`).
 
-:data:`MEASUREMENT_MODELS` names them by the wire's ``measurement.kind``: a
-new measurement type is its class here (or its module) and one line there,
-plus its wire model and the app's one function that builds it
-(``app.sessions.translate.measurement_model``).
+:data:`MEASUREMENT_MODELS` builds them by the wire's ``measurement.kind``
+from a sensor's site and the wire's parameters: a new measurement type is its
+class here (or its module) with its ``for_sensor`` and one line there, plus
+its wire model (``api_schemas.config``) and how its detections' fields make a
+measurement vector (``app.inputs.detections``).
 """
 
 from __future__ import annotations
@@ -155,6 +156,16 @@ class LinearGaussian:
         h[np.arange(len(mapping)), list(mapping)] = 1.0
         return cls(h, np.asarray(noise_covariance, dtype=np.float64))
 
+    @classmethod
+    def for_sensor(
+        cls, site: FloatArray, rotation: FloatArray | None, *, r: Sequence[Sequence[float]]
+    ) -> LinearGaussian:
+        """A Cartesian sensor of the ``[x, ẋ, …]`` state of ``len(site)`` axes: its
+        detections are the positions, in the tracker's frame (its site and axes unused),
+        with noise ``r`` (:data:`MEASUREMENT_MODELS`)."""
+        state_dim = 2 * len(site)
+        return cls.mapped(state_dim, range(0, state_dim, 2), np.asarray(r, dtype=np.float64))
+
     @property
     def dim(self) -> int:
         """Measurement dimension q."""
@@ -260,6 +271,29 @@ class Polar:
             rotation=rotation,
             velocity_mapping=tuple(range(1, 2 * d, 2)) if with_rate else None,
         )
+
+    @classmethod
+    def for_sensor(
+        cls,
+        site: FloatArray,
+        rotation: FloatArray | None,
+        *,
+        sigma_range: float,
+        sigma_azimuth_deg: float,
+        sigma_elevation_deg: float | None = None,
+        sigma_range_rate: float | None = None,
+    ) -> Polar:
+        """A radar at ``site`` (2 or 3 coordinates: the axes it measures) with its axes
+        ``rotation``, its σ as the wire gives them (angles in degrees): the elevation's
+        in 3-D only, with ``sigma_range_rate`` the range-rate (:data:`MEASUREMENT_MODELS`)."""
+        variances = [sigma_range**2, np.radians(sigma_azimuth_deg) ** 2]
+        if len(site) == 3:
+            if sigma_elevation_deg is None:
+                raise ModelConfigError("a 3-D polar sensor needs sigma_elevation_deg")
+            variances.append(np.radians(sigma_elevation_deg) ** 2)
+        if sigma_range_rate is not None:
+            variances.append(sigma_range_rate**2)
+        return cls.of_axes(site, variances, rotation)
 
     @property
     def _axes(self) -> int:
@@ -396,7 +430,9 @@ class Polar:
 
 
 MEASUREMENT_MODELS: Mapping[str, Callable[..., MeasurementModel]] = {
-    "cartesian": LinearGaussian.mapped,
-    "polar": Polar,
+    "cartesian": LinearGaussian.for_sensor,
+    "polar": Polar.for_sensor,
 }
-"""The measurement models by the wire's ``measurement.kind`` (module docstring)."""
+"""The measurement model of a detecting sensor by the wire's ``measurement.kind``: each
+takes the sensor's site and axes in the tracker's frame (``site`` of as many coordinates as
+the state has axes, ``rotation`` or None) and the wire's parameters of that kind by keyword."""

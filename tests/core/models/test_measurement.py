@@ -29,10 +29,15 @@ from stonesoup.models.measurement.nonlinear import (
 )
 from stonesoup.types.state import State
 
+from api_schemas.config import SessionConfig
+from api_schemas.reports import DetectionReport as WireDetectionReport
 from app.geo.geodesy import LocalFrame
+from app.inputs.detections import core_detection_report
+from app.sessions.translate import measurement_model
 from core.errors import ModelConfigError
 from core.models import MEASUREMENT_MODELS
 from core.models.measurement import ConvertedModel, LinearGaussian, MeasurementModel, Polar
+from tests.core.models.snapshot_scenes import geodetic_3d
 
 RNG_STATES = 40
 
@@ -204,21 +209,61 @@ def test_range_rates_ride_with_the_conversion() -> None:
     assert model.converted(z)[2] is None
 
 
-def test_registry_and_refusals() -> None:
-    """The registry names the wire's kinds; a polar model refuses what it cannot measure."""
+def test_registry_builds_each_kind_from_the_wire_parameters() -> None:
+    """The registry names the wire's kinds and builds each from a site and the wire's
+    parameters (angles in degrees there, radians in the model); a polar model refuses what
+    it cannot measure."""
     assert set(MEASUREMENT_MODELS) == {"cartesian", "polar"}
-    assert isinstance(
-        MEASUREMENT_MODELS["polar"](
-            ndim_state=4,
-            mapping=(0, 2),
-            noise_covar=np.eye(2),
-            translation_offset=np.zeros(2),
-        ),
-        ConvertedModel,
+    site = np.array(SITE_3D)
+    radar = MEASUREMENT_MODELS["polar"](
+        site,
+        None,
+        sigma_range=20.0,
+        sigma_azimuth_deg=0.2,
+        sigma_elevation_deg=0.3,
+        sigma_range_rate=1.5,
     )
+    assert isinstance(radar, ConvertedModel)
+    assert_allclose(radar.covar(), np.diag(SIGMAS), rtol=1e-15)
+    planar = MEASUREMENT_MODELS["polar"](site[:2], None, sigma_range=20.0, sigma_azimuth_deg=0.2)
+    assert (planar.ndim_state, planar.ndim_meas, planar.mapping) == (4, 2, (0, 2))
+    camera = MEASUREMENT_MODELS["cartesian"](site, None, r=np.eye(3).tolist())
+    assert (camera.ndim_state, camera.ndim_meas, camera.mapping) == (6, 3, (0, 2, 4))
+    with pytest.raises(ModelConfigError, match="sigma_elevation_deg"):
+        MEASUREMENT_MODELS["polar"](site, None, sigma_range=20.0, sigma_azimuth_deg=0.2)
     with pytest.raises(ModelConfigError, match="2 or 3"):
         Polar.of_axes((0.0,), (1.0, 1.0))
     with pytest.raises(ModelConfigError, match="shape"):
         Polar(4, (0, 2), np.eye(3), np.zeros(2))
     with pytest.raises(ModelConfigError, match="lie in"):
         Polar(4, (0, 4), np.eye(2), np.zeros(2))
+
+
+def test_a_detection_report_carries_its_sensors_model() -> None:
+    """Wire detections of a geodetic radar become a core report whose model is the
+    sensor's (built once per session config), whose positions are that model's
+    conversion of the measured range, azimuth, elevation and range-rate."""
+    config, reports = geodetic_3d(central=False)
+    session = SessionConfig.model_validate(config)
+    first, second = (
+        core_detection_report(WireDetectionReport.model_validate(body), session)
+        for body in (reports[0], reports[2])  # the same radar, two scans
+    )
+    assert isinstance(first.model, Polar) and first.model is second.model
+    assert first.model.velocity_mapping == (1, 3, 5)
+    body = reports[0]["detections"][0]
+    z = np.array(
+        [
+            body["range"],
+            np.radians(body["azimuth_deg"]),
+            np.radians(body["elevation_deg"]),
+            body["range_rate"],
+        ]
+    )
+    position, covariance, _ = first.model.converted(z[None, :])
+    assert_allclose(first.measurements[0], position[0], rtol=0, atol=0)
+    assert first.covariances is not None and first.range_rates is not None
+    assert_allclose(first.covariances[0], covariance[0], rtol=0, atol=0)
+    assert first.range_rates[0] == body["range_rate"]
+    again = SessionConfig.model_validate(config)  # another session: its own model
+    assert measurement_model(again, again.sensors[0]) is not first.model
