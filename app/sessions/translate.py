@@ -16,6 +16,7 @@ dataclasses, no intermediate lists); every non-finite score of a matrix is
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Iterable, Sequence
 from typing import Any
 
@@ -261,24 +262,19 @@ def range_rate_model(config: SessionConfig, sensor: SensorConfig, axes: int) -> 
     return model if isinstance(model, Polar) and model.velocity_mapping is not None else None
 
 
-MODEL_CACHE_SIZE = 1024
-"""Measurement models kept built (:func:`measurement_model`)."""
-
-_MODELS: dict[tuple[int, int], tuple[SessionConfig, SensorConfig, MeasurementModel | None]] = {}
-"""By the identity of a (validated, never changed) session config and its sensor; the entry
-holds both, so that neither identity is reused while it is kept."""
+_MODELS: dict[tuple[int, int], MeasurementModel | None] = {}
+"""Sensors' measurement models by the identity of their (validated, never changed) session
+config and sensor config; an entry goes with its session config."""
 
 
 def measurement_model(config: SessionConfig, sensor: SensorConfig) -> MeasurementModel | None:
     """A detecting sensor's measurement model (:func:`build_measurement_model`), built once
-    per session configuration: every detection report of the sensor takes it from here."""
+    per session config: every detection report of the sensor takes it from here."""
     key = (id(config), id(sensor))
-    entry = _MODELS.get(key)
-    if entry is None:
-        if len(_MODELS) >= MODEL_CACHE_SIZE:
-            _MODELS.clear()
-        entry = _MODELS[key] = (config, sensor, build_measurement_model(config, sensor))
-    return entry[2]
+    if key not in _MODELS:
+        _MODELS[key] = build_measurement_model(config, sensor)
+        weakref.finalize(config, _MODELS.pop, key, None)
+    return _MODELS[key]
 
 
 def build_measurement_model(config: SessionConfig, sensor: SensorConfig) -> MeasurementModel | None:
