@@ -231,7 +231,7 @@ def local_tracker_config(
             else LocalTrackerConfig.max_speed
         ),
         initial_velocity_std=initiation.velocity_std,
-        range_rate=range_rate_model(config, sensor, axes),
+        range_rate=range_rate_model(config, sensor),
         fields_of_view={sensor.id: fov},
         classification=ClassificationOptions() if config.classes else None,
         class_behaviours=class_behaviours(config),
@@ -255,7 +255,7 @@ def class_behaviours(config: SessionConfig) -> dict[str, tuple[str, ...]] | None
     return ordered
 
 
-def range_rate_model(config: SessionConfig, sensor: SensorConfig, axes: int) -> Polar | None:
+def range_rate_model(config: SessionConfig, sensor: SensorConfig) -> Polar | None:
     """A polar sensor's model when it measures the range-rate (``sigma_range_rate``), else
     None: the detections' ``range_rate`` then stays unused."""
     model = measurement_model(config, sensor)

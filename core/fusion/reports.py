@@ -66,11 +66,13 @@ class DetectionReport:
         measurements: FloatArray,
         covariances: FloatArray | None = None,
     ) -> DetectionReport:
-        """Detections measured by ``model``: a model that converts (:class:`~core.models.measurement.ConvertedModel`,
-        a radar's) gives the positions, their covariances and range-rates; the others'
-        measurements are the positions already (with ``covariances``: their own R)."""
-        converted = getattr(model, "converted", None)  # ConvertedModel (a protocol's
-        if converted is not None:  # isinstance check costs tens of µs per report)
+        """Detections measured by ``model``: a model that converts (a radar's,
+        :class:`~core.models.measurement.ConvertedModel`) gives the positions, their
+        covariances and range-rates; the others' measurements are the positions already
+        (with ``covariances``: their own R)."""
+        # ConvertedModel by its method: a protocol's isinstance costs tens of µs a report
+        converted = getattr(model, "converted", None)
+        if converted is not None:
             positions, noises, rates = converted(measurements)
             return cls(sensor, time, positions, noises, rates, model=model)
         return cls(sensor, time, measurements, covariances, model=model)

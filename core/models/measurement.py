@@ -243,6 +243,8 @@ class Polar:
         q = self.ndim_meas
         if np.shape(self.noise_covar) != (q, q):
             raise ModelConfigError(f"polar noise must have shape ({q}, {q})")
+        if np.any(self.noise_covar != np.diag(np.diagonal(self.noise_covar))):
+            raise ModelConfigError("polar noise must be diagonal (independent σ per component)")
         if np.shape(self.translation_offset) != (d,) or not np.all(
             np.isfinite(self.translation_offset)
         ):

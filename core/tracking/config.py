@@ -174,8 +174,8 @@ class SensorPhysics:
         cycle's, else estimated from the sensor's detections (:mod:`core.tracking.clutter`).
     measurement_noise : R of the sensor's detections that carry no covariance of their
         own, or None: the tracker's (the bank's R).
-    range_rate : the sensor's polar model with its range-rate (site and σ), or None: the tracker's
-        ``range_rate``.
+    range_rate : the sensor's polar model with its range-rate (site and σ), or None: the
+        tracker's ``range_rate``.
     """
 
     p_detect: float | None = None

@@ -237,6 +237,8 @@ def test_registry_builds_each_kind_from_the_wire_parameters() -> None:
         Polar(4, (0, 2), np.eye(3), np.zeros(2))
     with pytest.raises(ModelConfigError, match="lie in"):
         Polar(4, (0, 4), np.eye(2), np.zeros(2))
+    with pytest.raises(ModelConfigError, match="diagonal"):
+        Polar(4, (0, 2), np.array([[1.0, 0.1], [0.1, 1.0]]), np.zeros(2))
 
 
 def test_a_detection_report_carries_its_sensors_model() -> None:
