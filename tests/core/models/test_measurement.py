@@ -17,6 +17,8 @@ measurement at a geodetic site → a position in the session's ENU frame) agains
 
 from __future__ import annotations
 
+import typing
+
 import numpy as np
 import pymap3d
 import pytest
@@ -29,6 +31,7 @@ from stonesoup.models.measurement.nonlinear import (
 )
 from stonesoup.types.state import State
 
+from api_schemas.config import MeasurementModel as WireMeasurementModel
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport as WireDetectionReport
 from app.geo.geodesy import LocalFrame
@@ -210,10 +213,15 @@ def test_range_rates_ride_with_the_conversion() -> None:
 
 
 def test_registry_builds_each_kind_from_the_wire_parameters() -> None:
-    """The registry names the wire's kinds and builds each from a site and the wire's
-    parameters (angles in degrees there, radians in the model); a polar model refuses what
-    it cannot measure."""
-    assert set(MEASUREMENT_MODELS) == {"cartesian", "polar"}
+    """The registry names the wire's kinds (every member of the wire's measurement union)
+    and builds each from a site and the wire's parameters (angles in degrees there,
+    radians in the model); a polar model refuses what it cannot measure."""
+    members = typing.get_args(typing.get_args(WireMeasurementModel)[0])
+    kinds = {
+        typing.get_args(typing.get_args(member)[0].model_fields["kind"].annotation)[0]
+        for member in members
+    }
+    assert set(MEASUREMENT_MODELS) == kinds == {"cartesian", "polar"}
     site = np.array(SITE_3D)
     radar = MEASUREMENT_MODELS["polar"](
         site,
