@@ -255,7 +255,7 @@ class PolarMeasurement(WireModel):
 
     Its detections are ``{"range", "azimuth_deg", "elevation_deg"?, "range_rate"?}`` at the
     sensor's ``site``, azimuth clockwise from north. They are tracked as converted Cartesian
-    measurements with each detection's own covariance (:mod:`app.geo.polar`). With
+    measurements with each detection's own covariance (:mod:`core.models.measurement`). With
     ``sigma_range_rate`` a detection's ``range_rate`` updates its track's velocity after the
     position (a sequential extended Kalman update, :mod:`core.tracking.range_rate`); without
     it a ``range_rate`` is accepted and not used.

@@ -26,6 +26,7 @@ import numpy as np
 import pymap3d
 
 from core.arrays import FloatArray
+from core.models.measurement import rotate_covariances
 
 LATITUDE_LIMIT = 90.0
 """|latitude| ≤ 90° (degrees)."""
@@ -110,12 +111,6 @@ class LocalFrame:
     ) -> FloatArray:
         """The inverse rotation, session ENU → local ENU at each point (N, 3, 3)."""
         return np.swapaxes(self.rotation_from(latitude_deg, longitude_deg), -1, -2)
-
-
-def rotate_covariances(rotations: FloatArray, covariances: FloatArray) -> FloatArray:
-    """``R P Rᵀ`` for stacks (N, k, k), symmetrised so the result is exactly symmetric."""
-    turned = rotations @ covariances @ np.swapaxes(rotations, -1, -2)
-    return np.asarray(0.5 * (turned + np.swapaxes(turned, -1, -2)), dtype=np.float64)
 
 
 def heading_rotation(heading_deg: float, dimension: int) -> FloatArray:

@@ -19,7 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from app.geo.geodesy import LocalFrame, rotate_covariances
+from app.geo.geodesy import LocalFrame
+from core.models.measurement import rotate_covariances
 
 GEOJSON_MEDIA_TYPE = "application/geo+json"
 ELLIPSE_SIGMA = 2.0

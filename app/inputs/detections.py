@@ -2,8 +2,9 @@
 ``detections``), for the session's local tracker of that sensor.
 
 Cartesian detections give ``z`` (and optionally their own ``r``); a polar
-sensor's give range and azimuth (and elevation in 3-D), converted here to
-positions with each detection's own covariance (:mod:`app.geo.polar`).
+sensor's give range and azimuth (and elevation in 3-D), which its measurement
+model (:mod:`core.models.measurement`) converts to positions with each
+detection's own covariance.
 """
 
 from __future__ import annotations
@@ -26,13 +27,12 @@ from api_schemas.issues import FieldIssue
 from api_schemas.reports import CartesianDetection, DetectionReport, PolarDetection
 from api_schemas.timing import seconds
 from api_schemas.ws import DetectionsMessage
-from app.geo.geodesy import LocalFrame, rotate_covariances
-from app.geo.polar import polar_to_cartesian
 from app.inputs.base import InputKind
-from app.sessions.translate import class_frame, evidence_mass, sensor_site, session_origin
+from app.sessions.translate import class_frame, evidence_mass, measurement_model
 from core.fusion.engine import SessionEngine
 from core.fusion.reports import DetectionReport as CoreDetectionReport
 from core.fusion.reports import StepResult
+from core.models.measurement import Polar
 
 
 class Detections(InputKind[DetectionReport]):
@@ -70,60 +70,25 @@ class Detections(InputKind[DetectionReport]):
         return engine.apply_detections(core_detection_report(report, config), explain=explain)
 
 
-def site_axes(sensor: SensorConfig, origin: LocalFrame | None, dimension: int) -> np.ndarray | None:
-    """Rotation (d × d) from the ENU axes at a geodetic site to the session's at ``origin``
-    (``None`` at a session-frame ``position``: the sensor measures in the session's axes)."""
-    site = sensor.site
-    if site is None or site.lat is None or site.lon is None or origin is None:
-        return None
-    rotation: np.ndarray = origin.rotation_from(site.lat, site.lon)[0][:dimension, :dimension]
-    return rotation
-
-
 def polar_detection_report(
     report: DetectionReport, config: SessionConfig, sensor: SensorConfig
 ) -> CoreDetectionReport:
-    """A polar sensor's detections as converted positions, each with its own covariance.
-
-    Azimuth and elevation are measured in the site's own ENU axes: at a
-    geodetic site the converted offsets and covariances are turned into the
-    session's axes (``R_origin R_siteᵀ``, exact: :mod:`app.geo.geodesy`); the
-    tilt between the two planes is 0.009° per km from the origin.
-    """
-    noise = sensor.measurement
-    assert isinstance(noise, PolarMeasurement)
-    dim = len(config.state.position)
-    origin = session_origin(config)  # once, for the site and its axes
-    site, _ = sensor_site(sensor, origin)
+    """A polar sensor's detections, measured by its model (radians; NaN: no range-rate),
+    converted by it to positions, each with its own covariance (:mod:`core.models`)."""
+    model = measurement_model(config, sensor)
+    assert isinstance(model, Polar)
     detections = [d for d in report.detections if isinstance(d, PolarDetection)]
     assert len(detections) == len(report.detections)  # checked against the config before
-    ranges = np.array([d.range for d in detections], dtype=np.float64)
-    azimuths = np.array([d.azimuth_deg for d in detections], dtype=np.float64)
-    elevations = (
-        np.array([d.elevation_deg for d in detections], dtype=np.float64) if dim == 3 else None
-    )
-    offsets, covariances = polar_to_cartesian(
-        ranges,
-        azimuths,
-        noise.polar_sigmas,
-        np.zeros(dim),
-        elevations,
-        noise.sigma_elevation_deg,
-    )
-    offsets, covariances = offsets.reshape(-1, dim), covariances.reshape(-1, dim, dim)
-    turn = site_axes(sensor, origin, dim)
-    if turn is not None:
-        offsets = offsets @ turn.T
-        covariances = rotate_covariances(np.broadcast_to(turn, covariances.shape), covariances)
-    range_rates = None
-    if noise.sigma_range_rate is not None and any(d.range_rate is not None for d in detections):
-        range_rates = np.array(
-            [math.nan if d.range_rate is None else d.range_rate for d in detections],
-            dtype=np.float64,
-        )
-    return CoreDetectionReport(
-        report.sensor, seconds(report.time), offsets + site[:dim], covariances, range_rates
-    )
+    columns: list[list[float | None]] = [[d.range for d in detections]]
+    columns.append([d.azimuth_deg for d in detections])
+    if len(model.mapping) == 3:
+        columns.append([d.elevation_deg for d in detections])
+    measurements = np.array(columns, dtype=np.float64).T.reshape(-1, len(columns))
+    measurements[:, 1:] = np.radians(measurements[:, 1:])
+    if model.velocity_mapping is not None:
+        rates = [math.nan if d.range_rate is None else d.range_rate for d in detections]
+        measurements = np.column_stack([measurements, np.array(rates, dtype=np.float64)])
+    return CoreDetectionReport.measured(report.sensor, seconds(report.time), model, measurements)
 
 
 def core_detection_report(report: DetectionReport, config: SessionConfig) -> CoreDetectionReport:
@@ -150,12 +115,17 @@ def _measured(report: DetectionReport, config: SessionConfig) -> CoreDetectionRe
     assert len(detections) == len(report.detections)  # checked against the config before
     dim = len(detections[0].z) if detections else 2
     measurements = np.array([d.z for d in detections], dtype=np.float64).reshape(-1, dim)
-    if all(detection.r is None for detection in detections):
-        return CoreDetectionReport(report.sensor, seconds(report.time), measurements, None)
     noise = None if sensor is None else sensor.measurement
-    default = noise.r if isinstance(noise, CartesianMeasurement) else None
-    covariances = np.array(
-        [detection.r if detection.r is not None else default for detection in detections],
-        dtype=np.float64,
+    covariances = None
+    if any(detection.r is not None for detection in detections):
+        default = noise.r if isinstance(noise, CartesianMeasurement) else None
+        covariances = np.array(
+            [detection.r if detection.r is not None else default for detection in detections],
+            dtype=np.float64,
+        )
+    model = None if sensor is None else measurement_model(config, sensor)
+    if model is None:
+        return CoreDetectionReport(report.sensor, seconds(report.time), measurements, covariances)
+    return CoreDetectionReport.measured(
+        report.sensor, seconds(report.time), model, measurements, covariances
     )
-    return CoreDetectionReport(report.sensor, seconds(report.time), measurements, covariances)

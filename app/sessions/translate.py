@@ -16,6 +16,7 @@ dataclasses, no intermediate lists); every non-finite score of a matrix is
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Iterable, Sequence
 from typing import Any
 
@@ -52,10 +53,10 @@ from core.fusion.motion import MotionModel, StateLayout
 from core.fusion.state import StateFusion
 from core.geometry import FieldOfView, PolygonView, Sector
 from core.lifecycle import LifeCycleConfig
+from core.models.measurement import MEASUREMENT_MODELS, MeasurementModel, Polar
 from core.tracking.config import DEFAULT_IMM_DISTANCE, ClassificationOptions, LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
 from core.tracking.presets import MIN_MANOEUVRE_DENSITY, preset, with_classes
-from core.tracking.range_rate import RangeRateModel
 
 PlainObject = dict[str, Any]
 
@@ -230,7 +231,7 @@ def local_tracker_config(
             else LocalTrackerConfig.max_speed
         ),
         initial_velocity_std=initiation.velocity_std,
-        range_rate=range_rate_model(config, sensor, axes),
+        range_rate=range_rate_model(config, sensor),
         fields_of_view={sensor.id: fov},
         classification=ClassificationOptions() if config.classes else None,
         class_behaviours=class_behaviours(config),
@@ -254,16 +255,57 @@ def class_behaviours(config: SessionConfig) -> dict[str, tuple[str, ...]] | None
     return ordered
 
 
-def range_rate_model(
-    config: SessionConfig, sensor: SensorConfig, axes: int
-) -> RangeRateModel | None:
-    """A polar sensor's range-rate model (its site, ``sigma_range_rate``), or None without σ:
-    the detections' ``range_rate`` then stays unused."""
+def range_rate_model(config: SessionConfig, sensor: SensorConfig) -> Polar | None:
+    """A polar sensor's model when it measures the range-rate (``sigma_range_rate``), else
+    None: the detections' ``range_rate`` then stays unused."""
+    model = measurement_model(config, sensor)
+    return model if isinstance(model, Polar) and model.velocity_mapping is not None else None
+
+
+_MODELS: dict[tuple[int, int], MeasurementModel | None] = {}
+"""Sensors' measurement models by the identity of their (validated, never changed) session
+config and sensor config; an entry goes with its session config."""
+
+
+def measurement_model(config: SessionConfig, sensor: SensorConfig) -> MeasurementModel | None:
+    """A detecting sensor's measurement model (:func:`build_measurement_model`), built once
+    per session config: every detection report of the sensor takes it from here."""
+    key = (id(config), id(sensor))
+    if key not in _MODELS:
+        _MODELS[key] = build_measurement_model(config, sensor)
+        weakref.finalize(config, _MODELS.pop, key, None)
+    return _MODELS[key]
+
+
+def build_measurement_model(config: SessionConfig, sensor: SensorConfig) -> MeasurementModel | None:
+    """A detecting sensor's measurement model of its local tracker's ``[x, ẋ, …]`` state
+    (:mod:`core.models.measurement`); None for a sensor that sends track lists.
+
+    A polar sensor's site and axes are in the session frame: azimuth and elevation
+    are measured in the site's own ENU axes, turned into the session's at a
+    geodetic site (``R_origin R_siteᵀ``, exact: :mod:`app.geo.geodesy`; the tilt
+    between the two planes is 0.009° per km from the origin). The model is the
+    registry's of the sensor's ``measurement.kind``
+    (:data:`core.models.measurement.MEASUREMENT_MODELS`).
+    """
     noise = sensor.measurement
-    if not isinstance(noise, PolarMeasurement) or noise.sigma_range_rate is None:
+    if noise is None:
         return None
-    site, _ = sensor_site(sensor, session_origin(config))
-    return RangeRateModel(tuple(float(x) for x in site[:axes]), noise.sigma_range_rate)
+    axes = len(config.state.position)
+    origin = session_origin(config)  # once, for the site and its axes
+    site, _ = sensor_site(sensor, origin)
+    build = MEASUREMENT_MODELS[noise.kind]
+    return build(site[:axes], site_axes(sensor, origin, axes), **noise.model_dump(exclude={"kind"}))
+
+
+def site_axes(sensor: SensorConfig, origin: LocalFrame | None, dimension: int) -> np.ndarray | None:
+    """Rotation (d × d) from the ENU axes at a geodetic site to the session's at ``origin``
+    (``None`` at a session-frame ``position``: the sensor measures in the session's axes)."""
+    site = sensor.site
+    if site is None or site.lat is None or site.lon is None or origin is None:
+        return None
+    rotation: np.ndarray = origin.rotation_from(site.lat, site.lon)[0][:dimension, :dimension]
+    return rotation
 
 
 POLAR_REFERENCE_RANGE = 50_000.0
@@ -276,7 +318,7 @@ def polar_reference_noise(
     """The R a polar sensor's tracker uses where a detection's own covariance is not passed.
 
     Every polar detection is gated, scored, updated and starts its tracks
-    with its own converted covariance (:mod:`app.geo.polar`,
+    with its own converted covariance (:meth:`core.models.measurement.Polar.converted`,
     :mod:`core.tracking.initiator`); the bank's R is left only where a
     track has no detection: the gate volume of a coasting track and the
     zero-step prediction of a second scan at the same time. That R is the

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from core.arrays import FloatArray
 from core.belief import MassFunction
 from core.fusion.classes import ClassAssessment
 from core.lifecycle import StatusReason, TrackStatus
+from core.models.measurement import MeasurementModel
 
 
 @dataclass(frozen=True)
@@ -44,7 +45,9 @@ class DetectionReport:
     each detection's own noise covariance (m × q × q; default: the sensor's R),
     range-rate (m,; NaN: none; for a sensor whose tracker has a range-rate model) and
     class evidence (m masses on the session's class frame; None: none), combined into
-    the class mass of the local track it updates or starts."""
+    the class mass of the local track it updates or starts. ``model``: the measurement
+    model the detections were measured by (Stone Soup's ``Detection.measurement_model``;
+    :meth:`measured` converts a polar model's measurements to these positions)."""
 
     sensor: str
     time: float
@@ -52,6 +55,27 @@ class DetectionReport:
     covariances: FloatArray | None = None
     range_rates: FloatArray | None = None
     class_masses: tuple[MassFunction | None, ...] | None = None
+    model: MeasurementModel | None = field(default=None, compare=False)
+
+    @classmethod
+    def measured(
+        cls,
+        sensor: str,
+        time: float,
+        model: MeasurementModel,
+        measurements: FloatArray,
+        covariances: FloatArray | None = None,
+    ) -> DetectionReport:
+        """Detections measured by ``model``: a model that converts (a radar's,
+        :class:`~core.models.measurement.ConvertedModel`) gives the positions, their
+        covariances and range-rates; the others' measurements are the positions already
+        (with ``covariances``: their own R)."""
+        # ConvertedModel by its method: a protocol's isinstance costs tens of µs a report
+        converted = getattr(model, "converted", None)
+        if converted is not None:
+            positions, noises, rates = converted(measurements)
+            return cls(sensor, time, positions, noises, rates, model=model)
+        return cls(sensor, time, measurements, covariances, model=model)
 
 
 @dataclass(frozen=True)

@@ -98,9 +98,9 @@ from core.classification.credal import ACCUMULATIONS, DISCOUNTS, Accumulation, D
 from core.errors import TrackingError
 from core.geometry import Coverage, FieldOfView, PolygonView
 from core.lifecycle import LifeCycleConfig, ScoreModel
+from core.models.measurement import Polar
 from core.tracking.models import LinearMeasurementModel, ModelBank
 from core.tracking.presets import TrackingPreset, preset, with_classes
-from core.tracking.range_rate import RangeRateModel
 
 ImmDistance = Literal["closest_model", "combined", "gated_combined"]
 DistanceKind = Literal["plain", "modified"]
@@ -174,14 +174,14 @@ class SensorPhysics:
         cycle's, else estimated from the sensor's detections (:mod:`core.tracking.clutter`).
     measurement_noise : R of the sensor's detections that carry no covariance of their
         own, or None: the tracker's (the bank's R).
-    range_rate : the sensor's range-rate measurement (site and σ), or None: the tracker's
-        ``range_rate``.
+    range_rate : the sensor's polar model with its range-rate (site and σ), or None: the
+        tracker's ``range_rate``.
     """
 
     p_detect: float | None = None
     clutter_density: float | None = None
     measurement_noise: tuple[tuple[float, ...], ...] | None = None
-    range_rate: RangeRateModel | None = None
+    range_rate: Polar | None = None
 
     def __post_init__(self) -> None:
         if self.measurement_noise is not None:
@@ -238,7 +238,7 @@ class LocalTrackerConfig:
     initiation, max_speed : see the module Readings.
     initial_velocity_std : σ_v of a new track's velocity per axis (m/s), the velocity
         prior; None (default): no velocity knowledge (module Readings).
-    range_rate : the system's range-rate measurement (site and σ), or None; a scan
+    range_rate : the system's polar model with its range-rate (site and σ), or None; a scan
         may then give each detection's range-rate (:mod:`core.tracking.range_rate`).
     fields_of_view : the system's sensors and their fields of view.
     region : the surveillance region (default: union of the sensors' ranges).
@@ -273,7 +273,7 @@ class LocalTrackerConfig:
     initiation: Initiation = "single_point"
     max_speed: float = 1000.0
     initial_velocity_std: float | None = None
-    range_rate: RangeRateModel | None = None
+    range_rate: Polar | None = None
     fields_of_view: Mapping[str, FieldOfView | None] = field(
         default_factory=lambda: MappingProxyType({"sensor": None})
     )
@@ -436,7 +436,7 @@ class LocalTrackerConfig:
         own = self.sensor_physics.get(sensor, NO_PHYSICS).measurement_noise
         return None if own is None else np.array(own, dtype=np.float64)
 
-    def range_rate_of(self, sensor: str) -> RangeRateModel | None:
+    def range_rate_of(self, sensor: str) -> Polar | None:
         """The range-rate model of ``sensor``'s detections (its own, else the tracker's)."""
         own = self.sensor_physics.get(sensor, NO_PHYSICS).range_rate
         return self.range_rate if own is None else own

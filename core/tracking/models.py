@@ -72,6 +72,10 @@ import numpy as np
 
 from core.arrays import FloatArray
 from core.errors import ModelConfigError
+from core.models.measurement import LinearGaussian
+
+LinearMeasurementModel = LinearGaussian
+"""The banks' name of the linear measurement model (:mod:`core.models.measurement`)."""
 
 NoiseForm = Literal["discrete", "continuous"]
 NOISE_FORMS: tuple[NoiseForm, ...] = ("discrete", "continuous")
@@ -114,17 +118,6 @@ def _as_matrix(values: Any, shape: tuple[int, ...], name: str) -> FloatArray:
         raise ModelConfigError(f"{name} must be finite")
     array.flags.writeable = False
     return array
-
-
-def _check_covariance(matrix: FloatArray, name: str, *, definite: bool) -> None:
-    if not np.allclose(matrix, matrix.T, rtol=1e-12, atol=1e-12):
-        raise ModelConfigError(f"{name} must be symmetric")
-    smallest = float(np.linalg.eigvalsh(matrix).min())
-    scale = max(float(np.abs(matrix).max()), 1.0)
-    if definite and smallest <= 0.0:
-        raise ModelConfigError(f"{name} must be positive definite (smallest eigenvalue {smallest})")
-    if not definite and smallest < -1e-12 * scale:
-        raise ModelConfigError(f"{name} must be positive semi-definite (eigenvalue {smallest})")
 
 
 def _check_positive(value: float, name: str) -> float:
@@ -388,54 +381,6 @@ def speed_model(
         speeds=values,
         noise_intensity=_check_noise_intensity(noise_intensity, name),
     )
-
-
-@dataclass(frozen=True)
-class LinearMeasurementModel:
-    """``z = H x + v``, ``v ~ N(0, R)`` ([MTT] eq 13), shared by every model of a bank.
-
-    Attributes
-    ----------
-    matrix : ndarray, shape (q, n)
-        H.
-    noise_covariance : ndarray, shape (q, q)
-        R, symmetric positive definite.
-    """
-
-    matrix: FloatArray
-    noise_covariance: FloatArray
-
-    def __post_init__(self) -> None:
-        if self.matrix.ndim != 2:
-            raise ModelConfigError("measurement matrix H must be 2-D")
-        q = self.matrix.shape[0]
-        if self.noise_covariance.shape != (q, q):
-            raise ModelConfigError(
-                f"measurement noise R must have shape ({q}, {q}), got {self.noise_covariance.shape}"
-            )
-        if not (np.all(np.isfinite(self.matrix)) and np.all(np.isfinite(self.noise_covariance))):
-            raise ModelConfigError("measurement model must be finite")
-        _check_covariance(self.noise_covariance, "measurement noise R", definite=True)
-
-    @property
-    def dim(self) -> int:
-        """Measurement dimension q."""
-        return int(self.matrix.shape[0])
-
-    @classmethod
-    def position(
-        cls,
-        variance: float,
-        state_dim: int = STATE_DIM,
-        position_indices: Sequence[int] | None = None,
-    ) -> LinearMeasurementModel:
-        """H picks the positions (every even component by default), ``R = variance · I``
-        ([MTT] §6.1.1: variance 0.2)."""
-        var = _check_positive(variance, "measurement variance")
-        indices = list(range(0, state_dim, 2) if position_indices is None else position_indices)
-        h = np.zeros((len(indices), state_dim))
-        h[np.arange(len(indices)), indices] = 1.0
-        return cls(h, var * np.eye(len(indices)))
 
 
 def mode_transition_matrix(n_models: int, stay: float = 0.95) -> FloatArray:

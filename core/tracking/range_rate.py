@@ -6,8 +6,9 @@ with position ``p`` and velocity ``v``,
 
     h(x) = uᵀ v,   u = (p − s) / ρ,   ρ = |p − s|,
 
-with the Jacobian ``∂h/∂p = (v − h u) / ρ``, ``∂h/∂v = u``. The position
-(the converted measurement, :mod:`app.geo.polar`) and the range-rate have
+with the Jacobian ``∂h/∂p = (v − h u) / ρ``, ``∂h/∂v = u``
+(:meth:`core.models.measurement.Polar.range_rate`). The position (the
+converted measurement, :meth:`~core.models.measurement.Polar.converted`) and the range-rate have
 independent noises, so the update of both is the position update
 (:class:`~core.tracking.imm.IMMUpdater`) followed by this scalar EKF update,
 linearised at the position-updated estimate of every model of every track:
@@ -28,12 +29,12 @@ single-point) takes no range-rate: it enters from the track's first update.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from core.arrays import FloatArray, IntArray
 from core.errors import TrackingError
+from core.models.measurement import Polar
 from core.numerics import logsumexp
 from core.tracking.imm import IMMState, IMMUpdate
 from core.tracking.models import position_indices, velocity_indices
@@ -44,25 +45,11 @@ MIN_RANGE = 1e-3
 _LOG_2PI = math.log(2.0 * math.pi)
 
 
-@dataclass(frozen=True)
-class RangeRateModel:
-    """A sensor's range-rate measurement: its site (in the tracker's frame) and σ (m/s)."""
-
-    site: tuple[float, ...]
-    sigma: float
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.sigma) and self.sigma > 0.0):
-            raise TrackingError(f"the range-rate sigma must be positive, got {self.sigma!r}")
-        if not self.site or not all(math.isfinite(value) for value in self.site):
-            raise TrackingError(f"the range-rate site must be finite, got {self.site!r}")
-
-
 def range_rate_update(
     update: IMMUpdate,
     rows: IntArray,
     range_rates: FloatArray,
-    model: RangeRateModel,
+    model: Polar,
     axes: int,
 ) -> IMMUpdate:
     """``update`` with the range-rates ``range_rates`` (k,) of its tracks ``rows`` (k,) applied.
@@ -71,25 +58,16 @@ def range_rate_update(
     other tracks are unchanged. ``axes`` is the number of position axes of
     the ``[x, ẋ, …]`` state.
     """
-    if len(model.site) != axes:
-        raise TrackingError(f"the range-rate site needs {axes} coordinates, got {len(model.site)}")
+    layout = (tuple(position_indices(axes)), tuple(velocity_indices(axes)))
+    if (model.mapping, model.velocity_mapping) != layout:
+        raise TrackingError(f"the range-rate model needs the [x, ẋ, …] state of {axes} axes")
     state = update.state
-    pos, vel = list(position_indices(axes)), list(velocity_indices(axes))
     means, covariances = state.means[rows], state.covariances[rows]  # (k, r, n), (k, r, n, n)
-    offset = means[..., pos] - np.asarray(model.site, dtype=np.float64)
-    distance = np.linalg.norm(offset, axis=-1)  # (k, r)
+    distance, predicted, jacobian = model.range_rate(means)  # (k, r), (k, r), (k, r, n)
     usable = distance >= MIN_RANGE
-    line = offset / np.where(usable, distance, 1.0)[..., None]
-    velocity = means[..., vel]
-    predicted = np.sum(line * velocity, axis=-1)
-    jacobian = np.zeros_like(means)
-    jacobian[..., pos] = (velocity - predicted[..., None] * line) / np.where(usable, distance, 1.0)[
-        ..., None
-    ]
-    jacobian[..., vel] = line
     jacobian = np.where(usable[..., None], jacobian, 0.0)
     p_ht = np.einsum("krij,krj->kri", covariances, jacobian)
-    variance = model.sigma**2
+    variance = model.noise_covar[-1, -1]
     innovation_variance = np.einsum("kri,kri->kr", jacobian, p_ht) + variance
     gain = p_ht / innovation_variance[..., None]
     innovation = np.where(usable, np.asarray(range_rates)[:, None] - predicted, 0.0)

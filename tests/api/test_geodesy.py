@@ -17,9 +17,9 @@ from app.geo.geodesy import (
     LocalFrame,
     geodetic_to_session,
     heading_rotation,
-    rotate_covariances,
     sensor_to_session,
 )
+from core.models.measurement import rotate_covariances
 from tests.api.proj_oracle import proj_enu
 
 ORIGINS = [(0.0, 0.0, 0.0), (45.2, 5.7, 210.0), (-33.9, 151.2, 40.0), (80.0, -120.0, 1500.0)]

@@ -1,4 +1,4 @@
-"""Converted polar detections against Stone Soup's range-bearing measurement models.
+"""Converted polar detections (:meth:`core.models.measurement.Polar.converted`) against Stone Soup's range-bearing measurement models.
 
 Stone Soup measures bearing counter-clockwise from the x axis; our azimuth is
 clockwise from north, so ``bearing = 90° − azimuth``. The converted position
@@ -18,7 +18,7 @@ from stonesoup.models.measurement.nonlinear import (
 from stonesoup.types.detection import Detection
 from stonesoup.types.state import State
 
-from app.geo.polar import polar_to_cartesian
+from core.models.measurement import Polar
 
 
 def assert_noise_recovered(mapped: np.ndarray, noise: np.ndarray) -> None:
@@ -37,6 +37,24 @@ def measurement_jacobian(model: object, state: np.ndarray, mapping: list[int]) -
         minus = model.function(State(state - step), noise=False)  # type: ignore[attr-defined]
         columns.append(np.asarray(plus - minus, dtype=float).ravel() / 2e-3)
     return np.stack(columns, axis=-1)
+
+
+def polar_to_cartesian(
+    ranges: np.ndarray,
+    azimuths_deg: np.ndarray,
+    sigmas: tuple[float, float],
+    site: np.ndarray,
+    elevations_deg: np.ndarray | None = None,
+    sigma_elevation_deg: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Positions and covariances of detections as the radar's model converts them."""
+    columns = [ranges, np.radians(azimuths_deg)]
+    variances = [sigmas[0] ** 2, np.radians(sigmas[1]) ** 2]
+    if elevations_deg is not None and sigma_elevation_deg is not None:
+        columns.append(np.radians(elevations_deg))
+        variances.append(np.radians(sigma_elevation_deg) ** 2)
+    positions, covariances, _ = Polar.of_axes(site, variances).converted(np.stack(columns, -1))
+    return positions, covariances
 
 
 SITE_2D = np.array([1500.0, -700.0])

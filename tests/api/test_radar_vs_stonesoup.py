@@ -3,7 +3,7 @@
 One target per Monte Carlo run, 35–50 km from the radar, moving with the
 continuous white-noise-acceleration model the session declares (``motion.q``),
 seen every second with σ_range 20 m and σ_az 0.2°. The service tracks the
-polar detections (converted measurements, :mod:`app.geo.polar`); Stone Soup runs
+polar detections (converted measurements, :mod:`core.models.measurement`); Stone Soup runs
 single-target filters with ``CartesianToBearingRange`` and its extended and
 unscented Kalman updaters on the same measurements, each started from the
 service's first estimate (mean and covariance) at the same scan. The service's

@@ -9,10 +9,11 @@ import pytest
 from filterpy.kalman import ExtendedKalmanFilter
 from scipy.stats import norm
 
-from core.errors import TrackingError
+from core.errors import ModelConfigError, TrackingError
+from core.models.measurement import Polar
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.imm import IMMState, IMMUpdate
-from core.tracking.range_rate import RangeRateModel, range_rate_update
+from core.tracking.range_rate import range_rate_update
 from core.tracking.tracker import LocalTracker
 
 SITE = (1_000.0, -2_000.0, 30.0)
@@ -62,7 +63,9 @@ def test_each_model_of_each_track_is_filterpy_s_ekf_update() -> None:
     )
     rows = np.array([0, 2])
     measured = np.array([-95.0, 40.0])
-    result = range_rate_update(update, rows, measured, RangeRateModel(SITE, SIGMA), axes=3)
+    result = range_rate_update(
+        update, rows, measured, Polar.of_axes(SITE, (1.0, 1.0, 1.0, SIGMA**2)), axes=3
+    )
     for k, t in enumerate(rows.tolist()):
         expected_log_mu = log_mu[t].copy()
         for j in range(models):
@@ -94,7 +97,7 @@ def test_range_rates_need_a_model_velocities_and_one_per_detection() -> None:
     plain = LocalTracker(LocalTrackerConfig())
     with pytest.raises(TrackingError, match="range_rate model"):
         plain.step(0.0, np.zeros((1, 2)), range_rates=[1.0])
-    model = RangeRateModel((0.0, 0.0), 1.0)
+    model = Polar.of_axes((0.0, 0.0), (1.0, 1.0, 1.0))
     with pytest.raises(TrackingError, match="headings"):
         LocalTracker(LocalTrackerConfig(preset="pedestrian", range_rate=model))
     tracker = LocalTracker(LocalTrackerConfig(range_rate=model))
@@ -103,5 +106,5 @@ def test_range_rates_need_a_model_velocities_and_one_per_detection() -> None:
     with pytest.raises(TrackingError, match="range_rates"):
         tracker.step(0.0, np.zeros((1, 2)), range_rates=[math.inf])
     assert tracker.time is None  # refused scans change nothing
-    with pytest.raises(TrackingError, match="sigma"):
-        RangeRateModel((0.0, 0.0), 0.0)
+    with pytest.raises(ModelConfigError, match="polar noise"):
+        Polar.of_axes((0.0, 0.0), (1.0, 1.0, 0.0))
