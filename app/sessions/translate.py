@@ -107,6 +107,11 @@ def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> Sens
         fov = None if sensor.fov is None else field_of_view(sensor.fov, site, heading)
     except InvalidInput as error:
         raise InvalidFields([FieldIssue(("sensors", index, "fov"), str(error), None)]) from None
+    try:  # built here first (then cached): a σ the model refuses is located at its field
+        measurement_model(config, sensor)
+    except InvalidInput as error:
+        where = ("sensors", index, "measurement", *error.loc)
+        raise InvalidFields([FieldIssue(where, str(error), None)]) from None
     tracker = local_tracker_config(config, sensor, fov)
     if tracker is not None:
         confirmable(tracker, sensor, index, fov)

@@ -32,6 +32,7 @@ measurement vector (``app.inputs.detections``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
@@ -58,6 +59,24 @@ def rotate_covariances(rotations: FloatArray, covariances: FloatArray) -> FloatA
     """``R P Rᵀ`` for stacks (N, k, k), symmetrised so the result is exactly symmetric."""
     turned = rotations @ covariances @ np.swapaxes(rotations, -1, -2)
     return np.asarray(0.5 * (turned + np.swapaxes(turned, -1, -2)), dtype=np.float64)
+
+
+def _variance(name: str, sigma: float, *, angle: bool = False) -> float:
+    """σ² of the wire's ``name`` (an angle's σ in degrees, its variance in radians²), refused
+    (located at ``name``) unless a positive finite number: a σ whose square underflows to 0
+    or overflows gives no covariance."""
+    try:
+        with np.errstate(over="ignore", under="ignore"):
+            variance = float(np.radians(sigma) ** 2) if angle else sigma**2
+    except OverflowError:  # a Python float's square raises where numpy's is inf
+        variance = math.inf
+    if not (math.isfinite(variance) and variance > 0.0):
+        raise ModelConfigError(
+            f"{name} {sigma!r} has no usable variance: its square is {variance!r}, not a "
+            "positive finite number",
+            loc=(name,),
+        )
+    return variance
 
 
 @runtime_checkable
@@ -288,13 +307,18 @@ class Polar:
         """A radar at ``site`` (2 or 3 coordinates: the axes it measures) with its axes
         ``rotation``, its σ as the wire gives them (angles in degrees): the elevation's
         in 3-D only, with ``sigma_range_rate`` the range-rate (:data:`MEASUREMENT_MODELS`)."""
-        variances = [sigma_range**2, np.radians(sigma_azimuth_deg) ** 2]
+        variances = [
+            _variance("sigma_range", sigma_range),
+            _variance("sigma_azimuth_deg", sigma_azimuth_deg, angle=True),
+        ]
         if len(site) == 3:
             if sigma_elevation_deg is None:
-                raise ModelConfigError("a 3-D polar sensor needs sigma_elevation_deg")
-            variances.append(np.radians(sigma_elevation_deg) ** 2)
+                raise ModelConfigError(
+                    "a 3-D polar sensor needs sigma_elevation_deg", loc=("sigma_elevation_deg",)
+                )
+            variances.append(_variance("sigma_elevation_deg", sigma_elevation_deg, angle=True))
         if sigma_range_rate is not None:
-            variances.append(sigma_range_rate**2)
+            variances.append(_variance("sigma_range_rate", sigma_range_rate))
         return cls.of_axes(site, variances, rotation)
 
     @property

@@ -17,6 +17,7 @@ measurement at a geodetic site → a position in the session's ENU frame) agains
 
 from __future__ import annotations
 
+import math
 import typing
 
 import numpy as np
@@ -277,3 +278,33 @@ def test_a_detection_report_carries_its_sensors_model() -> None:
     assert first.range_rates[0] == body["range_rate"]
     again = SessionConfig.model_validate(config)  # another session: its own model
     assert measurement_model(again, again.sensors[0]) is not first.model
+
+
+@pytest.mark.parametrize(
+    ("name", "sigma", "square"),
+    [
+        # IEEE doubles, by hand: 1e-170² = 1e-340 is below the least subnormal (4.9e-324), so
+        # 0; 1e200² = 1e400 is beyond the largest double (1.8e308), so it overflows
+        ("sigma_range", 1e-170, 0.0),
+        ("sigma_range", 1e200, math.inf),
+        ("sigma_azimuth_deg", 1e-170, 0.0),  # 1.7e-172 rad
+        ("sigma_azimuth_deg", 1e200, math.inf),
+        ("sigma_elevation_deg", 1e-170, 0.0),
+        ("sigma_range_rate", 1e200, math.inf),
+    ],
+)
+def test_a_sigma_without_a_usable_variance_is_refused_at_its_name(
+    name: str, sigma: float, square: float
+) -> None:
+    """A σ whose square underflows to 0 or overflows gives no covariance: refused, located
+    at the wire's parameter (the service prefixes the sensor's measurement)."""
+    given = {
+        "sigma_range": 20.0,
+        "sigma_azimuth_deg": 0.2,
+        "sigma_elevation_deg": 0.3,
+        "sigma_range_rate": 1.5,
+    }
+    given[name] = sigma
+    with pytest.raises(ModelConfigError, match=f"its square is {square!r}") as refused:
+        Polar.for_sensor(np.array(SITE_3D), None, **given)
+    assert refused.value.loc == (name,)
