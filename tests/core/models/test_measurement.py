@@ -308,3 +308,44 @@ def test_a_sigma_without_a_usable_variance_is_refused_at_its_name(
     with pytest.raises(ModelConfigError, match=f"its square is {square!r}") as refused:
         Polar.for_sensor(np.array(SITE_3D), None, **given)
     assert refused.value.loc == (name,)
+
+
+def test_a_planar_radar_at_a_geodetic_site_measures_what_pymap3d_places() -> None:
+    """A 2-D session's radar at a geodetic site 84 km from the origin, built as the service
+    builds it: the point pymap3d places at (ρ, a) and elevation 0 from the site
+    (``aer2geodetic``, then ``geodetic2enu`` at the origin), in the session's plane, is the
+    model's conversion, and the model's ``h`` of it is (ρ, a) again. The site's axes in the
+    plane are the horizontal block of a 3-D rotation, not orthonormal (|RᵀR − I| ≈ 1e-4):
+    ``h`` through ``rotationᵀ`` was off by up to 9 m and 0.005° here."""
+    origin, site = (52.0, 4.0, 0.0), (52.5, 5.0, 0.0)
+    session = SessionConfig.model_validate(
+        {
+            "origin": dict(zip(("lat", "lon", "alt"), origin, strict=True)),
+            "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+            "sensors": [
+                {
+                    "id": "radar",
+                    "site": dict(zip(("lat", "lon", "alt"), site, strict=True)),
+                    "measurement": {"kind": "polar", "sigma_range": 20.0, "sigma_azimuth_deg": 0.2},
+                }
+            ],
+        }
+    )
+    model = measurement_model(session, session.sensors[0])
+    assert isinstance(model, Polar) and model.rotation is not None
+    azimuths = np.radians([0.0, 45.0, 90.0, 135.0, 180.0, -90.0, -30.0])
+    measurements = np.stack([np.full(len(azimuths), 50_000.0), azimuths], axis=-1)
+    placed = np.array(
+        [
+            pymap3d.geodetic2enu(
+                *pymap3d.aer2geodetic(np.degrees(a), 0.0, rho, *site, deg=True), *origin
+            )[:2]
+            for rho, a in measurements
+        ]
+    )
+    assert_allclose(model.converted(measurements)[0], placed, rtol=0, atol=1e-3)
+    states = np.insert(placed, [1, 2], 0.0, axis=1)  # [x, 0, y, 0]
+    measured = model.function(states)
+    assert_allclose(measured[:, 0], measurements[:, 0], rtol=0, atol=1e-3)
+    turned = np.angle(np.exp(1j * (measured[:, 1] - measurements[:, 1])))  # 180° is −180°
+    assert_allclose(turned, 0.0, rtol=0, atol=1e-9)
