@@ -37,7 +37,7 @@ from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport as WireDetectionReport
 from app.geo.geodesy import LocalFrame
 from app.inputs.detections import core_detection_report
-from app.sessions.translate import measurement_model
+from app.sessions.translate import fusion_config, measurement_model
 from core.errors import ModelConfigError
 from core.models import MEASUREMENT_MODELS
 from core.models.measurement import ConvertedModel, LinearGaussian, MeasurementModel, Polar
@@ -252,15 +252,18 @@ def test_registry_builds_each_kind_from_the_wire_parameters() -> None:
 
 def test_a_detection_report_carries_its_sensors_model() -> None:
     """Wire detections of a geodetic radar become a core report whose model is the
-    sensor's (built once per session config), whose positions are that model's
-    conversion of the measured range, azimuth, elevation and range-rate."""
+    sensor's (built once with the engine's config, kept on its sensor entry), whose
+    positions are that model's conversion of the measured range, azimuth, elevation and
+    range-rate."""
     config, reports = geodetic_3d(central=False)
     session = SessionConfig.model_validate(config)
+    engine_config = fusion_config(session)
     first, second = (
-        core_detection_report(WireDetectionReport.model_validate(body), session)
+        core_detection_report(WireDetectionReport.model_validate(body), session, engine_config)
         for body in (reports[0], reports[2])  # the same radar, two scans
     )
     assert isinstance(first.model, Polar) and first.model is second.model
+    assert first.model is engine_config.sensor(session.sensors[0].id).model
     assert first.model.velocity_mapping == (1, 3, 5)
     body = reports[0]["detections"][0]
     z = np.array(
@@ -277,7 +280,7 @@ def test_a_detection_report_carries_its_sensors_model() -> None:
     assert_allclose(first.covariances[0], covariance[0], rtol=0, atol=0)
     assert first.range_rates[0] == body["range_rate"]
     again = SessionConfig.model_validate(config)  # another session: its own model
-    assert measurement_model(again, again.sensors[0]) is not first.model
+    assert fusion_config(again).sensor(again.sensors[0].id).model is not first.model
 
 
 @pytest.mark.parametrize(
