@@ -39,6 +39,7 @@ from functools import cached_property
 from typing import Protocol, runtime_checkable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from core.arrays import FloatArray
 from core.errors import ModelConfigError
@@ -60,6 +61,23 @@ def rotate_covariances(rotations: FloatArray, covariances: FloatArray) -> FloatA
     """``R P Rᵀ`` for stacks (N, k, k), symmetrised so the result is exactly symmetric."""
     turned = rotations @ covariances @ np.swapaxes(rotations, -1, -2)
     return np.asarray(0.5 * (turned + np.swapaxes(turned, -1, -2)), dtype=np.float64)
+
+
+def read_only(array: ArrayLike) -> FloatArray:
+    """A read-only float64 copy of ``array``: a model's arrays are its own and stay as
+    built (a caller's array is not frozen, nor can a caller write into a model's)."""
+    frozen = np.array(array, dtype=np.float64)
+    frozen.setflags(write=False)
+    return frozen
+
+
+def _freeze(model: object, *names: str) -> None:
+    """Replace the frozen dataclass ``model``'s arrays ``names`` (those not None) by
+    :func:`read_only` copies."""
+    for name in names:
+        value = getattr(model, name)
+        if value is not None:
+            object.__setattr__(model, name, read_only(value))
 
 
 def _variance(name: str, sigma: float, *, angle: bool = False) -> float:
@@ -133,12 +151,15 @@ class LinearGaussian:
         H.
     noise_covariance : ndarray, shape (q, q)
         R, symmetric positive definite.
+
+    Both are kept as read-only copies.
     """
 
     matrix: FloatArray
     noise_covariance: FloatArray
 
     def __post_init__(self) -> None:
+        _freeze(self, "matrix", "noise_covariance")
         if self.matrix.ndim != 2:
             raise ModelConfigError("measurement matrix H must be 2-D")
         q = self.matrix.shape[0]
@@ -240,6 +261,8 @@ class Polar:
         axes is ``rotation @ w`` in the tracker's. None: the same axes.
     velocity_mapping : tuple of d ints, optional
         The velocity components: with them the last component is the range-rate.
+
+    The arrays are kept as read-only copies.
     """
 
     ndim_state: int
@@ -250,6 +273,7 @@ class Polar:
     velocity_mapping: tuple[int, ...] | None = None
 
     def __post_init__(self) -> None:
+        _freeze(self, "noise_covar", "translation_offset", "rotation")
         d = self._axes
         if d not in (2, 3):
             raise ModelConfigError(f"a polar model measures 2 or 3 positions, got {d}")
@@ -342,9 +366,7 @@ class Polar:
         (``app.sessions.translate.site_axes``), which is not orthonormal (|RᵀR − I| ≈ 1e-4
         at 80 km from the origin: 9 m of range at 50 km), and ``h`` must invert
         :meth:`converted`."""
-        return (
-            None if self.rotation is None else np.asarray(np.linalg.inv(self.rotation), np.float64)
-        )
+        return None if self.rotation is None else read_only(np.linalg.inv(self.rotation))
 
     def _offsets(self, states: FloatArray) -> tuple[FloatArray, FloatArray]:
         """``p − s`` in the tracker's axes and in the site's (``rotation⁻¹ (p − s)``)."""

@@ -4,7 +4,7 @@ The range-rate update takes its site and σ from the scan's model (the report's,
 ``LocalTracker.step(model=…)``), not from a copy in the tracker's configuration: held
 against filterpy's EKF at the site of whichever model the scan carries. A central
 tracker's reorder buffer re-runs restored scans with their sensor's model (the one
-kept on the engine config's sensor entry).
+kept on the engine config's sensor entry). A model's arrays are read-only copies.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from app.outputs.json_results import step_json
 from app.sessions.translate import fusion_config
 from core.errors import InvalidInput
 from core.fusion.engine import SessionEngine
-from core.models.measurement import Polar
+from core.models.measurement import LinearGaussian, Polar
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.tracker import LocalTracker
 from tests.core.models.snapshot_scenes import geodetic_3d
@@ -135,3 +135,21 @@ def test_a_range_rate_needs_a_preset_with_velocities_at_session_creation() -> No
         }
     with pytest.raises(InvalidInput, match="headings"):
         fusion_config(SessionConfig.model_validate(config))
+
+
+def test_a_model_s_arrays_are_its_own_and_read_only() -> None:
+    """covar() and the other arrays cannot be written through, and a caller's array given
+    to a model stays the caller's (writable, not aliased)."""
+    noise = np.diag([4.0, 4.0])
+    linear = LinearGaussian.mapped(4, (0, 2), noise)
+    site, turn = np.array([10.0, 20.0]), np.array([[1.0, 0.001], [-0.001, 1.0]])
+    polar = Polar.of_axes(site, (4.0, 1e-6, 0.25), rotation=turn)
+    assert polar.rotation is not None
+    arrays = [linear.covar(), linear.matrix, polar.covar(), polar.translation_offset]
+    arrays.append(polar.rotation)
+    for array in arrays:
+        with pytest.raises(ValueError, match="read-only"):
+            array[0, ...] = 0.0
+    noise[0, 0] = site[0] = turn[0, 0] = 7.0  # the caller's arrays stay writable
+    assert linear.covar()[0, 0] == 4.0
+    assert polar.translation_offset[0] == 10.0 and polar.rotation[0, 0] == 1.0
