@@ -103,6 +103,7 @@ from api_schemas.reports import DetectionReport as WireDetectionReport  # noqa: 
 from app.inputs.detections import core_detection_report  # noqa: E402
 from app.sessions.translate import fusion_config  # noqa: E402
 from core.association import METHODS  # noqa: E402
+from core.fusion.config import FusionConfig  # noqa: E402
 from core.fusion.engine import SessionEngine  # noqa: E402
 from core.fusion.reports import DetectionReport, ReportedTrack, TrackReport  # noqa: E402
 from core.metrics import identity_switches  # noqa: E402
@@ -440,7 +441,7 @@ def session_run(scene: Scene, sensors: list[int], local: bool = False) -> list[E
     out: list[Estimates] = []
     for scan in scene.scans:
         if scan.sensor in sensors:
-            engine.apply_detections(detection_report(scene, wire, scan))
+            engine.apply_detections(detection_report(scene, wire, scan, engine.config))
         if scan.sensor == SUBSTEPS - 1:
             out.append(
                 [
@@ -489,7 +490,7 @@ def track_list_run(
             del pending[k]
             sources[k] = SessionEngine(fusion_config(wires[k]))
         source = sources[k]
-        source.apply_detections(detection_report(scene, wires[k], scan))
+        source.apply_detections(detection_report(scene, wires[k], scan, source.config))
         tracks = tuple(
             ReportedTrack(
                 t.id,
@@ -518,7 +519,9 @@ def restarts(seconds: int) -> dict[int, float]:
     return {k: seconds / 2 + 5.0 * k for k in range(len(SENSORS))}
 
 
-def detection_report(scene: Scene, wire: SessionConfig, scan: Scan) -> DetectionReport:
+def detection_report(
+    scene: Scene, wire: SessionConfig, scan: Scan, engine_config: FusionConfig
+) -> DetectionReport:
     """A scan as the core takes it: as given in 2-D; in 3-D its polar detections through the
     service's conversion (``app.inputs.detections``: converted positions, each its own R)."""
     if not scene.polar:
@@ -531,7 +534,7 @@ def detection_report(scene: Scene, wire: SessionConfig, scan: Scan) -> Detection
             for r, a, e in scan.z.tolist()
         ],
     }
-    return core_detection_report(WireDetectionReport.model_validate(body), wire)
+    return core_detection_report(WireDetectionReport.model_validate(body), wire, engine_config)
 
 
 def clutter_in_measurement_space(scene: Scene, sensor: int) -> float:

@@ -130,14 +130,14 @@ def detections_step(polar: bool) -> Timed:
     def prepare() -> SessionEngine:
         engine = SessionEngine(fusion_config(config))
         engine.apply_detections(
-            core_detection_report(DetectionReport.model_validate(first), config)
+            core_detection_report(DetectionReport.model_validate(first), config, engine.config)
         )
         return engine
 
     def run(engine: object) -> None:
         assert isinstance(engine, SessionEngine)
         report = DetectionReport.model_validate(second)
-        engine.apply_detections(core_detection_report(report, config))
+        engine.apply_detections(core_detection_report(report, config, engine.config))
 
     return prepare, run
 

@@ -16,8 +16,6 @@ import numpy as np
 
 from api_schemas.config import (
     CartesianMeasurement,
-    PolarMeasurement,
-    SensorConfig,
     SessionConfig,
 )
 from api_schemas.consistency import detection_report_issues
@@ -28,11 +26,12 @@ from api_schemas.reports import CartesianDetection, DetectionReport, PolarDetect
 from api_schemas.timing import seconds
 from api_schemas.ws import DetectionsMessage
 from app.inputs.base import InputKind
-from app.sessions.translate import class_frame, evidence_mass, measurement_model
+from app.sessions.translate import class_frame, evidence_mass
+from core.fusion.config import FusionConfig
 from core.fusion.engine import SessionEngine
 from core.fusion.reports import DetectionReport as CoreDetectionReport
 from core.fusion.reports import StepResult
-from core.models.measurement import Polar
+from core.models.measurement import MeasurementModel, Polar
 
 
 class Detections(InputKind[DetectionReport]):
@@ -67,16 +66,14 @@ class Detections(InputKind[DetectionReport]):
     def run(
         self, engine: SessionEngine, report: DetectionReport, config: SessionConfig, explain: bool
     ) -> StepResult:
-        return engine.apply_detections(core_detection_report(report, config), explain=explain)
+        return engine.apply_detections(
+            core_detection_report(report, config, engine.config), explain=explain
+        )
 
 
-def polar_detection_report(
-    report: DetectionReport, config: SessionConfig, sensor: SensorConfig
-) -> CoreDetectionReport:
+def polar_detection_report(report: DetectionReport, model: Polar) -> CoreDetectionReport:
     """A polar sensor's detections, measured by its model (radians; NaN: no range-rate),
     converted by it to positions, each with its own covariance (:mod:`core.models`)."""
-    model = measurement_model(config, sensor)
-    assert isinstance(model, Polar)
     detections = [d for d in report.detections if isinstance(d, PolarDetection)]
     assert len(detections) == len(report.detections)  # checked against the config before
     columns: list[list[float | None]] = [[d.range for d in detections]]
@@ -91,11 +88,16 @@ def polar_detection_report(
     return CoreDetectionReport.measured(report.sensor, seconds(report.time), model, measurements)
 
 
-def core_detection_report(report: DetectionReport, config: SessionConfig) -> CoreDetectionReport:
+def core_detection_report(
+    report: DetectionReport, config: SessionConfig, engine_config: FusionConfig
+) -> CoreDetectionReport:
     """Wire detections as the core's: measurements (m × q), one R per detection when any
     gives its own ``r`` (the sensor's ``measurement.r`` for the others), and the class
-    evidence of those that give it (a mass each on the session's class frame)."""
-    core = _measured(report, config)
+    evidence of those that give it (a mass each on the session's class frame). They carry
+    their sensor's measurement model, the one of its entry in ``engine_config`` (built with
+    it, :func:`app.sessions.translate.sensor_spec`)."""
+    model = next((s.model for s in engine_config.sensors if s.id == report.sensor), None)
+    core = _measured(report, config, model)
     frame = class_frame(config.classes)
     if frame is None or all(d.classification is None for d in report.detections):
         return core
@@ -106,11 +108,13 @@ def core_detection_report(report: DetectionReport, config: SessionConfig) -> Cor
     return dataclasses.replace(core, class_masses=masses)
 
 
-def _measured(report: DetectionReport, config: SessionConfig) -> CoreDetectionReport:
-    """The detections' measurements and noises for the core."""
+def _measured(
+    report: DetectionReport, config: SessionConfig, model: MeasurementModel | None
+) -> CoreDetectionReport:
+    """The detections' measurements and noises for the core, measured by ``model``."""
     sensor = config.sensor(report.sensor)
-    if sensor is not None and isinstance(sensor.measurement, PolarMeasurement):
-        return polar_detection_report(report, config, sensor)
+    if isinstance(model, Polar):
+        return polar_detection_report(report, model)
     detections = [d for d in report.detections if isinstance(d, CartesianDetection)]
     assert len(detections) == len(report.detections)  # checked against the config before
     dim = len(detections[0].z) if detections else 2
@@ -123,7 +127,6 @@ def _measured(report: DetectionReport, config: SessionConfig) -> CoreDetectionRe
             [detection.r if detection.r is not None else default for detection in detections],
             dtype=np.float64,
         )
-    model = None if sensor is None else measurement_model(config, sensor)
     if model is None:
         return CoreDetectionReport(report.sensor, seconds(report.time), measurements, covariances)
     return CoreDetectionReport.measured(

@@ -16,7 +16,6 @@ dataclasses, no intermediate lists); every non-finite score of a matrix is
 from __future__ import annotations
 
 import math
-import weakref
 from collections.abc import Iterable, Sequence
 from typing import Any
 
@@ -53,7 +52,7 @@ from core.fusion.motion import MotionModel, StateLayout
 from core.fusion.state import StateFusion
 from core.geometry import FieldOfView, PolygonView, Sector
 from core.lifecycle import LifeCycleConfig
-from core.models.measurement import MEASUREMENT_MODELS, MeasurementModel, Polar
+from core.models.measurement import MEASUREMENT_MODELS, MeasurementModel
 from core.tracking.config import DEFAULT_IMM_DISTANCE, ClassificationOptions, LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
 from core.tracking.presets import MIN_MANOEUVRE_DENSITY, preset, with_classes
@@ -107,6 +106,11 @@ def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> Sens
         fov = None if sensor.fov is None else field_of_view(sensor.fov, site, heading)
     except InvalidInput as error:
         raise InvalidFields([FieldIssue(("sensors", index, "fov"), str(error), None)]) from None
+    try:  # a σ the model refuses is located at its field
+        model = measurement_model(config, sensor)
+    except InvalidInput as error:
+        where = ("sensors", index, "measurement", *error.loc)
+        raise InvalidFields([FieldIssue(where, str(error), None)]) from None
     tracker = local_tracker_config(config, sensor, fov)
     if tracker is not None:
         confirmable(tracker, sensor, index, fov)
@@ -117,6 +121,7 @@ def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> Sens
         fov=fov,
         tracker=tracker,
         local_tracker=sensor.local_tracker,
+        model=model,
     )
 
 
@@ -231,7 +236,6 @@ def local_tracker_config(
             else LocalTrackerConfig.max_speed
         ),
         initial_velocity_std=initiation.velocity_std,
-        range_rate=range_rate_model(config, sensor),
         fields_of_view={sensor.id: fov},
         classification=ClassificationOptions() if config.classes else None,
         class_behaviours=class_behaviours(config),
@@ -255,31 +259,12 @@ def class_behaviours(config: SessionConfig) -> dict[str, tuple[str, ...]] | None
     return ordered
 
 
-def range_rate_model(config: SessionConfig, sensor: SensorConfig) -> Polar | None:
-    """A polar sensor's model when it measures the range-rate (``sigma_range_rate``), else
-    None: the detections' ``range_rate`` then stays unused."""
-    model = measurement_model(config, sensor)
-    return model if isinstance(model, Polar) and model.velocity_mapping is not None else None
-
-
-_MODELS: dict[tuple[int, int], MeasurementModel | None] = {}
-"""Sensors' measurement models by the identity of their (validated, never changed) session
-config and sensor config; an entry goes with its session config."""
-
-
 def measurement_model(config: SessionConfig, sensor: SensorConfig) -> MeasurementModel | None:
-    """A detecting sensor's measurement model (:func:`build_measurement_model`), built once
-    per session config: every detection report of the sensor takes it from here."""
-    key = (id(config), id(sensor))
-    if key not in _MODELS:
-        _MODELS[key] = build_measurement_model(config, sensor)
-        weakref.finalize(config, _MODELS.pop, key, None)
-    return _MODELS[key]
-
-
-def build_measurement_model(config: SessionConfig, sensor: SensorConfig) -> MeasurementModel | None:
     """A detecting sensor's measurement model of its local tracker's ``[x, ẋ, …]`` state
-    (:mod:`core.models.measurement`); None for a sensor that sends track lists.
+    (:mod:`core.models.measurement`); None for a sensor that sends track lists. Built once
+    per engine configuration (:func:`sensor_spec`): its sensor's entry keeps it
+    (:attr:`core.fusion.config.SensorSpec.model`) and every detection report of the sensor
+    takes it from there (:func:`app.inputs.detections.core_detection_report`).
 
     A polar sensor's site and axes are in the session frame: azimuth and elevation
     are measured in the site's own ENU axes, turned into the session's at a

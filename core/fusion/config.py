@@ -21,7 +21,9 @@ from core.fusion.state import StateFusion
 from core.geometry import Coverage, FieldOfView, PolygonView
 from core.lifecycle import LifeCycleConfig
 from core.models import MappedMotion
+from core.models.measurement import MeasurementModel
 from core.tracking.config import LocalTrackerConfig
+from core.tracking.presets import VELOCITY
 
 CENTRAL_MIN_SENSORS = 2
 """Detecting sensors (not flagged ``local_tracker``) from which a session tracks centrally
@@ -50,6 +52,10 @@ class SensorSpec:
         track-to-track fusion, docs/algorithms.md §8.9); False (default): its detections go
         to the central tracker (:attr:`FusionConfig.central_tracker`) with the other
         detecting sensors' not flagged, when there are two or more.
+    model : the measurement model of its detections (:mod:`core.models.measurement`), built
+        once with the session's configuration; every detection report of the sensor
+        carries it (:attr:`~core.fusion.reports.DetectionReport.model`). None for a sensor
+        that sends track lists.
     """
 
     id: str
@@ -58,6 +64,7 @@ class SensorSpec:
     fov: FieldOfView | None = None
     tracker: LocalTrackerConfig | None = None
     local_tracker: bool = False
+    model: MeasurementModel | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         if not self.id:
@@ -149,6 +156,12 @@ class FusionConfig:
     def _check_detecting_sensor(self, sensor: SensorSpec, tracker: LocalTrackerConfig) -> None:
         check_layout_for_detections(self.motion.layout)
         preset = tracker.tracking_preset()
+        rates = getattr(sensor.model, "velocity_mapping", None) is not None
+        if rates and preset is not None and set(preset.conventions) != {VELOCITY}:
+            raise InvalidInput(
+                f"sensor {sensor.id!r}: a range-rate needs velocities in the state, not "
+                f"the headings of the {tracker.preset!r} preset"
+            )
         preset_classes = (
             None if preset is None or tracker.classification is None else preset.classes
         )

@@ -249,6 +249,7 @@ class SessionEngine:
                 report.covariances,
                 range_rates=report.range_rates,
                 class_masses=report.class_masses,
+                model=report.model,
             )
             tracks = local_track_report(
                 tracker, scan, self.config.motion.layout, self.config.classes
@@ -287,6 +288,7 @@ class SessionEngine:
                 report.covariances,
                 range_rates=report.range_rates,
                 class_masses=masses,
+                model=report.model,
             )
             tracks = local_track_report(
                 central, scan, self.config.motion.layout, self.config.classes, every=True
@@ -1004,7 +1006,8 @@ class SessionEngine:
                 engine.central = LocalTracker.restore(config.central_tracker, central)
             else:
                 engine.central = LocalTracker.restore(config.central_tracker, central["tracker"])
-                engine.reorder = ReorderBuffer.restore(engine.central, central)
+                models = {sensor.id: sensor.model for sensor in config.sensors}
+                engine.reorder = ReorderBuffer.restore(engine.central, central, models)
         for sensor, plain in state["local_trackers"].items():
             if config.tracked_centrally(sensor):
                 continue  # a version-1 export of a sensor now tracked centrally

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import bisect
 import copy
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -30,6 +30,7 @@ import numpy as np
 
 from core.belief import MassFunction
 from core.errors import InvalidInput, StaleReport
+from core.models.measurement import MeasurementModel
 from core.tracking.track import TrackerStep, float_array, mass_to_plain, plain_floats
 from core.tracking.tracker import LocalTracker
 
@@ -51,6 +52,7 @@ class BufferedScan:
     range_rates: np.ndarray | None
     class_masses: tuple[MassFunction | None, ...] | None
     before: dict[str, Any]
+    model: MeasurementModel | None = None
 
     def run(self, tracker: LocalTracker) -> tuple[BufferedScan, TrackerStep]:
         """This scan through ``tracker`` from its current state; the scan with that state."""
@@ -62,6 +64,7 @@ class BufferedScan:
             sensor=self.sensor,
             range_rates=self.range_rates,
             class_masses=self.class_masses,
+            model=self.model,
         )
         return _with_before(self, before), step
 
@@ -87,6 +90,7 @@ def _with_before(scan: BufferedScan, before: dict[str, Any]) -> BufferedScan:
         scan.range_rates,
         scan.class_masses,
         before,
+        scan.model,
     )
 
 
@@ -108,8 +112,10 @@ class ReorderBuffer:
         covariances: Any | None = None,
         range_rates: Any | None = None,
         class_masses: Sequence[MassFunction | None] | None = None,
+        model: MeasurementModel | None = None,
     ) -> TrackerStep:
-        """``sensor``'s scan at ``time`` through ``tracker``, in its place in time order.
+        """``sensor``'s scan at ``time`` through ``tracker``, in its place in time order
+        (``model``: the one its detections were measured by, the report's).
 
         Raises
         ------
@@ -130,6 +136,7 @@ class ReorderBuffer:
             None if range_rates is None else np.asarray(range_rates, dtype=np.float64),
             None if class_masses is None else tuple(class_masses),
             {},
+            model,
         )
         # after every buffered scan of its time or earlier: the order of arrival breaks ties
         at = bisect.bisect_right([buffered.time for buffered in self.scans], scan.time)
@@ -158,9 +165,15 @@ class ReorderBuffer:
 
     @classmethod
     def restore(
-        cls, tracker: LocalTracker, plain: dict[str, Any], window: float = REORDER_WINDOW
+        cls,
+        tracker: LocalTracker,
+        plain: dict[str, Any],
+        models: Mapping[str, MeasurementModel | None] | None = None,
+        window: float = REORDER_WINDOW,
     ) -> ReorderBuffer:
-        """Re-run the exported scans through ``tracker`` (restored from ``plain["tracker"]``)."""
+        """Re-run the exported scans through ``tracker`` (restored from ``plain["tracker"]``),
+        each measured by its sensor's model of ``models`` (the session's, by sensor id: a
+        scan exports its measurements, not its model)."""
         buffer = cls(window)
         frame = None if tracker.classifier is None else tracker.classifier.frame
         done = []
@@ -187,6 +200,7 @@ class ReorderBuffer:
                     for mass in masses
                 ),
                 {},
+                None if models is None else models.get(str(entry["sensor"])),
             )
             ran, _ = scan.run(tracker)
             done.append(ran)

@@ -32,11 +32,14 @@ measurement vector (``app.inputs.detections``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Protocol, runtime_checkable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from core.arrays import FloatArray
 from core.errors import ModelConfigError
@@ -58,6 +61,41 @@ def rotate_covariances(rotations: FloatArray, covariances: FloatArray) -> FloatA
     """``R P Rᵀ`` for stacks (N, k, k), symmetrised so the result is exactly symmetric."""
     turned = rotations @ covariances @ np.swapaxes(rotations, -1, -2)
     return np.asarray(0.5 * (turned + np.swapaxes(turned, -1, -2)), dtype=np.float64)
+
+
+def read_only(array: ArrayLike) -> FloatArray:
+    """A read-only float64 copy of ``array``: a model's arrays are its own and stay as
+    built (a caller's array is not frozen, nor can a caller write into a model's)."""
+    frozen = np.array(array, dtype=np.float64)
+    frozen.setflags(write=False)
+    return frozen
+
+
+def _freeze(model: object, *names: str) -> None:
+    """Replace the frozen dataclass ``model``'s arrays ``names`` (those not None) by
+    :func:`read_only` copies."""
+    for name in names:
+        value = getattr(model, name)
+        if value is not None:
+            object.__setattr__(model, name, read_only(value))
+
+
+def _variance(name: str, sigma: float, *, angle: bool = False) -> float:
+    """σ² of the wire's ``name`` (an angle's σ in degrees, its variance in radians²), refused
+    (located at ``name``) unless a positive finite number: a σ whose square underflows to 0
+    or overflows gives no covariance."""
+    try:
+        with np.errstate(over="ignore", under="ignore"):
+            variance = float(np.radians(sigma) ** 2) if angle else sigma**2
+    except OverflowError:  # a Python float's square raises where numpy's is inf
+        variance = math.inf
+    if not (math.isfinite(variance) and variance > 0.0):
+        raise ModelConfigError(
+            f"{name} {sigma!r} has no usable variance: its square is {variance!r}, not a "
+            "positive finite number",
+            loc=(name,),
+        )
+    return variance
 
 
 @runtime_checkable
@@ -113,12 +151,15 @@ class LinearGaussian:
         H.
     noise_covariance : ndarray, shape (q, q)
         R, symmetric positive definite.
+
+    Both are kept as read-only copies.
     """
 
     matrix: FloatArray
     noise_covariance: FloatArray
 
     def __post_init__(self) -> None:
+        _freeze(self, "matrix", "noise_covariance")
         if self.matrix.ndim != 2:
             raise ModelConfigError("measurement matrix H must be 2-D")
         q = self.matrix.shape[0]
@@ -220,6 +261,8 @@ class Polar:
         axes is ``rotation @ w`` in the tracker's. None: the same axes.
     velocity_mapping : tuple of d ints, optional
         The velocity components: with them the last component is the range-rate.
+
+    The arrays are kept as read-only copies.
     """
 
     ndim_state: int
@@ -230,6 +273,7 @@ class Polar:
     velocity_mapping: tuple[int, ...] | None = None
 
     def __post_init__(self) -> None:
+        _freeze(self, "noise_covar", "translation_offset", "rotation")
         d = self._axes
         if d not in (2, 3):
             raise ModelConfigError(f"a polar model measures 2 or 3 positions, got {d}")
@@ -288,13 +332,18 @@ class Polar:
         """A radar at ``site`` (2 or 3 coordinates: the axes it measures) with its axes
         ``rotation``, its σ as the wire gives them (angles in degrees): the elevation's
         in 3-D only, with ``sigma_range_rate`` the range-rate (:data:`MEASUREMENT_MODELS`)."""
-        variances = [sigma_range**2, np.radians(sigma_azimuth_deg) ** 2]
+        variances = [
+            _variance("sigma_range", sigma_range),
+            _variance("sigma_azimuth_deg", sigma_azimuth_deg, angle=True),
+        ]
         if len(site) == 3:
             if sigma_elevation_deg is None:
-                raise ModelConfigError("a 3-D polar sensor needs sigma_elevation_deg")
-            variances.append(np.radians(sigma_elevation_deg) ** 2)
+                raise ModelConfigError(
+                    "a 3-D polar sensor needs sigma_elevation_deg", loc=("sigma_elevation_deg",)
+                )
+            variances.append(_variance("sigma_elevation_deg", sigma_elevation_deg, angle=True))
         if sigma_range_rate is not None:
-            variances.append(sigma_range_rate**2)
+            variances.append(_variance("sigma_range_rate", sigma_range_rate))
         return cls.of_axes(site, variances, rotation)
 
     @property
@@ -310,11 +359,21 @@ class Polar:
         """R."""
         return self.noise_covar
 
+    @cached_property
+    def _to_site(self) -> FloatArray | None:
+        """``rotation⁻¹``: a vector in the tracker's axes in the site's. Not ``rotationᵀ``: a
+        planar session's rotation is the horizontal block of a geodetic site's 3-D one
+        (``app.sessions.translate.site_axes``), which is not orthonormal (|RᵀR − I| ≈ 1e-4
+        at 80 km from the origin: 9 m of range at 50 km), and ``h`` must invert
+        :meth:`converted`."""
+        return None if self.rotation is None else read_only(np.linalg.inv(self.rotation))
+
     def _offsets(self, states: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """``p − s`` in the tracker's axes and in the site's (``rotationᵀ (p − s)``)."""
+        """``p − s`` in the tracker's axes and in the site's (``rotation⁻¹ (p − s)``)."""
         offset = np.asarray(states, dtype=np.float64)[..., list(self.mapping)]
         offset = offset - self.translation_offset
-        local = offset if self.rotation is None else offset @ self.rotation
+        turn = self._to_site
+        local = offset if turn is None else offset @ turn.T
         return offset, local
 
     def function(self, states: FloatArray) -> FloatArray:
@@ -330,7 +389,7 @@ class Polar:
         return np.stack(parts, axis=-1)
 
     def jacobian(self, states: FloatArray) -> FloatArray:
-        """``∂(ρ, a, e)/∂p = J_w rotationᵀ`` with, for ``w = (x, y, z)`` (x east, y north):
+        """``∂(ρ, a, e)/∂p = J_w rotation⁻¹`` with, for ``w = (x, y, z)`` (x east, y north):
         ``∂ρ/∂w = w/ρ``, ``∂a/∂w = (y, −x, 0)/(x² + y²)``,
         ``∂e/∂w = (−xz/(hρ²), −yz/(hρ²), h/ρ²)``, ``h = √(x² + y²)``; the range-rate's row
         from :meth:`range_rate`."""
@@ -351,8 +410,9 @@ class Polar:
             scale = horizontal * rho2
             rows.append(np.stack([-x * z / scale, -y * z / scale, horizontal / rho2], axis=-1))
         block = np.stack(rows, axis=-2)  # (…, d, d): d(ρ, a[, e]) / dw
-        if self.rotation is not None:
-            block = block @ self.rotation.T
+        turn = self._to_site
+        if turn is not None:
+            block = block @ turn
         jacobian = np.zeros((*states.shape[:-1], self.ndim_meas, self.ndim_state))
         jacobian[..., : self._axes, list(self.mapping)] = block
         if self.velocity_mapping is not None:

@@ -98,7 +98,6 @@ from core.classification.credal import ACCUMULATIONS, DISCOUNTS, Accumulation, D
 from core.errors import TrackingError
 from core.geometry import Coverage, FieldOfView, PolygonView
 from core.lifecycle import LifeCycleConfig, ScoreModel
-from core.models.measurement import Polar
 from core.tracking.models import LinearMeasurementModel, ModelBank
 from core.tracking.presets import TrackingPreset, preset, with_classes
 
@@ -174,14 +173,11 @@ class SensorPhysics:
         cycle's, else estimated from the sensor's detections (:mod:`core.tracking.clutter`).
     measurement_noise : R of the sensor's detections that carry no covariance of their
         own, or None: the tracker's (the bank's R).
-    range_rate : the sensor's polar model with its range-rate (site and σ), or None: the
-        tracker's ``range_rate``.
     """
 
     p_detect: float | None = None
     clutter_density: float | None = None
     measurement_noise: tuple[tuple[float, ...], ...] | None = None
-    range_rate: Polar | None = None
 
     def __post_init__(self) -> None:
         if self.measurement_noise is not None:
@@ -238,8 +234,6 @@ class LocalTrackerConfig:
     initiation, max_speed : see the module Readings.
     initial_velocity_std : σ_v of a new track's velocity per axis (m/s), the velocity
         prior; None (default): no velocity knowledge (module Readings).
-    range_rate : the system's polar model with its range-rate (site and σ), or None; a scan
-        may then give each detection's range-rate (:mod:`core.tracking.range_rate`).
     fields_of_view : the system's sensors and their fields of view.
     region : the surveillance region (default: union of the sensors' ranges).
     classification : credal options, or None for no classification; ignored
@@ -273,7 +267,6 @@ class LocalTrackerConfig:
     initiation: Initiation = "single_point"
     max_speed: float = 1000.0
     initial_velocity_std: float | None = None
-    range_rate: Polar | None = None
     fields_of_view: Mapping[str, FieldOfView | None] = field(
         default_factory=lambda: MappingProxyType({"sensor": None})
     )
@@ -342,7 +335,8 @@ class LocalTrackerConfig:
         configuration, by sensor; docs/algorithms.md §8.9).
 
         Each sensor keeps what is its own: its fields of view, P_D, β_FT (given, or
-        estimated from its own detections), R and range-rate model (``sensor_physics``).
+        estimated from its own detections), and R (``sensor_physics``; its
+        measurement model rides with its detections).
         Everything else (models, association, life cycle, initiation, classification)
         is the session's and must agree; the bank's R is the sensor's R of the largest
         eigenvalue (the gate of a track without a detection is never smaller than a
@@ -385,28 +379,25 @@ class LocalTrackerConfig:
                         if np.array_equal(own, reference)
                         else tuple(tuple(float(x) for x in row) for row in own)
                     ),
-                    range_rate=config.range_rate_of(sensor),
                 )
         return replace(
             first,
             life_cycle=replace(first.life_cycle, false_target_density=None),
             measurement_noise=tuple(tuple(float(x) for x in row) for row in reference),
             sensor_physics=MappingProxyType(physics),
-            range_rate=None,
             fields_of_view=MappingProxyType(views),
             id_prefix=id_prefix,
         )
 
     def session_part(self, id_prefix: str) -> LocalTrackerConfig:
         """The configuration without what is each sensor's own (:meth:`central`): no bank, R,
-        P_D, β_FT, physics, range-rate or fields of view of its own."""
+        P_D, β_FT, physics or fields of view of its own."""
         return replace(
             self,
             bank=None,
             measurement_noise=None,
             p_detect=LocalTrackerConfig.p_detect,
             sensor_physics=MappingProxyType({}),
-            range_rate=None,
             fields_of_view=MappingProxyType({"sensor": None}),
             life_cycle=replace(self.life_cycle, false_target_density=None),
             id_prefix=id_prefix,
@@ -435,11 +426,6 @@ class LocalTrackerConfig:
         bank's (``sensor_physics``); None: the bank's."""
         own = self.sensor_physics.get(sensor, NO_PHYSICS).measurement_noise
         return None if own is None else np.array(own, dtype=np.float64)
-
-    def range_rate_of(self, sensor: str) -> Polar | None:
-        """The range-rate model of ``sensor``'s detections (its own, else the tracker's)."""
-        own = self.sensor_physics.get(sensor, NO_PHYSICS).range_rate
-        return self.range_rate if own is None else own
 
     def tracking_preset(self) -> TrackingPreset | None:
         """The preset (with the session's own classes, ``class_behaviours``), or None when

@@ -92,6 +92,7 @@ from core.lifecycle import (
     hand_over,
     initiated,
 )
+from core.models.measurement import MeasurementModel, Polar
 from core.pipeline.evidence import (
     coasting_misses,
     coverage_codes,
@@ -198,10 +199,6 @@ class LocalTracker:
         self._conventions: tuple[VelocityConvention, ...] = (
             (VELOCITY,) * self.bank.axes if found is None else found.conventions
         )
-        if any(config.range_rate_of(name) is not None for name in config.sensors) and set(
-            self._conventions
-        ) != {VELOCITY}:
-            raise TrackingError("a range-rate needs velocities in the state, not headings")
         self._associator = DetectionAssociator(
             config, self.bank, config.score, velocities=set(self._conventions) == {VELOCITY}
         )
@@ -275,6 +272,7 @@ class LocalTracker:
         sensor: str | None = None,
         range_rates: ArrayLike | None = None,
         class_masses: Sequence[MassFunction | None] | None = None,
+        model: MeasurementModel | None = None,
     ) -> TrackerStep:
         """Process one scan of ``sensor`` (default: the first configured sensor).
 
@@ -288,13 +286,17 @@ class LocalTracker:
             Each detection's own R (default: the bank's R).
         sensor : str, optional
         range_rates : array (m,), optional
-            Each detection's range-rate (NaN: none), for a tracker configured
-            with a ``range_rate`` model (:mod:`core.tracking.range_rate`).
+            Each detection's range-rate (NaN: none), measured by ``model``
+            (:mod:`core.tracking.range_rate`).
         class_masses : sequence of MassFunction or None, optional
             Each detection's own class evidence (None: none), on the classifier's
             class frame: combined into the class mass of the track it updates or
             starts, as one more step of its accumulation ([MTT] eq 11; a tracker
             without classification, or accumulating on behaviours, refuses it).
+        model : MeasurementModel, optional
+            The model the detections were measured by (the report's,
+            :class:`~core.fusion.reports.DetectionReport`): a polar model with a
+            range-rate gives the range-rates' site and σ.
 
         Raises
         ------
@@ -305,7 +307,9 @@ class LocalTracker:
         before = self.checkpoint()
         try:
             self._evidence = self._class_evidence(class_masses)
-            return self._step(time, measurements, measurement_covariances, sensor, range_rates)
+            return self._step(
+                time, measurements, measurement_covariances, sensor, range_rates, model
+            )
         except BaseException:
             self.rollback(before)
             raise
@@ -369,13 +373,15 @@ class LocalTracker:
         measurement_covariances: ArrayLike | None,
         sensor: str | None,
         range_rates: ArrayLike | None = None,
+        model: MeasurementModel | None = None,
     ) -> TrackerStep:
         """The pipeline (``core.pipeline``): predict, look, associate, update, life cycle,
         hand-over, initiate, keep the rows."""
         z, own_noise, sensor_name, elapsed = self._check(
             time, measurements, measurement_covariances, sensor
         )
-        doppler = self._check_range_rates(range_rates, len(z), sensor_name)
+        range_rate = self._range_rate_model(range_rates, model)
+        doppler = self._check_range_rates(range_rates, len(z))
         own_noise = self._own_noise(sensor_name, own_noise, len(z))
         noises = (
             np.broadcast_to(self._noise, (len(z), self._q, self._q))
@@ -412,7 +418,6 @@ class LocalTracker:
             score,
             branching=START_PASS if self._branching else None,
         )
-        range_rate = self.config.range_rate_of(sensor_name)
         if doppler is not None and range_rate is not None and len(association.rows):
             measured = np.isfinite(doppler[association.cols])
             association = replace(
@@ -646,14 +651,23 @@ class LocalTracker:
             return None
         return np.broadcast_to(noise, (count, self._q, self._q)).copy()
 
-    def _check_range_rates(
-        self, range_rates: ArrayLike | None, count: int, sensor: str
-    ) -> FloatArray | None:
-        """Each detection's range-rate (NaN: none), or None; only with a ``range_rate`` model."""
+    def _range_rate_model(
+        self, range_rates: ArrayLike | None, model: MeasurementModel | None
+    ) -> Polar | None:
+        """The polar model with a range-rate that measured the scan's ``range_rates``, or
+        None without range-rates."""
         if range_rates is None:
             return None
-        if self.config.range_rate_of(sensor) is None:
-            raise TrackingError("range_rates need a tracker configured with a range_rate model")
+        if not isinstance(model, Polar) or model.velocity_mapping is None:
+            raise TrackingError("range_rates need a polar measurement model with a range-rate")
+        if set(self._conventions) != {VELOCITY}:
+            raise TrackingError("a range-rate needs velocities in the state, not headings")
+        return model
+
+    def _check_range_rates(self, range_rates: ArrayLike | None, count: int) -> FloatArray | None:
+        """Each detection's range-rate (NaN: none), or None."""
+        if range_rates is None:
+            return None
         if self._associator.soft:
             raise TrackingError(f"{self.config.association_method} takes no range-rates")
         doppler = np.asarray(range_rates, dtype=np.float64).reshape(-1)

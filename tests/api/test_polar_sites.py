@@ -17,6 +17,7 @@ import numpy as np
 from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport
 from app.inputs.detections import core_detection_report
+from app.sessions.translate import fusion_config
 
 from .proj_oracle import proj_enu
 
@@ -62,7 +63,7 @@ def test_3d_polar_detections_at_a_geodetic_site_land_on_the_targets() -> None:
     report = DetectionReport.model_validate(
         {"sensor": "radar", "time": 0.0, "detections": detections}
     )
-    converted = core_detection_report(report, config)
+    converted = core_detection_report(report, config, fusion_config(config))
     np.testing.assert_allclose(converted.measurements, targets, atol=1e-3)
     assert converted.covariances is not None
     site = np.asarray(oracle.transform(*SITE))

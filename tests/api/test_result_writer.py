@@ -173,7 +173,9 @@ def engine_steps(
     for index, body in enumerate(bodies):
         explain = index % 3 == 0
         if detections:
-            report = core_detection_report(DetectionReport.model_validate(body), session)
+            report = core_detection_report(
+                DetectionReport.model_validate(body), session, engine.config
+            )
             yield session, engine, engine.apply_detections(report, explain=explain)
         else:
             report_ = session_frame_report(TrackReport.model_validate(body), session)

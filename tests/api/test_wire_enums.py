@@ -35,6 +35,7 @@ from api_schemas.results import (
     TrackStatus,
 )
 from app.inputs.detections import core_detection_report
+from app.sessions.translate import fusion_config
 from core.belief.decision import DecisionState as CoreDecisionState
 from core.fusion.classes import ClassState
 from core.fusion.motion import MotionKind
@@ -130,7 +131,7 @@ def test_every_measurement_kind_becomes_the_cores_cartesian_position(kind: str) 
     report = DetectionReport.model_validate(
         {"sensor": "radar", "time": 1.0, "detections": [detection]}
     )
-    core = core_detection_report(report, config)
+    core = core_detection_report(report, config, fusion_config(config))
     assert core.measurements.shape == (1, 2)
     assert core.measurements[0].tolist() == pytest.approx([300.0, 400.0], abs=1e-9)
 

@@ -48,7 +48,9 @@ def run(config: dict[str, Any], reports: list[dict[str, Any]]) -> dict[str, str]
     steps = hashlib.sha256()
     for seq, body in enumerate(reports, start=1):
         wire = DetectionReport.model_validate(body)
-        result = engine.apply_detections(core_detection_report(wire, session), explain=True)
+        result = engine.apply_detections(
+            core_detection_report(wire, session, engine.config), explain=True
+        )
         steps.update(step_json(result, seq).encode())
     export = orjson.dumps(engine.export(), option=orjson.OPT_SERIALIZE_NUMPY)
     return {"steps": steps.hexdigest(), "export": _sha(export)}

@@ -17,6 +17,7 @@ measurement at a geodetic site → a position in the session's ENU frame) agains
 
 from __future__ import annotations
 
+import math
 import typing
 
 import numpy as np
@@ -36,7 +37,7 @@ from api_schemas.config import SessionConfig
 from api_schemas.reports import DetectionReport as WireDetectionReport
 from app.geo.geodesy import LocalFrame
 from app.inputs.detections import core_detection_report
-from app.sessions.translate import measurement_model
+from app.sessions.translate import fusion_config, measurement_model
 from core.errors import ModelConfigError
 from core.models import MEASUREMENT_MODELS
 from core.models.measurement import ConvertedModel, LinearGaussian, MeasurementModel, Polar
@@ -251,15 +252,18 @@ def test_registry_builds_each_kind_from_the_wire_parameters() -> None:
 
 def test_a_detection_report_carries_its_sensors_model() -> None:
     """Wire detections of a geodetic radar become a core report whose model is the
-    sensor's (built once per session config), whose positions are that model's
-    conversion of the measured range, azimuth, elevation and range-rate."""
+    sensor's (built once with the engine's config, kept on its sensor entry), whose
+    positions are that model's conversion of the measured range, azimuth, elevation and
+    range-rate."""
     config, reports = geodetic_3d(central=False)
     session = SessionConfig.model_validate(config)
+    engine_config = fusion_config(session)
     first, second = (
-        core_detection_report(WireDetectionReport.model_validate(body), session)
+        core_detection_report(WireDetectionReport.model_validate(body), session, engine_config)
         for body in (reports[0], reports[2])  # the same radar, two scans
     )
     assert isinstance(first.model, Polar) and first.model is second.model
+    assert first.model is engine_config.sensor(session.sensors[0].id).model
     assert first.model.velocity_mapping == (1, 3, 5)
     body = reports[0]["detections"][0]
     z = np.array(
@@ -276,4 +280,75 @@ def test_a_detection_report_carries_its_sensors_model() -> None:
     assert_allclose(first.covariances[0], covariance[0], rtol=0, atol=0)
     assert first.range_rates[0] == body["range_rate"]
     again = SessionConfig.model_validate(config)  # another session: its own model
-    assert measurement_model(again, again.sensors[0]) is not first.model
+    assert fusion_config(again).sensor(again.sensors[0].id).model is not first.model
+
+
+@pytest.mark.parametrize(
+    ("name", "sigma", "square"),
+    [
+        # IEEE doubles, by hand: 1e-170² = 1e-340 is below the least subnormal (4.9e-324), so
+        # 0; 1e200² = 1e400 is beyond the largest double (1.8e308), so it overflows
+        ("sigma_range", 1e-170, 0.0),
+        ("sigma_range", 1e200, math.inf),
+        ("sigma_azimuth_deg", 1e-170, 0.0),  # 1.7e-172 rad
+        ("sigma_azimuth_deg", 1e200, math.inf),
+        ("sigma_elevation_deg", 1e-170, 0.0),
+        ("sigma_range_rate", 1e200, math.inf),
+    ],
+)
+def test_a_sigma_without_a_usable_variance_is_refused_at_its_name(
+    name: str, sigma: float, square: float
+) -> None:
+    """A σ whose square underflows to 0 or overflows gives no covariance: refused, located
+    at the wire's parameter (the service prefixes the sensor's measurement)."""
+    given = {
+        "sigma_range": 20.0,
+        "sigma_azimuth_deg": 0.2,
+        "sigma_elevation_deg": 0.3,
+        "sigma_range_rate": 1.5,
+    }
+    given[name] = sigma
+    with pytest.raises(ModelConfigError, match=f"its square is {square!r}") as refused:
+        Polar.for_sensor(np.array(SITE_3D), None, **given)
+    assert refused.value.loc == (name,)
+
+
+def test_a_planar_radar_at_a_geodetic_site_measures_what_pymap3d_places() -> None:
+    """A 2-D session's radar at a geodetic site 84 km from the origin, built as the service
+    builds it: the point pymap3d places at (ρ, a) and elevation 0 from the site
+    (``aer2geodetic``, then ``geodetic2enu`` at the origin), in the session's plane, is the
+    model's conversion, and the model's ``h`` of it is (ρ, a) again. The site's axes in the
+    plane are the horizontal block of a 3-D rotation, not orthonormal (|RᵀR − I| ≈ 1e-4):
+    ``h`` through ``rotationᵀ`` was off by up to 9 m and 0.005° here."""
+    origin, site = (52.0, 4.0, 0.0), (52.5, 5.0, 0.0)
+    session = SessionConfig.model_validate(
+        {
+            "origin": dict(zip(("lat", "lon", "alt"), origin, strict=True)),
+            "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+            "sensors": [
+                {
+                    "id": "radar",
+                    "site": dict(zip(("lat", "lon", "alt"), site, strict=True)),
+                    "measurement": {"kind": "polar", "sigma_range": 20.0, "sigma_azimuth_deg": 0.2},
+                }
+            ],
+        }
+    )
+    model = measurement_model(session, session.sensors[0])
+    assert isinstance(model, Polar) and model.rotation is not None
+    azimuths = np.radians([0.0, 45.0, 90.0, 135.0, 180.0, -90.0, -30.0])
+    measurements = np.stack([np.full(len(azimuths), 50_000.0), azimuths], axis=-1)
+    placed = np.array(
+        [
+            pymap3d.geodetic2enu(
+                *pymap3d.aer2geodetic(np.degrees(a), 0.0, rho, *site, deg=True), *origin
+            )[:2]
+            for rho, a in measurements
+        ]
+    )
+    assert_allclose(model.converted(measurements)[0], placed, rtol=0, atol=1e-3)
+    states = np.insert(placed, [1, 2], 0.0, axis=1)  # [x, 0, y, 0]
+    measured = model.function(states)
+    assert_allclose(measured[:, 0], measurements[:, 0], rtol=0, atol=1e-3)
+    turned = np.angle(np.exp(1j * (measured[:, 1] - measurements[:, 1])))  # 180° is −180°
+    assert_allclose(turned, 0.0, rtol=0, atol=1e-9)

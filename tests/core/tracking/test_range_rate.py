@@ -93,18 +93,24 @@ def test_each_model_of_each_track_is_filterpy_s_ekf_update() -> None:
     np.testing.assert_array_equal(result.state.covariances[1], covariances[1])
 
 
-def test_range_rates_need_a_model_velocities_and_one_per_detection() -> None:
-    plain = LocalTracker(LocalTrackerConfig())
-    with pytest.raises(TrackingError, match="range_rate model"):
-        plain.step(0.0, np.zeros((1, 2)), range_rates=[1.0])
+def test_range_rates_need_their_model_velocities_and_one_per_detection() -> None:
+    """A scan's range-rates are measured by the scan's model (the report's): without a
+    polar model with a range-rate there is no site or σ for them."""
+    tracker = LocalTracker(LocalTrackerConfig())
+    with pytest.raises(TrackingError, match="polar measurement model with a range-rate"):
+        tracker.step(0.0, np.zeros((1, 2)), range_rates=[1.0])
+    without_rate = Polar.of_axes((0.0, 0.0), (1.0, 1.0))
+    with pytest.raises(TrackingError, match="polar measurement model with a range-rate"):
+        tracker.step(0.0, np.zeros((1, 2)), range_rates=[1.0], model=without_rate)
     model = Polar.of_axes((0.0, 0.0), (1.0, 1.0, 1.0))
+    pedestrian = LocalTracker(LocalTrackerConfig(preset="pedestrian"))
     with pytest.raises(TrackingError, match="headings"):
-        LocalTracker(LocalTrackerConfig(preset="pedestrian", range_rate=model))
-    tracker = LocalTracker(LocalTrackerConfig(range_rate=model))
+        pedestrian.step(0.0, np.zeros((1, 2)), range_rates=[1.0], model=model)
     with pytest.raises(TrackingError, match="range_rates"):
-        tracker.step(0.0, np.zeros((2, 2)), range_rates=[1.0])
+        tracker.step(0.0, np.zeros((2, 2)), range_rates=[1.0], model=model)
     with pytest.raises(TrackingError, match="range_rates"):
-        tracker.step(0.0, np.zeros((1, 2)), range_rates=[math.inf])
+        tracker.step(0.0, np.zeros((1, 2)), range_rates=[math.inf], model=model)
+    assert pedestrian.time is None
     assert tracker.time is None  # refused scans change nothing
     with pytest.raises(ModelConfigError, match="polar noise"):
         Polar.of_axes((0.0, 0.0), (1.0, 1.0, 0.0))
