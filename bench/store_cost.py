@@ -6,7 +6,8 @@ First the store calls alone, in this process: :data:`SESSIONS` sessions' inputs
 and to a :class:`~app.stores.sqlite.SqliteStore` on a fresh file (WAL,
 ``synchronous=FULL``: an fsync per commit, group commit), by one writer thread
 and by one thread per session; this process's CPU (every thread, user +
-system) per input. Then through the service: two service processes run on
+system) per input; then the same on ``synchronous=NORMAL``, a labelled extra
+row (no fsync at commit: what the fsync costs). Then through the service: two service processes run on
 loopback with the default settings, one per store, but the overload guards
 (off: a refusal's CPU would be charged to the inputs applied). The load is
 :data:`SESSIONS` sessions of one detecting sensor each (:func:`scan`: 20
@@ -57,7 +58,7 @@ from service import free_port, process_cpu_s, running, service_command
 
 from app.stores.base import SessionRecord, Store
 from app.stores.memory import MemoryStore
-from app.stores.sqlite import SqliteStore
+from app.stores.sqlite import SqliteStore, Synchronous
 
 SESSIONS = 16
 """Sessions (sensors), each with its own client sending one input at a time."""
@@ -133,20 +134,32 @@ def store_calls(store: Store, writers: int) -> tuple[float, float]:
 
 
 def store_calls_alone() -> None:
+    """The store calls alone, sqlite as configured (``synchronous=FULL``), then a labelled
+    extra row: ``synchronous=NORMAL`` (no fsync at commit: an acknowledged input survives the
+    process's death, SIGKILL included, but not the machine's), what the fsync costs."""
     print(
         f"store calls alone (this process): {SESSIONS} sessions × {STORE_INPUTS} inputs"
         f" ({len(orjson.dumps({'report': orjson.loads(scan('s', 0))}))} bytes each, as logged)"
     )
     print(
-        f"{'writers':<8} {'memory ms/input':>15} {'sqlite ms/input':>15} {'extra':>6} {'sqlite inputs/s':>15}"
+        f"{'sqlite':<26} {'writers':>7} {'memory ms/input':>15} {'sqlite ms/input':>15}"
+        f" {'extra':>6} {'sqlite inputs/s':>15}"
     )
-    for writers in (1, SESSIONS):
-        memory, _ = store_calls(MemoryStore(), writers)
-        with tempfile.TemporaryDirectory() as directory:
-            sqlite = SqliteStore(Path(directory) / "alone.db")
-            durable, rate = store_calls(sqlite, writers)
-            sqlite.close()
-        print(f"{writers:<8} {memory:15.3f} {durable:15.3f} {durable - memory:6.3f} {rate:15.0f}")
+    rows: list[tuple[str, Synchronous]] = [
+        ("synchronous=FULL (default)", "FULL"),
+        ("NORMAL (extra row)", "NORMAL"),
+    ]
+    for label, synchronous in rows:
+        for writers in (1, SESSIONS):
+            memory, _ = store_calls(MemoryStore(), writers)
+            with tempfile.TemporaryDirectory() as directory:
+                sqlite = SqliteStore(Path(directory) / "alone.db", synchronous)
+                durable, rate = store_calls(sqlite, writers)
+                sqlite.close()
+            print(
+                f"{label:<26} {writers:>7} {memory:15.3f} {durable:15.3f}"
+                f" {durable - memory:6.3f} {rate:15.0f}"
+            )
 
 
 class Load:
