@@ -23,7 +23,9 @@ answers do not keep up (fewer than 95 % of the scans sent in the window
 answered within it, or p99 ≥ 50 ms) is over capacity. Per configuration the
 summary gives the highest rate answered at p99 < 50 ms, per worker process
 (a core each), and 2 workers against 1. Then 2 workers against 1 once more, at
-saturation and drift-proof (:func:`scaling`): both servers up, windows alternating.
+saturation and drift-proof (:func:`scaling`): both servers up, windows alternating,
+each round followed by a window on the bare echo (the machine's speed then);
+``--scaling`` runs that part alone.
 
 Sessions run with the defaults and the sensor's physics only (R, P_D, clutter
 density, field of view, the scan period). The service's protective limits are
@@ -456,6 +458,15 @@ def main(arguments: argparse.Namespace) -> int:
     )
     print("limits sized for the load: " + " ".join(f"{k}={v}" for k, v in SIZED.items()))
     load_before = os.getloadavg()
+    if arguments.scaling:
+        for store in ("sqlite", "redis"):
+            if store in arguments.stores:
+                scaling(store, timing, SCALING_ROUNDS)
+        print(
+            f"machine load (1-minute average): {load_before[0]:.1f} at start,"
+            f" {os.getloadavg()[0]:.1f} at end"
+        )
+        return 0
     results: dict[str, list[Cell]] = {}
     header = (
         f"{'server':13} {'K × r':>10} {'scans/s':>8} {'p50 ms':>8} {'p99 ms':>8} "
@@ -493,21 +504,38 @@ def main(arguments: argparse.Namespace) -> int:
 
 
 def scaling(store: str, timing: Timing, rounds: int) -> list[float]:
-    """2 workers against 1 at saturation: both servers up, :data:`SATURATING_SENSORS` sensors
-    each sending its next scan when the last is answered, in windows alternating between
-    them (the order flips each round: this machine's speed drifts within seconds); the
-    answered rate of each round's 2-worker window over its 1-worker neighbour."""
+    """2 workers against 1 at saturation: both servers and the bare echo up,
+    :data:`SATURATING_SENSORS` sensors each sending its next scan when the last is answered,
+    in windows alternating between the servers (the order flips each round: this machine's
+    speed drifts within seconds), then one on the echo (the machine's speed in that round);
+    the answered rate of each round's 2-worker window over its 1-worker neighbour."""
     rates: tuple[list[float], list[float]] = ([], [])
+    echo_port = free_port()
     with (
         serving(Configuration(store, 1)) as (one_url, one_pids),
         serving(Configuration(store, 2)) as (two_url, two_pids),
+        running(bare_command(echo_port), echo_port) as echo,
     ):
         servers = ((one_url, one_pids), (two_url, two_pids))
         for round_number in range(rounds):
+            cells: dict[int, Cell] = {}
             for which in (1, 0) if round_number % 2 else (0, 1):
                 url, pids = servers[which]
-                cell = measure(url, pids, SATURATING_SENSORS, 0.0, timing)
-                rates[which].append(cell.answered_per_s)
+                cells[which] = measure(url, pids, SATURATING_SENSORS, 0.0, timing)
+                rates[which].append(cells[which].answered_per_s)
+            bare = measure(
+                f"ws://127.0.0.1:{echo_port}/echo", [echo.pid], SATURATING_SENSORS, 0.0, timing
+            )
+            one, two = cells[0], cells[1]
+            print(
+                f"  {store} round {round_number + 1}: 1 worker {one.answered_per_s:.0f} scans/s"
+                f" ({one.cpu_ms_per_scan:.2f} ms CPU/scan), 2 workers {two.answered_per_s:.0f}"
+                f" ({two.cpu_ms_per_scan:.2f} ms; sockets {'/'.join(map(str, two.sockets))}),"
+                f" 2 / 1 {two.answered_per_s / max(one.answered_per_s, 1e-9):.2f};"
+                f" bare echo {bare.answered_per_s:.0f} messages/s ({bare.cpu_ms_per_scan:.2f} ms"
+                f" CPU/message); load {os.getloadavg()[0]:.1f}",
+                flush=True,
+            )
     ratios = [two / one for one, two in zip(*rates, strict=True)]
     print(
         f"{store} at saturation ({SATURATING_SENSORS} sensors, each sending when answered), "
@@ -571,6 +599,9 @@ def parse(argv: list[str]) -> argparse.Namespace:
     )
     parser.add_argument(
         "--grid", nargs="+", type=_cell, help="cells K×r instead of the issue's (e.g. 100x5)"
+    )
+    parser.add_argument(
+        "--scaling", action="store_true", help="2 workers against 1 (and the echo) alone"
     )
     parser.add_argument(
         "--configurations",

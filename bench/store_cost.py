@@ -1,18 +1,24 @@
 """What durability costs: the service's CPU per input on the memory store and on sqlite.
 
-Run with ``make bench`` (or ``python bench/store_cost.py [--seconds S]``). Two
-service processes run on loopback with the default settings, one per store
-(``memory``, and ``sqlite`` on a fresh file: WAL, ``synchronous=FULL``, an
-fsync per commit, group commit). The load is :data:`SESSIONS` sessions of one
-detecting sensor each (:func:`scan`: 20 targets and some clutter a scan),
-every one fed by its own client over REST, one request at a time (closed
-loop: the next input is sent when the previous one is acknowledged, i.e.
-durable). Windows alternate between the two servers (:data:`ROUNDS` each, the
-order flipping every round) so a drift of the shared machine's speed falls on
+Run with ``make bench`` (or ``python bench/store_cost.py [--seconds S]``).
+First the store calls alone, in this process: :data:`SESSIONS` sessions' inputs
+(:func:`scan`, as logged) appended to a :class:`~app.stores.memory.MemoryStore`
+and to a :class:`~app.stores.sqlite.SqliteStore` on a fresh file (WAL,
+``synchronous=FULL``: an fsync per commit, group commit), by one writer thread
+and by one thread per session; this process's CPU (every thread, user +
+system) per input; then the same on ``synchronous=NORMAL``, a labelled extra
+row (no fsync at commit: what the fsync costs). Then through the service: two service processes run on
+loopback with the default settings, one per store, but the overload guards
+(off: a refusal's CPU would be charged to the inputs applied). The load is
+:data:`SESSIONS` sessions of one detecting sensor each (:func:`scan`: 20
+targets and some clutter a scan), every one fed by its own client over REST,
+one request at a time (closed loop: the next input is sent when the previous
+one is acknowledged, i.e. durable). Both servers are loaded at once, over the
+same :data:`ROUNDS` windows, so that whatever the shared machine does falls on
 both; each server's CPU (user + system, every thread) is read from
-``/proc/<pid>/stat`` around its windows. Prints CPU per input for each store
-and sqlite's extra, over all windows and as the median over rounds of the
-difference between neighbouring windows.
+``/proc/<pid>/stat`` around each window. Prints CPU per input for each store
+and sqlite's extra, over all windows and as the median (and quartiles) over
+the windows of the difference.
 
 Then overload (issue 29, "refused, not spread"): :data:`OVERLOAD_SESSIONS` sensors
 on ``stream`` connections, each sending at a steady rate whatever the answers,
@@ -27,11 +33,15 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import os
+import resource
 import statistics
 import sys
 import tempfile
+import threading
 import time
 from dataclasses import dataclass, field
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -46,12 +56,16 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from machine import describe_machine
 from service import free_port, process_cpu_s, running, service_command
 
+from app.stores.base import SessionRecord, Store
+from app.stores.memory import MemoryStore
+from app.stores.sqlite import SqliteStore, Synchronous
+
 SESSIONS = 16
 """Sessions (sensors), each with its own client sending one input at a time."""
 TRACKS = 20
-ROUNDS = 8
-SECONDS = 1.5
-"""Per window (one server, one round)."""
+ROUNDS = 12
+SECONDS = 2.0
+"""Per window (both servers at once)."""
 WARMUP_INPUTS = 5
 """Inputs per session sent before any window (the engine's first tracks, connections)."""
 CLUTTER = 4
@@ -76,6 +90,76 @@ def scan(sensor: str, index: int) -> bytes:
     clutter = rng.uniform(-500.0, 3000.0, (CLUTTER, 2))
     detections = [{"z": [round(float(v), 3) for v in point]} for point in [*points, *clutter]]
     return orjson.dumps({"sensor": sensor, "time": float(index), "detections": detections})
+
+
+STORE_INPUTS = 200
+"""Inputs per session appended in the store-calls-alone part."""
+
+
+def _process_cpu_s() -> float:
+    """This process's CPU seconds so far (every thread, user + system)."""
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
+def store_calls(store: Store, writers: int) -> tuple[float, float]:
+    """CPU ms per input and inputs/s of :data:`SESSIONS` sessions' :data:`STORE_INPUTS` inputs
+    each appended to ``store`` by ``writers`` threads (each writing whole sessions, in order)."""
+    for index in range(SESSIONS):
+        record = SessionRecord(
+            id=f"s{index}",
+            config=config(f"s{index}"),
+            token_hash=f"h{index}",
+            created_at=datetime.now(UTC),
+        )
+        store.create_session(record)
+    logged = [{"report": orjson.loads(scan("s", number))} for number in range(STORE_INPUTS)]
+
+    def write(sessions: range) -> None:
+        for number in range(STORE_INPUTS):
+            for index in sessions:
+                store.append(f"s{index}", number + 1, logged[number], datetime.now(UTC))
+
+    threads = [
+        threading.Thread(target=write, args=(range(first, SESSIONS, writers),))
+        for first in range(writers)
+    ]
+    cpu, started = _process_cpu_s(), time.perf_counter()
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    count = SESSIONS * STORE_INPUTS
+    return 1e3 * (_process_cpu_s() - cpu) / count, count / (time.perf_counter() - started)
+
+
+def store_calls_alone() -> None:
+    """The store calls alone, sqlite as configured (``synchronous=FULL``), then a labelled
+    extra row: ``synchronous=NORMAL`` (no fsync at commit: an acknowledged input survives the
+    process's death, SIGKILL included, but not the machine's), what the fsync costs."""
+    print(
+        f"store calls alone (this process): {SESSIONS} sessions × {STORE_INPUTS} inputs"
+        f" ({len(orjson.dumps({'report': orjson.loads(scan('s', 0))}))} bytes each, as logged)"
+    )
+    print(
+        f"{'sqlite':<26} {'writers':>7} {'memory ms/input':>15} {'sqlite ms/input':>15}"
+        f" {'extra':>6} {'sqlite inputs/s':>15}"
+    )
+    rows: list[tuple[str, Synchronous]] = [
+        ("synchronous=FULL (default)", "FULL"),
+        ("NORMAL (extra row)", "NORMAL"),
+    ]
+    for label, synchronous in rows:
+        for writers in (1, SESSIONS):
+            memory, _ = store_calls(MemoryStore(), writers)
+            with tempfile.TemporaryDirectory() as directory:
+                sqlite = SqliteStore(Path(directory) / "alone.db", synchronous)
+                durable, rate = store_calls(sqlite, writers)
+                sqlite.close()
+            print(
+                f"{label:<26} {writers:>7} {memory:15.3f} {durable:15.3f}"
+                f" {durable - memory:6.3f} {rate:15.0f}"
+            )
 
 
 class Load:
@@ -151,30 +235,31 @@ async def measure(
     servers: dict[str, tuple[str, int]], seconds: float
 ) -> tuple[dict[str, list[float]], int]:
     """Per store: CPU ms per input over all windows, inputs/s, then CPU ms per input in every
-    round; and how many inputs were refused as overload (sent again)."""
+    round; and how many inputs were refused as overload (sent again, none expected: the guards
+    are off). In each round both servers are loaded at once, over the same window: whatever
+    the shared machine does meanwhile falls on both."""
     loads = {store: Load(url) for store, (url, _) in servers.items()}
     for load in loads.values():
         await load.open()
-        await load.warm_up()
-    cpu = {store: 0.0 for store in servers}
-    inputs = {store: 0 for store in servers}
+    await asyncio.gather(*(load.warm_up() for load in loads.values()))
+    cpu = dict.fromkeys(servers, 0.0)
+    inputs = dict.fromkeys(servers, 0)
     per_round: dict[str, list[float]] = {store: [] for store in servers}
-    elapsed = {store: 0.0 for store in servers}
-    order = list(servers)
-    for round_ in range(ROUNDS):
-        for store in order if round_ % 2 == 0 else reversed(order):
-            pid = servers[store][1]
-            before, started = process_cpu_s(pid), time.perf_counter()
-            done = await loads[store].window(seconds)
-            used = process_cpu_s(pid) - before
-            elapsed[store] += time.perf_counter() - started
+    elapsed = 0.0
+    for _ in range(ROUNDS):
+        before = {store: process_cpu_s(pid) for store, (_, pid) in servers.items()}
+        started = time.perf_counter()
+        done = await asyncio.gather(*(load.window(seconds) for load in loads.values()))
+        elapsed += time.perf_counter() - started
+        for store, count in zip(servers, done, strict=True):
+            used = process_cpu_s(servers[store][1]) - before[store]
             cpu[store] += used
-            inputs[store] += done
-            per_round[store].append(1e3 * used / max(done, 1))
+            inputs[store] += count
+            per_round[store].append(1e3 * used / max(count, 1))
     for load in loads.values():
         await load.close()
     per_store = {
-        store: [1e3 * cpu[store] / max(inputs[store], 1), inputs[store] / elapsed[store]]
+        store: [1e3 * cpu[store] / max(inputs[store], 1), inputs[store] / elapsed]
         + per_round[store]
         for store in servers
     }
@@ -186,8 +271,9 @@ OVERLOAD_SESSIONS = 40
 OVERLOAD_FACTOR = 2.0
 """Offered load of the overload run, in multiples of the closed-loop capacity just measured."""
 OVERLOAD_SECONDS = 8.0
-GUARD_OFF = {"CREDAL_OVERLOAD_DELAY_MS": "0"}
-"""The store comparison measures the CPU of inputs applied, all of them."""
+GUARD_OFF = {"CREDAL_OVERLOAD_DELAY_MS": "0", "CREDAL_MAX_QUEUE_MS": "0"}
+"""Both overload guards off: the store comparison measures the CPU of inputs applied, all of
+them (a refusal's CPU would be charged to the inputs accepted)."""
 QUOTAS_OFF = {
     "CREDAL_TENANT_INPUTS_PER_SECOND": "1000000",
     "CREDAL_TENANT_WORK_PER_MINUTE": "1000000000000",
@@ -255,8 +341,8 @@ async def overload(url: str, offered: float) -> list[Stream]:
 
 
 def overload_run(offered: float, why: str) -> None:
-    """The same steady load, above capacity, on a server with the default overload guard and
-    on one without (``CREDAL_OVERLOAD_DELAY_MS=0``); the latency of the answered inputs."""
+    """The same steady load, above capacity, on a server with the default overload guards and
+    on one without (:data:`GUARD_OFF`); the latency of the answered inputs."""
     print(
         f"\noverload: {OVERLOAD_SESSIONS} stream sessions (memory store), each a detecting sensor"
         f" at a steady {offered / OVERLOAD_SESSIONS:.2f} Hz, {offered:.0f} scans/s in all"
@@ -264,12 +350,12 @@ def overload_run(offered: float, why: str) -> None:
         " defaults but the tenant quotas (lifted: every sensor here is one tenant)"
     )
     print(
-        f"{'overload_delay_ms':<18} {'answered/s':>10} {'refused/s':>9} {'p50 ms':>8}"
+        f"{'overload guards':<18} {'answered/s':>10} {'refused/s':>9} {'p50 ms':>8}"
         f" {'p99 ms':>8} {'unanswered':>10}"
     )
     for label, environment in (
-        ("200 (default)", QUOTAS_OFF),
-        ("0 (off)", QUOTAS_OFF | GUARD_OFF),
+        ("default", QUOTAS_OFF),
+        ("off", QUOTAS_OFF | GUARD_OFF),
     ):
         port = free_port()
         with running(service_command(port, "memory"), port, environment):
@@ -297,17 +383,20 @@ def main() -> int:
         type=float,
         help="scans/s of the overload run alone (without it: the stores first, then overload)",
     )
+    parser.add_argument("--no-overload", action="store_true", help="the stores only")
     arguments = parser.parse_args()
     print(describe_machine())
     if arguments.overload_rate is not None:
         overload_run(arguments.overload_rate, "--overload-rate")
         return 0
+    store_calls_alone()
     print(
-        f"load: {SESSIONS} sessions × 1 client each, closed loop, {TRACKS} targets + {CLUTTER} clutter a scan"
-        " (REST /detections),"
-        f" default settings but the overload guard (off: a refusal's CPU would be charged to"
-        f" the inputs accepted); {ROUNDS} alternating windows of {arguments.seconds:.1f} s per store"
+        f"\nthrough the service: {SESSIONS} sessions × 1 client each, closed loop, {TRACKS} targets"
+        f" + {CLUTTER} clutter a scan (REST /detections), default settings but the overload"
+        f" guards (off: a refusal's CPU would be charged to the inputs applied); {ROUNDS}"
+        f" windows of {arguments.seconds:.1f} s, both servers loaded at once"
     )
+    load_before = os.getloadavg()[0]
     with tempfile.TemporaryDirectory() as directory:
         memory_port, sqlite_port = free_port(), free_port()
         database = Path(directory) / "bench.db"
@@ -322,23 +411,29 @@ def main() -> int:
                 "sqlite": (f"http://127.0.0.1:{sqlite_port}", sqlite.pid),
             }
             results, refused = asyncio.run(measure(servers, arguments.seconds))
-    print(f"{'store':<8} {'CPU ms/input':>13} {'inputs/s':>9}   per round")
+    print(f"{'store':<8} {'CPU ms/input':>13} {'inputs/s':>9}   per window")
     for store, (cpu_ms, rate, *rounds) in results.items():
         shown = " ".join(f"{value:.2f}" for value in rounds)
         print(f"{store:<8} {cpu_ms:13.2f} {rate:9.0f}   {shown}")
     extra = results["sqlite"][0] - results["memory"][0]
-    paired = statistics.median(
+    differences = [
         sqlite - memory
         for memory, sqlite in zip(results["memory"][2:], results["sqlite"][2:], strict=True)
+    ]
+    low, middle, high = statistics.quantiles(differences, n=4)
+    print(
+        f"sqlite's extra CPU per input: {extra:.2f} ms over all windows; per window median"
+        f" {middle:.2f} ms (quartiles {low:.2f} … {high:.2f}); goal ≤ 0.5 ms (issue 29)"
     )
     print(
-        f"sqlite's extra CPU per input: {extra:.2f} ms over all windows, {paired:.2f} ms median"
-        " of the rounds (neighbouring windows); goal ≤ 0.5 ms (issue 29)"
+        f"machine load (1-minute average, {os.cpu_count()} cores): {load_before:.1f} at start,"
+        f" {os.getloadavg()[0]:.1f} at end"
     )
     if refused:
         print(f"({refused} inputs were refused as overload and sent again)")
-    capacity = min(results["memory"][1], results["sqlite"][1])
-    overload_run(OVERLOAD_FACTOR * capacity, f"{OVERLOAD_FACTOR:g}× the closed-loop rate above")
+    if not arguments.no_overload:
+        capacity = min(results["memory"][1], results["sqlite"][1])
+        overload_run(OVERLOAD_FACTOR * capacity, f"{OVERLOAD_FACTOR:g}× the closed-loop rate above")
     return 0
 
 

@@ -16,8 +16,10 @@ in a directory of their own (one per ``serve``, removed when it stops):
   lock.
 - :class:`PeerFanout`: each worker listens on a Unix socket there
   (``<pid>.sock``) and links to every other worker; a result goes to this
-  worker's subscribers and, as one frame, to every linked worker, which hands
-  it to its own subscribers of that session (or drops it: nobody listens).
+  worker's subscribers and, as one frame, to the linked workers that have
+  subscribers of its session, which hand it to them: results are published
+  only where someone listens. Which workers listen to which session is
+  counted in a second sqlite file there (:class:`FileListeners`).
 
 The store's sequence check stays the fence (``BEGIN IMMEDIATE`` takes the
 file's write lock in whichever process), so a session's ``seq`` never breaks
@@ -41,7 +43,13 @@ from typing import Any
 
 from limits.aio.storage import MemoryStorage
 
-from app.cluster.fanout import DEFAULT_MAX_PENDING, LocalFanout, ResultFanout, Subscription
+from app.cluster.fanout import (
+    DEFAULT_MAX_PENDING,
+    LocalFanout,
+    ResultFanout,
+    Subscription,
+    _LocalSubscription,
+)
 from app.cluster.lease import SessionLeases, _check_ttl
 from app.cluster.quotas import TenantQuotas
 from app.settings import Settings
@@ -50,6 +58,7 @@ from app.stores.base import Store
 logger = logging.getLogger("credal_fusion.workers")
 
 LEASES_FILE = "leases.db"
+LISTENERS_FILE = "listeners.db"
 _FRAME = struct.Struct("!II")
 """A result between workers: the session id's and the text's lengths (UTF-8 bytes), then both."""
 MAX_LINK_BUFFER = 16 * 1024 * 1024
@@ -135,15 +144,99 @@ class FileLeases:
         return 0 if held is None else max(0, int((held[1] - time.monotonic()) * 1000))
 
 
+class FileListeners:
+    """How many subscriptions each worker holds of each session, in a sqlite file the worker
+    processes share (nothing fsynced: a count outlives no crash of its ``serve``). Used on the
+    event loop's thread: each call is one statement on a small file in the page cache.
+
+    A subscription is counted before its subscriber reads the session's ``seq`` from the store,
+    and a worker reads the count after logging the input whose result it publishes. So a
+    result that a worker sends nowhere (its count read before the subscription was counted)
+    was logged before that ``seq`` was read: the subscriber waits for no result that is not
+    sent to it (as with Redis's ``PUBSUB NUMSUB`` read in the append script)."""
+
+    def __init__(self, path: Path, worker: str) -> None:
+        self.worker = worker
+        self._connection = sqlite3.connect(
+            path, isolation_level=None, check_same_thread=False, timeout=30.0
+        )
+        self._connection.execute("PRAGMA journal_mode = WAL")
+        self._connection.execute("PRAGMA synchronous = OFF")  # a count outlives no crash
+        self._connection.execute(
+            "CREATE TABLE IF NOT EXISTS listeners (session_id TEXT NOT NULL, worker TEXT NOT NULL,"
+            " subscriptions INTEGER NOT NULL, PRIMARY KEY (session_id, worker)) WITHOUT ROWID"
+        )
+        # a process that had this pid before, in this serve, is gone: its counts are not ours
+        self._connection.execute("DELETE FROM listeners WHERE worker = ?", (worker,))
+
+    def add(self, session_id: str) -> None:
+        """One more subscription of this worker to ``session_id``."""
+        self._connection.execute(
+            "INSERT INTO listeners VALUES (?, ?, 1) ON CONFLICT (session_id, worker)"
+            " DO UPDATE SET subscriptions = subscriptions + 1",
+            (session_id, self.worker),
+        )
+
+    def remove(self, session_id: str) -> None:
+        """One subscription fewer of this worker to ``session_id``."""
+        self._connection.execute(
+            "UPDATE listeners SET subscriptions = subscriptions - 1"
+            " WHERE session_id = ? AND worker = ?",
+            (session_id, self.worker),
+        )
+        self._connection.execute(
+            "DELETE FROM listeners WHERE session_id = ? AND worker = ? AND subscriptions <= 0",
+            (session_id, self.worker),
+        )
+
+    def elsewhere(self, session_id: str) -> list[str]:
+        """The other workers with subscriptions to ``session_id``."""
+        rows = self._connection.execute(
+            "SELECT worker FROM listeners WHERE session_id = ? AND worker != ?",
+            (session_id, self.worker),
+        )
+        return [str(row[0]) for row in rows]
+
+    def close(self) -> None:
+        self._connection.execute("DELETE FROM listeners WHERE worker = ?", (self.worker,))
+        self._connection.close()
+
+
+class _PeerSubscription(_LocalSubscription):
+    """A subscription of one worker, counted in :class:`FileListeners` while it lasts."""
+
+    def __init__(self, fanout: PeerFanout, session_id: str) -> None:
+        super().__init__(fanout.local, session_id, fanout.local.max_pending)
+        self._listeners = fanout.listeners
+        self._counted = False
+
+    async def start(self) -> None:
+        await super().start()
+        self._listeners.add(self.session_id)
+        self._counted = True
+
+    async def aclose(self) -> None:
+        if self._counted:
+            self._counted = False
+            self._listeners.remove(self.session_id)
+        await super().aclose()
+
+
 class PeerFanout:
     """:class:`~app.cluster.fanout.ResultFanout` among the worker processes of one ``serve``."""
 
-    def __init__(self, directory: Path, max_pending: int = DEFAULT_MAX_PENDING) -> None:
+    def __init__(
+        self, directory: Path, max_pending: int = DEFAULT_MAX_PENDING, name: str | None = None
+    ) -> None:
         self.directory = directory
-        self.name = str(os.getpid())
+        self.name = name or str(os.getpid())
+        """This worker's name among the others (its pid)."""
         self.local = LocalFanout(max_pending)
+        self.listeners = FileListeners(directory / LISTENERS_FILE, self.name)
         self.dropped = 0
         """Results not sent to a worker whose link was full."""
+        self.forwarded = 0
+        """Results sent to other workers (one per worker sent to)."""
         self._links: dict[str, asyncio.StreamWriter] = {}
         self._readers: set[asyncio.Task[None]] = set()
         self._server: asyncio.Server | None = None
@@ -155,7 +248,8 @@ class PeerFanout:
 
     async def start(self) -> None:
         """Listen, then link to every worker already listening (one that starts later links
-        to this one): from then on every result published by a linked worker arrives here."""
+        to this one): from then on every result a linked worker publishes of a session this
+        one listens to arrives here."""
         own = self.directory / f"{self.name}.sock"
         self._server = await asyncio.start_unix_server(self._accepted, path=str(own))
         for path in sorted(self.directory.glob("*.sock")):
@@ -199,19 +293,28 @@ class PeerFanout:
             writer.close()
 
     async def publish(self, session_id: str, result_json: str) -> int:
+        """To this worker's subscribers of the session, and to the linked workers that have
+        some (:class:`FileListeners`); how many subscriptions of this worker got it."""
         delivered = await self.local.publish(session_id, result_json)
         if self._links:
-            sid, text = session_id.encode(), result_json.encode()
-            frame = _FRAME.pack(len(sid), len(text)) + sid + text
-            for writer in list(self._links.values()):
-                if writer.transport.get_write_buffer_size() > MAX_LINK_BUFFER:
-                    self.dropped += 1
-                else:
-                    writer.write(frame)
+            links = [
+                self._links[name]
+                for name in self.listeners.elsewhere(session_id)
+                if name in self._links
+            ]
+            if links:
+                sid, text = session_id.encode(), result_json.encode()
+                frame = _FRAME.pack(len(sid), len(text)) + sid + text
+                for writer in links:
+                    if writer.transport.get_write_buffer_size() > MAX_LINK_BUFFER:
+                        self.dropped += 1
+                    else:
+                        writer.write(frame)
+                        self.forwarded += 1
         return delivered
 
     def subscribe(self, session_id: str) -> Subscription:
-        return self.local.subscribe(session_id)
+        return _PeerSubscription(self, session_id)
 
     async def ping(self) -> None:
         return None
@@ -224,6 +327,7 @@ class PeerFanout:
         for task in list(self._readers):
             task.cancel()
         await self.local.aclose()
+        self.listeners.close()
 
 
 @dataclass(frozen=True)

@@ -18,10 +18,13 @@ image is malformed", "file is not a database") as
 :class:`~app.errors.StoreCorrupt`, a permanent fault (opening such a file
 succeeds: the service starts, not ready).
 
-Threads: each thread gets its own connection (sqlite3 connections are not
-shared across threads); writes are serialised by a process lock and
-``BEGIN IMMEDIATE`` (which also guards against another process on the same
-file), and the sequence-number check runs inside that transaction.
+Threads: each thread reads on its own connection; every write goes through
+one connection, whichever thread makes it, under a process lock (its page
+cache stays warm: with a write connection per thread, each append reread the
+pages the other threads' connections had changed). Across processes sqlite's
+file lock serialises the writes (``BEGIN IMMEDIATE``, or a lone statement's
+own transaction), and the sequence-number check is part of the statement that
+logs an input (``_APPEND``), so it holds whichever process writes.
 
 Group commit: the fsync is most of an append's cost, so inputs that arrive
 while a commit is under way share the next one. :meth:`SqliteStore.append`
@@ -31,7 +34,10 @@ leader) logs every input queued by then in one ``BEGIN IMMEDIATE`` … ``COMMIT`
 find their input committed and return. So an append still returns only after
 the transaction holding its input is durable, and an input is acknowledged
 only after that: a crash loses no acknowledged input, however many writers
-share a commit. With one writer at a time nothing waits: a batch of one.
+share a commit. With one writer at a time nothing waits: a batch of one, which
+is a single statement (its own transaction, committed and fsynced before it
+returns) — each sqlite call lets the event loop's thread take the GIL, which
+the writing thread then waits to get back, so the fewer calls the better.
 """
 
 from __future__ import annotations
@@ -98,6 +104,17 @@ CREATE TABLE IF NOT EXISTS snapshots (
 ) WITHOUT ROWID;
 """
 
+
+_APPEND = """
+INSERT INTO inputs (session_id, seq, received_at, input) SELECT ?1, ?2, ?3, ?4
+WHERE EXISTS (SELECT 1 FROM sessions WHERE id = ?1 AND deleted = 0)
+AND ?2 = 1 + max(
+    coalesce((SELECT max(seq) FROM inputs WHERE session_id = ?1), 0),
+    coalesce((SELECT max(seq) FROM snapshots WHERE session_id = ?1), 0)
+)
+"""
+"""An input logged only if its session is live and its seq follows the session's last (logged
+input or snapshot): the store's sequence check in the statement that writes."""
 
 _ID = {"inputs": "session_id", "snapshots": "session_id", "sessions": "id"}
 """The column holding the session id, per table."""
@@ -174,6 +191,8 @@ class SqliteStore:
         self._connections: list[sqlite3.Connection] = []
         self._connections_lock = threading.Lock()
         self._write_lock = threading.Lock()
+        self._write_connection: sqlite3.Connection | None = None
+        """One connection for every write (:meth:`_writer`): its page cache stays warm."""
         self._queue_lock = threading.Lock()
         self._queue: list[_Append] = []
         """Appends waiting for the next group commit (:meth:`append`)."""
@@ -199,25 +218,37 @@ class SqliteStore:
                 )
 
     def _connection(self) -> sqlite3.Connection:
+        """This thread's connection (reads)."""
         if self._closed:
             raise RuntimeError("the store is closed")
         connection: sqlite3.Connection | None = getattr(self._local, "connection", None)
         if connection is None:
-            connection = sqlite3.connect(
-                self.path,
-                isolation_level=None,
-                check_same_thread=False,
-                timeout=BUSY_TIMEOUT_MS / 1000,
-            )
-            connection.row_factory = sqlite3.Row
-            connection.execute("PRAGMA journal_mode = WAL")
-            connection.execute(f"PRAGMA synchronous = {self._synchronous}")
-            connection.execute("PRAGMA foreign_keys = ON")
-            connection.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
-            connection.execute(f"PRAGMA journal_size_limit = {JOURNAL_SIZE_LIMIT}")
-            self._local.connection = connection
-            with self._connections_lock:
-                self._connections.append(connection)
+            connection = self._local.connection = self._connect()
+        return connection
+
+    def _writer(self) -> sqlite3.Connection:
+        """The connection every write uses, whichever thread makes it (under the write lock)."""
+        if self._closed:
+            raise RuntimeError("the store is closed")
+        if self._write_connection is None:
+            self._write_connection = self._connect()
+        return self._write_connection
+
+    def _connect(self) -> sqlite3.Connection:
+        connection = sqlite3.connect(
+            self.path,
+            isolation_level=None,
+            check_same_thread=False,
+            timeout=BUSY_TIMEOUT_MS / 1000,
+        )
+        connection.row_factory = sqlite3.Row
+        connection.execute("PRAGMA journal_mode = WAL")
+        connection.execute(f"PRAGMA synchronous = {self._synchronous}")
+        connection.execute("PRAGMA foreign_keys = ON")
+        connection.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
+        connection.execute(f"PRAGMA journal_size_limit = {JOURNAL_SIZE_LIMIT}")
+        with self._connections_lock:
+            self._connections.append(connection)
         return connection
 
     @contextmanager
@@ -230,7 +261,7 @@ class SqliteStore:
         """One ``BEGIN IMMEDIATE`` … ``COMMIT`` on this thread's connection (rolled back on any
         error), sqlite's operational errors as StoreUnavailable; the caller holds the write lock."""
         with _faults():
-            connection = self._connection()
+            connection = self._writer()
             connection.execute("BEGIN IMMEDIATE")
             try:
                 yield connection
@@ -361,16 +392,22 @@ class SqliteStore:
         return self.shared
 
     def _commit_queued(self) -> None:
-        """One transaction (one fsync) for every append queued now (under the write lock)."""
+        """One commit (one fsync) for every append queued now (under the write lock): a lone
+        append is one statement, its own transaction; several share ``BEGIN IMMEDIATE`` …
+        ``COMMIT``. Each sqlite call lets the event loop's thread take the GIL, which this
+        thread must then wait to get back: the fewer calls, the fewer waits (and futex
+        round trips) per input."""
         with self._queue_lock:
             batch, self._queue = self._queue, []
         committed = False
         try:
-            with self._transaction() as connection:
-                connection.executemany(
-                    "INSERT INTO inputs (session_id, seq, received_at, input) VALUES (?, ?, ?, ?)",
-                    self._checked_rows(connection, batch),
-                )
+            if len(batch) == 1:
+                with _faults():
+                    self._insert(self._writer(), batch[0])
+            else:
+                with self._transaction() as connection:
+                    for pending in batch:
+                        self._insert(connection, pending)
             committed = True
         except Exception as error:  # nothing of the batch is logged
             for pending in batch:
@@ -381,31 +418,26 @@ class SqliteStore:
                     pending.error = StoreUnavailable("sqlite", "the commit was interrupted")
                 pending.done = True
 
-    def _checked_rows(
-        self, connection: sqlite3.Connection, batch: list[_Append]
-    ) -> list[tuple[str, int, str, str]]:
-        """The rows of the appends whose session is live and whose seq is the next one (in the
-        order queued: two of one session in a batch follow each other); the others get their
-        error."""
-        last: dict[str, int] = {}
-        rows = []
-        for pending in batch:
-            session_id = pending.session_id
-            if session_id not in last:
-                live = connection.execute(
-                    "SELECT 1 FROM sessions WHERE id = ? AND deleted = 0", (session_id,)
-                ).fetchone()
-                last[session_id] = -1 if live is None else self._last_seq(connection, session_id)
-            try:
-                if last[session_id] < 0:
-                    raise SessionNotFound(session_id)
-                check_seq(session_id, pending.seq, last[session_id])
-            except (SessionNotFound, SequenceConflict) as error:
-                pending.error = error
-                continue
-            last[session_id] = pending.seq
-            rows.append((session_id, pending.seq, pending.received_at, pending.text))
-        return rows
+    def _insert(self, connection: sqlite3.Connection, pending: _Append) -> None:
+        """Log ``pending`` if its session is live and its seq the next one (one statement: the
+        check and the insert), else set its refusal."""
+        row = (pending.session_id, pending.seq, pending.received_at, pending.text)
+        if connection.execute(_APPEND, row).rowcount != 1:
+            pending.error = self._refusal(connection, pending.session_id, pending.seq)
+
+    def _refusal(self, connection: sqlite3.Connection, session_id: str, seq: int) -> Exception:
+        """Why ``_APPEND`` did not log input ``seq`` of ``session_id`` (read on the connection
+        that tried, under the write lock)."""
+        live = connection.execute(
+            "SELECT 1 FROM sessions WHERE id = ? AND deleted = 0", (session_id,)
+        ).fetchone()
+        if live is None:
+            return SessionNotFound(session_id)
+        try:
+            check_seq(session_id, seq, self._last_seq(connection, session_id))
+        except SequenceConflict as conflict:
+            return conflict
+        return StoreUnavailable("sqlite", "the session's log changed during the append")
 
     def last_seq(self, session_id: str) -> int:
         def read(connection: sqlite3.Connection) -> int:

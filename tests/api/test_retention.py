@@ -125,12 +125,12 @@ def test_a_sqlite_error_is_an_outage_and_changes_nothing(tmp_path: Path) -> None
     store = SqliteStore(tmp_path / "store.db")
     try:
         fill(store, "s1", 2)
-        store._connection().execute("PRAGMA query_only = ON")  # writes fail as on a bad disk
+        store._writer().execute("PRAGMA query_only = ON")  # writes fail as on a bad disk
         with pytest.raises(StoreUnavailable) as refused:
             store.append("s1", 3, INPUT, now())
         assert refused.value.status_code == 503 and refused.value.headers()["Retry-After"]
         assert isinstance(refused.value.__cause__, sqlite3.OperationalError)
-        store._connection().execute("PRAGMA query_only = OFF")  # the disk is back
+        store._writer().execute("PRAGMA query_only = OFF")  # the disk is back
         assert store.last_seq("s1") == 2
         store.append("s1", 3, INPUT, now())
         assert [entry.seq for entry in store.entries("s1")] == [1, 2, 3]

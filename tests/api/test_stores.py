@@ -277,9 +277,9 @@ def test_sqlite_restores_after_reopen(tmp_path: Path) -> None:
 
 def test_sqlite_uses_wal_and_full_sync(tmp_path: Path) -> None:
     store = SqliteStore(tmp_path / "pragmas.db")
-    connection = store._connection()
-    assert connection.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
-    assert connection.execute("PRAGMA synchronous").fetchone()[0] == 2  # FULL
+    for connection in (store._connection(), store._writer()):  # a reader, the writer
+        assert connection.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+        assert connection.execute("PRAGMA synchronous").fetchone()[0] == 2  # FULL
     store.close()
 
 
