@@ -7,7 +7,8 @@ realisation and are not independent. Each interval respects its quantity:
   interval of the per-run rates (honest about the correlation within a run)
   and the Wilson score interval of the pooled decisions (never of zero width),
   clipped to [0, 1] (:func:`rate_interval`); a share of runs: Wilson or
-  Clopper–Pearson (:func:`wilson`, :func:`clopper_pearson`);
+  Clopper–Pearson (:func:`wilson`, :func:`clopper_pearson`); the difference of two
+  independent rates: Newcombe's hybrid score interval (:func:`rate_difference`);
 - a **count per run** (identity switches, false tracks, stolen detections —
   mostly zeros): the hull of the exact (Garwood) Poisson interval of the
   total count over the runs and the percentile bootstrap of the per-run mean,
@@ -96,6 +97,24 @@ def clopper_pearson(successes: float, trials: float) -> tuple[float, float]:
         else float(stats.beta.ppf(1 - tail, successes + 1, trials - successes))
     )
     return low, high
+
+
+def rate_difference(
+    successes_a: float, trials_a: float, successes_b: float, trials_b: float
+) -> Interval:
+    """Rate b − rate a of two independent binomial samples, with Newcombe's hybrid score 95 %
+    interval (Newcombe 1998, Stat Med 17:873, method 10: each rate's Wilson interval,
+    combined in quadrature; defined at zero counts, never wider than [−1, 1])."""
+    rate_a = successes_a / trials_a if trials_a > 0 else 0.0
+    rate_b = successes_b / trials_b if trials_b > 0 else 0.0
+    low_a, high_a = wilson(successes_a, trials_a)
+    low_b, high_b = wilson(successes_b, trials_b)
+    difference = rate_b - rate_a
+    return Interval(
+        difference,
+        difference - math.hypot(rate_b - low_b, high_a - rate_a),
+        difference + math.hypot(high_b - rate_b, rate_a - low_a),
+    )
 
 
 def poisson_interval(count: float) -> tuple[float, float]:

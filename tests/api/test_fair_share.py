@@ -92,6 +92,54 @@ def test_a_cancelled_waiter_gives_its_turn_on() -> None:
     assert asyncio.run(scene()) == ["stays"]
 
 
+def test_a_waiter_cancelled_as_its_turn_is_handed_over_gives_the_slot_back() -> None:
+    """The slot is handed to a waiter (its future given its result) and, before its task
+    resumes, the task is cancelled (its client went away at that moment): the task ends
+    cancelled without its step, the slot it was handed comes back, and the next waiter takes
+    it. The order is fixed by the event loop's FIFO of ready callbacks, not by time: releasing
+    the holder schedules the hand-out (``call_soon``), the cancel is scheduled right after
+    it, and the hand-out's wake-up of the waiter comes after both."""
+
+    async def scene() -> tuple[list[str], list[int], int, int]:
+        loop = asyncio.get_running_loop()
+        turns = Turns(slots=1)
+        served: list[str] = []
+        free_seen: list[int] = []
+        holder = turns.turn("a", alone=True)
+        await holder.__aenter__()
+
+        async def step(tenant: str, name: str) -> None:
+            async with turns.turn(tenant):
+                served.append(name)
+
+        handed = asyncio.create_task(step("b", "handed"))
+        await asyncio.sleep(0)  # queued first: the hand-out's first choice
+        later = asyncio.create_task(step("c", "later"))
+        await asyncio.sleep(0)
+        assert turns.waiting() == 2 and turns.free == 0
+        (waiter,) = turns.queues["b"]
+
+        def cancel_after_hand_out() -> None:
+            # the hand-out ran: the waiter holds the slot, its task has not resumed yet
+            assert waiter.done() and not waiter.cancelled()
+            free_seen.append(turns.free)
+            handed.cancel()
+
+        await holder.__aexit__(None, None, None)  # schedules the hand-out
+        loop.call_soon(cancel_after_hand_out)
+        with pytest.raises(asyncio.CancelledError):
+            await handed
+        for _ in range(5):  # loop turns, not time: the next hand-out, then the step
+            await asyncio.sleep(0)
+        if not later.done():  # a lost slot: nobody would ever serve it
+            later.cancel()
+        return served, free_seen, turns.free, turns.waiting()
+
+    served, free_seen, free, waiting = asyncio.run(scene())
+    assert free_seen == [0]  # the cancelled task had been handed the only slot
+    assert (served, free, waiting) == (["later"], 1, 0)
+
+
 def registry_of(**settings: object) -> tuple[SessionRegistry, SessionRecord]:
     target = SessionRegistry(MemoryStore(), make_settings(**settings), ServiceMetrics.create())
     record = SessionRecord(

@@ -2,8 +2,9 @@
 
 Independent references: ``scipy.stats.binomtest(...).proportion_ci`` (Wilson,
 Clopper–Pearson), the Poisson tail probabilities of ``scipy.stats.poisson``
-at the interval's ends, ``scipy.stats.bootstrap``, ``scipy.stats.ttest_1samp``
-and Holm's procedure written out as its definition (sequential rejection).
+at the interval's ends, ``scipy.stats.bootstrap``, ``scipy.stats.ttest_1samp``,
+Holm's procedure written out as its definition (sequential rejection), and the
+published worked examples of Newcombe's interval for a difference of rates.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from evaluation.intervals import (
     holm,
     paired_difference,
     poisson_interval,
+    rate_difference,
     rate_interval,
     runs_for_power,
     wilson,
@@ -128,3 +130,26 @@ def test_runs_for_power_reaches_the_power_by_simulation_free_check() -> None:
         )
         assert (power >= target) == (m == n)
     assert runs_for_power(0.5, 1.0, tests=6) > n  # a Bonferroni share of six tests
+
+
+NEWCOMBE_TABLE_II = [
+    # (a successes, a trials, b successes, b trials, low, high): Newcombe (1998), Stat Med
+    # 17:873-890, Table II, method 10 (hybrid score, no continuity correction), for b − a
+    (48, 80, 56, 70, 0.0524, 0.3339),
+    (3, 10, 9, 10, 0.1705, 0.8090),
+    (2, 7, 6, 7, 0.0582, 0.8062),
+    (0, 29, 5, 56, -0.0381, 0.1926),
+    (0, 20, 0, 10, -0.1611, 0.2775),
+    (0, 10, 0, 10, -0.2775, 0.2775),
+    (0, 20, 10, 10, 0.6791, 1.0000),
+    (0, 10, 10, 10, 0.6075, 1.0000),
+]
+
+
+@pytest.mark.parametrize(("ka", "na", "kb", "nb", "low", "high"), NEWCOMBE_TABLE_II)
+def test_rate_difference_is_newcombes_published_interval(
+    ka: int, na: int, kb: int, nb: int, low: float, high: float
+) -> None:
+    interval = rate_difference(ka, na, kb, nb)
+    assert interval.estimate == pytest.approx(kb / nb - ka / na, abs=1e-15)
+    assert (interval.low, interval.high) == pytest.approx((low, high), abs=5e-5)
