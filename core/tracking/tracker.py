@@ -387,7 +387,8 @@ class LocalTracker:
         prediction = predict_bank(self.predictor, self._state, elapsed)
         first, latest = self._detection_times.T
         # §8.3: at an instant it was hit at, a tentative track's detections are positions
-        refined = (self._rows.life.status == TENTATIVE) & (latest == time)
+        again = latest == time  # and no track's hits count that instant twice
+        refined = (self._rows.life.status == TENTATIVE) & again
         passes = _passes(self._rows.life, latest > first, refined)
         if self._branching:  # §8.3: a start's second detection is its velocity, not a manoeuvre
             starts = np.flatnonzero(passes == START_PASS)
@@ -460,6 +461,7 @@ class LocalTracker:
                 densities=(score.false_target_density, score.new_target_density),
                 velocity_measured=latest > first,
                 vouched=self._vouched(column, time),
+                repeated=again,
             ),
         )
         self._rows = self._rows.living(life)
@@ -488,7 +490,7 @@ class LocalTracker:
                 split.cols,
                 numbers,
                 before.score[parents] + np.where(refined[parents], 0.0, split.gain),
-                hits=2,
+                hits=before.hits[parents] + ~again[parents],  # the instants of its detections
                 times=(first[parents], time),
                 recent=None
                 if self._recent is None  # the start's first detection, then the branch's
@@ -924,7 +926,7 @@ class LocalTracker:
         detections: IntArray,
         numbers: IntArray,
         start: float | FloatArray,
-        hits: int = 1,
+        hits: int | IntArray = 1,
         *,
         times: tuple[float | FloatArray, float],
         recent: RecentDetections | None = None,

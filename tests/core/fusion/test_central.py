@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -20,6 +21,7 @@ from core.lifecycle import LifeCycleConfig
 from core.metrics import coverage, identity_switches
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
+from core.tracking.tracker import LocalTracker
 
 from .engine_helpers import LAYOUT
 
@@ -507,3 +509,26 @@ def test_a_clutter_born_tentative_track_is_refuted_by_every_sensor_that_could_se
     engine.apply_detections(DetectionReport("a", 1.0, np.zeros((0, 2))))
     assert central.export()["tracks"] == []
     assert central.tallies["a"].refuted == 1
+
+
+def test_a_track_hits_count_the_instants_it_was_detected_at() -> None:
+    """A tentative track's hits are the instants it was detected at, not its detections:
+    the three sensors of one instant add one hit, so ``min_points`` 3 confirms at the third
+    instant (hand-counted: instants 0, 1, 2), where counting detections (3, 5, 6 hits)
+    confirmed at the second; and a sensor's branch of an instant already counted adds none.
+    """
+    configs = {name: pair_tracker(name) for name in PAIR_SENSORS}
+    life = replace(configs["a"].life_cycle, min_points=3)
+    configs = {name: replace(config, life_cycle=life) for name, config in configs.items()}
+    central = LocalTracker(LocalTrackerConfig.central(configs))
+    target = np.array([[10.0, -20.0]])
+    seen = {0.0: ("a", "b", "c"), 1.0: ("a", "b"), 2.0: ("a",)}
+    hits, statuses = [], []
+    for instant, (time, sensors) in enumerate(seen.items()):
+        for name in sensors:
+            step = central.step(time, target + 0.5 * time, sensor=name)
+            track = next(t for t in step.tracks if t.id == "C1")  # the target's first start
+            hits.append((instant, track.hits))
+        statuses.append(track.status.value)
+    assert hits == [(0, 1), (0, 1), (0, 1), (1, 2), (1, 2), (2, 3)]
+    assert statuses == ["tentative", "tentative", "confirmed"]
