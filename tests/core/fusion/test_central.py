@@ -579,3 +579,36 @@ def test_sensors_share_the_new_targets_the_birth_density_gives() -> None:
     twice = {"a": alone, "a2": replace(alone, fields_of_view={"a2": None})}
     alternating = [(("a", "a2")[t % 2], float(t)) for t in range(8)]
     np.testing.assert_allclose(start_densities(twice, alternating), birth, rtol=1e-12)
+
+
+def false_track_scans(seed: int, names: list[str], seconds: int = 30) -> int:
+    """Clutter only (five false detections per scan on a 400 m square) for the three sensors
+    of :data:`PAIR_SENSORS`, each once a second, 1/3 s apart: the confirmed or coasting
+    tracks of the session of ``names`` summed over the seconds (all false: no target)."""
+    rng = np.random.default_rng(seed)
+    config = FusionConfig(
+        motion=MotionModel(LAYOUT, q=0.05),
+        sensors=tuple(
+            SensorSpec(name, p_detect=PAIR_SENSORS[name][1], tracker=pair_tracker(name))
+            for name in names
+        ),
+    )
+    engine = SessionEngine(config)
+    false = 0
+    for second in range(seconds):
+        for k, name in enumerate(PAIR_SENSORS):
+            clutter = rng.uniform(-200.0, 200.0, (rng.poisson(5), 2))
+            if name in names:
+                step = engine.apply_detections(DetectionReport(name, second + k / 3, clutter))
+        false += sum(t.status.value in ("confirmed", "coasting") for t in step.tracks)
+    return false
+
+
+def test_three_staggered_sensors_confirm_no_more_clutter_than_the_best_alone() -> None:
+    """With the births shared among the sensors' scans (§8.9), three sensors 1/3 s apart
+    show no more false tracks than the best of them alone (against the truth: there is no
+    target; 8 seeds of 30 s: 10 track-seconds against 18; before, each scan took all of
+    β_NT and the three showed 27)."""
+    fused = sum(false_track_scans(seed, list(PAIR_SENSORS)) for seed in range(8))
+    alone = sum(false_track_scans(seed, ["a"]) for seed in range(8))
+    assert fused <= alone, (fused, alone)
