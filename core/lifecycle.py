@@ -479,8 +479,9 @@ class LifeState:
         return cls.new(0, 0.0)
 
     @classmethod
-    def new(cls, count: int, score: float | FloatArray, hits: int = 1) -> LifeState:
-        """``count`` tentative tracks just initiated with ``score`` (one, or one each) and ``hits``."""
+    def new(cls, count: int, score: float | FloatArray, hits: int | IntArray = 1) -> LifeState:
+        """``count`` tentative tracks just initiated with ``score`` and ``hits`` (one, or one
+        each)."""
         return cls(
             status=np.full(count, TENTATIVE, dtype=np.int64),
             reason=np.full(count, reason_code(StatusReason.INITIATED), dtype=np.int64),
@@ -517,7 +518,7 @@ def initiated(
     config: LifeCycleConfig,
     count: int,
     score: float | FloatArray,
-    hits: int = 1,
+    hits: int | IntArray = 1,
     *,
     confirmed_below: bool = False,
 ) -> LifeState:
@@ -571,6 +572,9 @@ class Evidence:
         (a central tracker's, docs/algorithms.md §8.9): an established one is not ended
         by its score or its empty gate before that sensor's next scan, and its score
         stays at the delete threshold at least; None: none.
+    repeated : tracks detected at this instant already (another sensor's detection of one
+        instant, docs/algorithms.md §8.3): the hit adds nothing to their ``hits``, which
+        count the instants a track was detected at; None: none.
     """
 
     time: float
@@ -586,6 +590,7 @@ class Evidence:
     densities: tuple[float, float] | None = None
     velocity_measured: BoolArray | None = None
     vouched: BoolArray | None = None
+    repeated: BoolArray | None = None
 
 
 # ------------------------------------------------------------------ visibility
@@ -686,7 +691,9 @@ def advance(
     if evidence.vouched is not None:
         held = evidence.vouched & established(status)
         score = np.where(held, np.maximum(score, config.delete_threshold), score)
-    hits = state.hits + detected.astype(np.int64)
+    # a track's hits are the instants it was detected at (§8.3)
+    counted = detected if evidence.repeated is None else detected & ~evidence.repeated
+    hits = state.hits + counted.astype(np.int64)
     misses = np.where(detected, 0, state.misses + missed.astype(np.int64))
     reason = state.reason
 
