@@ -22,6 +22,7 @@ from core.geometry import Coverage, FieldOfView, PolygonView
 from core.lifecycle import LifeCycleConfig
 from core.models import MappedMotion
 from core.tracking.config import LocalTrackerConfig
+from core.volume import RadarVolume
 
 CENTRAL_MIN_SENSORS = 2
 """Detecting sensors (not flagged ``local_tracker``) from which a session tracks centrally
@@ -43,6 +44,7 @@ class SensorSpec:
     reliability : λ for discounting its class evidence ([MTT] eq 7).
     p_detect : P_D, used by the track score.
     fov : its field of view, or None if it sees everywhere.
+    volume : a 3-D radar's coverage volume (:mod:`core.volume`), or None: none.
     tracker : for a sensor that sends raw detections, its own tracker
         configuration (the session tracks them, docs/algorithms.md §4, §8.9); None for a
         sensor that sends track lists.
@@ -56,6 +58,7 @@ class SensorSpec:
     reliability: float = 1.0
     p_detect: float = 0.9
     fov: FieldOfView | None = None
+    volume: RadarVolume | None = None
     tracker: LocalTrackerConfig | None = None
     local_tracker: bool = False
 
@@ -205,7 +208,11 @@ class FusionConfig:
 
     @property
     def coverage(self) -> Coverage:
-        return Coverage(tuple(sensor.fov for sensor in self.sensors), self.region)
+        return Coverage(
+            tuple(sensor.fov for sensor in self.sensors),
+            self.region,
+            tuple(sensor.volume for sensor in self.sensors),
+        )
 
 
 CENTRAL_SPEC = SensorSpec(id=CENTRAL_SOURCE, p_detect=CENTRAL_P_DETECT)

@@ -549,7 +549,11 @@ class SessionEngine:
         if len(live):
             live_status = life.status[at]
             seen[at], hidden[at] = seen_by(
-                sensor.fov, states[:, position], live_status, management.occlusion_radius
+                sensor.fov,
+                states[:, position],
+                live_status,
+                management.occlusion_radius,
+                sensor.volume,
             )
             seen[at] &= self._silence_counts(live, sensor.id) | missed_by_source
             missed = np.flatnonzero(coasting_misses(live_status, seen[at], detected[at]))

@@ -101,6 +101,7 @@ from core.lifecycle import LifeCycleConfig, ScoreModel
 from core.tracking.models import LinearMeasurementModel, ModelBank
 from core.tracking.presets import TrackingPreset, preset, with_classes
 from core.tracking.range_rate import RangeRateModel
+from core.volume import RadarVolume
 
 ImmDistance = Literal["closest_model", "combined", "gated_combined"]
 DistanceKind = Literal["plain", "modified"]
@@ -241,6 +242,8 @@ class LocalTrackerConfig:
     range_rate : the system's range-rate measurement (site and σ), or None; a scan
         may then give each detection's range-rate (:mod:`core.tracking.range_rate`).
     fields_of_view : the system's sensors and their fields of view.
+    volumes : the coverage volume of each 3-D radar that has one (:mod:`core.volume`), by
+        sensor; a sensor not named has none (docs/algorithms.md §8.11).
     region : the surveillance region (default: union of the sensors' ranges).
     classification : credal options, or None for no classification; ignored
         when the bank has no classes.
@@ -277,6 +280,7 @@ class LocalTrackerConfig:
     fields_of_view: Mapping[str, FieldOfView | None] = field(
         default_factory=lambda: MappingProxyType({"sensor": None})
     )
+    volumes: Mapping[str, RadarVolume] = field(default_factory=lambda: MappingProxyType({}))
     region: PolygonView | None = None
     classification: ClassificationOptions | None = field(default_factory=ClassificationOptions)
     class_behaviours: Mapping[str, tuple[str, ...]] | None = None
@@ -314,6 +318,9 @@ class LocalTrackerConfig:
         unknown = sorted(set(self.sensor_physics) - set(self.fields_of_view))
         if unknown:
             raise TrackingError(f"sensor_physics names {unknown}, not among fields_of_view")
+        unknown = sorted(set(self.volumes) - set(self.fields_of_view))
+        if unknown:
+            raise TrackingError(f"volumes names {unknown}, not among fields_of_view")
 
     @classmethod
     def paper(cls, **options: Any) -> LocalTrackerConfig:
@@ -341,7 +348,7 @@ class LocalTrackerConfig:
         """One tracker over the detections of the sensors ``configs`` (each one's own tracker
         configuration, by sensor; docs/algorithms.md §8.9).
 
-        Each sensor keeps what is its own: its fields of view, P_D, β_FT (given, or
+        Each sensor keeps what is its own: its fields of view and volume, P_D, β_FT (given, or
         estimated from its own detections), R and range-rate model (``sensor_physics``).
         Everything else (models, association, life cycle, initiation, classification)
         is the session's and must agree; the bank's R is the sensor's R of the largest
@@ -359,6 +366,7 @@ class LocalTrackerConfig:
         reference = noises[widest]
         base = first.session_part(id_prefix)
         views: dict[str, FieldOfView | None] = {}
+        volumes: dict[str, RadarVolume] = {}
         physics: dict[str, SensorPhysics] = {}
         for name in names:
             config = configs[name]
@@ -377,6 +385,8 @@ class LocalTrackerConfig:
                 p_detect, clutter = config.physics(sensor)
                 own = noises[name]
                 views[sensor] = view
+                if sensor in config.volumes:
+                    volumes[sensor] = config.volumes[sensor]
                 physics[sensor] = SensorPhysics(
                     p_detect=p_detect,
                     clutter_density=clutter,
@@ -394,12 +404,13 @@ class LocalTrackerConfig:
             sensor_physics=MappingProxyType(physics),
             range_rate=None,
             fields_of_view=MappingProxyType(views),
+            volumes=MappingProxyType(volumes),
             id_prefix=id_prefix,
         )
 
     def session_part(self, id_prefix: str) -> LocalTrackerConfig:
         """The configuration without what is each sensor's own (:meth:`central`): no bank, R,
-        P_D, β_FT, physics, range-rate or fields of view of its own."""
+        P_D, β_FT, physics, range-rate, fields of view or volumes of its own."""
         return replace(
             self,
             bank=None,
@@ -408,6 +419,7 @@ class LocalTrackerConfig:
             sensor_physics=MappingProxyType({}),
             range_rate=None,
             fields_of_view=MappingProxyType({"sensor": None}),
+            volumes=MappingProxyType({}),
             life_cycle=replace(self.life_cycle, false_target_density=None),
             id_prefix=id_prefix,
         )
@@ -472,8 +484,9 @@ class LocalTrackerConfig:
 
     @property
     def coverage(self) -> Coverage:
-        """The system's coverage: one view per sensor, in configuration order."""
-        return Coverage(tuple(self.fields_of_view.values()), self.region)
+        """The system's coverage: one view (and volume) per sensor, in configuration order."""
+        volumes = tuple(self.volumes.get(name) for name in self.fields_of_view)
+        return Coverage(tuple(self.fields_of_view.values()), self.region, volumes)
 
     @property
     def sensors(self) -> tuple[str, ...]:

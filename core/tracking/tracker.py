@@ -222,6 +222,7 @@ class LocalTracker:
         self._branching = config.initiation == "single_point" and (not self._associator.soft)
         self._coverage = config.coverage
         self._views = dict(config.fields_of_view)
+        self._volumes = dict(config.volumes)
         # The state: one row per live track.
         self.time: float | None = None
         self.next_number = 1
@@ -397,7 +398,11 @@ class LocalTracker:
         status = before.status
         codes = coverage_codes(self._coverage, positions)
         seen, hidden = seen_by(
-            self._views[sensor_name], positions, status, self.config.life_cycle.occlusion_radius
+            self._views[sensor_name],
+            positions,
+            status,
+            self.config.life_cycle.occlusion_radius,
+            self._volumes.get(sensor_name),
         )
         column = self._column = self.config.sensors.index(sensor_name)
         counted = seen & self._carried(column, status)
