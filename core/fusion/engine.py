@@ -884,9 +884,14 @@ class SessionEngine:
     def _views(
         self, rows: IntArray, states: FloatArray, covariances: FloatArray
     ) -> tuple[FusedTrackView, ...]:
-        """The tracks ``rows`` as a step shows them, with their fused states at a time."""
+        """The tracks ``rows`` as a step shows them, with their fused states at a time; a
+        track held only by a phantom of the central tracker is shown a phantom
+        (:meth:`_unseen`)."""
         life = self._rows.rows.life.select(rows)
         times = self._table.times[rows].tolist()
+        statuses, reasons = life.statuses(), life.reasons()
+        for at, reason in self._unseen(rows).items():
+            statuses[at], reasons[at] = TrackStatus.PHANTOM, reason
         return tuple(
             FusedTrackView(
                 id=track.id,
@@ -900,8 +905,8 @@ class SessionEngine:
             )
             for track, status, reason, score, report_times, state, covariance in zip(
                 [self.tracks[row] for row in rows.tolist()],
-                life.statuses(),
-                life.reasons(),
+                statuses,
+                reasons,
                 life.score.tolist(),
                 times,
                 states,
@@ -909,6 +914,27 @@ class SessionEngine:
                 strict=True,
             )
         )
+
+    def _unseen(self, rows: IntArray) -> dict[int, StatusReason]:
+        """Positions in ``rows`` of the established tracks that no source but the central
+        tracker is current on (§8.6) and that it keeps as a phantom — no sensor could see
+        it (docs/algorithms.md §8.11) — with the phantom's reason. The central tracker
+        reports its phantoms at every step, so its fused track keeps its id through the
+        blind zone; it is shown a phantom (predicted, not seen), not confirmed."""
+        source = self.config.central_source
+        if self.central is None or self.time is None or source not in self._table.slots:
+            return {}
+        phantoms = self.central.phantoms
+        if not phantoms:
+            return {}
+        status = self._rows.rows.life.status[rows]
+        others = np.delete(self._current(rows), self._table.slot(source), axis=1).any(axis=1)
+        unseen = {}
+        for at in np.flatnonzero(established(status) & ~others).tolist():
+            estimate = self.tracks[int(rows[at])].estimates.get(source)
+            if estimate is not None and estimate.track in phantoms:
+                unseen[at] = phantoms[estimate.track]
+        return unseen
 
     def picture(self, time: float | None = None) -> tuple[FusedTrackView, ...]:
         """The live fused tracks at ``time`` (default: the fusion time); changes nothing.

@@ -268,6 +268,16 @@ class LocalTracker:
         """Live tracks (terminated ones are dropped after the step that ends them)."""
         return len(self._rows)
 
+    @property
+    def phantoms(self) -> dict[str, StatusReason]:
+        """The tracks kept as phantoms (no sensor could see them, [HZ] §5.1): id → reason."""
+        rows = np.flatnonzero(self._rows.life.status == PHANTOM)
+        reasons = self._rows.life.reason[rows].tolist()
+        return {
+            self._track_id(int(number)): REASONS[code]
+            for number, code in zip(self._rows.numbers[rows].tolist(), reasons, strict=True)
+        }
+
     def step(
         self,
         time: float,
