@@ -703,9 +703,16 @@ class SessionEngine:
 
     def _hand_over_to_phantoms(self, fresh: IntArray, terminated: IntArray) -> IntArray:
         """A track confirmed in this step that matches a phantom gives it its estimates
-        ([HZ] §5.1); returns ``terminated`` and the newcomers it terminated."""
+        ([HZ] §5.1); returns ``terminated`` and the newcomers it terminated. A pair is two
+        objects only if a source is current on both (§8.6): the sensor that lost the
+        phantom in a blind zone and now reports the newcomer saw one object twice."""
         phantoms = np.flatnonzero(self._rows.rows.life.status == PHANTOM)
-        return self._merge(phantoms, fresh, StatusReason.MERGED_INTO_PHANTOM, terminated)
+        if len(phantoms) == 0 or len(fresh) == 0:
+            return terminated
+        current = self._current(np.arange(len(self._rows.rows.life.status)))
+        return self._merge(
+            phantoms, fresh, StatusReason.MERGED_INTO_PHANTOM, terminated, carried=current
+        )
 
     def _absorb_duplicates(self, terminated: IntArray, created: IntArray) -> IntArray:
         """A tentative track that duplicates an established track of other sensors joins it.
