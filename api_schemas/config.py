@@ -25,6 +25,7 @@ from api_schemas.base import (
     Identifier,
     Label,
     Matrix,
+    NonNegativeFloat,
     OpenUnitFloat,
     PositiveFloat,
     UnitFloat,
@@ -349,6 +350,55 @@ class SensorSite(WireModel):
         return self.position is None
 
 
+Elevation = Annotated[float, Field(allow_inf_nan=False, ge=-90.0, le=90.0)]
+
+
+class RadarCoverage(WireModel):
+    """A 3-D radar's coverage volume, read off its data sheet (docs/algorithms.md §8.11).
+
+    Where the radar could see a target: within its instrumented range, between its
+    elevation limits and, with ``antenna_height``, above its radar horizon over a 4/3
+    Earth, ``√(2kRh_a) + √(2kRh_t)`` of ground range (k = 4/3, R = 6371 km; h_a the
+    antenna's and h_t the target's height above the horizon's surface). Its silence
+    about a track counts as a miss only there; a track no sensor could see is kept as
+    a phantom ([HZ] §5.1: not deleted for the misses nobody could have made, expired
+    after ``phantom_max_distance / phantom_min_speed``) and ends when it leaves every
+    radar's instrumented range. Every field is optional: a limit left out is no limit.
+    """
+
+    range_max: PositiveFloat | None = Field(
+        default=None, description="instrumented range: the largest slant range seen (m)"
+    )
+    elevation_min_deg: Elevation = Field(
+        default=-90.0, description="lowest elevation seen, above the site's horizontal (deg)"
+    )
+    elevation_max_deg: Elevation = Field(default=90.0, description="highest elevation seen (deg)")
+    antenna_height: NonNegativeFloat | None = Field(
+        default=None,
+        description=(
+            "the antenna's height (m) above the surface its radar horizon lies on (ground "
+            "or sea level; at a geodetic site its alt less the surface's): with it, a "
+            "target below the 4/3-Earth radar horizon is not seen (default null: no horizon)"
+        ),
+    )
+
+    @model_validator(mode="after")
+    def _elevations_ordered(self) -> Self:
+        if self.elevation_min_deg >= self.elevation_max_deg:
+            raise_issues(
+                "RadarCoverage",
+                [
+                    FieldIssue(
+                        ("elevation_min_deg",),
+                        f"elevation_min_deg ({self.elevation_min_deg:g}) must be below "
+                        f"elevation_max_deg ({self.elevation_max_deg:g})",
+                        self.elevation_min_deg,
+                    )
+                ],
+            )
+        return self
+
+
 class SensorConfig(WireModel):
     """One sensor: identity, reliability (class-evidence discounting), P_D, field of view, noise."""
 
@@ -360,6 +410,14 @@ class SensorConfig(WireModel):
     site: SensorSite | None = Field(
         default=None,
         description="where the sensor stands (default: the session frame's origin, heading 0)",
+    )
+    coverage: RadarCoverage | None = Field(
+        default=None,
+        description=(
+            "a 3-D polar sensor's coverage volume from its data sheet (instrumented range, "
+            "elevation limits, antenna height for the radar horizon); default null: it "
+            "could see everywhere its fov allows"
+        ),
     )
     clutter_density: PositiveFloat | None = Field(
         default=None,
@@ -751,6 +809,17 @@ class SessionConfig(WireModel):
                 )
             )
         polar = sensor.measurement
+        if sensor.coverage is not None and (
+            not isinstance(polar, PolarMeasurement) or measured != 3
+        ):
+            issues.append(
+                FieldIssue(
+                    ("sensors", index, "coverage"),
+                    "a coverage volume is a 3-D polar sensor's (measurement kind 'polar' in a "
+                    "session of 3 position components); give a planar sensor its fov",
+                    None,
+                )
+            )
         if isinstance(polar, PolarMeasurement):
             if measured == 1:
                 issues.append(

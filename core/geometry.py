@@ -29,6 +29,7 @@ import shapely
 
 from core.arrays import BoolArray, FloatArray, IntArray
 from core.errors import InvalidInput
+from core.volume import RadarVolume
 
 
 class Visibility(enum.IntEnum):
@@ -149,36 +150,60 @@ class Coverage:
     views : one field of view per sensor, or ``None`` for a sensor that sees everywhere.
     region : optional explicit surveillance region; by default the union of
         the sensors' ranges (see the module's **Reading**).
+    volumes : a 3-D radar's coverage volume per sensor (:class:`~core.volume.RadarVolume`,
+        None: none), in the order of ``views``; a sensor with one sees where both its
+        field of view and its volume do, and its range is also within the volume's
+        instrumented range. Empty (default): no volumes.
     """
 
     views: tuple[FieldOfView | None, ...]
     region: PolygonView | None = None
+    volumes: tuple[RadarVolume | None, ...] = ()
+
+    def _volume(self, index: int) -> RadarVolume | None:
+        return self.volumes[index] if index < len(self.volumes) else None
 
     def sees(self, points: FloatArray) -> BoolArray:
-        """``sees[s, i]``: sensor ``s`` has position ``i`` in its field of view."""
-        array = _as_points(points)
-        rows = [
-            np.ones(len(array), dtype=np.bool_) if view is None else view.contains(array)
-            for view in self.views
-        ]
-        return np.asarray(rows, dtype=np.bool_).reshape(len(self.views), len(array))
+        """``sees[s, i]``: sensor ``s`` has position ``i`` in its field of view (and volume).
+
+        ``points`` (N, 2), or (N, 3) where a sensor has a volume: fields of view are planar
+        and look at the first two coordinates."""
+        array = np.asarray(points, dtype=np.float64)
+        plane = _as_points(array[:, :2] if array.ndim == 2 else array)
+        rows = []
+        for index, view in enumerate(self.views):
+            row = np.ones(len(plane), dtype=np.bool_) if view is None else view.contains(plane)
+            volume = self._volume(index)
+            if volume is not None:
+                row = row & volume.contains(array)
+            rows.append(row)
+        return np.asarray(rows, dtype=np.bool_).reshape(len(self.views), len(plane))
 
     def visibility(self, points: FloatArray) -> IntArray:
-        """:class:`Visibility` code of every position."""
-        array = _as_points(points)
-        if any(view is None for view in self.views):  # a sensor that sees everywhere
-            return np.full(len(array), int(Visibility.VISIBLE), dtype=np.int64)
+        """:class:`Visibility` code of every position ((N, 2), or (N, 3): :meth:`sees`)."""
+        array = np.asarray(points, dtype=np.float64)
+        plane = _as_points(array[:, :2] if array.ndim == 2 else array)
+        if any(  # a sensor that sees everywhere
+            view is None and self._volume(index) is None for index, view in enumerate(self.views)
+        ):
+            return np.full(len(plane), int(Visibility.VISIBLE), dtype=np.int64)
         sees = self.sees(array)
         visible = sees.any(axis=0)
         if self.region is not None:
-            surveyed = self.region.contains(array)
+            surveyed = self.region.contains(plane)
         else:
-            ranges = [  # a polygon's range is what it sees: not looked up twice
-                seen if isinstance(view, PolygonView) else view.in_range(array)
-                for view, seen in zip(self.views, sees, strict=True)
-                if view is not None
-            ]
-            stacked = np.asarray(ranges, dtype=np.bool_).reshape(len(self.views), len(array))
+            ranges = []
+            for index, (view, seen) in enumerate(zip(self.views, sees, strict=True)):
+                # a polygon's range is what it sees: not looked up twice
+                if isinstance(view, PolygonView) and self._volume(index) is None:
+                    ranges.append(seen)
+                    continue
+                reach = (
+                    np.ones(len(plane), dtype=np.bool_) if view is None else view.in_range(plane)
+                )
+                volume = self._volume(index)
+                ranges.append(reach if volume is None else reach & volume.in_range(array))
+            stacked = np.asarray(ranges, dtype=np.bool_).reshape(len(self.views), len(plane))
             surveyed = np.asarray(stacked.any(axis=0), dtype=np.bool_)
         codes = np.where(
             visible,

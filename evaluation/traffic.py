@@ -26,9 +26,10 @@ station one of a minute; airliners' reports carry their emitter category
 ("large") as class evidence {liner, bomber}.
 
 **The session** (:func:`session_config`) is what a new user writes from the
-sensors' data sheets: the origin, each radar's site, σ, P_D and clutter
-density, the scene's birth density, the ``aircraft`` preset with its classes,
-and the ADS-B source by its id alone — no management knob.
+sensors' data sheets: the origin, each radar's site, σ, P_D, clutter
+density and coverage volume (:func:`radar_coverage`: range, top elevation,
+antenna height), the scene's birth density, the ``aircraft`` preset with its
+classes, and the ADS-B source by its id alone — no management knob.
 
 **Metrics** (:func:`assess`), on the fused picture every
 :data:`PICTURE_EVERY` s of scene time (``GET …/tracks?time=t``): confirmed or
@@ -381,6 +382,17 @@ def _adsb_list(
 
 
 # ------------------------------------------------------------------ the session
+def radar_coverage(radar: Radar) -> dict[str, float]:
+    """A radar's data-sheet coverage (``coverage`` of its sensor config): its instrumented
+    range, top elevation and antenna height; the scene's horizon lies on the ellipsoid, so
+    the antenna's height above it is the site's alt."""
+    return {
+        "range_max": radar.range_max,
+        "elevation_max_deg": radar.elevation_max_deg,
+        "antenna_height": radar.alt,
+    }
+
+
 def session_config(scene: Scene, sensors: Iterable[str] | None = None) -> dict[str, Any]:
     """The session a new user writes from the sensors' data sheets (module docstring)."""
     chosen = None if sensors is None else set(sensors)
@@ -396,6 +408,7 @@ def session_config(scene: Scene, sensors: Iterable[str] | None = None) -> dict[s
                 "sigma_azimuth_deg": radar.sigma_azimuth_deg,
                 "sigma_elevation_deg": radar.sigma_elevation_deg,
             },
+            "coverage": radar_coverage(radar),
         }
         for radar in scene.radars
         if chosen is None or radar.id in chosen

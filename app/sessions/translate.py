@@ -56,6 +56,7 @@ from core.models.measurement import MEASUREMENT_MODELS, MeasurementModel
 from core.tracking.config import DEFAULT_IMM_DISTANCE, ClassificationOptions, LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
 from core.tracking.presets import MIN_MANOEUVRE_DENSITY, preset, with_classes
+from core.volume import RadarVolume
 
 PlainObject = dict[str, Any]
 
@@ -111,7 +112,8 @@ def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> Sens
     except InvalidInput as error:
         where = ("sensors", index, "measurement", *error.loc)
         raise InvalidFields([FieldIssue(where, str(error), None)]) from None
-    tracker = local_tracker_config(config, sensor, fov)
+    volume = radar_volume(sensor, config)
+    tracker = local_tracker_config(config, sensor, fov, volume)
     if tracker is not None:
         confirmable(tracker, sensor, index, fov)
     return SensorSpec(
@@ -119,9 +121,33 @@ def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> Sens
         reliability=sensor.reliability,
         p_detect=sensor.p_detect,
         fov=fov,
+        volume=volume,
         tracker=tracker,
         local_tracker=sensor.local_tracker,
         model=model,
+    )
+
+
+def radar_volume(sensor: SensorConfig, config: SessionConfig) -> RadarVolume | None:
+    """A 3-D radar's coverage volume (``coverage``) in the session frame: at its site, in
+    its site's ENU axes (turned from the session's exactly, as its detections are:
+    :func:`app.inputs.detections.site_axes`)."""
+    coverage = sensor.coverage
+    if coverage is None:
+        return None
+    origin = session_origin(config)
+    site, _ = sensor_site(sensor, origin)
+    axes = np.eye(3)
+    place = sensor.site
+    if place is not None and place.lat is not None and place.lon is not None and origin is not None:
+        axes = origin.rotation_to(place.lat, place.lon)[0]
+    return RadarVolume(
+        site=(float(site[0]), float(site[1]), float(site[2])),
+        axes=tuple((float(a), float(b), float(c)) for a, b, c in axes.tolist()),
+        range_max=coverage.range_max,
+        elevation_min_deg=coverage.elevation_min_deg,
+        elevation_max_deg=coverage.elevation_max_deg,
+        antenna_height=coverage.antenna_height,
     )
 
 
@@ -185,7 +211,10 @@ def confirmable(
 
 
 def local_tracker_config(
-    config: SessionConfig, sensor: SensorConfig, fov: FieldOfView | None
+    config: SessionConfig,
+    sensor: SensorConfig,
+    fov: FieldOfView | None,
+    volume: RadarVolume | None = None,
 ) -> LocalTrackerConfig | None:
     """The local tracker of a sensor that sends detections (it has a measurement model)."""
     if sensor.measurement is None:
@@ -237,6 +266,7 @@ def local_tracker_config(
         ),
         initial_velocity_std=initiation.velocity_std,
         fields_of_view={sensor.id: fov},
+        volumes={} if volume is None else {sensor.id: volume},
         classification=ClassificationOptions() if config.classes else None,
         class_behaviours=class_behaviours(config),
         id_prefix=f"{sensor.id}:",

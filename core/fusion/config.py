@@ -24,6 +24,7 @@ from core.models import MappedMotion
 from core.models.measurement import MeasurementModel
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.presets import VELOCITY
+from core.volume import RadarVolume
 
 CENTRAL_MIN_SENSORS = 2
 """Detecting sensors (not flagged ``local_tracker``) from which a session tracks centrally
@@ -45,6 +46,7 @@ class SensorSpec:
     reliability : λ for discounting its class evidence ([MTT] eq 7).
     p_detect : P_D, used by the track score.
     fov : its field of view, or None if it sees everywhere.
+    volume : a 3-D radar's coverage volume (:mod:`core.volume`), or None: none.
     tracker : for a sensor that sends raw detections, its own tracker
         configuration (the session tracks them, docs/algorithms.md §4, §8.9); None for a
         sensor that sends track lists.
@@ -62,6 +64,7 @@ class SensorSpec:
     reliability: float = 1.0
     p_detect: float = 0.9
     fov: FieldOfView | None = None
+    volume: RadarVolume | None = None
     tracker: LocalTrackerConfig | None = None
     local_tracker: bool = False
     model: MeasurementModel | None = field(default=None, compare=False)
@@ -218,7 +221,11 @@ class FusionConfig:
 
     @property
     def coverage(self) -> Coverage:
-        return Coverage(tuple(sensor.fov for sensor in self.sensors), self.region)
+        return Coverage(
+            tuple(sensor.fov for sensor in self.sensors),
+            self.region,
+            tuple(sensor.volume for sensor in self.sensors),
+        )
 
 
 CENTRAL_SPEC = SensorSpec(id=CENTRAL_SOURCE, p_detect=CENTRAL_P_DETECT)

@@ -551,7 +551,11 @@ class SessionEngine:
         if len(live):
             live_status = life.status[at]
             seen[at], hidden[at] = seen_by(
-                sensor.fov, states[:, position], live_status, management.occlusion_radius
+                sensor.fov,
+                states[:, position],
+                live_status,
+                management.occlusion_radius,
+                sensor.volume,
             )
             seen[at] &= self._silence_counts(live, sensor.id) | missed_by_source
             missed = np.flatnonzero(coasting_misses(live_status, seen[at], detected[at]))
@@ -701,9 +705,16 @@ class SessionEngine:
 
     def _hand_over_to_phantoms(self, fresh: IntArray, terminated: IntArray) -> IntArray:
         """A track confirmed in this step that matches a phantom gives it its estimates
-        ([HZ] §5.1); returns ``terminated`` and the newcomers it terminated."""
+        ([HZ] §5.1); returns ``terminated`` and the newcomers it terminated. A pair is two
+        objects only if a source is current on both (§8.6): the sensor that lost the
+        phantom in a blind zone and now reports the newcomer saw one object twice."""
         phantoms = np.flatnonzero(self._rows.rows.life.status == PHANTOM)
-        return self._merge(phantoms, fresh, StatusReason.MERGED_INTO_PHANTOM, terminated)
+        if len(phantoms) == 0 or len(fresh) == 0:
+            return terminated
+        current = self._current(np.arange(len(self._rows.rows.life.status)))
+        return self._merge(
+            phantoms, fresh, StatusReason.MERGED_INTO_PHANTOM, terminated, carried=current
+        )
 
     def _absorb_duplicates(self, terminated: IntArray, created: IntArray) -> IntArray:
         """A tentative track that duplicates an established track of other sensors joins it.
@@ -882,9 +893,14 @@ class SessionEngine:
     def _views(
         self, rows: IntArray, states: FloatArray, covariances: FloatArray
     ) -> tuple[FusedTrackView, ...]:
-        """The tracks ``rows`` as a step shows them, with their fused states at a time."""
+        """The tracks ``rows`` as a step shows them, with their fused states at a time; a
+        track held only by a phantom of the central tracker is shown a phantom
+        (:meth:`_unseen`)."""
         life = self._rows.rows.life.select(rows)
         times = self._table.times[rows].tolist()
+        statuses, reasons = life.statuses(), life.reasons()
+        for at, reason in self._unseen(rows).items():
+            statuses[at], reasons[at] = TrackStatus.PHANTOM, reason
         return tuple(
             FusedTrackView(
                 id=track.id,
@@ -898,8 +914,8 @@ class SessionEngine:
             )
             for track, status, reason, score, report_times, state, covariance in zip(
                 [self.tracks[row] for row in rows.tolist()],
-                life.statuses(),
-                life.reasons(),
+                statuses,
+                reasons,
                 life.score.tolist(),
                 times,
                 states,
@@ -907,6 +923,27 @@ class SessionEngine:
                 strict=True,
             )
         )
+
+    def _unseen(self, rows: IntArray) -> dict[int, StatusReason]:
+        """Positions in ``rows`` of the established tracks that no source but the central
+        tracker is current on (§8.6) and that it keeps as a phantom — no sensor could see
+        it (docs/algorithms.md §8.11) — with the phantom's reason. The central tracker
+        reports its phantoms at every step, so its fused track keeps its id through the
+        blind zone; it is shown a phantom (predicted, not seen), not confirmed."""
+        source = self.config.central_source
+        if self.central is None or self.time is None or source not in self._table.slots:
+            return {}
+        phantoms = self.central.phantoms
+        if not phantoms:
+            return {}
+        status = self._rows.rows.life.status[rows]
+        others = np.delete(self._current(rows), self._table.slot(source), axis=1).any(axis=1)
+        unseen = {}
+        for at in np.flatnonzero(established(status) & ~others).tolist():
+            estimate = self.tracks[int(rows[at])].estimates.get(source)
+            if estimate is not None and estimate.track in phantoms:
+                unseen[at] = phantoms[estimate.track]
+        return unseen
 
     def picture(self, time: float | None = None) -> tuple[FusedTrackView, ...]:
         """The live fused tracks at ``time`` (default: the fusion time); changes nothing.

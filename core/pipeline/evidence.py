@@ -15,6 +15,7 @@ import numpy as np
 from core.arrays import BoolArray, FloatArray, IntArray
 from core.geometry import Coverage, FieldOfView, Visibility
 from core.lifecycle import established, everywhere, sensor_view
+from core.volume import RadarVolume
 
 
 def hits(count: int, rows: IntArray, increments: FloatArray) -> tuple[BoolArray, FloatArray]:
@@ -42,13 +43,19 @@ def sensor_miss_runs(runs: IntArray, column: int, seen: BoolArray, detected: Boo
 
 
 def seen_by(
-    view: FieldOfView | None, positions: FloatArray, status: IntArray, radius: float
+    view: FieldOfView | None,
+    positions: FloatArray,
+    status: IntArray,
+    radius: float,
+    volume: RadarVolume | None = None,
 ) -> tuple[BoolArray, BoolArray]:
     """Seen by the step's sensor, and occluded, of each row ([HZ] §2.1).
 
     ``positions`` (n, q) are the position components; fields of view are
     planar (x, y of a 3-D track); with fewer than two there is no plane and
     every row is seen. The occluders are the established rows (``status``).
+    A 3-D radar's ``volume`` (:mod:`core.volume`) sees only inside its range,
+    elevation limits and horizon (docs/algorithms.md §8.11).
     """
     count = len(positions)
     if positions.shape[1] < 2:
@@ -57,7 +64,10 @@ def seen_by(
     if count == 0:
         return np.zeros(0, dtype=bool), np.zeros(0, dtype=bool)
     plane = positions[:, :2]
-    return sensor_view(view, plane, plane[established(status)], radius)
+    seen, hidden = sensor_view(view, plane, plane[established(status)], radius)
+    if volume is not None:
+        seen = seen & volume.contains(positions)
+    return seen, hidden
 
 
 def coverage_codes(coverage: Coverage, positions: FloatArray) -> IntArray:
@@ -65,4 +75,4 @@ def coverage_codes(coverage: Coverage, positions: FloatArray) -> IntArray:
     count = len(positions)
     if positions.shape[1] < 2 or count == 0:
         return np.full(count, int(Visibility.VISIBLE), dtype=np.int64)
-    return np.asarray(coverage.visibility(positions[:, :2]), dtype=np.int64)
+    return np.asarray(coverage.visibility(positions), dtype=np.int64)

@@ -100,6 +100,7 @@ from core.geometry import Coverage, FieldOfView, PolygonView
 from core.lifecycle import LifeCycleConfig, ScoreModel
 from core.tracking.models import LinearMeasurementModel, ModelBank
 from core.tracking.presets import TrackingPreset, preset, with_classes
+from core.volume import RadarVolume
 
 ImmDistance = Literal["closest_model", "combined", "gated_combined"]
 DistanceKind = Literal["plain", "modified"]
@@ -235,6 +236,8 @@ class LocalTrackerConfig:
     initial_velocity_std : σ_v of a new track's velocity per axis (m/s), the velocity
         prior; None (default): no velocity knowledge (module Readings).
     fields_of_view : the system's sensors and their fields of view.
+    volumes : the coverage volume of each 3-D radar that has one (:mod:`core.volume`), by
+        sensor; a sensor not named has none (docs/algorithms.md §8.11).
     region : the surveillance region (default: union of the sensors' ranges).
     classification : credal options, or None for no classification; ignored
         when the bank has no classes.
@@ -270,6 +273,7 @@ class LocalTrackerConfig:
     fields_of_view: Mapping[str, FieldOfView | None] = field(
         default_factory=lambda: MappingProxyType({"sensor": None})
     )
+    volumes: Mapping[str, RadarVolume] = field(default_factory=lambda: MappingProxyType({}))
     region: PolygonView | None = None
     classification: ClassificationOptions | None = field(default_factory=ClassificationOptions)
     class_behaviours: Mapping[str, tuple[str, ...]] | None = None
@@ -307,6 +311,9 @@ class LocalTrackerConfig:
         unknown = sorted(set(self.sensor_physics) - set(self.fields_of_view))
         if unknown:
             raise TrackingError(f"sensor_physics names {unknown}, not among fields_of_view")
+        unknown = sorted(set(self.volumes) - set(self.fields_of_view))
+        if unknown:
+            raise TrackingError(f"volumes names {unknown}, not among fields_of_view")
 
     @classmethod
     def paper(cls, **options: Any) -> LocalTrackerConfig:
@@ -334,9 +341,9 @@ class LocalTrackerConfig:
         """One tracker over the detections of the sensors ``configs`` (each one's own tracker
         configuration, by sensor; docs/algorithms.md §8.9).
 
-        Each sensor keeps what is its own: its fields of view, P_D, β_FT (given, or
-        estimated from its own detections), and R (``sensor_physics``; its
-        measurement model rides with its detections).
+        Each sensor keeps what is its own: its fields of view and volume, P_D, β_FT (given,
+        or estimated from its own detections), and R (``sensor_physics``; its measurement
+        model rides with its detections).
         Everything else (models, association, life cycle, initiation, classification)
         is the session's and must agree; the bank's R is the sensor's R of the largest
         eigenvalue (the gate of a track without a detection is never smaller than a
@@ -353,6 +360,7 @@ class LocalTrackerConfig:
         reference = noises[widest]
         base = first.session_part(id_prefix)
         views: dict[str, FieldOfView | None] = {}
+        volumes: dict[str, RadarVolume] = {}
         physics: dict[str, SensorPhysics] = {}
         for name in names:
             config = configs[name]
@@ -371,6 +379,8 @@ class LocalTrackerConfig:
                 p_detect, clutter = config.physics(sensor)
                 own = noises[name]
                 views[sensor] = view
+                if sensor in config.volumes:
+                    volumes[sensor] = config.volumes[sensor]
                 physics[sensor] = SensorPhysics(
                     p_detect=p_detect,
                     clutter_density=clutter,
@@ -386,12 +396,13 @@ class LocalTrackerConfig:
             measurement_noise=tuple(tuple(float(x) for x in row) for row in reference),
             sensor_physics=MappingProxyType(physics),
             fields_of_view=MappingProxyType(views),
+            volumes=MappingProxyType(volumes),
             id_prefix=id_prefix,
         )
 
     def session_part(self, id_prefix: str) -> LocalTrackerConfig:
         """The configuration without what is each sensor's own (:meth:`central`): no bank, R,
-        P_D, β_FT, physics or fields of view of its own."""
+        P_D, β_FT, physics, fields of view or volumes of its own."""
         return replace(
             self,
             bank=None,
@@ -399,6 +410,7 @@ class LocalTrackerConfig:
             p_detect=LocalTrackerConfig.p_detect,
             sensor_physics=MappingProxyType({}),
             fields_of_view=MappingProxyType({"sensor": None}),
+            volumes=MappingProxyType({}),
             life_cycle=replace(self.life_cycle, false_target_density=None),
             id_prefix=id_prefix,
         )
@@ -458,8 +470,9 @@ class LocalTrackerConfig:
 
     @property
     def coverage(self) -> Coverage:
-        """The system's coverage: one view per sensor, in configuration order."""
-        return Coverage(tuple(self.fields_of_view.values()), self.region)
+        """The system's coverage: one view (and volume) per sensor, in configuration order."""
+        volumes = tuple(self.volumes.get(name) for name in self.fields_of_view)
+        return Coverage(tuple(self.fields_of_view.values()), self.region, volumes)
 
     @property
     def sensors(self) -> tuple[str, ...]:

@@ -219,6 +219,7 @@ class LocalTracker:
         self._branching = config.initiation == "single_point" and (not self._associator.soft)
         self._coverage = config.coverage
         self._views = dict(config.fields_of_view)
+        self._volumes = dict(config.volumes)
         # The state: one row per live track.
         self.time: float | None = None
         self.next_number = 1
@@ -266,6 +267,16 @@ class LocalTracker:
     def n_tracks(self) -> int:
         """Live tracks (terminated ones are dropped after the step that ends them)."""
         return len(self._rows)
+
+    @property
+    def phantoms(self) -> dict[str, StatusReason]:
+        """The tracks kept as phantoms (no sensor could see them, [HZ] §5.1): id → reason."""
+        rows = np.flatnonzero(self._rows.life.status == PHANTOM)
+        reasons = self._rows.life.reason[rows].tolist()
+        return {
+            self._track_id(int(number)): REASONS[code]
+            for number, code in zip(self._rows.numbers[rows].tolist(), reasons, strict=True)
+        }
 
     def step(
         self,
@@ -408,7 +419,11 @@ class LocalTracker:
         status = before.status
         codes = coverage_codes(self._coverage, positions)
         seen, hidden = seen_by(
-            self._views[sensor_name], positions, status, self.config.life_cycle.occlusion_radius
+            self._views[sensor_name],
+            positions,
+            status,
+            self.config.life_cycle.occlusion_radius,
+            self._volumes.get(sensor_name),
         )
         column = self._column = self.config.sensors.index(sensor_name)
         counted = seen & self._carried(column, status)

@@ -5,6 +5,8 @@ service with defaults plus the radar's data sheet, checked against the truth."""
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable, Iterable
+from typing import Any
 
 import httpx
 import numpy as np
@@ -20,6 +22,7 @@ from evaluation.traffic import (
     Scene,
     assess,
     run_service,
+    session_config,
     simulate,
 )
 
@@ -41,10 +44,22 @@ def radar(name: str) -> Radar:
     return next(r for r in RADARS if r.id == name)
 
 
-def held_once(scene: Scene) -> tuple[int, float]:
-    """The aircraft's extra fused ids and its coverage, the service run on ``scene``."""
+def without_coverage(scene: Scene, sensors: Iterable[str] | None) -> dict[str, Any]:
+    """The scene's session with its radars not told their coverage volumes."""
+    config = session_config(scene, sensors)
+    for sensor in config["sensors"]:
+        sensor.pop("coverage", None)
+    return config
+
+
+def held_once(
+    scene: Scene,
+    config: Callable[[Scene, Iterable[str] | None], dict[str, Any]] = session_config,
+) -> tuple[int, float]:
+    """The aircraft's extra fused ids and its coverage, the service run on ``scene`` with
+    the session ``config`` (default the scene's)."""
     with live_service() as url, httpx.Client(base_url=url, timeout=60) as client:
-        run = run_service(client, scene)
+        run = run_service(client, scene, config=config)
     score = assess(scene, run)
     return score.extra_ids["AFR1"], score.coverage["AFR1"]
 
