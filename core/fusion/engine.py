@@ -544,6 +544,7 @@ class SessionEngine:
         at = live if every else np.searchsorted(candidates, live)
         detected, hit_increment = hits(count, at[hit_rows], increments)
         seen, hidden = np.zeros(count, dtype=bool), np.zeros(count, dtype=bool)
+        vouched = np.zeros(count, dtype=bool)
         gate_log_det = np.zeros(count)
         position = self._position
         if len(live):
@@ -552,6 +553,7 @@ class SessionEngine:
                 sensor.fov, states[:, position], live_status, management.occlusion_radius
             )
             seen[at] &= self._silence_counts(live, sensor.id) | missed_by_source
+            vouched[at] = self._vouched(live, sensor.id)
             missed = np.flatnonzero(coasting_misses(live_status, seen[at], detected[at]))
             if len(missed):
                 gate_log_det[at[missed]] = self._gate_log_dets(live[missed], covariances[missed])
@@ -570,6 +572,7 @@ class SessionEngine:
                 visibility=coverage_codes(self._coverage, fused_states[:, position]),
                 occluded=hidden,
                 sensors=self._table.present[candidates].sum(axis=1),
+                vouched=vouched,
             ),
         )
         after = self._status_by_sources(life, after, candidates)
@@ -625,6 +628,18 @@ class SessionEngine:
         stale = ~recent.any(axis=1)
         carried = recent[:, slot]
         return np.asarray((carried | stale) & ~others, dtype=bool)
+
+    def _vouched(self, rows: IntArray, sensor: str) -> BoolArray:
+        """The tracks ``rows`` another source than ``sensor`` keeps up to date (is current
+        on, §8.6): ``sensor``'s report does not end them, by its hit's fit, its coasted
+        track or its silence — their score waits at the delete threshold (§8.2, the fused
+        layer's form of the central tracker's vouch, §8.9). A source that returns from an
+        outage with an accurate estimate of an aircraft the radars' overconfident track
+        drifted from (a hit ΔL far below the threshold) then updates the track instead of
+        deleting it; the other source's own silence decides once it stops updating it."""
+        current = self._current(rows)
+        others = np.delete(current, self._table.slot(sensor), axis=1)
+        return np.asarray(others.any(axis=1), dtype=bool)
 
     def _status_by_sources(self, before: LifeState, after: LifeState, rows: IntArray) -> LifeState:
         """An established track is ``confirmed`` while one of its sources keeps it up to
