@@ -9,7 +9,10 @@ detection i) is gated and scored ([MTT] eq 15) with
 - ``"combined"``: the model-combined ẑ, S of [MTT] §4;
 - ``"gated_combined"``: gated by the closest model, ranked (the distance the
   association decides on) by the model-combined D, capped just under the gate
-  so that every gated pair stays possible.
+  so that every gated pair stays possible; a pair outside the combined gate
+  stays only when the bank explains it (its IMM mixture likelihood beats a miss
+  and a false alarm by the SPRT's confirm threshold, ``manoeuvre_floor``): at
+  long gaps the union of the models' gates is far wider than the mixture's.
 
 :class:`TrackGatingProblem` is an :class:`~core.association.AssociationProblem`
 whose candidate pairs are computed that way (on the T × r model rows, with the
