@@ -553,7 +553,8 @@ class SessionEngine:
                 sensor.fov, states[:, position], live_status, management.occlusion_radius
             )
             seen[at] &= self._silence_counts(live, sensor.id) | missed_by_source
-            vouched[at] = self._vouched(live, sensor.id) & detected[at]
+            # a hit, however badly it fits, or a silence that is no miss: held (§8.2)
+            vouched[at] = self._vouched(live, sensor.id) & (detected[at] | ~seen[at])
             missed = np.flatnonzero(coasting_misses(live_status, seen[at], detected[at]))
             if len(missed):
                 gate_log_det[at[missed]] = self._gate_log_dets(live[missed], covariances[missed])
@@ -631,13 +632,14 @@ class SessionEngine:
 
     def _vouched(self, rows: IntArray, sensor: str) -> BoolArray:
         """The tracks ``rows`` another source than ``sensor`` keeps up to date (is current
-        on, §8.6). The caller keeps those ``sensor``'s report hits: a hit that fits badly
-        does not end them — their score waits at the delete threshold (§8.2, the fused
-        layer's form of the central tracker's vouch, §8.9). A source that returns from an
-        outage with an accurate estimate of an aircraft the radars' overconfident track
-        drifted from (a hit ΔL far below the threshold) then updates the track instead of
-        deleting it. Its misses (a coasted track, §8.10) still count: they are what refutes
-        another source's false track."""
+        on, §8.6). The caller holds those ``sensor``'s report does not miss: a hit that
+        fits badly, or a silence that is no miss, does not end them — their score waits at
+        the delete threshold (§8.2, the fused layer's form of the central tracker's vouch,
+        §8.9). A source that returns from an outage with an accurate estimate of an
+        aircraft the radars' overconfident track drifted from (a hit ΔL far below the
+        threshold) then updates the track instead of deleting it, and its next hits, on
+        the estimate it has corrected, restart the test. Its misses (a coasted track,
+        §8.10) still decide: they are what refutes another source's false track."""
         current = self._current(rows)
         others = np.delete(current, self._table.slot(sensor), axis=1)
         return np.asarray(others.any(axis=1), dtype=bool)
