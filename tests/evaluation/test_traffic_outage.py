@@ -6,8 +6,11 @@ the truth."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pymap3d
+import pytest
 
 from evaluation.traffic import ADSB, ADSB_STATION_OUTAGE, ORIGIN, Flight, Scene, simulate
 
@@ -39,19 +42,35 @@ def outage_scene(seed: int) -> Scene:
     return simulate(seed=seed, duration=DURATION, flights=[climbing_flight()])
 
 
-def test_an_aircraft_keeps_its_fused_id_through_the_adsb_stations_outage() -> None:
+def without_list_after_return(scene: Scene) -> Scene:
+    """The scene with the station's second list after the outage dropped (as 5 % of lists
+    are): the report after the first one carries nothing."""
+    stop = ADSB_STATION_OUTAGE[1]
+    after = [k for k, item in enumerate(scene.inputs) if item.sensor == ADSB and item.time > stop]
+    inputs = list(scene.inputs)
+    second = after[1]
+    inputs[second] = dataclasses.replace(inputs[second], body=dict(inputs[second].body, tracks=[]))
+    return dataclasses.replace(scene, inputs=inputs)
+
+
+@pytest.mark.parametrize("dropped", [False, True])
+def test_an_aircraft_keeps_its_fused_id_through_the_adsb_stations_outage(dropped: bool) -> None:
     """The radars' track of the airliner keeps the climb's vertical velocity for a while after
     it levels off (the aircraft bank's vertical axis has the papers' small Q), so when ADS-B
     comes back at 960.5 s its first report, bound to the fused track by its id, lies a few
     hundred metres above the fused estimate and far outside its covariance: a hit ΔL below
     the delete threshold. The radars keep the track up to date all the while, so that
-    report updates the track and does not delete it (before: a new fused id at 960.5 s)."""
+    report updates the track and does not delete it (before: a new fused id at 960.5 s);
+    nor does the station's next list, dropped, end it (its silence is no miss while the
+    radars are current: ``dropped``)."""
     scene = outage_scene(1)
     assert scene.equipped == {"AFR1"}
     lists = [item.time for item in scene.inputs if item.sensor == ADSB]
     start, stop = ADSB_STATION_OUTAGE
     assert not any(start <= t <= stop for t in lists)
     assert any(stop < t < stop + 2.0 for t in lists)  # it comes back
+    if dropped:
+        scene = without_list_after_return(scene)
     extra, coverage = held_once(scene)
     assert extra == 0
     assert coverage >= 0.95
