@@ -544,7 +544,6 @@ class SessionEngine:
         at = live if every else np.searchsorted(candidates, live)
         detected, hit_increment = hits(count, at[hit_rows], increments)
         seen, hidden = np.zeros(count, dtype=bool), np.zeros(count, dtype=bool)
-        vouched = np.zeros(count, dtype=bool)
         gate_log_det = np.zeros(count)
         position = self._position
         if len(live):
@@ -553,8 +552,13 @@ class SessionEngine:
                 sensor.fov, states[:, position], live_status, management.occlusion_radius
             )
             seen[at] &= self._silence_counts(live, sensor.id) | missed_by_source
-            # a hit, however badly it fits, or a silence that is no miss: held (§8.2)
-            vouched[at] = self._vouched(live, sensor.id) & (detected[at] | ~seen[at])
+            # §8.2: a hit on an established track another source keeps current never lowers
+            # its score ([MTT] eq 16's ΔL < 0 refutes the fused estimate, not the object)
+            vouched = np.zeros(count, dtype=bool)
+            vouched[at] = self._vouched(live, sensor.id) & established(live_status)
+            hit_increment = np.where(
+                vouched & detected, np.maximum(hit_increment, 0.0), hit_increment
+            )
             missed = np.flatnonzero(coasting_misses(live_status, seen[at], detected[at]))
             if len(missed):
                 gate_log_det[at[missed]] = self._gate_log_dets(live[missed], covariances[missed])
@@ -573,7 +577,6 @@ class SessionEngine:
                 visibility=coverage_codes(self._coverage, fused_states[:, position]),
                 occluded=hidden,
                 sensors=self._table.present[candidates].sum(axis=1),
-                vouched=vouched,
             ),
         )
         after = self._status_by_sources(life, after, candidates)
@@ -632,14 +635,11 @@ class SessionEngine:
 
     def _vouched(self, rows: IntArray, sensor: str) -> BoolArray:
         """The tracks ``rows`` another source than ``sensor`` keeps up to date (is current
-        on, §8.6). The caller holds those ``sensor``'s report does not miss: a hit that
-        fits badly, or a silence that is no miss, does not end them — their score waits at
-        the delete threshold (§8.2, the fused layer's form of the central tracker's vouch,
-        §8.9). A source that returns from an outage with an accurate estimate of an
-        aircraft the radars' overconfident track drifted from (a hit ΔL far below the
-        threshold) then updates the track instead of deleting it, and its next hits, on
-        the estimate it has corrected, restart the test. Its misses (a coasted track,
-        §8.10) still decide: they are what refutes another source's false track."""
+        on, §8.6): a hit of ``sensor``'s report on them does not lower their score (§8.2).
+        A source that returns from an outage with an accurate estimate of an aircraft the
+        radars' overconfident track drifted from (a hit ΔL far below the delete
+        threshold) then updates the track instead of deleting it. Its misses (a coasted
+        track, §8.10) still count: they are what refutes another source's false track."""
         current = self._current(rows)
         others = np.delete(current, self._table.slot(sensor), axis=1)
         return np.asarray(others.any(axis=1), dtype=bool)
