@@ -558,6 +558,13 @@ class SessionEngine:
                 sensor.volume,
             )
             seen[at] &= self._silence_counts(live, sensor.id) | missed_by_source
+            # §8.2: a hit on an established track another source keeps current never lowers
+            # its score ([MTT] eq 16's ΔL < 0 refutes the fused estimate, not the object)
+            vouched = np.zeros(count, dtype=bool)
+            vouched[at] = self._vouched(live, sensor.id) & established(live_status)
+            hit_increment = np.where(
+                vouched & detected, np.maximum(hit_increment, 0.0), hit_increment
+            )
             missed = np.flatnonzero(coasting_misses(live_status, seen[at], detected[at]))
             if len(missed):
                 gate_log_det[at[missed]] = self._gate_log_dets(live[missed], covariances[missed])
@@ -631,6 +638,17 @@ class SessionEngine:
         stale = ~recent.any(axis=1)
         carried = recent[:, slot]
         return np.asarray((carried | stale) & ~others, dtype=bool)
+
+    def _vouched(self, rows: IntArray, sensor: str) -> BoolArray:
+        """The tracks ``rows`` another source than ``sensor`` keeps up to date (is current
+        on, §8.6): a hit of ``sensor``'s report on them does not lower their score (§8.2).
+        A source that returns from an outage with an accurate estimate of an aircraft the
+        radars' overconfident track drifted from (a hit ΔL far below the delete
+        threshold) then updates the track instead of deleting it. Its misses (a coasted
+        track, §8.10) still count: they are what refutes another source's false track."""
+        current = self._current(rows)
+        others = np.delete(current, self._table.slot(sensor), axis=1)
+        return np.asarray(others.any(axis=1), dtype=bool)
 
     def _status_by_sources(self, before: LifeState, after: LifeState, rows: IntArray) -> LifeState:
         """An established track is ``confirmed`` while one of its sources keeps it up to
