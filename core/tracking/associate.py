@@ -111,6 +111,11 @@ class DetectionAssociator:
         self._velocity_scales: tuple[tuple[float, float], ...] = (
             VELOCITY_SCALES if config.initial_velocity_std is None and velocities else ()
         )
+        # per scale: 1 − s_k² and ln w_k, kept for every scan (the terms of _mixture_gain)
+        self._mixture_terms = (
+            np.array([1.0 - scale**2 for scale, _ in self._velocity_scales]),
+            np.array([math.log(weight) for _, weight in self._velocity_scales]),
+        )
         self._positions = position_indices(bank.axes)
         self._velocities = velocity_indices(bank.axes)
         self._h = bank.measurement.matrix
@@ -295,17 +300,14 @@ class DetectionAssociator:
         if own_noise is not None:
             s = s - self._noise + own_noise[cols]
         innovation = z[cols] - sub.measurement_means[rows, 0]
-        terms = []
-        for scale, weight in self._velocity_scales:
-            s_k = s - (1.0 - scale**2) * spread
-            distance = np.einsum(
-                "pi,pi->p", innovation, np.linalg.solve(s_k, innovation[..., None])[..., 0]
-            )
-            log_det = np.linalg.slogdet(s_k)[1]
-            terms.append(
-                math.log(weight) - 0.5 * (self._q * math.log(2.0 * math.pi) + log_det + distance)
-            )
-        mixed = np.logaddexp.reduce(np.stack(terms), axis=0)
+        # every scale at once (k, p, q, q): one solve and one slogdet, not one per scale
+        shrink, log_weight = self._mixture_terms
+        s_k = s - shrink[:, None, None, None] * spread
+        nu = np.broadcast_to(innovation, s_k.shape[:-1])
+        distance = np.einsum("kpi,kpi->kp", nu, np.linalg.solve(s_k, nu[..., None])[..., 0])
+        log_det = np.linalg.slogdet(s_k)[1]
+        terms = log_weight[:, None] - 0.5 * (self._q * math.log(2.0 * math.pi) + log_det + distance)
+        mixed = np.logaddexp.reduce(terms, axis=0)
         score = self._scan
         return np.asarray(
             math.log(score.p_detect) - math.log(score.false_target_density) + mixed,

@@ -499,7 +499,9 @@ class LocalTracker:
         # Per-detection assignment (by track number for now).
         numbers = np.full(len(z), -1, dtype=np.int64)
         numbers[association.cols] = self._rows.numbers[candidates[association.rows]]
-        in_pass = np.isin(association.cols, association.used)
+        free = np.ones(len(z), dtype=bool)
+        free[association.used] = False  # a start's detections start tracks too (§8.3)
+        in_pass = ~free[association.cols]  # the detections the passes took (np.isin's answer)
         joined = established(status[candidates[association.rows[in_pass]]])
         claimed = np.zeros(len(z), dtype=bool)  # by an established track
         claimed[association.cols[in_pass][joined]] = True
@@ -522,8 +524,6 @@ class LocalTracker:
                     time, z[split.cols], noises[split.cols]
                 ),
             )
-        free = np.ones(len(z), dtype=bool)
-        free[association.used] = False  # a start's detections start tracks too (§8.3)
         free[repeated] = False
         started = self._initiate(time, sensor_name, z, noises, free, numbers, score)
         tally = self._tally(before, life, len(z), joined, started, newly_confirmed)
