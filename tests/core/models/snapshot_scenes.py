@@ -1,17 +1,14 @@
-"""Scenes whose outputs pin a refactoring bit for bit (issue #25: "behaviour unchanged").
+"""Scenes run through the service's own path, for the measurement-model tests.
 
-Each scene runs in process through the service's own path — the wire config and
-detections (:mod:`api_schemas`), their translation to the core
+Each scene runs in process through the wire config and detections
+(:mod:`api_schemas`), their translation to the core
 (:func:`app.sessions.translate.fusion_config`,
 :func:`app.inputs.detections.core_detection_report`), the session engine, the
 result writer (:func:`app.outputs.json_results.step_json`) and the engine's
-export — and is summarised by the sha256 of every step's result text and of
-the final export. The hashes in ``test_measurement_snapshot.py`` were recorded
-on main (5a97bc2) before the measurement models moved into the core: they are
-a refactoring guard, not an oracle (the models' oracles are Stone Soup and
-pymap3d, ``test_measurement.py``).
-
-Run as ``python -m tests.core.models.snapshot_scenes`` to print the hashes.
+export, and is summarised by the sha256 of every step's result text and of the
+final export. A refactoring compares these hashes before and after by hand
+(``python -m tests.core.models.snapshot_scenes`` prints them); no test pins them,
+since they are the code's own earlier output, not an oracle.
 """
 
 from __future__ import annotations
