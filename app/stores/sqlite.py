@@ -269,7 +269,15 @@ class SqliteStore:
                 if connection.in_transaction:
                     connection.execute("ROLLBACK")
                 raise
-            connection.execute("COMMIT")
+            try:
+                connection.execute("COMMIT")
+            except BaseException:
+                # A failed COMMIT may leave the transaction open (SQLITE_BUSY) or half undone
+                # (IOERR, FULL): end it, so that the shared writer's next lone append is its own
+                # transaction, not a statement inside one that is never committed.
+                if connection.in_transaction:
+                    connection.execute("ROLLBACK")
+                raise
 
     def _read(self, read: Callable[[sqlite3.Connection], T]) -> T:
         """``read`` on this thread's connection; sqlite's operational errors as StoreUnavailable."""
@@ -403,7 +411,10 @@ class SqliteStore:
         try:
             if len(batch) == 1:
                 with _faults():
-                    self._insert(self._writer(), batch[0])
+                    writer = self._writer()
+                    if writer.in_transaction:  # never acknowledge a statement left uncommitted
+                        writer.execute("ROLLBACK")
+                    self._insert(writer, batch[0])
             else:
                 with self._transaction() as connection:
                     for pending in batch:

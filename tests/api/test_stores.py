@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import sqlite3
 import subprocess
 import sys
 import textwrap
@@ -18,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from app.errors import StoreUnavailable
 from app.http.errors import SessionNotFound
 from app.stores import (
     MemoryStore,
@@ -281,6 +283,49 @@ def test_sqlite_uses_wal_and_full_sync(tmp_path: Path) -> None:
         assert connection.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
         assert connection.execute("PRAGMA synchronous").fetchone()[0] == 2  # FULL
     store.close()
+
+
+class _CommitFailsOnce:
+    """The store's write connection, whose next COMMIT fails as SQLITE_BUSY does: with an
+    error and the transaction left open (sqlite's documented behaviour)."""
+
+    def __init__(self, connection: sqlite3.Connection) -> None:
+        self._connection = connection
+        self.failed = False
+
+    def execute(self, sql: str, *args: object) -> sqlite3.Cursor:
+        if sql == "COMMIT" and not self.failed:
+            self.failed = True
+            raise sqlite3.OperationalError("database is locked")
+        return self._connection.execute(sql, *args)
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._connection, name)
+
+
+def test_sqlite_acknowledges_no_append_after_a_failed_commit(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A write whose COMMIT fails must not leave the shared write connection inside a
+    transaction: the next lone append is acknowledged only once it is on disk, as another
+    connection to the file reads it."""
+    path = tmp_path / "commit.db"
+    store = SqliteStore(path)
+    store.create_session(record())
+    store.append("s1", 1, {"n": 1}, now())
+    failing = _CommitFailsOnce(store._writer())
+    monkeypatch.setattr(store, "_writer", lambda: failing)
+    with pytest.raises(StoreUnavailable):
+        store.save_snapshot("s1", Snapshot(seq=1, taken_at=now(), state={"x": 1}))
+    assert failing.failed
+    store.append("s1", 2, {"n": 2}, now())
+    other = sqlite3.connect(path)
+    seqs = [row[0] for row in other.execute("SELECT seq FROM inputs ORDER BY seq")]
+    snapshots = other.execute("SELECT COUNT(*) FROM snapshots").fetchone()[0]
+    other.close()
+    store.close()
+    assert seqs == [1, 2]
+    assert snapshots == 0  # the failed write was rolled back, not committed later
 
 
 WRITER = textwrap.dedent(
