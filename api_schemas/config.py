@@ -353,6 +353,12 @@ class SensorSite(WireModel):
 Elevation = Annotated[float, Field(allow_inf_nan=False, ge=-90.0, le=90.0)]
 
 
+MAX_COVERAGE_RANGE = 1e8
+"""The largest instrumented range accepted (m): beyond any radar's, and squares stay finite."""
+MAX_ANTENNA_HEIGHT = 1e5
+"""The largest antenna height accepted (m): above any airborne radar's; the horizon stays finite."""
+
+
 class RadarCoverage(WireModel):
     """A 3-D radar's coverage volume, read off its data sheet (docs/algorithms.md §8.11).
 
@@ -367,7 +373,9 @@ class RadarCoverage(WireModel):
     """
 
     range_max: PositiveFloat | None = Field(
-        default=None, description="instrumented range: the largest slant range seen (m)"
+        default=None,
+        le=MAX_COVERAGE_RANGE,
+        description="instrumented range: the largest slant range seen (m, at most 10⁸)",
     )
     elevation_min_deg: Elevation = Field(
         default=-90.0, description="lowest elevation seen, above the site's horizontal (deg)"
@@ -375,8 +383,9 @@ class RadarCoverage(WireModel):
     elevation_max_deg: Elevation = Field(default=90.0, description="highest elevation seen (deg)")
     antenna_height: NonNegativeFloat | None = Field(
         default=None,
+        le=MAX_ANTENNA_HEIGHT,
         description=(
-            "the antenna's height (m) above the surface its radar horizon lies on (ground "
+            "the antenna's height (m, at most 10⁵) above the surface its radar horizon lies on (ground "
             "or sea level; at a geodetic site its alt less the surface's): with it, a "
             "target below the 4/3-Earth radar horizon is not seen (default null: no horizon)"
         ),

@@ -48,6 +48,11 @@ CARTESIAN = {"kind": "cartesian", "r": [[100.0, 0.0, 0.0], [0.0, 100.0, 0.0], [0
     [
         (session(radar({"range_max": 0})), ["body", "sensors", 0, "coverage", "range_max"]),
         (session(radar({"range_max": -5e4})), ["body", "sensors", 0, "coverage", "range_max"]),
+        (session(radar({"range_max": 1e300})), ["body", "sensors", 0, "coverage", "range_max"]),
+        (
+            session(radar({"antenna_height": 1e308})),  # its square overflows: no horizon
+            ["body", "sensors", 0, "coverage", "antenna_height"],
+        ),
         (
             session(radar({"elevation_max_deg": 120})),
             ["body", "sensors", 0, "coverage", "elevation_max_deg"],
