@@ -37,6 +37,7 @@ import sqlite3
 import struct
 import threading
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -59,6 +60,8 @@ logger = logging.getLogger("credal_fusion.workers")
 
 LEASES_FILE = "leases.db"
 LISTENERS_FILE = "listeners.db"
+LISTENERS_TIMEOUT_S = 1.0
+"""How long a call on the event loop waits for another worker's lock on the listeners file."""
 _FRAME = struct.Struct("!II")
 """A result between workers: the session id's and the text's lengths (UTF-8 bytes), then both."""
 MAX_LINK_BUFFER = 16 * 1024 * 1024
@@ -158,7 +161,7 @@ class FileListeners:
     def __init__(self, path: Path, worker: str) -> None:
         self.worker = worker
         self._connection = sqlite3.connect(
-            path, isolation_level=None, check_same_thread=False, timeout=30.0
+            path, isolation_level=None, check_same_thread=False, timeout=LISTENERS_TIMEOUT_S
         )
         self._connection.execute("PRAGMA journal_mode = WAL")
         self._connection.execute("PRAGMA synchronous = OFF")  # a count outlives no crash
@@ -297,11 +300,11 @@ class PeerFanout:
         some (:class:`FileListeners`); how many subscriptions of this worker got it."""
         delivered = await self.local.publish(session_id, result_json)
         if self._links:
-            links = [
-                self._links[name]
-                for name in self.listeners.elsewhere(session_id)
-                if name in self._links
-            ]
+            try:
+                names: Iterable[str] = self.listeners.elsewhere(session_id)
+            except sqlite3.Error:  # the count unreadable (a worker stalled holding its lock):
+                names = list(self._links)  # every linked worker, as before counts existed
+            links = [self._links[name] for name in names if name in self._links]
             if links:
                 sid, text = session_id.encode(), result_json.encode()
                 frame = _FRAME.pack(len(sid), len(text)) + sid + text

@@ -542,7 +542,8 @@ class SqliteStore:
         self._read(lambda connection: connection.execute("SELECT 1").fetchone())
 
     def close(self) -> None:
-        with self._connections_lock:
+        # under the write lock: never close the shared writer inside another thread's write
+        with self._write_lock, self._connections_lock:
             self._closed = True
             for connection in self._connections:
                 connection.close()

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import sqlite3
 from collections.abc import Callable
 from pathlib import Path
 
@@ -92,3 +93,32 @@ def test_a_worker_that_stopped_leaves_no_listener(tmp_path: Path) -> None:
         await a.aclose()
 
     asyncio.run(main())
+
+
+def test_a_listener_count_that_cannot_be_read_sends_to_every_linked_worker(
+    tmp_path: Path,
+) -> None:
+    """While the listeners file cannot be read (another worker stalled holding its lock), a
+    result goes to every linked worker rather than to none: a subscriber loses nothing."""
+
+    async def main() -> None:
+        a = PeerFanout(tmp_path, name="301")
+        b = PeerFanout(tmp_path, name="302")
+        await a.start()
+        await b.start()
+        await settle(lambda: a.peers == 1 and b.peers == 1)
+        try:
+            async with b.subscribe("s1") as on_b:
+                a.listeners.elsewhere = unreadable  # type: ignore[method-assign]
+                assert await a.publish("s1", result(1)) == 0
+                assert a.forwarded == 1
+                assert json.loads(await asyncio.wait_for(anext(on_b), WAIT_S)) == {"seq": 1}
+        finally:
+            await b.aclose()
+            await a.aclose()
+
+    asyncio.run(main())
+
+
+def unreadable(session_id: str) -> list[str]:
+    raise sqlite3.OperationalError("database is locked")
