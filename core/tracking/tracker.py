@@ -258,9 +258,6 @@ class LocalTracker:
         self.tallies: dict[str, ScanTally] = {name: ScanTally() for name in config.sensors}
         """Per sensor, what its detections did, summed over its scans (:class:`ScanTally`)."""
         self._sigma = float(np.sqrt(np.linalg.eigvalsh(self._noise)[-1]))
-        # §8.9: the density of targets no scan has detected yet (a central tracker's with a
-        # given β_NT; None before its first scan)
-        self._undetected: float | None = None
 
     # ------------------------------------------------------------------ api
     @property
@@ -404,7 +401,6 @@ class LocalTracker:
         )
         claimed_any = bool(np.any(established(self._rows.life.status)))
         score = self._scan_score(sensor_name, z, noises, counted=not claimed_any)
-        score = self._new_targets(score, elapsed)
         prediction = predict_bank(self.predictor, self._state, elapsed)
         first, latest = self._detection_times.T
         # §8.3: at an instant it was hit at, a tentative track's detections are positions
@@ -544,25 +540,6 @@ class LocalTracker:
             if clutter is None:  # nothing seen yet: the prior of one false alarm per km^q
                 clutter = default_density(self._q)
         return self.config.life_cycle.scan_score(p_detect, clutter)
-
-    def _new_targets(self, score: ScoreModel, elapsed: float) -> ScoreModel:
-        """The scan's β_NT in a central tracker given the birth density (docs/algorithms.md
-        §8.9): the density of targets no scan has detected yet, born at β_NT per nominal
-        scan period ΔT and thinned by each scan's P_D ([PMBM] the undetected targets'
-        Poisson intensity: predicted λ + β_NT Δt/ΔT, updated (1 − P_D) λ), of which the
-        scan detects P_D λ. It starts at β_NT/P_D, where a sensor alone stays: β_NT per
-        scan at every scan of one sensor one ΔT apart, as a single sensor's score; several
-        sensors share the births instead of each counting all of them."""
-        given = self.config.life_cycle.new_target_density
-        if given is None or len(self.config.sensors) < 2:
-            return score
-        p_detect = score.p_detect
-        if self._undetected is None:
-            undetected = given / p_detect
-        else:
-            undetected = self._undetected + given * elapsed / self.config.time_interval
-        self._undetected = (1.0 - p_detect) * undetected
-        return replace(score, new_target_density=p_detect * undetected)
 
     def _counted(self, sensor: str, z: FloatArray, noises: FloatArray) -> ClutterEstimate:
         """The sensor's estimate after a scan's unclaimed detections ``z`` (their noises)."""
@@ -1136,7 +1113,6 @@ class LocalTracker:
             "clutter": {name: estimate.to_plain() for name, estimate in self._clutter.items()},
             "tallies": {name: tally.to_plain() for name, tally in self.tallies.items()},
             "scan_times": plain_floats(self._scan_times),
-            "undetected_density": self._undetected,
             "tracks": tracks,
         }
 
@@ -1190,8 +1166,6 @@ class LocalTracker:
         ).reshape(-1, sensors)
         if "scan_times" in plain:
             tracker._scan_times = float_array(plain["scan_times"]).reshape(sensors, 2)
-        undetected = plain.get("undetected_density")  # an older export: none yet
-        tracker._undetected = None if undetected is None else float(undetected)
         # an export without them: each track's detections span two instants, or (a start of
         # one detection) are of the export's time
         tracker._detection_times = float_array(
