@@ -175,19 +175,6 @@ class ScoreModel:
         """ΔL on a miss: ln(1 − P_D)."""
         return math.log1p(-self.p_detect)
 
-    @property
-    def manoeuvre_floor(self) -> float:
-        """The least IMM mixture log-likelihood ln Λ(z) of a detection outside the mixture's
-        gate that a track may take (docs/algorithms.md §4): the hit's ΔL = ln(P_D Λ / β_FT)
-        beats the miss's ln(1 − P_D) by the confirm threshold, Wald's evidence for "the
-        target manoeuvred and made z" against "it was missed and z is false"
-        ([MTT] §4.3, eq 16)."""
-        return (
-            self.miss_increment
-            + math.log(self.false_target_density / self.p_detect)
-            + self.confirm_threshold
-        )
-
     def hit_increment(
         self, distance: FloatArray, log_det_innovation: FloatArray, dim: int
     ) -> FloatArray:

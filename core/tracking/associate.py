@@ -198,7 +198,6 @@ class DetectionAssociator:
             self._noise,
             self.config.imm_distance,
             self._modified if own_noise is None else self._modified_sum,
-            self._scan.manoeuvre_floor,
         )
         rank = np.asarray(first)
         if rank.dtype == np.bool_:

@@ -9,10 +9,7 @@ detection i) is gated and scored ([MTT] eq 15) with
 - ``"combined"``: the model-combined ẑ, S of [MTT] §4;
 - ``"gated_combined"``: gated by the closest model, ranked (the distance the
   association decides on) by the model-combined D, capped just under the gate
-  so that every gated pair stays possible; a pair outside the combined gate
-  stays only when the bank explains it (its IMM mixture likelihood beats a miss
-  and a false alarm by the SPRT's confirm threshold, ``manoeuvre_floor``): at
-  long gaps the union of the models' gates is far wider than the mixture's.
+  so that every gated pair stays possible.
 
 :class:`TrackGatingProblem` is an :class:`~core.association.AssociationProblem`
 whose candidate pairs are computed that way (on the T × r model rows, with the
@@ -37,10 +34,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from core.arrays import BoolArray, FloatArray, IntArray
+from core.arrays import FloatArray, IntArray
 from core.association.problem import AssociationProblem
 from core.distance import CandidatePairs, DistanceModel, Estimates, ModifiedScale, gated_pairs
-from core.pipeline.gate import mahalanobis
 from core.tracking.config import ImmDistance
 from core.tracking.imm import IMMPrediction
 
@@ -102,7 +98,6 @@ def gate_pairs(
     gate: float,
     imm_distance: ImmDistance,
     modified: ModifiedScale | None,
-    manoeuvre_floor: float | None = None,
 ) -> GatedPairs:
     """Every (track, detection) pair with D ≤ ``gate`` (module docstring).
 
@@ -114,11 +109,8 @@ def gate_pairs(
     noise : ndarray, shape (q, q)
         The bank's R (subtracted from S for the ``sum`` form).
     gate : float
-    imm_distance : "closest_model" | "combined" | "gated_combined"
+    imm_distance : "closest_model" | "combined"
     modified : ModifiedScale or None
-    manoeuvre_floor : float or None
-        ``gated_combined``: the least IMM mixture log-likelihood ln Λ of a pair outside
-        the combined gate (:func:`_explained`); None: every pair the closest model gates.
     """
     tracks, models = prediction.log_mode_probabilities.shape
     q = measurements.shape[1]
@@ -148,40 +140,28 @@ def gate_pairs(
         keep = order[first]
         chosen_models = (rows[keep] % per_row).astype(np.int64)
         distance = found.distance[keep]
-        pair_tracks, pair_cols = track[first], cols_sorted[first]
-        kept = np.ones(len(keep), dtype=bool)
         if imm_distance == "gated_combined":
-            combined = _combined_distance(
+            distance = _combined_distance(
                 prediction,
                 measurements,
                 measurement_covariances,
                 noise,
-                pair_tracks,
-                pair_cols,
+                track[first],
+                cols_sorted[first],
                 modified,
+                gate,
             )
-            if manoeuvre_floor is not None:
-                kept = _explained(
-                    prediction,
-                    measurements,
-                    measurement_covariances,
-                    noise,
-                    (pair_tracks, pair_cols),
-                    combined > gate,
-                    manoeuvre_floor,
-                )
-            distance = np.minimum(combined, RANK_CAP * gate)
         reduced = CandidatePairs(
-            pair_tracks[kept].astype(np.int64),
-            pair_cols[kept].astype(np.int64),
-            distance[kept],
-            found.log_det[keep][kept],
+            track[first].astype(np.int64),
+            cols_sorted[first].astype(np.int64),
+            distance,
+            found.log_det[keep],
             tracks,
             len(measurements),
             q,
-            plain[keep][kept],
+            plain[keep],
         )
-        return GatedPairs(reduced, chosen_models[kept])
+        return GatedPairs(reduced, chosen_models)
     chosen = np.zeros(len(rows), dtype=np.int64) if per_row > 1 else np.full(len(rows), -1)
     reduced = CandidatePairs(
         rows // per_row, cols, found.distance, found.log_det, tracks, len(measurements), q, plain
@@ -201,12 +181,13 @@ def _combined_distance(
     tracks: IntArray,
     cols: IntArray,
     modified: ModifiedScale | None,
+    gate: float,
 ) -> FloatArray:
-    """The model-combined D of the pairs (``tracks``, ``cols``) that the closest model gated
-    (the caller caps it at :data:`RANK_CAP` × gate): the closest model decides that a pair
-    is possible (a manoeuvre the bank contains stays in the gate), the combined ẑ, S rank
-    the possible pairs (a neighbour that one unlikely model predicts ranks far behind the
-    target's own detection)."""
+    """The model-combined D of the pairs (``tracks``, ``cols``) that the closest model gated,
+    capped at :data:`RANK_CAP` × gate: the closest model decides that a pair is possible
+    (a manoeuvre the bank contains stays in the gate), the combined ẑ, S rank the possible
+    pairs (a neighbour that one unlikely model predicts ranks far behind the target's own
+    detection)."""
     centres, spreads = prediction.combined_measurement()
     known = spreads if measurement_covariances is None else spreads - noise
     covariances = known[tracks]
@@ -217,41 +198,7 @@ def _combined_distance(
     distance = np.einsum("pi,pi->p", innovations, solved)
     if modified is not None:
         distance = distance * modified.ratio(known)[tracks]
-    return np.asarray(distance, dtype=np.float64)
-
-
-def _explained(
-    prediction: IMMPrediction,
-    measurements: FloatArray,
-    measurement_covariances: FloatArray | None,
-    noise: FloatArray,
-    pairs: tuple[IntArray, IntArray],
-    outside: BoolArray,
-    floor: float,
-) -> BoolArray:
-    """Which of the ``pairs`` (tracks, detections) stay possible: every one inside the
-    combined gate, and each one ``outside`` it whose IMM mixture likelihood
-    ``ln Λ = ln Σ_j c̄_j N(z; ẑ_j, C_j)`` ([MTT] eq 18 weighted by the predicted mode
-    probabilities, Blackman & Popoli pp. 225–226) reaches ``floor`` (docs/algorithms.md §4,
-    "a detection outside the mixture's gate")."""
-    kept = ~outside
-    rows = np.flatnonzero(outside)
-    if len(rows) == 0:
-        return kept
-    tracks, cols = pairs[0][rows], pairs[1][rows]
-    spreads = prediction.innovation_covariances[tracks]  # (P, r, q, q)
-    if measurement_covariances is not None:
-        spreads = spreads - noise + measurement_covariances[cols][:, None]
-    innovations = measurements[cols][:, None, :] - prediction.measurement_means[tracks]
-    distance, log_det = mahalanobis(
-        innovations.reshape(-1, innovations.shape[-1]),
-        spreads.reshape(-1, *spreads.shape[-2:]),
-    )
-    q = measurements.shape[1]
-    log_n = -0.5 * (q * np.log(2.0 * np.pi) + log_det + distance).reshape(innovations.shape[:2])
-    log_mixture = np.logaddexp.reduce(prediction.log_mode_probabilities[tracks] + log_n, axis=1)
-    kept[rows] = log_mixture >= floor
-    return kept
+    return np.asarray(np.minimum(distance, RANK_CAP * gate), dtype=np.float64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -271,7 +218,6 @@ class ScanGating:
     noise: FloatArray
     imm_distance: ImmDistance
     modified: ModifiedScale | None
-    manoeuvre_floor: float | None = None
     combined: tuple[FloatArray, FloatArray] = field(init=False)
     _gated: dict[float, GatedPairs] = field(default_factory=dict, init=False, repr=False)
 
@@ -290,7 +236,6 @@ class ScanGating:
                 gate,
                 self.imm_distance,
                 self.modified,
-                self.manoeuvre_floor,
             )
             self._gated[gate] = found
         return found.restricted(tracks, detections)
