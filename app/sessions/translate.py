@@ -131,16 +131,14 @@ def sensor_spec(sensor: SensorConfig, index: int, config: SessionConfig) -> Sens
 def radar_volume(sensor: SensorConfig, config: SessionConfig) -> RadarVolume | None:
     """A 3-D radar's coverage volume (``coverage``) in the session frame: at its site, in
     its site's ENU axes (turned from the session's exactly, as its detections are:
-    :func:`app.inputs.detections.site_axes`)."""
+    :func:`site_axes`, inverted)."""
     coverage = sensor.coverage
     if coverage is None:
         return None
     origin = session_origin(config)
     site, _ = sensor_site(sensor, origin)
-    axes = np.eye(3)
-    place = sensor.site
-    if place is not None and place.lat is not None and place.lon is not None and origin is not None:
-        axes = origin.rotation_to(place.lat, place.lon)[0]
+    turned = site_axes(sensor, origin, 3)  # the site's ENU → the session's
+    axes = np.eye(3) if turned is None else turned.T
     return RadarVolume(
         site=(float(site[0]), float(site[1]), float(site[2])),
         axes=tuple((float(a), float(b), float(c)) for a, b, c in axes.tolist()),
