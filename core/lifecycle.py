@@ -175,6 +175,15 @@ class ScoreModel:
         """ΔL on a miss: ln(1 − P_D)."""
         return math.log1p(-self.p_detect)
 
+    @property
+    def hit_floor(self) -> float:
+        """The least likelihood ln Λ(z) of a detection that an established track may take
+        (docs/algorithms.md §8.1, "A detection after a long gap"): where
+        ``P_D Λ(z) ≥ (1 − P_D) β_FT`` the hit's ΔL = ln(P_D Λ / β_FT) is at least the
+        miss's ln(1 − P_D) ([MTT] §4.3, eq 16) — "the target made z" is at least as likely
+        as "the target was missed and z is a false alarm"."""
+        return self.miss_increment + math.log(self.false_target_density / self.p_detect)
+
     def hit_increment(
         self, distance: FloatArray, log_det_innovation: FloatArray, dim: int
     ) -> FloatArray:
@@ -259,6 +268,12 @@ class LifeCycleConfig:
         P_D 0.9, the run a true target shows with probability β per scan. A tentative
         track is scored up to its confirm threshold whatever the ceiling. The paper
         profile: the confirm threshold (6 misses at P_D 0.9).
+    hit_evidence : the local tracker's established tracks take a detection only where the
+        hit is at least as likely as a miss and a false alarm (:attr:`ScoreModel.hit_floor`,
+        each model of the bank weighted by the probability that it held over the step:
+        docs/algorithms.md §8.1, "A detection after a long gap"). The paper profile: off,
+        the gate alone decides ([MTT] §4.2; mtt-scenes' coasting track takes target 4's
+        detection, the event of [MTT] Fig 4–5).
     occlusion_radius : radius of a known track as an occluder ([HZ] §2.1); 0: no occlusion.
     phantom_max_distance, phantom_min_speed : a phantom lives at most
         ``max_distance / min_speed`` seconds ([HZ] §5.1).
@@ -276,6 +291,7 @@ class LifeCycleConfig:
     min_points: int | None = 2
     initiation_hits: int = 3
     score_ceiling: float | None = 0.0
+    hit_evidence: bool = True
     occlusion_radius: float = 0.0
     phantom_max_distance: float = 500.0
     phantom_min_speed: float = 1.0
@@ -286,13 +302,15 @@ class LifeCycleConfig:
         """The life cycle of the papers' experiments (the first two editions' defaults) for
         ``dim`` position axes: both densities one per km^q (:func:`default_density`),
         [HZ]'s gate emptiness from the first miss, score-only confirmation, no start exempt
-        from the SPRT, the score ceiling at the confirm threshold; ``options`` override any field."""
+        from the SPRT, the score ceiling at the confirm threshold, the gate alone deciding
+        which detection a track may take; ``options`` override any field."""
         settings: dict[str, Any] = {
             "false_target_density": default_density(dim),
             "new_target_density": default_density(dim),
             "termination_misses": 1,
             "min_points": None,
             "initiation_hits": 0,
+            "hit_evidence": False,
         }
         settings.update(options)
         if "score_ceiling" not in options:

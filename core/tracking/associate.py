@@ -191,6 +191,9 @@ class DetectionAssociator:
         assignment on D it takes a target's detection from that target's own track;
         with min_points confirmation it is confirmed on it, and the target changes id.
         """
+        rank = np.asarray(first)
+        if rank.dtype == np.bool_:
+            rank = np.where(rank, 0, 1)
         gating = ScanGating(
             sub,
             z,
@@ -198,10 +201,12 @@ class DetectionAssociator:
             self._noise,
             self.config.imm_distance,
             self._modified if own_noise is None else self._modified_sum,
+            # §8.1: an established track takes a detection only if the hit is at least as
+            # likely as a miss and a false alarm
+            np.where(rank == 0, self._scan.hit_floor, -np.inf)
+            if self.config.life_cycle.hit_evidence
+            else None,
         )
-        rank = np.asarray(first)
-        if rank.dtype == np.bool_:
-            rank = np.where(rank, 0, 1)
         left = np.ones(len(z), dtype=bool)
         found_rows, found_cols, found_gain = [], [], []
         for level in np.unique(rank[rank != branching]).tolist():

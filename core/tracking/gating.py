@@ -34,11 +34,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from core.arrays import FloatArray, IntArray
+from core.arrays import BoolArray, FloatArray, IntArray
 from core.association.problem import AssociationProblem
 from core.distance import CandidatePairs, DistanceModel, Estimates, ModifiedScale, gated_pairs
+from core.numerics import logsumexp
+from core.pipeline.gate import mahalanobis
 from core.tracking.config import ImmDistance
 from core.tracking.imm import IMMPrediction
+
+_LOG_2PI = float(np.log(2.0 * np.pi))
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,8 +102,10 @@ def gate_pairs(
     gate: float,
     imm_distance: ImmDistance,
     modified: ModifiedScale | None,
+    floors: FloatArray | None = None,
 ) -> GatedPairs:
-    """Every (track, detection) pair with D ≤ ``gate`` (module docstring).
+    """Every (track, detection) pair with D ≤ ``gate`` (module docstring), and, for the
+    tracks with a finite ``floors`` entry, whose likelihood reaches it (:func:`_explained`).
 
     Parameters
     ----------
@@ -111,7 +117,70 @@ def gate_pairs(
     gate : float
     imm_distance : "closest_model" | "combined"
     modified : ModifiedScale or None
+    floors : ndarray, shape (T,), or None
+        Per track, the least held-mixture log-likelihood ln Λ(z) of a detection it may take
+        (−inf: none; :attr:`~core.lifecycle.ScoreModel.hit_floor`).
     """
+    found = _gated(
+        prediction, measurements, measurement_covariances, noise, gate, imm_distance, modified
+    )
+    if floors is None or not np.any(np.isfinite(floors[found.pairs.rows])):
+        return found
+    keep = _explained(prediction, measurements, measurement_covariances, noise, found, floors)
+    pairs = found.pairs
+    return GatedPairs(
+        CandidatePairs(
+            pairs.rows[keep],
+            pairs.cols[keep],
+            pairs.distance[keep],
+            pairs.log_det[keep],
+            pairs.n_known,
+            pairs.n_incoming,
+            pairs.dimension,
+            found.plain_distance[keep],
+        ),
+        found.models[keep],
+    )
+
+
+def _explained(
+    prediction: IMMPrediction,
+    measurements: FloatArray,
+    measurement_covariances: FloatArray | None,
+    noise: FloatArray,
+    found: GatedPairs,
+    floors: FloatArray,
+) -> BoolArray:
+    """Which ``found`` pairs stay: those of tracks without a floor, and those whose held
+    mixture ``ln Λ(z) = ln Σ_j h_j N(z; ẑ_j, C_j)`` ([MTT] eq 18, each model weighted by
+    the probability that it held over the step, :meth:`IMMPredictor.held`) reaches their
+    track's floor (docs/algorithms.md §8.1, "A detection after a long gap")."""
+    rows, cols = found.pairs.rows, found.pairs.cols
+    keep = np.ones(len(rows), dtype=bool)
+    tested = np.flatnonzero(np.isfinite(floors[rows]))
+    tracks, detections = rows[tested], cols[tested]
+    spreads = prediction.innovation_covariances[tracks]  # (P, r, q, q)
+    if measurement_covariances is not None:
+        spreads = spreads - noise + measurement_covariances[detections][:, None]
+    innovations = measurements[detections][:, None, :] - prediction.measurement_means[tracks]
+    q = measurements.shape[1]
+    distance, log_det = mahalanobis(innovations.reshape(-1, q), spreads.reshape(-1, q, q))
+    log_normal = -0.5 * (q * _LOG_2PI + log_det + distance).reshape(innovations.shape[:2])
+    log_mixture = logsumexp(prediction.log_held[tracks] + log_normal, axis=1)
+    keep[tested] = log_mixture >= floors[tracks]
+    return keep
+
+
+def _gated(
+    prediction: IMMPrediction,
+    measurements: FloatArray,
+    measurement_covariances: FloatArray | None,
+    noise: FloatArray,
+    gate: float,
+    imm_distance: ImmDistance,
+    modified: ModifiedScale | None,
+) -> GatedPairs:
+    """Every (track, detection) pair with D ≤ ``gate`` (:func:`gate_pairs`)."""
     tracks, models = prediction.log_mode_probabilities.shape
     q = measurements.shape[1]
     if imm_distance == "combined":
@@ -218,6 +287,7 @@ class ScanGating:
     noise: FloatArray
     imm_distance: ImmDistance
     modified: ModifiedScale | None
+    floors: FloatArray | None = None
     combined: tuple[FloatArray, FloatArray] = field(init=False)
     _gated: dict[float, GatedPairs] = field(default_factory=dict, init=False, repr=False)
 
@@ -236,6 +306,7 @@ class ScanGating:
                 gate,
                 self.imm_distance,
                 self.modified,
+                self.floors,
             )
             self._gated[gate] = found
         return found.restricted(tracks, detections)

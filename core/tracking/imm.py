@@ -133,6 +133,10 @@ class IMMPrediction:
         ẑ_j = H x_j.
     innovation_covariances : ndarray, shape (T, r, q, q)
         S_j = H P_j Hᵀ + R.
+    log_held_probabilities : ndarray, shape (T, r), or None
+        log h_j, the probability that model j held over the whole step, the path its
+        prediction x̄_j assumes (:meth:`IMMPredictor.held`); None: c̄ (a step of at most
+        one nominal scan, where the two agree).
     """
 
     means: FloatArray
@@ -140,11 +144,18 @@ class IMMPrediction:
     log_mode_probabilities: FloatArray
     measurement_means: FloatArray
     innovation_covariances: FloatArray
+    log_held_probabilities: FloatArray | None = None
 
     @property
     def mode_probabilities(self) -> FloatArray:
         """c̄, shape (T, r)."""
         return np.asarray(np.exp(self.log_mode_probabilities), dtype=np.float64)
+
+    @property
+    def log_held(self) -> FloatArray:
+        """log h_j, shape (T, r) (``log_held_probabilities``, or log c̄ without it)."""
+        held = self.log_held_probabilities
+        return self.log_mode_probabilities if held is None else held
 
     def combined(self) -> tuple[FloatArray, FloatArray]:
         """Predicted IMM estimate ``(x̄ (T, n), P̄ (T, n, n))`` weighted by c̄."""
@@ -289,7 +300,28 @@ class IMMPredictor:
             log_mode_probabilities=log_predicted,
             measurement_means=measurement_means,
             innovation_covariances=innovation_covariances,
+            log_held_probabilities=self.held(state, step),
         )
+
+    def held(self, state: IMMState, dt: float) -> FloatArray | None:
+        """log h_j: the probability, under the bank's mode chain, that model j held over the
+        whole step Δt — the path its prediction ``F_j(Δt) x⁰_j + B_j(Δt) u_j`` assumes
+        (docs/algorithms.md §8.1, "A detection after a long gap"). None (h = c̄) for a step
+        of at most one nominal scan ΔT, where the chain switches once at most.
+
+        Over k = Δt/ΔT > 1 scans c̄_j = (μ Π^k)_j is the probability of being in mode j at
+        the *end* of the gap; the held input's displacement ½ u_j Δt² needs mode j from
+        the first scan on and staying: ``h_j = (μ Π)_j Π_jj^(k−1)``.
+        """
+        interval = self.bank.time_interval
+        if self.bank.n_models == 1 or dt <= interval:
+            return None
+        transition = self.bank.mode_transition
+        first = logsumexp(
+            state.log_mode_probabilities[:, :, None] + safe_log(transition)[None], axis=1
+        )
+        stay = safe_log(np.diagonal(transition).copy())
+        return np.asarray(first + (dt / interval - 1.0) * stay[None, :], dtype=np.float64)
 
 
 def posterior_log_modes(prior: FloatArray, joint: FloatArray, hit: BoolArray) -> FloatArray:

@@ -134,12 +134,14 @@ SEED_NOISE_GATE = 0.999
 
 
 def _select_prediction(prediction: IMMPrediction, rows: IntArray) -> IMMPrediction:
+    held = prediction.log_held_probabilities
     return IMMPrediction(
         prediction.means[rows],
         prediction.covariances[rows],
         prediction.log_mode_probabilities[rows],
         prediction.measurement_means[rows],
         prediction.innovation_covariances[rows],
+        None if held is None else held[rows],
     )
 
 
