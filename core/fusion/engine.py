@@ -725,13 +725,19 @@ class SessionEngine:
         """A track confirmed in this step that matches a phantom gives it its estimates
         ([HZ] §5.1); returns ``terminated`` and the newcomers it terminated. A pair is two
         objects only if a source is current on both (§8.6): the sensor that lost the
-        phantom in a blind zone and now reports the newcomer saw one object twice."""
+        phantom in a blind zone and now reports the newcomer saw one object twice. The older
+        of a pair keeps its id (the phantom, unless the newcomer was started before it)."""
         phantoms = np.flatnonzero(self._rows.rows.life.status == PHANTOM)
         if len(phantoms) == 0 or len(fresh) == 0:
             return terminated
         current = self._current(np.arange(len(self._rows.rows.life.status)))
         return self._merge(
-            phantoms, fresh, StatusReason.MERGED_INTO_PHANTOM, terminated, carried=current
+            phantoms,
+            fresh,
+            StatusReason.MERGED_INTO_PHANTOM,
+            terminated,
+            carried=current,
+            older_keeps=True,
         )
 
     def _absorb_duplicates(self, terminated: IntArray, created: IntArray) -> IntArray:
@@ -779,6 +785,7 @@ class SessionEngine:
             StatusReason.DUPLICATE,
             terminated,
             carried=current,
+            older_keeps=True,
         )
 
     def _merge(
@@ -788,14 +795,15 @@ class SessionEngine:
         reason: StatusReason,
         terminated: IntArray,
         carried: BoolArray | None = None,
+        older_keeps: bool = False,
     ) -> IntArray:
         """Gate ``newcomers`` against ``keepers`` (GNN, ``sum`` distance); merge disjoint pairs.
 
         The keeper keeps its id, takes the newcomer's estimates and becomes
-        (or stays) confirmed; the newcomer is terminated with ``reason``.
-        Disjoint: no sensor carries both (``carried``, (rows, sensors); default: has an
-        estimate of both); with ``carried`` given, the older of a pair keeps its id.
-        Returns ``terminated`` and the newcomers merged.
+        (or stays) confirmed; the newcomer is terminated with ``reason``; with
+        ``older_keeps``, the older of a pair (the smaller number) is the keeper, whichever
+        list it came from. Disjoint: no sensor carries both (``carried``, (rows, sensors);
+        default: has an estimate of both). Returns ``terminated`` and the newcomers merged.
         """
         if len(keepers) == 0 or len(newcomers) == 0 or self.time is None:
             return terminated
@@ -811,7 +819,7 @@ class SessionEngine:
         keeper_rows, newcomer_rows = keepers[known[disjoint]], newcomers[incoming[disjoint]]
         if len(keeper_rows) == 0:
             return terminated
-        if carried is not None:
+        if older_keeps:
             numbers = self._rows.rows.numbers
             older = numbers[newcomer_rows] < numbers[keeper_rows]
             keeper_rows, newcomer_rows = (
