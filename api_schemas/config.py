@@ -251,6 +251,26 @@ class CartesianMeasurement(WireModel):
         return self
 
 
+SIGMA_RANGE_BOUNDS_M = (1e-3, 1e5)
+"""A polar sensor's ``sigma_range`` (m), bounds included: a millimetre to 100 km. No radar
+measures range outside them, and inside them the converted covariances are well conditioned;
+the unlikely part of the range is warned about (``app.plausibility``)."""
+SIGMA_ANGLE_BOUNDS_DEG = (1e-4, 180.0)
+"""``sigma_azimuth_deg`` and ``sigma_elevation_deg`` (°), bounds included: above 180° (π) a
+detection's angle would be spread over more than the whole circle."""
+SIGMA_RANGE_RATE_BOUNDS_MPS = (1e-3, 1e4)
+"""``sigma_range_rate`` (m/s), bounds included: a millimetre per second to 10 km/s."""
+
+
+def _bounded(bounds: tuple[float, float]) -> object:
+    return Field(allow_inf_nan=False, ge=bounds[0], le=bounds[1])
+
+
+SigmaRange = Annotated[float, _bounded(SIGMA_RANGE_BOUNDS_M)]
+SigmaAngle = Annotated[float, _bounded(SIGMA_ANGLE_BOUNDS_DEG)]
+SigmaRangeRate = Annotated[float, _bounded(SIGMA_RANGE_RATE_BOUNDS_MPS)]
+
+
 class PolarMeasurement(WireModel):
     """A radar's range and azimuth (and elevation, in 3-D) standard deviations.
 
@@ -263,15 +283,18 @@ class PolarMeasurement(WireModel):
     """
 
     kind: Literal["polar"]
-    sigma_range: PositiveFloat = Field(description="range standard deviation (m)")
-    sigma_azimuth_deg: PositiveFloat = Field(description="azimuth standard deviation (deg)")
-    sigma_elevation_deg: PositiveFloat | None = Field(
-        default=None, description="elevation standard deviation (deg); required in 3-D"
+    sigma_range: SigmaRange = Field(description="range standard deviation (m), 0.001 to 100 000")
+    sigma_azimuth_deg: SigmaAngle = Field(
+        description="azimuth standard deviation (deg), 0.0001 to 180"
     )
-    sigma_range_rate: PositiveFloat | None = Field(
+    sigma_elevation_deg: SigmaAngle | None = Field(
+        default=None,
+        description="elevation standard deviation (deg), 0.0001 to 180; required in 3-D",
+    )
+    sigma_range_rate: SigmaRangeRate | None = Field(
         default=None,
         description=(
-            "range-rate standard deviation (m/s); with it, the detections' "
+            "range-rate standard deviation (m/s), 0.001 to 10 000; with it, the detections' "
             "range_rate updates the tracks' velocities (without it, range_rate is not used)"
         ),
     )

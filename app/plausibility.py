@@ -13,7 +13,10 @@ The thresholds, each a documented constant:
   an origin) is flagged; for a geodetic value the warning says which likely
   mistake would bring it near: lat/lon swapped, the origin in radians, the
   origin's lat/lon swapped, the value in radians;
-- :data:`MIN_SIGMA_RANGE_M` (1 m): a radar's range σ below it looks like km;
+- :data:`MIN_SIGMA_RANGE_M` (1 m): a radar's range σ below it looks like km; above
+  :data:`MAX_SIGMA_RANGE_M` (1 km), like cm or mm;
+- :data:`MIN_SIGMA_RANGE_RATE_MPS` (0.01 m/s) and :data:`MAX_SIGMA_RANGE_RATE_MPS` (100 m/s): a
+  range-rate σ below looks like km/s, above like cm/s;
 - :data:`MIN_SIGMA_ANGLE_DEG` (0.02°) and :data:`MAX_SIGMA_ANGLE_DEG` (10°):
   an angle σ below looks like radians, above like milliradians (every angle
   of the API is in degrees);
@@ -52,6 +55,12 @@ FAR_M = 1_000_000.0
 """A site, apex or track this far from the origin (m) is flagged (1 000 km)."""
 MIN_SIGMA_RANGE_M = 1.0
 """A radar's range σ below this (m) looks like km (radars: metres to hundreds of metres)."""
+MAX_SIGMA_RANGE_M = 1000.0
+"""A radar's range σ above this (m) looks like cm or mm (the wire refuses it above 100 km)."""
+MIN_SIGMA_RANGE_RATE_MPS = 0.01
+"""A range-rate σ below this (m/s) looks like km/s (a Doppler σ: tenths of m/s to a few m/s)."""
+MAX_SIGMA_RANGE_RATE_MPS = 100.0
+"""A range-rate σ above this (m/s) looks like cm/s."""
 MIN_SIGMA_ANGLE_DEG = 0.02
 """An angle σ below this (°) looks like radians (0.02 rad = 1.1°, a plausible radar σ)."""
 MAX_SIGMA_ANGLE_DEG = 10.0
@@ -368,11 +377,16 @@ def _far_sectors(config: SessionConfig, origin: LocalFrame | None) -> Iterator[F
 
 @config_rule(
     "sigma_range_small",
+    "sigma_range_large",
     "sigma_angle_small",
     "sigma_angle_large",
+    "sigma_range_rate_small",
+    "sigma_range_rate_large",
     "range_in_km",
-    flags=f"a polar sensor's sigma_range below {MIN_SIGMA_RANGE_M:g} m (km?), an angle σ below "
-    f"{MIN_SIGMA_ANGLE_DEG:g}° (radians?) or above {MAX_SIGMA_ANGLE_DEG:g}° (milliradians?), "
+    flags=f"a polar sensor's sigma_range below {MIN_SIGMA_RANGE_M:g} m (km?) or above "
+    f"{MAX_SIGMA_RANGE_M:g} m (cm or mm?), an angle σ below {MIN_SIGMA_ANGLE_DEG:g}° (radians?) "
+    f"or above {MAX_SIGMA_ANGLE_DEG:g}° (milliradians?), a sigma_range_rate below "
+    f"{MIN_SIGMA_RANGE_RATE_MPS:g} m/s (km/s?) or above {MAX_SIGMA_RANGE_RATE_MPS:g} m/s (cm/s?), "
     f"a sector reaching fewer than {MIN_RANGE_CELLS:g} range σs (range in km?)",
 )
 def _polar_units(config: SessionConfig, origin: LocalFrame | None) -> Iterator[FieldWarning]:
@@ -387,6 +401,28 @@ def _polar_units(config: SessionConfig, origin: LocalFrame | None) -> Iterator[F
                 "sigma_range_small",
                 f"sigma_range {noise.sigma_range:g} m is below {MIN_SIGMA_RANGE_M:g} m (a radar's "
                 f"is metres to hundreds of metres): is it in km? sigma_range is in metres",
+            )
+        elif noise.sigma_range > MAX_SIGMA_RANGE_M:
+            yield warning(
+                (*loc, "sigma_range"),
+                "sigma_range_large",
+                f"sigma_range {noise.sigma_range:g} m is above {MAX_SIGMA_RANGE_M:g} m (a radar's "
+                f"is metres to hundreds of metres): is it in cm or mm? sigma_range is in metres",
+            )
+        rate = noise.sigma_range_rate
+        if rate is not None and rate < MIN_SIGMA_RANGE_RATE_MPS:
+            yield warning(
+                (*loc, "sigma_range_rate"),
+                "sigma_range_rate_small",
+                f"sigma_range_rate {rate:g} m/s is below {MIN_SIGMA_RANGE_RATE_MPS:g} m/s: is it "
+                f"in km/s ({rate:g} km/s = {rate * 1000:g} m/s)? it is in m/s",
+            )
+        elif rate is not None and rate > MAX_SIGMA_RANGE_RATE_MPS:
+            yield warning(
+                (*loc, "sigma_range_rate"),
+                "sigma_range_rate_large",
+                f"sigma_range_rate {rate:g} m/s is above {MAX_SIGMA_RANGE_RATE_MPS:g} m/s: is it "
+                f"in cm/s ({rate:g} cm/s = {rate / 100:g} m/s)? it is in m/s",
             )
         for name in ("sigma_azimuth_deg", "sigma_elevation_deg"):
             sigma = getattr(noise, name)

@@ -484,6 +484,9 @@ class SqliteStore:
             )
 
     def load(self, session_id: str) -> SessionLoad:
+        """The record, the newest snapshot and the inputs after it, read in one (deferred) read
+        transaction: in WAL its first read fixes the snapshot of the file every later read
+        sees, so a writer's commit in between (a snapshot, a compaction) never shows half."""
         return self._read(lambda connection: self._load(connection, session_id))
 
     def _load(self, connection: sqlite3.Connection, session_id: str) -> SessionLoad:

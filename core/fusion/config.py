@@ -23,7 +23,7 @@ from core.lifecycle import LifeCycleConfig
 from core.models import MappedMotion
 from core.models.measurement import MeasurementModel
 from core.tracking.config import LocalTrackerConfig
-from core.tracking.presets import VELOCITY
+from core.tracking.range_rate import require_velocities
 from core.volume import RadarVolume
 
 CENTRAL_MIN_SENSORS = 2
@@ -160,11 +160,11 @@ class FusionConfig:
         check_layout_for_detections(self.motion.layout)
         preset = tracker.tracking_preset()
         rates = getattr(sensor.model, "velocity_mapping", None) is not None
-        if rates and preset is not None and set(preset.conventions) != {VELOCITY}:
-            raise InvalidInput(
-                f"sensor {sensor.id!r}: a range-rate needs velocities in the state, not "
-                f"the headings of the {tracker.preset!r} preset"
-            )
+        if rates:
+            try:
+                require_velocities(preset)
+            except TrackingError as error:
+                raise InvalidInput(f"sensor {sensor.id!r}: {error}") from None
         preset_classes = (
             None if preset is None or tracker.classification is None else preset.classes
         )

@@ -116,7 +116,7 @@ def local_track_report(
     updated or not: the central tracker's, docs/algorithms.md §8.9)."""
     order = np.array(local_order(layout), dtype=np.int64)
     preset = tracker.preset
-    headings = preset is not None and preset.velocity_convention == "heading"
+    headings = preset is not None and preset.headings
     updated = set(step.updated)
     kept = [
         track

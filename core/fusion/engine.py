@@ -619,6 +619,34 @@ class SessionEngine:
         )
         return np.asarray(table.present[rows] & within, dtype=bool)
 
+    def _reporting(self, rows: IntArray) -> BoolArray:
+        """:meth:`_current` without the central tracker's phantoms: a phantom is its
+        prediction, kept for a hand-over ([HZ] §5.1) and reported at every step, but none of
+        its sensors saw the object there. It neither vouches for a track nor keeps another
+        source's silence from counting (§8.2); it still keeps the track's id and status
+        (:meth:`_status_by_sources`, :meth:`_unseen`)."""
+        current = self._current(rows)
+        held = self._central_phantoms(rows)
+        if held:
+            current[list(held), self._table.slot(self.config.central_source)] = False
+        return current
+
+    def _central_phantoms(self, rows: IntArray) -> dict[int, StatusReason]:
+        """Positions in ``rows`` of the tracks whose central estimate is a track the central
+        tracker keeps as a phantom (§8.9), with the phantom's reason."""
+        source = self.config.central_source
+        if self.central is None or source not in self._table.slots:
+            return {}
+        phantoms = self.central.phantoms
+        if not phantoms:
+            return {}
+        held = {}
+        for at, row in enumerate(rows.tolist()):
+            estimate = self.tracks[row].estimates.get(source)
+            if estimate is not None and estimate.track in phantoms:
+                held[at] = phantoms[estimate.track]
+        return held
+
     def _silence_counts(self, rows: IntArray, sensor: str) -> BoolArray:
         """Where ``sensor``'s silence about the tracks ``rows`` is a miss (§8.2).
 
@@ -632,7 +660,7 @@ class SessionEngine:
         counts again, so that the track still ends.
         """
         slot = self._table.slot(sensor)
-        current = self._current(rows)
+        current = self._reporting(rows)
         others = np.delete(current, slot, axis=1).any(axis=1)
         recent = self._current(rows, STALE_REVISITS)
         stale = ~recent.any(axis=1)
@@ -646,7 +674,7 @@ class SessionEngine:
         radars' overconfident track drifted from (a hit ΔL far below the delete
         threshold) then updates the track instead of deleting it. Its misses (a coasted
         track, §8.10) still count: they are what refutes another source's false track."""
-        current = self._current(rows)
+        current = self._reporting(rows)
         others = np.delete(current, self._table.slot(sensor), axis=1)
         return np.asarray(others.any(axis=1), dtype=bool)
 
@@ -725,13 +753,19 @@ class SessionEngine:
         """A track confirmed in this step that matches a phantom gives it its estimates
         ([HZ] §5.1); returns ``terminated`` and the newcomers it terminated. A pair is two
         objects only if a source is current on both (§8.6): the sensor that lost the
-        phantom in a blind zone and now reports the newcomer saw one object twice."""
+        phantom in a blind zone and now reports the newcomer saw one object twice. The older
+        of a pair keeps its id (the phantom, unless the newcomer was started before it)."""
         phantoms = np.flatnonzero(self._rows.rows.life.status == PHANTOM)
         if len(phantoms) == 0 or len(fresh) == 0:
             return terminated
         current = self._current(np.arange(len(self._rows.rows.life.status)))
         return self._merge(
-            phantoms, fresh, StatusReason.MERGED_INTO_PHANTOM, terminated, carried=current
+            phantoms,
+            fresh,
+            StatusReason.MERGED_INTO_PHANTOM,
+            terminated,
+            carried=current,
+            older_keeps=True,
         )
 
     def _absorb_duplicates(self, terminated: IntArray, created: IntArray) -> IntArray:
@@ -779,6 +813,7 @@ class SessionEngine:
             StatusReason.DUPLICATE,
             terminated,
             carried=current,
+            older_keeps=True,
         )
 
     def _merge(
@@ -788,14 +823,15 @@ class SessionEngine:
         reason: StatusReason,
         terminated: IntArray,
         carried: BoolArray | None = None,
+        older_keeps: bool = False,
     ) -> IntArray:
         """Gate ``newcomers`` against ``keepers`` (GNN, ``sum`` distance); merge disjoint pairs.
 
         The keeper keeps its id, takes the newcomer's estimates and becomes
-        (or stays) confirmed; the newcomer is terminated with ``reason``.
-        Disjoint: no sensor carries both (``carried``, (rows, sensors); default: has an
-        estimate of both); with ``carried`` given, the older of a pair keeps its id.
-        Returns ``terminated`` and the newcomers merged.
+        (or stays) confirmed; the newcomer is terminated with ``reason``; with
+        ``older_keeps``, the older of a pair (the smaller number) is the keeper, whichever
+        list it came from. Disjoint: no sensor carries both (``carried``, (rows, sensors);
+        default: has an estimate of both). Returns ``terminated`` and the newcomers merged.
         """
         if len(keepers) == 0 or len(newcomers) == 0 or self.time is None:
             return terminated
@@ -811,7 +847,7 @@ class SessionEngine:
         keeper_rows, newcomer_rows = keepers[known[disjoint]], newcomers[incoming[disjoint]]
         if len(keeper_rows) == 0:
             return terminated
-        if carried is not None:
+        if older_keeps:
             numbers = self._rows.rows.numbers
             older = numbers[newcomer_rows] < numbers[keeper_rows]
             keeper_rows, newcomer_rows = (
@@ -948,20 +984,13 @@ class SessionEngine:
         it (docs/algorithms.md §8.11) — with the phantom's reason. The central tracker
         reports its phantoms at every step, so its fused track keeps its id through the
         blind zone; it is shown a phantom (predicted, not seen), not confirmed."""
-        source = self.config.central_source
-        if self.central is None or self.time is None or source not in self._table.slots:
+        held = self._central_phantoms(rows) if self.time is not None else {}
+        if not held:
             return {}
-        phantoms = self.central.phantoms
-        if not phantoms:
-            return {}
-        status = self._rows.rows.life.status[rows]
-        others = np.delete(self._current(rows), self._table.slot(source), axis=1).any(axis=1)
-        unseen = {}
-        for at in np.flatnonzero(established(status) & ~others).tolist():
-            estimate = self.tracks[int(rows[at])].estimates.get(source)
-            if estimate is not None and estimate.track in phantoms:
-                unseen[at] = phantoms[estimate.track]
-        return unseen
+        source = self._table.slot(self.config.central_source)
+        others = np.delete(self._current(rows), source, axis=1).any(axis=1)
+        shown = established(self._rows.rows.life.status[rows]) & ~others
+        return {at: reason for at, reason in held.items() if shown[at]}
 
     def picture(self, time: float | None = None) -> tuple[FusedTrackView, ...]:
         """The live fused tracks at ``time`` (default: the fusion time); changes nothing.

@@ -95,6 +95,12 @@ class TrackingPreset:
         return self.relation.target
 
     @property
+    def headings(self) -> bool:
+        """Whether the horizontal axes' second components are headings (eq 26), not velocities
+        (eq 24): the one test of it (a range-rate, a fused velocity, velocity gating ask)."""
+        return self.velocity_convention != VELOCITY
+
+    @property
     def conventions(self) -> tuple[VelocityConvention, ...]:
         """What the second component of each axis means: the horizontal axes follow
         :attr:`velocity_convention`, a vertical axis is a velocity."""

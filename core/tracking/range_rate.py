@@ -38,11 +38,23 @@ from core.models.measurement import Polar
 from core.numerics import logsumexp
 from core.tracking.imm import IMMState, IMMUpdate
 from core.tracking.models import position_indices, velocity_indices
+from core.tracking.presets import TrackingPreset
 
 MIN_RANGE = 1e-3
 """Smallest distance from the site (m) at which a track's range-rate is updated."""
 
 _LOG_2PI = math.log(2.0 * math.pi)
+
+
+def require_velocities(preset: TrackingPreset | None) -> None:
+    """A range-rate updates the velocity along the line of sight: the state needs velocities,
+    not a preset's headings ([MTT] eq 26). The one check, for a session's sensor when it is
+    configured and for a scan's range-rates at the tracker (None: an explicit bank, velocities)."""
+    if preset is not None and preset.headings:
+        raise TrackingError(
+            f"a range-rate needs velocities in the state, not the headings of the {preset.name!r} "
+            "preset"
+        )
 
 
 def range_rate_update(

@@ -109,7 +109,7 @@ from core.tracking.config import LocalTrackerConfig
 from core.tracking.imm import IMMPrediction, IMMPredictor, IMMState
 from core.tracking.initiator import pair_seeds, single_point_initiation, two_point_initiation
 from core.tracking.presets import VELOCITY, TrackingPreset, VelocityConvention
-from core.tracking.range_rate import range_rate_update
+from core.tracking.range_rate import range_rate_update, require_velocities
 from core.tracking.track import (
     LocalTrack,
     ScanTally,
@@ -202,7 +202,7 @@ class LocalTracker:
             (VELOCITY,) * self.bank.axes if found is None else found.conventions
         )
         self._associator = DetectionAssociator(
-            config, self.bank, config.score, velocities=set(self._conventions) == {VELOCITY}
+            config, self.bank, config.score, velocities=found is None or not found.headings
         )
         self.classifier: BatchedCredalClassifier | None = None
         self._significance: float | None = None
@@ -679,8 +679,7 @@ class LocalTracker:
             return None
         if not isinstance(model, Polar) or model.velocity_mapping is None:
             raise TrackingError("range_rates need a polar measurement model with a range-rate")
-        if set(self._conventions) != {VELOCITY}:
-            raise TrackingError("a range-rate needs velocities in the state, not headings")
+        require_velocities(self.preset)
         return model
 
     def _check_range_rates(self, range_rates: ArrayLike | None, count: int) -> FloatArray | None:

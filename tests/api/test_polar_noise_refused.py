@@ -1,8 +1,11 @@
-"""A polar sensor's σ that gives no usable variance is a 422 at its field, on session creation.
+"""A polar sensor's σ outside its documented bounds is a 422 at its field, on session creation.
 
-Hand-worked IEEE doubles: 1e-170² = 1e-340 underflows to 0 (the least subnormal is
-4.9e-324), 1e200² overflows (the largest double is 1.8e308): neither is a variance. Before,
-the underflow was a 422 pointing at the document's root ("#") and the overflow a 500.
+The bounds (``api_schemas.config``): sigma_range 0.001 m to 100 km, an angle σ 0.0001° to 180°
+(above π the angle is spread over more than the circle), sigma_range_rate 0.001 to 10 000 m/s.
+Beyond them no sensor measures; before them, a finite absurd σ (1e30 m, 1e-30 m, 200°) was
+accepted and the radar's covariances were 1e60 m² or 1e-60 m². The σ whose square is no
+double at all (1e-170² underflows to 0, 1e200² overflows: hand-worked IEEE doubles) are
+refused at the same place.
 """
 
 from __future__ import annotations
@@ -32,24 +35,43 @@ def _radar(**measurement: float) -> dict[str, Any]:
 
 
 @pytest.mark.parametrize(
-    ("name", "sigma"),
+    ("name", "sigma", "words"),
     [
-        ("sigma_range", 1e-170),
-        ("sigma_range", 1e200),
-        ("sigma_azimuth_deg", 1e-170),
-        ("sigma_elevation_deg", 1e200),
-        ("sigma_range_rate", 1e-170),
+        ("sigma_range", 1e30, "less than or equal to 100000"),
+        ("sigma_range", 1e-30, "greater than or equal to 0.001"),
+        ("sigma_range", 1e-170, "greater than or equal to 0.001"),
+        ("sigma_range", 1e200, "less than or equal to 100000"),
+        ("sigma_azimuth_deg", 200.0, "less than or equal to 180"),
+        ("sigma_azimuth_deg", 1e-170, "greater than or equal to 0.0001"),
+        ("sigma_elevation_deg", 1e200, "less than or equal to 180"),
+        ("sigma_elevation_deg", 1e-30, "greater than or equal to 0.0001"),
+        ("sigma_range_rate", 1e-170, "greater than or equal to 0.001"),
+        ("sigma_range_rate", 1e30, "less than or equal to 10000"),
     ],
 )
-def test_a_sigma_without_a_variance_is_refused_at_its_field(
-    live_server: LiveServer, name: str, sigma: float
+def test_a_sigma_outside_its_bounds_is_refused_at_its_field(
+    live_server: LiveServer, name: str, sigma: float, words: str
 ) -> None:
     answer = httpx.post(f"{live_server.url}/v1/sessions", json=_radar(**{name: sigma}))
     assert answer.status_code == 422
     assert answer.headers["content-type"] == "application/problem+json"
     errors = answer.json()["errors"]
     assert [error["pointer"] for error in errors] == [f"#/sensors/0/measurement/{name}"]
-    assert "no usable variance" in errors[0]["detail"]
+    assert words in errors[0]["detail"]
+
+
+@pytest.mark.parametrize(
+    "bounds",
+    [
+        {"sigma_range": 1e-3, "sigma_azimuth_deg": 1e-4, "sigma_elevation_deg": 180.0},
+        {"sigma_range": 1e5, "sigma_range_rate": 1e4, "sigma_elevation_deg": 1e-4},
+        {"sigma_azimuth_deg": 180.0, "sigma_range_rate": 1e-3},
+    ],
+)
+def test_the_bounds_themselves_are_accepted(
+    live_server: LiveServer, bounds: dict[str, float]
+) -> None:
+    assert httpx.post(f"{live_server.url}/v1/sessions", json=_radar(**bounds)).status_code == 201
 
 
 def test_the_same_radar_with_usable_sigmas_is_created(live_server: LiveServer) -> None:

@@ -516,3 +516,52 @@ def test_sqlite_appends_waiting_for_a_commit_share_the_next_one(tmp_path: Path) 
             {"session": session_id, "seq": 1}
         ]
     store.close()
+
+
+def test_sqlite_load_reads_one_snapshot_while_a_writer_compacts(tmp_path: Path) -> None:
+    """``load`` reads the record, the newest snapshot and the inputs after it in one read
+    transaction. A writer thread that snapshots at 5 and compacts through 5 between the
+    snapshot's read and the inputs' read (held there by the reader's trace callback, so the
+    interleaving is certain) must not show through: the load is the store either before
+    (snapshot 2, inputs 3..6) or after (snapshot 5, input 6) that commit. Read without one
+    transaction it was snapshot 2 with input 6 alone: inputs 3..5 lost, a replay missing
+    three steps."""
+    path = tmp_path / "store.db"
+    store = SqliteStore(path)
+    try:
+        store.create_session(record())
+        for seq in range(1, 7):
+            store.append("s1", seq, {"n": seq}, now())
+            if seq == 2:
+                store.save_snapshot("s1", Snapshot(seq=2, taken_at=now(), state={"n": 2}))
+        reading_inputs, written = threading.Event(), threading.Event()
+
+        def writer() -> None:
+            reading_inputs.wait(timeout=30)
+            store.save_snapshot("s1", Snapshot(seq=5, taken_at=now(), state={"n": 5}))
+            assert store.compact("s1", 5) == 5  # inputs 1..5 deleted, committed
+            written.set()
+
+        def hold(statement: str) -> None:
+            if "FROM inputs" in statement and not reading_inputs.is_set():
+                reading_inputs.set()
+                assert written.wait(timeout=30), "the writer did not commit"
+
+        thread = threading.Thread(target=writer)
+        thread.start()
+        store._connection().set_trace_callback(hold)  # this thread's reading connection
+        try:
+            loaded = store.load("s1")
+        finally:
+            store._connection().set_trace_callback(None)
+            thread.join()
+        assert written.is_set()
+        assert loaded.snapshot is not None
+        seqs = [entry.seq for entry in loaded.entries]
+        # by hand: the two committed states of the store
+        assert (loaded.snapshot.seq, seqs) in [(2, [3, 4, 5, 6]), (5, [6])]
+        again = store.load("s1")  # and after the writer: its state
+        assert again.snapshot is not None
+        assert (again.snapshot.seq, [entry.seq for entry in again.entries]) == (5, [6])
+    finally:
+        store.close()

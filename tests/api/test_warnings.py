@@ -352,3 +352,38 @@ def test_track_and_detection_rules_without_a_server() -> None:
     # without an origin nothing is far: a session frame may be UTM
     plain = SessionConfig.model_validate({"state": STATE})
     assert plausibility.input_warnings("tracks", far, plain) == []
+
+
+def test_large_range_and_range_rate_sigmas_in_the_wrong_unit(server: LiveServer) -> None:
+    """sigma_range 2000 (20 m in cm) and sigma_range_rate 150 (1.5 m/s in cm/s) are legal and
+    warned about; sigma_range_rate 0.0015 (1.5 m/s in km/s) too; 20 m and 1.5 m/s are not."""
+    radar = copy.deepcopy(RADAR)
+    radar["measurement"] = {
+        "kind": "polar",
+        "sigma_range": 2000.0,  # cm
+        "sigma_azimuth_deg": 0.2,
+        "sigma_range_rate": 150.0,  # cm/s
+    }
+    del radar["fov"]  # its reach in σ_range would be flagged too (range_in_km)
+    other = copy.deepcopy(RADAR) | {"id": "radar-2"}
+    other["measurement"] = {
+        "kind": "polar",
+        "sigma_range": 20.0,
+        "sigma_azimuth_deg": 0.2,
+        "sigma_range_rate": 0.0015,  # km/s
+    }
+    plain = copy.deepcopy(RADAR) | {"id": "radar-3"}
+    plain["measurement"] = {
+        "kind": "polar",
+        "sigma_range": 20.0,
+        "sigma_azimuth_deg": 0.2,
+        "sigma_range_rate": 1.5,
+    }
+    created = create(server, config(sensors=[radar, other, plain]))
+    assert warned(created) == [
+        ("#/sensors/0/measurement/sigma_range", "sigma_range_large"),
+        ("#/sensors/0/measurement/sigma_range_rate", "sigma_range_rate_large"),
+        ("#/sensors/1/measurement/sigma_range_rate", "sigma_range_rate_small"),
+    ]
+    assert "(150 cm/s = 1.5 m/s)" in created["warnings"][1]["message"]
+    assert "(0.0015 km/s = 1.5 m/s)" in created["warnings"][2]["message"]

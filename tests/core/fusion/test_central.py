@@ -16,8 +16,8 @@ from core.fusion.engine import SessionEngine
 from core.fusion.motion import MotionModel
 from core.fusion.reorder import REORDER_WINDOW
 from core.fusion.reports import DetectionReport, ReportedTrack, StepResult, TrackReport
-from core.geometry import Sector
-from core.lifecycle import LifeCycleConfig
+from core.geometry import PolygonView, Sector
+from core.lifecycle import LifeCycleConfig, StatusReason, TrackStatus
 from core.metrics import coverage, identity_switches
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
@@ -532,3 +532,68 @@ def test_a_track_hits_count_the_instants_it_was_detected_at() -> None:
         statuses.append(track.status.value)
     assert hits == [(0, 1), (0, 1), (0, 1), (1, 2), (1, 2), (2, 3)]
     assert statuses == ["tentative", "tentative", "confirmed"]
+
+
+def test_a_central_phantom_is_no_report_of_the_object() -> None:
+    """A target leaves radar a's sector for the gap before radar b's (inside the session's
+    region: a blind zone, docs/algorithms.md §8.9): the central tracker keeps it as a
+    phantom, reported at every step. A track-list source ``lists`` (P_D 0.9, sees
+    everywhere) that carried it and now sends empty lists is the only source that could
+    see it: its silence is a miss (§8.2), ln(1 − 0.9) from the score ceiling 0 each, and
+    the third crosses the delete threshold ln(β/(1 − α)) = ln(1e-3/0.999) (3 × −2.3026 =
+    −6.908 ≤ −6.907, by hand). The phantom, a prediction, does not hold the track."""
+    a = Sector(
+        origin=(0.0, 0.0), heading_deg=0.0, half_angle_deg=45.0, range_min=0.0, range_max=1000.0
+    )
+    b = Sector(
+        origin=(3000.0, 0.0),
+        heading_deg=180.0,
+        half_angle_deg=45.0,
+        range_min=0.0,
+        range_max=1000.0,
+    )
+    region = PolygonView(((-500.0, -1500.0), (3500.0, -1500.0), (3500.0, 1500.0), (-500.0, 1500.0)))
+    config = FusionConfig(
+        motion=MotionModel(LAYOUT, q=100.0),
+        sensors=(
+            SensorSpec("a", tracker=tracker("a", fov=a)),
+            SensorSpec("b", tracker=tracker("b", fov=b)),
+            SensorSpec("lists", p_detect=0.9),
+        ),
+        region=region,
+    )
+    engine = SessionEngine(config)
+    central = engine.central
+    assert central is not None
+    rng = np.random.default_rng(3)
+    covariance = np.diag([100.0, 25.0, 100.0, 25.0])
+    start, velocity = np.array([500.0, 0.0]), np.array([50.0, 0.0])
+    silent_from, steps = None, []
+    for k in range(30):
+        truth = start + velocity * k
+        seen = np.hypot(*truth) <= 1000.0
+        z = truth[None] + rng.normal(0.0, SIGMA, (1, 2)) if seen else np.zeros((0, 2))
+        engine.apply_detections(DetectionReport("a", float(k), z))
+        engine.apply_detections(DetectionReport("b", k + 0.5, np.zeros((0, 2))))
+        if silent_from is None and central.phantoms:
+            silent_from = k + 2  # lists still reports it twice after the phantom starts
+        state = np.array([truth[0] + velocity[0] * 0.75, velocity[0], truth[1], velocity[1]])
+        tracks = (ReportedTrack("t", state, covariance),)
+        if silent_from is not None and k >= silent_from:
+            tracks = ()
+        steps.append(engine.apply(TrackReport("lists", k + 0.75, tracks)))
+        if silent_from is not None and k >= silent_from + 3:
+            break
+    assert silent_from is not None, "the central track never became a phantom"
+    first = steps[0].tracks[0].id
+    history = [
+        [(track.status, track.reason, track.score) for track in step.tracks if track.id == first]
+        for step in steps
+    ]
+    # the precondition: lists' last hit left the track at the score ceiling, 0
+    assert history[silent_from - 1][0][2] == 0.0
+    scores = [history[silent_from + m][0][2] for m in range(2)]
+    assert scores == pytest.approx([math.log(0.1), 2 * math.log(0.1)], abs=1e-12)
+    ended = history[silent_from + 2]
+    assert ended == [(TrackStatus.TERMINATED, StatusReason.SCORE_DELETED, ended[0][2])]
+    assert ended[0][2] == pytest.approx(3 * math.log(0.1), abs=1e-12)

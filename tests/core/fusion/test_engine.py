@@ -17,7 +17,7 @@ from core.fusion.engine import STALE_REVISITS, SessionEngine
 from core.fusion.motion import MotionModel, StateLayout
 from core.fusion.reports import ReportedTrack, TrackReport
 from core.geometry import PolygonView, Sector
-from core.lifecycle import LifeCycleConfig, StatusReason, TrackStatus
+from core.lifecycle import STATUS_CODES, LifeCycleConfig, StatusReason, TrackStatus
 from core.simulation.tracklists import crossing_traffic, estimate_covariance, t2t_four
 
 from .engine_helpers import fused_ids_of_targets, make_config, run, serialise
@@ -481,3 +481,26 @@ def test_status_follows_the_sources_revisits_not_every_report() -> None:
     # stale after 40 s: s2's lists count misses (P_D 0.9: ln 0.1 each) until the score ends it
     assert statuses[-1][1] is TrackStatus.TERMINATED
     assert 40.0 < statuses[-1][0] < 50.0
+
+
+def test_a_hand_over_to_a_younger_phantom_keeps_the_older_id() -> None:
+    """The fused hand-over merges a phantom and a newly confirmed track under the older id
+    (``_merge``'s ``older_keeps``, asked for explicitly, not implied by ``carried``). F1 (a's
+    track, the older) and F2 (b's, the younger, made a phantom at F1's place) are one object
+    no source is current on both of: F2 ends, F1 keeps its id and takes b's estimate."""
+    engine = SessionEngine(make_config(["a", "b"]))
+    covariance = np.diag([100.0, 1.0, 100.0, 1.0])
+    here, there = np.array([0.0, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 5000.0, 0.0])
+    engine.apply(TrackReport("a", 0.0, (ReportedTrack("x", here, covariance),)))
+    engine.apply(TrackReport("b", 0.0, (ReportedTrack("y", there, covariance),)))
+    assert [track.id for track in engine.tracks] == ["F1", "F2"]
+    # F2 lost in a blind zone, its estimate predicted to where a's newcomer F1 is confirmed
+    engine._table.write(np.array([1]), "b", here[None], covariance[None], 0.0)
+    life = engine._rows.rows.life
+    status = life.status.copy()
+    status[:] = [STATUS_CODES[TrackStatus.CONFIRMED], STATUS_CODES[TrackStatus.PHANTOM]]
+    engine._rows.rows = engine._rows.rows.living(replace(life, status=status))
+    ended = engine._hand_over_to_phantoms(np.array([0]), np.zeros(0, dtype=np.int64))
+    assert ended.tolist() == [1]  # F2's row
+    assert engine._rows.rows.life.statuses()[0] is TrackStatus.CONFIRMED
+    assert set(engine.tracks[0].estimates) == {"a", "b"}

@@ -9,7 +9,9 @@ import pytest
 from filterpy.kalman import ExtendedKalmanFilter
 from scipy.stats import norm
 
-from core.errors import ModelConfigError, TrackingError
+from core.errors import InvalidInput, ModelConfigError, TrackingError
+from core.fusion.config import FusionConfig, SensorSpec
+from core.fusion.motion import MotionModel, StateLayout
 from core.models.measurement import Polar
 from core.tracking.config import LocalTrackerConfig
 from core.tracking.imm import IMMState, IMMUpdate
@@ -114,3 +116,29 @@ def test_range_rates_need_their_model_velocities_and_one_per_detection() -> None
     assert tracker.time is None  # refused scans change nothing
     with pytest.raises(ModelConfigError, match="polar noise"):
         Polar.of_axes((0.0, 0.0), (1.0, 1.0, 0.0))
+
+
+def test_a_range_rate_on_headings_is_refused_with_one_reason_by_session_and_tracker() -> None:
+    """One fact, one check (core.tracking.range_rate.require_velocities): a session whose
+    radar measures range-rates under the pedestrian preset (headings, [MTT] eq 26) is refused
+    when it is configured, and a tracker given such a scan refuses it, for the same reason."""
+    reason = (
+        "a range-rate needs velocities in the state, not the headings of the 'pedestrian' preset"
+    )
+    model = Polar.of_axes((0.0, 0.0), (1.0, 1.0, 1.0))
+    config = LocalTrackerConfig(preset="pedestrian")
+    layout = StateLayout(dim=4, position=(0, 2), velocity=(1, 3))
+    with pytest.raises(InvalidInput) as refused:
+        FusionConfig(
+            motion=MotionModel(layout, q=1.0),
+            sensors=(SensorSpec("walker", tracker=config, model=model),),
+        )
+    assert str(refused.value) == f"sensor 'walker': {reason}"
+    with pytest.raises(TrackingError) as scan:
+        LocalTracker(config).step(0.0, np.zeros((1, 2)), range_rates=[1.0], model=model)
+    assert str(scan.value) == reason
+    # the aircraft preset's velocities take it
+    FusionConfig(
+        motion=MotionModel(layout, q=1.0),
+        sensors=(SensorSpec("radar", tracker=LocalTrackerConfig(), model=model),),
+    )
