@@ -360,7 +360,9 @@ class SessionEngine:
             else self._hit_increments(states[rows], covariances[rows], incoming, cols, sensor)
         )
         self._record(live[rows], cols, report, incoming)  # update
-        created = self._start(new[~coasted[new]], report, incoming)
+        # nor does a phantom of the central tracker start one: it is a prediction (§8.2)
+        startable = ~coasted & ~self._phantom_reports(report)
+        created = self._start(new[startable[new]], report, incoming)
 
         self.time = t if self.time is None else max(self.time, t)
         self._learn_revisit(report.sensor, t)
@@ -630,6 +632,13 @@ class SessionEngine:
         if held:
             current[list(held), self._table.slot(self.config.central_source)] = False
         return current
+
+    def _phantom_reports(self, report: TrackReport) -> BoolArray:
+        """The tracks of ``report`` that are phantoms of the central tracker (§8.9)."""
+        phantoms = self.central.phantoms if self.central is not None else {}
+        if not phantoms or not self._is_central(report.sensor):
+            return np.zeros(len(report.tracks), dtype=bool)
+        return np.array([track.id in phantoms for track in report.tracks], dtype=bool)
 
     def _central_phantoms(self, rows: IntArray) -> dict[int, StatusReason]:
         """Positions in ``rows`` of the tracks whose central estimate is a track the central

@@ -541,7 +541,8 @@ def test_a_central_phantom_is_no_report_of_the_object() -> None:
     everywhere) that carried it and now sends empty lists is the only source that could
     see it: its silence is a miss (§8.2), ln(1 − 0.9) from the score ceiling 0 each, and
     the third crosses the delete threshold ln(β/(1 − α)) = ln(1e-3/0.999) (3 × −2.3026 =
-    −6.908 ≤ −6.907, by hand). The phantom, a prediction, does not hold the track."""
+    −6.908 ≤ −6.907, by hand). The phantom, a prediction, does not hold the track, nor
+    start another one."""
     a = Sector(
         origin=(0.0, 0.0), heading_deg=0.0, half_angle_deg=45.0, range_min=0.0, range_max=1000.0
     )
@@ -597,3 +598,6 @@ def test_a_central_phantom_is_no_report_of_the_object() -> None:
     ended = history[silent_from + 2]
     assert ended == [(TrackStatus.TERMINATED, StatusReason.SCORE_DELETED, ended[0][2])]
     assert ended[0][2] == pytest.approx(3 * math.log(0.1), abs=1e-12)
+    # nor does the phantom, still reported by the central tracker, start a fused track again
+    assert central.phantoms
+    assert steps[silent_from + 3].tracks == ()
