@@ -55,6 +55,16 @@ def address_tenant(client: str | None) -> str:
     return f"address:{address}"
 
 
+KEY_TENANT_PREFIX = "key:"
+"""The tenant of an API key is ``key:<name>``."""
+
+
+def is_keyed(tenant: str) -> bool:
+    """Whether ``tenant`` is an API key's (not a client address's, nor the admin's): keyed
+    tenants are served first (:mod:`app.http.front`, :mod:`app.sessions.turns`)."""
+    return tenant.startswith(KEY_TENANT_PREFIX)
+
+
 def parse_api_keys(text: str) -> dict[str, str]:
     """``name:key,name:key`` → key → tenant name (``key:<name>``); ``ValueError`` naming what
     is wrong."""
@@ -68,7 +78,7 @@ def parse_api_keys(text: str) -> dict[str, str]:
         check_secret(f"the API key of tenant {name!r}", key)
         if key in keys:
             raise ValueError(f"the API key of tenant {name!r} is another tenant's too")
-        keys[key] = f"key:{name}"
+        keys[key] = f"{KEY_TENANT_PREFIX}{name}"
     return keys
 
 

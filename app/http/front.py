@@ -58,14 +58,13 @@ from app.http.rate_limit import (
 )
 from app.http.requests import OFFLOAD_BYTES
 from app.http.responses import dumps
+from app.tenants import is_keyed
 
 HEALTH_PATH = "/healthz"
 KEYED_FIRST = "keyed_tenants_first"
 KEYED_GRACE_S = 1.0
 """A keyed tenant answered less than this long ago is still being served (its next request,
 a sensor's next scan, is on its way)."""
-KEYED_PREFIX = "tenant:key:"
-"""The key (:func:`~app.http.rate_limit.client_key`) of an API key's tenant."""
 
 
 class KeyedFirst(Overload):
@@ -82,10 +81,9 @@ class KeyedFirst(Overload):
         )
 
 
-def is_keyed(key: str) -> bool:
-    """Whether the tenant key ``key`` is an API key's (``CREDAL_API_KEYS``; not an address's,
-    nor the admin's: the operator's own requests make no client wait)."""
-    return key.startswith(KEYED_PREFIX)
+def keyed_key(key: str) -> bool:
+    """Whether the rate-limit key ``key`` (``tenant:<tenant>``) is an API key's tenant's."""
+    return is_keyed(key.removeprefix("tenant:"))
 
 
 Answer = tuple[int, list[tuple[bytes, bytes]], bytes]
@@ -195,7 +193,7 @@ class FrontDoor:
                 answer = (RATE_LIMIT, item, key, reset, private)
                 await self._refuse(scope, receive, send, extra, *answer)
                 return
-        keyed = is_keyed(key)
+        keyed = keyed_key(key)
         size = body_size(scope, self.max_body)
         if size > OFFLOAD_BYTES and not keyed and self.keyed_served(scope):
             self._count(KEYED_FIRST)
@@ -222,7 +220,7 @@ class FrontDoor:
             return True
         registry = getattr(getattr(scope.get("app"), "state", None), "registry", None)
         in_flight: dict[str, int] = {} if registry is None else registry.pipeline.tenant_in_flight
-        return any(is_keyed(f"tenant:{tenant}") for tenant in in_flight)
+        return any(is_keyed(tenant) for tenant in in_flight)
 
     def _count(self, limit: str) -> None:
         if self.refused is not None:
