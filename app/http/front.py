@@ -1,8 +1,9 @@
 """The front door: what is decided from a request's head alone, before any other layer.
 
-:class:`FrontDoor` is the outermost ASGI layer (:func:`app.main.create_app` puts it around
-the whole middleware stack, Starlette's own error middleware included): it sees every HTTP request and WebSocket upgrade once its head is
-read (the transport limits of :mod:`app.http.transport` came before it) and, in this order:
+:class:`FrontDoor` is the outermost ASGI layer (:func:`app.main.create_app` puts it around the
+whole middleware stack, Starlette's own error middleware included): it sees every HTTP request
+and WebSocket upgrade once its head is read (the transport limits of
+:mod:`app.http.transport` came before it) and, in this order:
 
 1. answers ``GET /healthz`` itself, from bytes written once: a liveness probe costs no
    routing, no middleware and no rate limit (and is never refused);
@@ -10,9 +11,9 @@ read (the transport limits of :mod:`app.http.transport` came before it) and, in 
    tenant of its verified token, else its client address's);
 3. the rate limit (``CREDAL_RATE_LIMIT``) per tenant;
 4. **keyed tenants first**: while a tenant with an API key is being served —
-   a request of it in flight here, or answered less than :data:`KEYED_GRACE_S` ago, or an
-   input of it in flight in the pipeline (REST or WebSocket) — a tenant *without* a key
-   (an address tenant of ``CREDAL_ACCESS=open``) sending a body larger than
+   an HTTP request of it in flight here, or answered less than :data:`KEYED_GRACE_S` ago, or
+   an input of it in flight in the pipeline (REST or WebSocket) — a client *without* a key
+   (an address tenant of ``CREDAL_ACCESS=open``; the admin is neither) sending a body larger than
    :data:`~app.http.requests.OFFLOAD_BYTES` (a body whose parsing and validation cost
    milliseconds of CPU: 10-15 ms for a 2 000-track list) is refused ``503 overloaded``
    (``limit: "keyed_tenants_first"``, ``Retry-After: 1``) before its body is read. Small
@@ -58,7 +59,7 @@ from app.http.rate_limit import (
 )
 from app.http.requests import OFFLOAD_BYTES
 from app.http.responses import dumps
-from app.tenants import is_keyed
+from app.tenants import is_anonymous, is_keyed
 
 HEALTH_PATH = "/healthz"
 KEYED_FIRST = "keyed_tenants_first"
@@ -79,11 +80,6 @@ class KeyedFirst(Overload):
             type(self).retry_after_s,
             limit=KEYED_FIRST,
         )
-
-
-def keyed_key(key: str) -> bool:
-    """Whether the rate-limit key ``key`` (``tenant:<tenant>``) is an API key's tenant's."""
-    return is_keyed(key.removeprefix("tenant:"))
 
 
 Answer = tuple[int, list[tuple[bytes, bytes]], bytes]
@@ -193,9 +189,9 @@ class FrontDoor:
                 answer = (RATE_LIMIT, item, key, reset, private)
                 await self._refuse(scope, receive, send, extra, *answer)
                 return
-        keyed = keyed_key(key)
+        tenant = key.removeprefix("tenant:")
         size = body_size(scope, self.max_body)
-        if size > OFFLOAD_BYTES and not keyed and self.keyed_served(scope):
+        if size > OFFLOAD_BYTES and is_anonymous(tenant) and self.keyed_served(scope):
             self._count(KEYED_FIRST)
             await send_answer(send, _keyed_first_answer(private), extra)
             return
@@ -204,7 +200,7 @@ class FrontDoor:
             answer = (BODY_RATE, self.body_rate, key, reset, private)
             await self._refuse(scope, receive, send, extra, *answer)
             return
-        if not keyed:
+        if kind != "http" or not is_keyed(tenant):  # a keyed stream is served by its inputs
             await self.app(scope, receive, send)
             return
         self.keyed_in_flight += 1

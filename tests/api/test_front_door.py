@@ -17,7 +17,7 @@ import pytest
 
 from app.http import front
 from app.http.requests import OFFLOAD_BYTES
-from tests.api.conftest import LiveServer, make_settings, serving
+from tests.api.conftest import ADMIN_TOKEN, LiveServer, make_settings, serving
 
 KEY = "alpha-key-0123456789abcdefghijklmnopqrstuvwxyz"
 CONFIG: dict[str, Any] = {
@@ -107,6 +107,11 @@ def test_without_a_key_a_large_body_waits_while_keyed_tenants_are_served(
         large = client.post(f"{keyed}/tracks", json=LARGE, headers=keyed_token)
         assert large.status_code == 200, large.text
         assert len(large.json()["tracks"]) == 400
+        # the operator's own session is no anonymous client's
+        operated, operated_token = session(client, ADMIN_TOKEN)
+        large = client.post(f"{operated}/tracks", json=LARGE, headers=operated_token)
+        assert large.status_code == 200, large.text
+        assert refused_at_door(client, "keyed_tenants_first") == before + 1
 
 
 def test_without_keyed_tenants_served_a_large_body_is_taken(
