@@ -25,8 +25,10 @@ samples, then checks the two rules and exits 1 if one fails:
 Speed is not measured here (``bench/service.py`` does that).
 
 ``--crowd`` (``make soak`` runs it after the stores): on the sqlite store, the
-same honest load for :data:`CROWD_SECONDS` alone, then as long again with an
-anonymous attacker process beside it (:func:`attack`, from other loopback
+same honest load (its sessions created with an API key, :data:`HONEST_KEY`, as
+a client of a service on a network must) for :data:`CROWD_SECONDS` alone, then
+as long again with an anonymous attacker process (no key: open access on
+loopback lets it create sessions and send inputs) beside it (:func:`attack`, from other loopback
 addresses: slowloris connections, 16 MB headers, a session flood, floods of
 the heaviest legal inputs and of explained ones). The honest sensors' p99
 latency must stay within 10 % of their run alone, and the honest error rate
