@@ -167,6 +167,7 @@ def create_app(settings: Settings | None = None, workers: WorkerGroup | None = N
             body_bytes_per_second=settings.tenant_body_bytes_per_second,
             max_body=settings.max_body_bytes,
             refused=service_metrics.refused_at_door,
+            held=service_metrics.held_at_door,
             cors_origins=settings.cors_origin_list(),
         )
 

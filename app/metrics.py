@@ -75,6 +75,7 @@ class ServiceMetrics:
     overloaded: Counter
     refused_waiting: Counter
     refused_at_door: Counter
+    held_at_door: Counter
     loop_lag: Histogram
     collections: Histogram
     detections: Counter
@@ -171,6 +172,12 @@ class ServiceMetrics:
                 "(503: a large body without an API key while keyed tenants are served; "
                 "app.http.front).",
                 ("limit",),
+                registry=registry,
+            ),
+            held_at_door=Counter(
+                "credal_requests_held_at_door",
+                "keyed_tenants_first refusals answered only when the Retry-After of the "
+                "client's previous one had passed (it sent again too soon; app.http.front).",
                 registry=registry,
             ),
             loop_lag=Histogram(

@@ -17,7 +17,11 @@ and WebSocket upgrade once its head is read (the transport limits of
    :data:`~app.http.requests.OFFLOAD_BYTES` (a body whose parsing and validation cost
    milliseconds of CPU: 10-15 ms for a 2 000-track list) is refused ``503 overloaded``
    (``limit: "keyed_tenants_first"``, ``Retry-After: 1``) before its body is read. Small
-   requests (session creation, reads, small inputs) of every tenant go on as before;
+   requests (session creation, reads, small inputs) of every tenant go on as before. A
+   client that sends its next large body before the ``Retry-After`` it was given has passed
+   waits it out: that refusal is answered when the time is up (``credal_requests_held_at_door``
+   counts them), so one address's refusals come at most one per second per connection
+   (``max_connections_per_client`` of them), whatever it sends;
 5. the tenant's request-body bytes (``tenant_body_bytes_per_second``, on ``Content-Length``).
 
 Every refusal here is a problem+json answer written once per server and kept (an
@@ -34,6 +38,7 @@ about as much CPU as the honest load; refused at the door, nothing.
 
 from __future__ import annotations
 
+import asyncio
 import functools
 import math
 import time
@@ -63,6 +68,8 @@ from app.tenants import is_anonymous, is_keyed
 
 HEALTH_PATH = "/healthz"
 KEYED_FIRST = "keyed_tenants_first"
+MAX_WAITING_ADDRESSES = 4096
+"""Addresses whose keyed-first ``Retry-After`` is remembered before those past it are dropped."""
 KEYED_GRACE_S = 1.0
 """A keyed tenant answered less than this long ago is still being served (its next request,
 a sensor's next scan, is on its way)."""
@@ -147,9 +154,11 @@ class FrontDoor:
         body_bytes_per_second: int,
         max_body: int,
         refused: Counter | None = None,
+        held: Counter | None = None,
         cors_origins: list[str] | None = None,
     ) -> None:
         self.app = app
+        self.held = held
         self.cors_origins = frozenset(cors_origins or ())
         """The browser origins allowed (``CREDAL_CORS_ORIGINS``): the door's answers to them
         carry the headers :class:`~starlette.middleware.cors.CORSMiddleware` would add, and
@@ -164,6 +173,9 @@ class FrontDoor:
         """Requests of keyed tenants being answered here."""
         self.keyed_answered = -math.inf
         """When (``time.monotonic()``) a keyed tenant's request was last answered here."""
+        self.waiting_until: dict[str, float] = {}
+        """Address tenant → when (``time.monotonic()``) the ``Retry-After`` of its latest
+        keyed-first refusal ends."""
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         kind = scope["type"]
@@ -192,7 +204,7 @@ class FrontDoor:
         tenant = key.removeprefix("tenant:")
         size = body_size(scope, self.max_body)
         if size > OFFLOAD_BYTES and is_anonymous(tenant) and self.keyed_served(scope):
-            self._count(KEYED_FIRST)
+            await self._wait_your_turn(tenant)
             await send_answer(send, _keyed_first_answer(private), extra)
             return
         if size and not await self.limiter.hit(self.body_rate, "bytes", key, cost=size):
@@ -217,6 +229,21 @@ class FrontDoor:
         registry = getattr(getattr(scope.get("app"), "state", None), "registry", None)
         in_flight: dict[str, int] = {} if registry is None else registry.pipeline.tenant_in_flight
         return any(is_keyed(tenant) for tenant in in_flight)
+
+    async def _wait_your_turn(self, tenant: str) -> None:
+        """Count a keyed-first refusal of ``tenant``; hold it until the ``Retry-After`` of the
+        previous one has passed if that has not (module docstring, 4)."""
+        self._count(KEYED_FIRST)
+        now = time.monotonic()
+        until = self.waiting_until.get(tenant, -math.inf)
+        if until > now:
+            if self.held is not None:
+                self.held.inc()
+            await asyncio.sleep(until - now)
+            now = time.monotonic()
+        if len(self.waiting_until) >= MAX_WAITING_ADDRESSES:  # forget the ones past their time
+            self.waiting_until = {t: u for t, u in self.waiting_until.items() if u > now}
+        self.waiting_until[tenant] = now + KeyedFirst.retry_after_s
 
     def _count(self, limit: str) -> None:
         if self.refused is not None:

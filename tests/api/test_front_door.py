@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import re
+import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -17,6 +18,7 @@ import pytest
 
 from app.http import front
 from app.http.requests import OFFLOAD_BYTES
+from app.main import create_app
 from tests.api.conftest import ADMIN_TOKEN, LiveServer, make_settings, serving
 
 KEY = "alpha-key-0123456789abcdefghijklmnopqrstuvwxyz"
@@ -176,3 +178,34 @@ def test_a_refusal_to_an_allowed_browser_origin_carries_its_cors_headers() -> No
         health = client.get("/healthz", headers={"Origin": "https://ops.example"})
         assert health.status_code == 200
         assert health.headers["access-control-allow-origin"] == "https://ops.example"
+
+
+def test_a_large_body_sent_again_before_retry_after_waits_it_out(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The address's previous keyed-first refusal said ``Retry-After`` (set here to end 2 s
+    from now): the next one is held until then, counted, and is the same 503."""
+    monkeypatch.setattr(front, "KEYED_GRACE_S", 3600.0)
+    application = create_app(make_settings(access="open", api_keys=f"alpha:{KEY}"))
+    with (
+        serving(application.state.settings, application) as live,
+        httpx.Client(base_url=live.url, timeout=30) as client,
+    ):
+        anonymous, anonymous_token = session(client)
+        session(client, KEY)
+        door = application.middleware_stack
+        assert isinstance(door, front.FrontDoor)
+        door.waiting_until["address:127.0.0.1"] = time.monotonic() + 2.0
+        assert held_at_door(client) == 0.0
+        held = client.post(f"{anonymous}/tracks", json=LARGE, headers=anonymous_token)
+        assert held.status_code == 503
+        assert held.json()["limit"] == "keyed_tenants_first"
+        assert held_at_door(client) == 1.0
+        assert refused_at_door(client, "keyed_tenants_first") == 1.0
+
+
+def held_at_door(client: httpx.Client) -> float:
+    found = re.search(
+        r"^credal_requests_held_at_door_total (\S+)$", client.get("/metrics").text, re.M
+    )
+    return float(found.group(1)) if found else 0.0
