@@ -12,6 +12,7 @@ from contextlib import asynccontextmanager
 from fastapi import FastAPI, Request, Response
 from fastapi.middleware.cors import CORSMiddleware
 from fastapi.routing import APIRoute
+from starlette.types import ASGIApp
 
 from app.cluster.peers import WorkerGroup
 from app.http.body_limits import BodyLimits
@@ -22,7 +23,7 @@ from app.http.errors import (
     install_error_handlers,
     problem_answer,
 )
-from app.http.rate_limit import RateLimit
+from app.http.front import FrontDoor
 from app.http.security import SecurityHeaders
 from app.http.tenants import tenancy_of
 from app.metrics import HttpMetrics, ServiceMetrics
@@ -138,18 +139,13 @@ def create_app(settings: Settings | None = None, workers: WorkerGroup | None = N
     app.include_router(streams.router)
     app.include_router(viewer.router)
     docs.install_docs(app)
-    # the last added runs first: metrics, CORS, rate limit, body limits (then internal errors)
+    # the last added runs first: metrics, CORS, body limits (then internal errors); the front
+    # door (rate limits, keyed tenants first, /healthz) runs before all of them
     app.add_middleware(
         BodyLimits,
         max_bytes=settings.max_body_bytes,
         read_timeout=settings.body_read_timeout,
         limits=settings.wire_limits(),
-    )
-    app.add_middleware(  # before the body is read
-        RateLimit,
-        rates=parse_rates(settings.rate_limit),
-        body_bytes_per_second=settings.tenant_body_bytes_per_second,
-        max_body=settings.max_body_bytes,
     )
     origins = settings.cors_origin_list()
     if origins:
@@ -162,4 +158,18 @@ def create_app(settings: Settings | None = None, workers: WorkerGroup | None = N
     app.add_middleware(SecurityHeaders)
     app.add_middleware(HttpMetrics, metrics=service_metrics)
     install_openapi(app)
+    build_stack = app.build_middleware_stack
+
+    def behind_the_front_door() -> ASGIApp:
+        return FrontDoor(
+            build_stack(),
+            rates=parse_rates(settings.rate_limit),
+            body_bytes_per_second=settings.tenant_body_bytes_per_second,
+            max_body=settings.max_body_bytes,
+            refused=service_metrics.refused_at_door,
+            held=service_metrics.held_at_door,
+            cors_origins=settings.cors_origin_list(),
+        )
+
+    app.build_middleware_stack = behind_the_front_door  # type: ignore[method-assign]
     return app

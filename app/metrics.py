@@ -74,6 +74,8 @@ class ServiceMetrics:
     internal_errors: Counter
     overloaded: Counter
     refused_waiting: Counter
+    refused_at_door: Counter
+    held_at_door: Counter
     loop_lag: Histogram
     collections: Histogram
     detections: Counter
@@ -161,6 +163,21 @@ class ServiceMetrics:
                 "max_queue_ms (503 overloaded: it waited too long to be answered in time) or "
                 "tenant_max_in_flight (429: its tenant had that many waiting or applied).",
                 ("limit",),
+                registry=registry,
+            ),
+            refused_at_door=Counter(
+                "credal_requests_refused_at_door",
+                "Requests refused from their head alone, before any other layer, by the limit "
+                "named: rate_limit, tenant_body_bytes_per_second (429) or keyed_tenants_first "
+                "(503: a large body without an API key while keyed tenants are served; "
+                "app.http.front).",
+                ("limit",),
+                registry=registry,
+            ),
+            held_at_door=Counter(
+                "credal_requests_held_at_door",
+                "keyed_tenants_first refusals answered only when the Retry-After of the "
+                "client's previous one had passed (it sent again too soon; app.http.front).",
                 registry=registry,
             ),
             loop_lag=Histogram(

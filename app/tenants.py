@@ -40,19 +40,38 @@ def is_loopback(host: str) -> bool:
         return False
 
 
+ADDRESS_TENANT_PREFIX = "address:"
+
+
 def address_tenant(client: str | None) -> str:
     """The tenant of a client without a key: its address (an IPv6 address by its /64)."""
     if client is None:
-        return "address:unknown"
+        return f"{ADDRESS_TENANT_PREFIX}unknown"
     try:
         address = ipaddress.ip_address(client)
     except ValueError:
-        return f"address:{client}"
+        return f"{ADDRESS_TENANT_PREFIX}{client}"
     if isinstance(address, ipaddress.IPv6Address):
         if address.ipv4_mapped is not None:
-            return f"address:{address.ipv4_mapped}"
-        return f"address:{ipaddress.ip_network(f'{address}/64', strict=False)}"
-    return f"address:{address}"
+            return f"{ADDRESS_TENANT_PREFIX}{address.ipv4_mapped}"
+        return f"{ADDRESS_TENANT_PREFIX}{ipaddress.ip_network(f'{address}/64', strict=False)}"
+    return f"{ADDRESS_TENANT_PREFIX}{address}"
+
+
+KEY_TENANT_PREFIX = "key:"
+"""The tenant of an API key is ``key:<name>``."""
+
+
+def is_keyed(tenant: str) -> bool:
+    """Whether ``tenant`` is an API key's (not a client address's, nor the admin's): keyed
+    tenants are served first (:mod:`app.http.front`, :mod:`app.sessions.turns`)."""
+    return tenant.startswith(KEY_TENANT_PREFIX)
+
+
+def is_anonymous(tenant: str) -> bool:
+    """Whether ``tenant`` is a client address's (open access, no key): its large bodies wait
+    while keyed tenants are served (:mod:`app.http.front`)."""
+    return tenant.startswith(ADDRESS_TENANT_PREFIX)
 
 
 def parse_api_keys(text: str) -> dict[str, str]:
@@ -68,7 +87,7 @@ def parse_api_keys(text: str) -> dict[str, str]:
         check_secret(f"the API key of tenant {name!r}", key)
         if key in keys:
             raise ValueError(f"the API key of tenant {name!r} is another tenant's too")
-        keys[key] = f"key:{name}"
+        keys[key] = f"{KEY_TENANT_PREFIX}{name}"
     return keys
 
 

@@ -25,8 +25,10 @@ samples, then checks the two rules and exits 1 if one fails:
 Speed is not measured here (``bench/service.py`` does that).
 
 ``--crowd`` (``make soak`` runs it after the stores): on the sqlite store, the
-same honest load for :data:`CROWD_SECONDS` alone, then as long again with an
-anonymous attacker process beside it (:func:`attack`, from other loopback
+same honest load (its sessions created with an API key, :data:`HONEST_KEY`, as
+a client of a service on a network must) for :data:`CROWD_SECONDS` alone, then
+as long again with an anonymous attacker process (no key: open access on
+loopback lets it create sessions and send inputs) beside it (:func:`attack`, from other loopback
 addresses: slowloris connections, 16 MB headers, a session flood, floods of
 the heaviest legal inputs and of explained ones). The honest sensors' p99
 latency must stay within 10 % of their run alone, and the honest error rate
@@ -122,9 +124,11 @@ def gauge(metrics: str, name: str) -> int:
 class Load:
     """The load generator: long sessions at a paced rate, and a churn of short ones."""
 
-    def __init__(self, url: str, deadline: float) -> None:
+    def __init__(self, url: str, deadline: float, key: str | None = None) -> None:
         self.url = url
         self.deadline = deadline
+        self.creating = {} if key is None else {"Authorization": f"Bearer {key}"}
+        """The headers of a session's creation: the tenant's API key, if it has one."""
         self.sent = 0
         self.requests = 0
         """Requests whose status is checked (the inputs, the churn's deletions)."""
@@ -153,7 +157,9 @@ class Load:
 
     async def long_session(self, client: httpx.AsyncClient, number: int) -> None:
         sensors = [f"s{number}-{k}" for k in range(SENSORS)]
-        created = (await client.post("/v1/sessions", json=config(sensors))).json()
+        created = (
+            await client.post("/v1/sessions", json=config(sensors), headers=self.creating)
+        ).json()
         headers = {"Authorization": f"Bearer {created['token']}"}
         path = f"/v1/sessions/{created['id']}/tracks"
         await asyncio.gather(
@@ -180,7 +186,9 @@ class Load:
     async def churn(self, client: httpx.AsyncClient) -> None:
         cycle = 0
         while time.monotonic() < self.deadline:
-            created = (await client.post("/v1/sessions", json=config(["c"]))).json()
+            created = (
+                await client.post("/v1/sessions", json=config(["c"]), headers=self.creating)
+            ).json()
             headers = {"Authorization": f"Bearer {created['token']}"}
             path = f"/v1/sessions/{created['id']}"
             for step in range(CHURN_INPUTS):
@@ -270,6 +278,10 @@ def report(name: str, samples: list[Sample]) -> bool:
 
 
 CROWD_SECONDS = float(os.environ.get("CROWD_SECONDS", "60"))
+HONEST_KEY = "honest-soak-key-0123456789abcdefghijklmnop"
+"""The honest client's API key (``CREDAL_API_KEYS``): its tenant is ``key:honest``. The server
+listens on loopback, so access stays open (``auto``): the attacker needs no key to create
+sessions and send inputs, as an address tenant (app/http/front.py: keyed tenants first)."""
 ATTACKER = "127.0.0.77"
 """The attacker's main address (any 127.x.y.z is loopback on Linux); its slowloris
 connections also come from 50 others."""
@@ -364,7 +376,7 @@ def crowd_phase(url: str, pid: int, attacked: bool, seconds: float) -> Phase:
         attacker.start()
     server_cpu, server_wait = process_cpu_s(pid), loop_thread_wait_s(pid)
     honest_cpu = time.process_time()
-    load = Load(url, time.monotonic() + seconds)
+    load = Load(url, time.monotonic() + seconds, HONEST_KEY)
     asyncio.run(load.run())
     honest_cpu = time.process_time() - honest_cpu
     server_cpu, server_wait = process_cpu_s(pid) - server_cpu, loop_thread_wait_s(pid) - server_wait
@@ -396,7 +408,7 @@ def crowd() -> int:
     seconds = CROWD_SECONDS / CROWD_PHASES
     with tempfile.TemporaryDirectory(prefix="credal-soak-") as directory:
         database = Path(directory) / "crowd.db"
-        settings = {"CREDAL_RATE_LIMIT": "1000/second"}
+        settings = {"CREDAL_RATE_LIMIT": "1000/second", "CREDAL_API_KEYS": f"honest:{HONEST_KEY}"}
         with serving(f"sqlite:{database}", settings) as (url, pid):
             for _ in range(CROWD_PHASES):
                 for attacked in (False, True):

@@ -19,7 +19,9 @@ a tenth of a core on parsing): a body counts its declared ``Content-Length``
 (a chunked one, ``max_body_bytes``). A request over either limit gets ``429``
 problem+json naming the limit (``limit: "rate_limit"`` or
 ``"tenant_body_bytes_per_second"``, ``rate``) with a ``Retry-After`` header,
-before its body is read. ``/healthz`` is never limited: a liveness probe must not be refused.
+before its body is read, by the front door (:mod:`app.http.front`: the outermost layer, with
+an answer written once per server). ``/healthz`` is never limited: a liveness probe must not
+be refused.
 
 The counters are the library's sliding-window counters in this process's
 memory, its asyncio flavour (the threaded one starts a timer thread every
@@ -31,28 +33,23 @@ Tokens are keyed by a hash, never kept in clear.
 
 from __future__ import annotations
 
-import math
 import time
 from collections import deque
 from collections.abc import Callable
 
-from limits import RateLimitItem, RateLimitItemPerSecond
-from limits.aio.storage import MemoryStorage
-from limits.aio.strategies import SlidingWindowCounterRateLimiter
+from limits import RateLimitItem
 from starlette.responses import Response
-from starlette.types import ASGIApp, Receive, Scope, Send
+from starlette.types import Receive, Scope, Send
 from starlette.websockets import WebSocket
 
-from app.http.errors import RateLimited, problem_response
 from app.http.security import hash_token
 from app.tenants import address_tenant
 
 RATE_LIMIT = "rate_limit"
 BODY_RATE = "tenant_body_bytes_per_second"
-EXEMPT_PATHS = frozenset({"/healthz"})
 
 
-def _rate_text(item: RateLimitItem) -> str:
+def rate_text(item: RateLimitItem) -> str:
     return f"{item.amount} per {item.multiples} {item.GRANULARITY.name}"
 
 
@@ -88,59 +85,6 @@ def tenant_finder(scope: Scope) -> Callable[[str], str | None]:
     return tenant_of
 
 
-class RateLimit:
-    """ASGI middleware: refuse requests beyond ``rates`` per key, and request bodies beyond
-    ``body_bytes_per_second`` per key, with 429 and ``Retry-After``, before the body is read."""
-
-    def __init__(
-        self, app: ASGIApp, rates: list[RateLimitItem], body_bytes_per_second: int, max_body: int
-    ) -> None:
-        self.app = app
-        self.rates = rates
-        self.body_rate = RateLimitItemPerSecond(body_bytes_per_second)
-        self.max_body = max_body
-        self.limiter = SlidingWindowCounterRateLimiter(MemoryStorage())
-        self._tenant_of: Callable[[str], str | None] | None = None
-
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] not in ("http", "websocket") or scope.get("path") in EXEMPT_PATHS:
-            await self.app(scope, receive, send)
-            return
-        if self._tenant_of is None:  # the application's registry and tenants, once
-            self._tenant_of = tenant_finder(scope)
-        key = client_key(scope, self._tenant_of)
-        for item in self.rates:
-            if not await self.limiter.hit(item, key):
-                await self._refuse(scope, receive, send, item, key, RATE_LIMIT)
-                return
-        size = body_size(scope, self.max_body)
-        if size and not await self.limiter.hit(self.body_rate, "bytes", key, cost=size):
-            await self._refuse(scope, receive, send, self.body_rate, key, BODY_RATE)
-            return
-        await self.app(scope, receive, send)
-
-    async def _refuse(
-        self,
-        scope: Scope,
-        receive: Receive,
-        send: Send,
-        item: RateLimitItem,
-        key: str,
-        limit: str,
-    ) -> None:
-        identifiers = (key,) if limit == RATE_LIMIT else ("bytes", key)
-        reset = (await self.limiter.get_window_stats(item, *identifiers)).reset_time
-        retry_after = max(1, math.ceil(reset - time.time()))
-        rate = _rate_text(item) + (" bytes" if limit == BODY_RATE else "")
-        who = key.removeprefix("tenant:")
-        who = "this client address" if who.startswith("address:") else f"tenant {who!r}"
-        response = problem_response(RateLimited(limit, rate, who, retry_after), scope.get("path"))
-        if scope["type"] == "websocket":
-            await _deny_websocket(scope, receive, send, response)
-            return
-        await response(scope, receive, send)
-
-
 def body_size(scope: Scope, max_body: int) -> int:
     """What a request's body counts against the tenant's bytes: its ``Content-Length`` (at most
     ``max_body``: more is refused unread anyway), ``max_body`` for a body of unknown length
@@ -156,7 +100,7 @@ def body_size(scope: Scope, max_body: int) -> int:
     return max_body if chunked else 0
 
 
-async def _deny_websocket(scope: Scope, receive: Receive, send: Send, response: Response) -> None:
+async def deny_websocket(scope: Scope, receive: Receive, send: Send, response: Response) -> None:
     """Refuse an upgrade: the 429 answer if the server can send one, else close code 1008."""
     websocket = WebSocket(scope, receive, send)
     if "websocket.http.response" in scope.get("extensions", {}):

@@ -64,6 +64,75 @@ def test_turns_go_round_robin_between_tenants_not_first_come_first_served() -> N
     assert order == ["F1", "P1", "T1", "F2", "F3", "F4", "F5", "F6"]
 
 
+def test_keyed_tenants_take_the_turns_before_a_crowd_of_addresses() -> None:
+    """One slot, held; a crowd of three addresses queues first (A1 B1 C1 A2), then two keyed
+    tenants (k1 twice, k2 once) and one more address (D1). By hand: the keyed tenants in turn
+    while one waits (k1, k2, k1), then the addresses in the order they first queued, one input
+    each per round (A1 B1 C1 D1 A2)."""
+    order: list[str] = []
+
+    async def scene() -> None:
+        turns = Turns(slots=1)
+        holder = turns.turn("address:127.0.0.1", alone=True)
+        await holder.__aenter__()
+
+        async def step(tenant: str, name: str) -> None:
+            async with turns.turn(tenant):
+                order.append(name)
+                await asyncio.sleep(0)
+
+        queued = [
+            ("address:10.0.0.1", "A1"),
+            ("address:10.0.0.2", "B1"),
+            ("address:10.0.0.3", "C1"),
+            ("address:10.0.0.1", "A2"),
+            ("key:one", "k1a"),
+            ("key:one", "k1b"),
+            ("key:two", "k2"),
+            ("address:10.0.0.4", "D1"),
+        ]
+        tasks = []
+        for tenant, name in queued:
+            tasks.append(asyncio.create_task(step(tenant, name)))
+            await asyncio.sleep(0)
+        assert turns.waiting() == len(queued)
+        await holder.__aexit__(None, None, None)
+        await asyncio.gather(*tasks)
+        assert turns.free == 1 and turns.waiting() == 0
+
+    asyncio.run(scene())
+    assert order == ["k1a", "k2", "k1b", "A1", "B1", "C1", "D1", "A2"]
+
+
+def test_a_cancelled_keyed_waiter_leaves_its_queue() -> None:
+    """A keyed input cancelled while it waits leaves the keyed queue; the address's input then
+    takes the slot, and no slot is lost or made."""
+    order: list[str] = []
+
+    async def scene() -> tuple[int, int]:
+        turns = Turns(slots=1)
+        holder = turns.turn("address:10.0.0.9", alone=True)
+        await holder.__aenter__()
+
+        async def step(tenant: str, name: str) -> None:
+            async with turns.turn(tenant):
+                order.append(name)
+
+        anonymous = asyncio.create_task(step("address:10.0.0.1", "A1"))
+        await asyncio.sleep(0)
+        keyed = asyncio.create_task(step("key:one", "k1"))
+        await asyncio.sleep(0)
+        keyed.cancel()
+        with pytest.raises(asyncio.CancelledError):
+            await keyed
+        await holder.__aexit__(None, None, None)
+        await anonymous
+        return turns.free, turns.waiting()
+
+    assert asyncio.run(scene()) == (1, 0)
+    assert order == ["A1"]
+
+
 def test_a_cancelled_waiter_gives_its_turn_on() -> None:
     """An input cancelled while it waits (its client went away) leaves the queue; the slot goes
     to the next waiter, and no slot is lost or made."""

@@ -1,0 +1,288 @@
+"""The front door: what is decided from a request's head alone, before any other layer.
+
+:class:`FrontDoor` is the outermost ASGI layer (:func:`app.main.create_app` puts it around the
+whole middleware stack, Starlette's own error middleware included): it sees every HTTP request
+and WebSocket upgrade once its head is read (the transport limits of
+:mod:`app.http.transport` came before it) and, in this order:
+
+1. answers ``GET /healthz`` itself, from bytes written once: a liveness probe costs no
+   routing, no middleware and no rate limit (and is never refused);
+2. decides whom the request counts against (:func:`~app.http.rate_limit.client_key`: the
+   tenant of its verified token, else its client address's);
+3. the rate limit (``CREDAL_RATE_LIMIT``) per tenant;
+4. **keyed tenants first**: while a tenant with an API key is being served —
+   an HTTP request of it in flight here, or answered less than :data:`KEYED_GRACE_S` ago, or
+   an input of it in flight in the pipeline (REST or WebSocket) — a client *without* a key
+   (an address tenant of ``CREDAL_ACCESS=open``; the admin is neither) sending a body larger than
+   :data:`~app.http.requests.OFFLOAD_BYTES` (a body whose parsing and validation cost
+   milliseconds of CPU: 10-15 ms for a 2 000-track list) is refused ``503 overloaded``
+   (``limit: "keyed_tenants_first"``, ``Retry-After: 1``) before its body is read. Small
+   requests (session creation, reads, small inputs) of every tenant go on as before. A
+   client that sends its next large body before the ``Retry-After`` it was given has passed
+   waits it out: that refusal is answered when the time is up (``credal_requests_held_at_door``
+   counts them), so one address's refusals come at most one per second per connection
+   (``max_connections_per_client`` of them), whatever it sends;
+5. the tenant's request-body bytes (``tenant_body_bytes_per_second``, on ``Content-Length``).
+
+Every refusal here is a problem+json answer written once per server and kept (an
+:func:`functools.lru_cache` of its bytes): a refusal renders nothing, validates nothing and
+runs no other layer, so a crowd's refused requests cost the server the reading of their
+heads. (A refused body is not read by the application; the HTTP protocol discards its bytes
+as they arrive, so the connection stays usable for the answer.) ``/metrics`` counts the
+refusals in ``credal_requests_refused_at_door{limit}``.
+
+Measured in ``bench/soak.py --crowd``: an anonymous attacker's 276 KB inputs cost the server
+~8 ms of CPU each refused after parsing (``max_input_work``) and 60-90 ms each accepted (the
+2 000-track first input of each new session): beside the honest load the server spent
++4.1 to +4.6 ms of CPU per honest input (+53 to +64 %); refused at the door, each costs
+0.25 ms (its body discarded unparsed) and the server +0.4 to +0.6 ms per honest input.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import functools
+import math
+import time
+from collections.abc import Callable
+from http import HTTPStatus
+
+from limits import RateLimitItem, RateLimitItemPerSecond
+from limits.aio.storage import MemoryStorage
+from limits.aio.strategies import SlidingWindowCounterRateLimiter
+from prometheus_client import Counter
+from starlette.types import ASGIApp, Receive, Scope, Send
+
+from app.errors import Overload, RateLimited, ServiceError
+from app.http.errors import problem_for, problem_response
+from app.http.rate_limit import (
+    BODY_RATE,
+    RATE_LIMIT,
+    body_size,
+    client_key,
+    deny_websocket,
+    rate_text,
+    tenant_finder,
+)
+from app.http.requests import OFFLOAD_BYTES
+from app.http.responses import dumps
+from app.tenants import is_anonymous, is_keyed
+
+HEALTH_PATH = "/healthz"
+KEYED_FIRST = "keyed_tenants_first"
+MAX_WAITING_ADDRESSES = 4096
+"""Addresses whose keyed-first ``Retry-After`` is remembered before those past it are dropped."""
+KEYED_GRACE_S = 1.0
+"""A keyed tenant answered less than this long ago is still being served (its next request,
+a sensor's next scan, is on its way)."""
+
+
+class KeyedFirst(Overload):
+    """A large body of a tenant without a key while keyed tenants are served (module docstring)."""
+
+    def __init__(self) -> None:
+        super().__init__(
+            "tenants with an API key are being served: a request body over "
+            f"{OFFLOAD_BYTES} bytes from a client without a key waits for a quiet moment "
+            f"(limit {KEYED_FIRST}); nothing was read or applied, send it again after "
+            "Retry-After, or with an API key",
+            type(self).retry_after_s,
+            limit=KEYED_FIRST,
+        )
+
+
+Answer = tuple[int, list[tuple[bytes, bytes]], bytes]
+"""An answer written once: its status, raw headers and body."""
+
+
+def answer_of(refusal: ServiceError, private: bool) -> Answer:
+    """The answer of ``refusal`` (problem+json, no ``instance``: it is the same for every
+    path); ``private``: an API path (``Cache-Control: no-store``, as
+    :class:`~app.http.security.SecurityHeaders` says)."""
+    problem = problem_for(refusal)
+    body = dumps(problem.model_dump(mode="json", exclude_none=True)).encode()
+    headers = [
+        (b"content-type", b"application/problem+json"),
+        (b"content-length", str(len(body)).encode()),
+        (b"x-content-type-options", b"nosniff"),
+        *(
+            (name.lower().encode("latin-1"), value.encode("latin-1"))
+            for name, value in refusal.headers().items()
+        ),
+    ]
+    if private:
+        headers.append((b"cache-control", b"no-store"))
+    return int(refusal.status_code), headers, body
+
+
+@functools.lru_cache(maxsize=256)
+def _rate_answer(limit: str, rate: str, who: str, retry_after: int, private: bool) -> Answer:
+    return answer_of(RateLimited(limit, rate, who, retry_after), private)
+
+
+@functools.lru_cache(maxsize=2)
+def _keyed_first_answer(private: bool) -> Answer:
+    return answer_of(KeyedFirst(), private)
+
+
+@functools.lru_cache(maxsize=1)
+def _health_answer() -> Answer:
+    from app.routes.health import HEALTH  # the route's own text (it documents the schema)
+
+    headers = [
+        (b"content-type", b"application/json"),
+        (b"content-length", str(len(HEALTH)).encode()),
+        (b"x-content-type-options", b"nosniff"),
+    ]
+    return HTTPStatus.OK.value, headers, HEALTH
+
+
+async def send_answer(send: Send, answer: Answer, extra: list[tuple[bytes, bytes]]) -> None:
+    """Send ``answer`` with the ``extra`` headers (a browser's CORS headers) after its own."""
+    status, headers, body = answer
+    if extra:
+        headers = headers + extra
+    await send({"type": "http.response.start", "status": status, "headers": headers})
+    await send({"type": "http.response.body", "body": body})
+
+
+class FrontDoor:
+    """ASGI layer: the checks of the module docstring, before every other layer."""
+
+    def __init__(
+        self,
+        app: ASGIApp,
+        rates: list[RateLimitItem],
+        body_bytes_per_second: int,
+        max_body: int,
+        refused: Counter | None = None,
+        held: Counter | None = None,
+        cors_origins: list[str] | None = None,
+    ) -> None:
+        self.app = app
+        self.held = held
+        self.cors_origins = frozenset(cors_origins or ())
+        """The browser origins allowed (``CREDAL_CORS_ORIGINS``): the door's answers to them
+        carry the headers :class:`~starlette.middleware.cors.CORSMiddleware` would add, and
+        their preflight requests (``OPTIONS``) are that middleware's alone."""
+        self.rates = rates
+        self.body_rate = RateLimitItemPerSecond(body_bytes_per_second)
+        self.max_body = max_body
+        self.limiter = SlidingWindowCounterRateLimiter(MemoryStorage())
+        self.refused = refused
+        self._tenant_of: Callable[[str], str | None] | None = None
+        self.keyed_in_flight = 0
+        """Requests of keyed tenants being answered here."""
+        self.keyed_answered = -math.inf
+        """When (``time.monotonic()``) a keyed tenant's request was last answered here."""
+        self.waiting_until: dict[str, float] = {}
+        """Address tenant → when (``time.monotonic()``) the ``Retry-After`` of its latest
+        keyed-first refusal ends."""
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        kind = scope["type"]
+        if kind not in ("http", "websocket"):
+            await self.app(scope, receive, send)
+            return
+        path = scope.get("path", "")
+        method = scope.get("method")
+        if self.cors_origins and method == "OPTIONS":
+            await self.app(scope, receive, send)
+            return
+        extra = self._cors_headers(scope)
+        if path == HEALTH_PATH and method == "GET":
+            await send_answer(send, _health_answer(), extra)
+            return
+        if self._tenant_of is None:  # the application's registry and tenants, once
+            self._tenant_of = tenant_finder(scope)
+        key = client_key(scope, self._tenant_of)
+        private = path.startswith("/v1/")
+        for item in self.rates:
+            if not await self.limiter.hit(item, key):
+                reset = (await self.limiter.get_window_stats(item, key)).reset_time
+                answer = (RATE_LIMIT, item, key, reset, private)
+                await self._refuse(scope, receive, send, extra, *answer)
+                return
+        tenant = key.removeprefix("tenant:")
+        size = body_size(scope, self.max_body)
+        if size > OFFLOAD_BYTES and is_anonymous(tenant) and self.keyed_served(scope):
+            await self._wait_your_turn(tenant)
+            await send_answer(send, _keyed_first_answer(private), extra)
+            return
+        if size and not await self.limiter.hit(self.body_rate, "bytes", key, cost=size):
+            reset = (await self.limiter.get_window_stats(self.body_rate, "bytes", key)).reset_time
+            answer = (BODY_RATE, self.body_rate, key, reset, private)
+            await self._refuse(scope, receive, send, extra, *answer)
+            return
+        if kind != "http" or not is_keyed(tenant):  # a keyed stream is served by its inputs
+            await self.app(scope, receive, send)
+            return
+        self.keyed_in_flight += 1
+        try:
+            await self.app(scope, receive, send)
+        finally:
+            self.keyed_in_flight -= 1
+            self.keyed_answered = time.monotonic()
+
+    def keyed_served(self, scope: Scope) -> bool:
+        """Whether a keyed tenant is being served (module docstring, 4)."""
+        if self.keyed_in_flight or time.monotonic() - self.keyed_answered < KEYED_GRACE_S:
+            return True
+        registry = getattr(getattr(scope.get("app"), "state", None), "registry", None)
+        in_flight: dict[str, int] = {} if registry is None else registry.pipeline.tenant_in_flight
+        return any(is_keyed(tenant) for tenant in in_flight)
+
+    async def _wait_your_turn(self, tenant: str) -> None:
+        """Count a keyed-first refusal of ``tenant``; hold it until the ``Retry-After`` of the
+        previous one has passed if that has not (module docstring, 4)."""
+        self._count(KEYED_FIRST)
+        now = time.monotonic()
+        until = self.waiting_until.get(tenant, -math.inf)
+        if until > now:
+            if self.held is not None:
+                self.held.inc()
+            await asyncio.sleep(until - now)
+            now = time.monotonic()
+        if len(self.waiting_until) >= MAX_WAITING_ADDRESSES:  # forget the ones past their time
+            self.waiting_until = {t: u for t, u in self.waiting_until.items() if u > now}
+        self.waiting_until[tenant] = now + KeyedFirst.retry_after_s
+
+    def _count(self, limit: str) -> None:
+        if self.refused is not None:
+            self.refused.labels(limit).inc()
+
+    def _cors_headers(self, scope: Scope) -> list[tuple[bytes, bytes]]:
+        """The CORS headers of an answer to an allowed browser origin (none to any other)."""
+        if not self.cors_origins:
+            return []
+        for name, value in scope.get("headers", ()):
+            if name == b"origin":
+                if value.decode("latin-1") in self.cors_origins:
+                    return [(b"access-control-allow-origin", value), (b"vary", b"Origin")]
+                break
+        return []
+
+    async def _refuse(
+        self,
+        scope: Scope,
+        receive: Receive,
+        send: Send,
+        extra: list[tuple[bytes, bytes]],
+        limit: str,
+        item: RateLimitItem,
+        key: str,
+        reset: float,
+        private: bool,
+    ) -> None:
+        self._count(limit)
+        retry_after = max(1, math.ceil(reset - time.time()))
+        rate = rate_text(item) + (" bytes" if limit == BODY_RATE else "")
+        who = key.removeprefix("tenant:")
+        who = "this client address" if who.startswith("address:") else f"tenant {who!r}"
+        if scope["type"] == "websocket":
+            response = problem_response(
+                RateLimited(limit, rate, who, retry_after), scope.get("path")
+            )
+            await deny_websocket(scope, receive, send, response)
+            return
+        await send_answer(send, _rate_answer(limit, rate, who, retry_after, private), extra)

@@ -1,0 +1,211 @@
+"""The front door (:mod:`app.http.front`) against a live uvicorn server: keyed tenants first,
+refusals written once, ``/healthz`` answered before any other layer.
+
+Clients without a key are address tenants (``CREDAL_ACCESS=open`` on loopback); a keyed
+tenant's activity is made by its own requests. No assertion is on a time.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import httpx
+import pytest
+
+from app.http import front
+from app.http.requests import OFFLOAD_BYTES
+from app.main import create_app
+from tests.api.conftest import ADMIN_TOKEN, LiveServer, make_settings, serving
+
+KEY = "alpha-key-0123456789abcdefghijklmnopqrstuvwxyz"
+CONFIG: dict[str, Any] = {
+    "state": {"dim": 4, "position": [0, 2], "velocity": [1, 3]},
+    "sensors": [{"id": "s"}],
+}
+
+
+def tracks(count: int, time: float = 1.0) -> dict[str, Any]:
+    """A track list of ``count`` tracks 300 m apart (small covariances: no two associate)."""
+    covariance = [[4, 0, 0, 0], [0, 1, 0, 0], [0, 0, 4, 0], [0, 0, 0, 1]]
+    return {
+        "sensor": "s",
+        "time": time,
+        "tracks": [
+            {"id": f"t{k}", "state": [300.0 * k, 1.0, 0.0, 1.0], "covariance": covariance}
+            for k in range(count)
+        ],
+    }
+
+
+LARGE = tracks(400)
+SMALL = tracks(3)
+
+
+def test_the_payloads_are_on_each_side_of_the_large_body_line() -> None:
+    """What the door calls large is a body whose parsing is offloaded: > 32 KiB (and the
+    test settings allow 64 KiB)."""
+    assert OFFLOAD_BYTES == 32 * 1024
+    compact: dict[str, Any] = {"separators": (",", ":")}  # as httpx writes it
+    assert len(json.dumps(LARGE, **compact)) > 32 * 1024 > len(json.dumps(SMALL))
+    assert len(json.dumps(LARGE, **compact)) < 64 * 1024
+
+
+@pytest.fixture(scope="module")
+def server() -> Iterator[LiveServer]:
+    settings = make_settings(access="open", api_keys=f"alpha:{KEY}")
+    with serving(settings) as live:
+        yield live
+
+
+def session(client: httpx.Client, key: str | None = None) -> tuple[str, dict[str, str]]:
+    headers = {} if key is None else {"Authorization": f"Bearer {key}"}
+    created = client.post("/v1/sessions", json=CONFIG, headers=headers)
+    assert created.status_code == 201, created.text
+    body = created.json()
+    return f"/v1/sessions/{body['id']}", {"Authorization": f"Bearer {body['token']}"}
+
+
+def refused_at_door(client: httpx.Client, limit: str) -> float:
+    metrics = client.get("/metrics").text
+    found = re.search(
+        rf'^credal_requests_refused_at_door_total{{limit="{limit}"}} (\S+)$', metrics, re.M
+    )
+    return float(found.group(1)) if found else 0.0
+
+
+def test_without_a_key_a_large_body_waits_while_keyed_tenants_are_served(
+    server: LiveServer, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(front, "KEYED_GRACE_S", 3600.0)  # the keyed tenant stays "being served"
+    with httpx.Client(base_url=server.url, timeout=30) as client:
+        anonymous, anonymous_token = session(client)
+        keyed, keyed_token = session(client, KEY)  # a keyed tenant's request: being served
+        before = refused_at_door(client, "keyed_tenants_first")
+
+        refused = client.post(f"{anonymous}/tracks", json=LARGE, headers=anonymous_token)
+        assert refused.status_code == 503
+        assert refused.headers["content-type"] == "application/problem+json"
+        assert refused.headers["retry-after"] == "1"
+        assert refused.headers["x-content-type-options"] == "nosniff"
+        assert refused.headers["cache-control"] == "no-store"
+        problem = refused.json()
+        assert problem["type"] == "urn:credal-fusion:problem:overloaded"
+        assert problem["status"] == 503
+        assert problem["limit"] == "keyed_tenants_first"
+        assert problem["retry_after"] == 1
+        assert "API key" in problem["detail"]
+        # nothing of it was applied; the connection stays usable
+        assert client.get(f"{anonymous}/tracks", headers=anonymous_token).json()["tracks"] == []
+        assert refused_at_door(client, "keyed_tenants_first") == before + 1
+
+        # a small body without a key, and a large one with a key, go on
+        small = client.post(f"{anonymous}/tracks", json=SMALL, headers=anonymous_token)
+        assert small.status_code == 200, small.text
+        assert len(small.json()["tracks"]) == 3
+        large = client.post(f"{keyed}/tracks", json=LARGE, headers=keyed_token)
+        assert large.status_code == 200, large.text
+        assert len(large.json()["tracks"]) == 400
+        # the operator's own session is no anonymous client's
+        operated, operated_token = session(client, ADMIN_TOKEN)
+        large = client.post(f"{operated}/tracks", json=LARGE, headers=operated_token)
+        assert large.status_code == 200, large.text
+        assert refused_at_door(client, "keyed_tenants_first") == before + 1
+
+
+def test_without_keyed_tenants_served_a_large_body_is_taken(
+    server: LiveServer, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(front, "KEYED_GRACE_S", 0.0)  # no keyed request is in flight now
+    with httpx.Client(base_url=server.url, timeout=30) as client:
+        anonymous, anonymous_token = session(client)
+        taken = client.post(f"{anonymous}/tracks", json=LARGE, headers=anonymous_token)
+        assert taken.status_code == 200, taken.text
+        assert len(taken.json()["tracks"]) == 400
+
+
+def test_healthz_is_answered_at_the_door_with_the_routes_document(server: LiveServer) -> None:
+    with httpx.Client(base_url=server.url, timeout=30) as client:
+        answer = client.get("/healthz")
+        assert answer.status_code == 200
+        assert answer.headers["content-type"] == "application/json"
+        assert answer.headers["x-content-type-options"] == "nosniff"
+        document = answer.json()
+        assert document["status"] == "ok"
+        schema = client.get("/openapi.json").json()["components"]["schemas"]["Health"]
+        assert set(document) <= set(schema["properties"])
+        assert set(schema.get("required", [])) <= set(document)
+
+
+def test_a_rate_refusal_is_written_once_and_answered_the_same_everywhere() -> None:
+    """Two refused requests of the address on two paths: the same document (no ``instance``:
+    written once per server), the paths' own ``Cache-Control``."""
+    with (
+        serving(make_settings(rate_limit="2/minute")) as live,
+        httpx.Client(base_url=live.url, timeout=30) as client,
+    ):
+        assert client.get("/readyz").status_code == 200
+        assert client.get("/readyz").status_code == 200
+        first = client.get("/v1/sessions/nothing")
+        second = client.get("/metrics")
+        assert first.status_code == second.status_code == 429
+        same = ("type", "title", "status", "limit", "rate")
+        assert {key: first.json()[key] for key in same} == {key: second.json()[key] for key in same}
+        assert first.json()["limit"] == "rate_limit"
+        assert first.json()["rate"] == "2 per 1 minute"
+        assert "instance" not in first.json()
+        assert first.headers["cache-control"] == "no-store"
+        assert "cache-control" not in second.headers
+        assert int(first.headers["retry-after"]) == first.json()["retry_after"]
+
+
+def test_a_refusal_to_an_allowed_browser_origin_carries_its_cors_headers() -> None:
+    """The door runs before the CORS middleware: its answers say what that middleware would."""
+    settings = make_settings(rate_limit="1/minute", cors_origins="https://ops.example")
+    with (
+        serving(settings) as live,
+        httpx.Client(base_url=live.url, timeout=30) as client,
+    ):
+        assert client.get("/readyz").status_code == 200
+        allowed = client.get("/readyz", headers={"Origin": "https://ops.example"})
+        other = client.get("/readyz", headers={"Origin": "https://evil.example"})
+        assert allowed.status_code == other.status_code == 429
+        assert allowed.headers["access-control-allow-origin"] == "https://ops.example"
+        assert "access-control-allow-origin" not in other.headers
+        health = client.get("/healthz", headers={"Origin": "https://ops.example"})
+        assert health.status_code == 200
+        assert health.headers["access-control-allow-origin"] == "https://ops.example"
+
+
+def test_a_large_body_sent_again_before_retry_after_waits_it_out(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The address's previous keyed-first refusal said ``Retry-After`` (set here to end 2 s
+    from now): the next one is held until then, counted, and is the same 503."""
+    monkeypatch.setattr(front, "KEYED_GRACE_S", 3600.0)
+    application = create_app(make_settings(access="open", api_keys=f"alpha:{KEY}"))
+    with (
+        serving(application.state.settings, application) as live,
+        httpx.Client(base_url=live.url, timeout=30) as client,
+    ):
+        anonymous, anonymous_token = session(client)
+        session(client, KEY)
+        door = application.middleware_stack
+        assert isinstance(door, front.FrontDoor)
+        door.waiting_until["address:127.0.0.1"] = time.monotonic() + 2.0
+        assert held_at_door(client) == 0.0
+        held = client.post(f"{anonymous}/tracks", json=LARGE, headers=anonymous_token)
+        assert held.status_code == 503
+        assert held.json()["limit"] == "keyed_tenants_first"
+        assert held_at_door(client) == 1.0
+        assert refused_at_door(client, "keyed_tenants_first") == 1.0
+
+
+def held_at_door(client: httpx.Client) -> float:
+    found = re.search(
+        r"^credal_requests_held_at_door_total (\S+)$", client.get("/metrics").text, re.M
+    )
+    return float(found.group(1)) if found else 0.0
