@@ -1021,9 +1021,11 @@ class LocalTracker:
             class_masses = tuple(masses[row] for row in rows)
             pignistic = tuple(classes.pignistic[row] if defined[row] else None for row in rows)
         life = self._rows.life
+        numbers_in_order = own[order].tolist()
+        ids = {number: self._track_id(number) for number in numbers_in_order}
         # every track's fields as columns in id order: plain ints and floats once for all
         tracks = LocalTracks(
-            ids=tuple(self._track_id(number) for number in own[order].tolist()),
+            ids=tuple(ids.values()),
             statuses=tuple(STATUSES[code] for code in life.status[order].tolist()),
             reasons=tuple(REASONS[code] for code in life.reason[order].tolist()),
             states=means[order],
@@ -1036,7 +1038,11 @@ class LocalTracker:
         )
         self._keep(self._rows.alive)
         self.time = time
-        assignment = tuple(None if n < 0 else self._track_id(int(n)) for n in numbers.tolist())
+        # each detection's and each updated track's id (a number the scan's tracks have; the
+        # id is made anew only for one they do not)
+        assignment = tuple(
+            None if n < 0 else ids.get(n) or self._track_id(n) for n in numbers.tolist()
+        )
         return TrackerStep(
             time=time,
             sensor=sensor,
@@ -1044,7 +1050,7 @@ class LocalTracker:
             assignment=assignment,
             tally=tally,
             clutter_density=clutter,
-            updated=tuple(self._track_id(int(n)) for n in np.unique(updated).tolist()),
+            updated=tuple(ids.get(n) or self._track_id(n) for n in np.unique(updated).tolist()),
         )
 
     def _keep(self, rows: IntArray) -> None:
