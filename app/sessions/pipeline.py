@@ -591,7 +591,8 @@ class InputPipeline:
 
 def result_message(result: str, ref: str | None = None) -> str:
     """A ``result`` WebSocket message around a result's JSON text (not serialised again)."""
-    return f'{{"type":"result","ref":{dumps(ref)},"result":{result}}}'
+    written_ref = "null" if ref is None else dumps(ref)  # most answers have no ref
+    return f'{{"type":"result","ref":{written_ref},"result":{result}}}'
 
 
 def _tally(engine: SessionEngine | None, sensor: str) -> ScanTally | None:
