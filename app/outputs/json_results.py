@@ -4,8 +4,9 @@
 ``FusedTrack``) and ``tests/api/test_result_writer.py`` validates the
 writers' output against those models: :func:`step_json` for a step result
 (the per-input hot path), :func:`picture_json` for fused tracks, both written
-by orjson in C straight from the engine's views (numpy arrays and ``Source``
-dataclasses, no intermediate lists); every non-finite score of a matrix is
+by orjson in C from the step's columns (:class:`~core.fusion.reports.FusedTracks`: all
+states and all covariances turned into floats in one call each, ``Source`` dataclasses
+as they are); every non-finite score of a matrix is
 ``null``, any other non-finite number refused. ``frame=geodetic`` adds each
 track's ``geodetic`` position.
 """
