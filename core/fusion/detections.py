@@ -108,15 +108,17 @@ def local_track_report(
     order = np.array(local_order(layout), dtype=np.int64)
     preset = tracker.preset
     headings = preset is not None and preset.velocity_convention == "heading"
-    tracks = step.columns
     updated = set(step.updated)
     kept = [
         index
-        for index, (track_id, status) in enumerate(zip(tracks.ids, tracks.statuses, strict=True))
+        for index, (track_id, status) in enumerate(
+            zip(step.columns.ids, step.columns.statuses, strict=True)
+        )
         if (status in KEPT if every else status is TrackStatus.CONFIRMED and track_id in updated)
     ]
     if not kept:
         return ()
+    tracks = step.columns
     local_states, local_covariances = tracks.states[kept], tracks.covariances[kept]
     if headings:  # module Reading: each track's headings turned into velocities
         local = [
