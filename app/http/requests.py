@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import functools
 import json
+import threading
 import typing
 from collections.abc import Callable, Coroutine
 from typing import Any
@@ -41,11 +42,25 @@ def _refuse_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     return document
 
 
+_DECODERS = threading.local()
+
+
+def _decoder() -> json.JSONDecoder:
+    """This thread's decoder (``json.loads`` builds one, its scanner included, at every call;
+    one per thread: a decoder's scanner is not shared between threads)."""
+    decoder: json.JSONDecoder | None = getattr(_DECODERS, "decoder", None)
+    if decoder is None:
+        decoder = _DECODERS.decoder = json.JSONDecoder(object_pairs_hook=_refuse_duplicates)
+    return decoder
+
+
 def parse_json(text: str | bytes) -> Any:
     """The JSON document ``text``; :class:`json.JSONDecodeError` for anything it cannot be."""
     source = text if isinstance(text, str) else text.decode("utf-8", errors="surrogatepass")
+    if source.startswith("\ufeff"):  # as json.loads refuses it
+        raise json.JSONDecodeError("Unexpected UTF-8 BOM (decode using utf-8-sig)", source, 0)
     try:
-        return json.loads(source, object_pairs_hook=_refuse_duplicates)
+        return _decoder().decode(source)
     except json.JSONDecodeError:
         raise
     except DuplicateKeyError as error:

@@ -4,8 +4,9 @@
 ``FusedTrack``) and ``tests/api/test_result_writer.py`` validates the
 writers' output against those models: :func:`step_json` for a step result
 (the per-input hot path), :func:`picture_json` for fused tracks, both written
-by orjson in C straight from the engine's views (numpy arrays and ``Source``
-dataclasses, no intermediate lists); every non-finite score of a matrix is
+by orjson in C from the step's columns (:class:`~core.fusion.reports.FusedTracks`: all
+states and all covariances turned into floats in one call each, ``Source`` dataclasses
+as they are); every non-finite score of a matrix is
 ``null``, any other non-finite number refused. ``frame=geodetic`` adds each
 track's ``geodetic`` position.
 """
@@ -25,7 +26,7 @@ from app.geo.geojson import GeodeticOutput, with_geodetic
 from app.outputs.base import OutputFormat, PlainObject
 from app.outputs.text import itemwise
 from core.fusion.classes import ClassAssessment
-from core.fusion.reports import AssociationView, FusedTrackView, StepResult
+from core.fusion.reports import AssociationView, FusedTracks, FusedTrackView, StepResult
 
 ONE_CALL_TRACKS = 200
 """A step result of at most this many tracks (~100 KB) is written in one orjson call: one C
@@ -74,19 +75,16 @@ def finite_or_none(value: float | None) -> float | None:
 def check_finite(views: Sequence[FusedTrackView]) -> None:
     """Raise ``ValueError`` naming the first track with a non-finite state or covariance.
 
-    One test over every track of the step (the arrays are small: per-track
-    calls would cost more than the test); the culprit is looked for only then.
+    One test over every track's columns (:class:`~core.fusion.reports.FusedTracks`); the
+    culprit is looked for only then.
     """
-    if not views:
+    tracks = FusedTracks.of(views)
+    if np.isfinite(tracks.states).all() and np.isfinite(tracks.covariances).all():
         return
-    states = np.concatenate([view.state for view in views])
-    covariances = np.concatenate([view.covariance.ravel() for view in views])
-    if np.isfinite(states).all() and np.isfinite(covariances).all():
-        return
-    for view in views:
-        for what, values in (("state", view.state), ("covariance", view.covariance)):
-            if not np.isfinite(values).all():
-                raise ValueError(f"fused track {view.id!r}: non-finite {what}")
+    for index, track_id in enumerate(tracks.ids):
+        for what, values in (("state", tracks.states), ("covariance", tracks.covariances)):
+            if not np.isfinite(values[index]).all():
+                raise ValueError(f"fused track {track_id!r}: non-finite {what}")
 
 
 def _class_fast(assessment: ClassAssessment | None) -> PlainObject | None:
@@ -124,22 +122,6 @@ def _class_fast(assessment: ClassAssessment | None) -> PlainObject | None:
         "decision": assessment.decision,
         "decision_state": assessment.decision_state.value,
         "summarized": assessment.summarized,
-    }
-
-
-def _track_fast(view: FusedTrackView) -> PlainObject:
-    score = float(view.score)
-    if not math.isfinite(score):
-        raise ValueError(f"fused track {view.id!r}: non-finite score")
-    return {
-        "id": view.id,
-        "status": view.status.value,
-        "state": np.ascontiguousarray(view.state, dtype=np.float64),  # finite: check_finite
-        "covariance": np.ascontiguousarray(view.covariance, dtype=np.float64),
-        "sources": view.sources,  # frozen dataclasses (sensor, track, time): the wire names
-        "classification": _class_fast(view.classification),
-        "score": score,
-        "reason": view.reason.value,
     }
 
 
@@ -208,16 +190,43 @@ def track_items(
     views: Sequence[FusedTrackView], geodetic: GeodeticOutput | None = None
 ) -> Iterator[PlainObject]:
     """Fused tracks in the contract's shape (``FusedTrack``), for :func:`wire_json`, made one
-    at a time as they are written (:func:`~app.outputs.text.itemwise`): states and
-    covariances stay numpy arrays, sources ``Source`` dataclasses (orjson writes both in C).
-    Refuses (``ValueError``, before the first) a non-finite state, covariance or score."""
-    check_finite(views)
-    if geodetic is None:
-        return (_track_fast(view) for view in views)
-    points = geodetic.points([view.state for view in views])
-    return (
-        {**_track_fast(view), "geodetic": point} for view, point in zip(views, points, strict=True)
+    at a time as they are written (:func:`~app.outputs.text.itemwise`) from the step's columns
+    (:class:`~core.fusion.reports.FusedTracks`: every state and covariance turned into floats
+    in one call each; sources ``Source`` dataclasses, which orjson writes in C). Refuses
+    (``ValueError``, before the first) a non-finite state, covariance or score."""
+    tracks = FusedTracks.of(views)
+    check_finite(tracks)
+    for track_id, score in zip(tracks.ids, tracks.scores, strict=True):
+        if not math.isfinite(score):
+            raise ValueError(f"fused track {track_id!r}: non-finite score")
+    columns = zip(
+        tracks.ids,
+        tracks.statuses,
+        tracks.states.tolist(),
+        tracks.covariances.tolist(),
+        tracks.sources,
+        tracks.classifications,
+        tracks.scores,
+        tracks.reasons,
+        strict=True,
     )
+    items = (
+        {
+            "id": track_id,
+            "status": status.value,
+            "state": state,
+            "covariance": covariance,
+            "sources": sources,  # frozen dataclasses (sensor, track, time): the wire names
+            "classification": None if classification is None else _class_fast(classification),
+            "score": score,
+            "reason": reason.value,
+        }
+        for track_id, status, state, covariance, sources, classification, score, reason in columns
+    )
+    if geodetic is None:
+        return items
+    points = geodetic.points(list(tracks.states))
+    return ({**item, "geodetic": point} for item, point in zip(items, points, strict=True))
 
 
 def track_fields(views: Sequence[FusedTrackView]) -> list[PlainObject]:

@@ -119,6 +119,7 @@ class InputPipeline:
     def __init__(self, registry: SessionRegistry) -> None:
         self.registry = registry
         self._input_series: dict[str, InputSeries] = {}
+        self._tallied: list[tuple[str, Counter]] = []
         self.in_flight = 0
         """Inputs admitted and not yet answered (the overload guard's queue: :meth:`admit`)."""
         self.tenant_in_flight: dict[str, int] = {}
@@ -542,13 +543,22 @@ class InputPipeline:
         if after is None:
             return
         before = before or ScanTally()
-        metrics = self.registry.metrics
-        for outcome in ("joined_established", "joined_tentative", "started", "unused"):
-            metrics.detections.labels(outcome).inc(
-                getattr(after, outcome) - getattr(before, outcome)
-            )
-        for event in ("confirmed", "refuted", "ended"):
-            metrics.local_tracks.labels(event).inc(getattr(after, event) - getattr(before, event))
+        for name, counter in self._tally_counters():
+            counter.inc(getattr(after, name) - getattr(before, name))
+
+    def _tally_counters(self) -> list[tuple[str, Counter]]:
+        """Each counted field of a :class:`ScanTally` with its ``/metrics`` counter (its
+        ``labels()`` once, not per input)."""
+        if not self._tallied:
+            metrics = self.registry.metrics
+            self._tallied = [
+                (outcome, metrics.detections.labels(outcome))
+                for outcome in ("joined_established", "joined_tentative", "started", "unused")
+            ] + [
+                (event, metrics.local_tracks.labels(event))
+                for event in ("confirmed", "refuted", "ended")
+            ]
+        return self._tallied
 
     async def _snapshot(self, session: LiveSession) -> None:
         """Snapshot the engine, then compact the log to ``log_retention`` inputs behind it."""
@@ -581,7 +591,8 @@ class InputPipeline:
 
 def result_message(result: str, ref: str | None = None) -> str:
     """A ``result`` WebSocket message around a result's JSON text (not serialised again)."""
-    return f'{{"type":"result","ref":{dumps(ref)},"result":{result}}}'
+    written_ref = "null" if ref is None else dumps(ref)  # most answers have no ref
+    return f'{{"type":"result","ref":{written_ref},"result":{result}}}'
 
 
 def _tally(engine: SessionEngine | None, sensor: str) -> ScanTally | None:

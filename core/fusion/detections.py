@@ -40,7 +40,7 @@ from core.fusion.reports import ReportedTrack
 from core.lifecycle import TrackStatus
 from core.models import StateLayout
 from core.tracking.models import ModelBank
-from core.tracking.track import LocalTrack, TrackerStep
+from core.tracking.track import TrackerStep
 from core.tracking.tracker import LocalTracker
 
 KEPT = (TrackStatus.CONFIRMED, TrackStatus.COASTING, TrackStatus.PHANTOM)
@@ -94,15 +94,6 @@ def heading_to_velocity(
     return mean, 0.5 * (combined + combined.T)
 
 
-def _in_velocity_convention(
-    bank: ModelBank, headings: bool, track: LocalTrack
-) -> tuple[FloatArray, FloatArray]:
-    """The local estimate ``[x, ẋ, …]`` and its covariance (headings turned into velocities)."""
-    if not headings:
-        return track.state, track.covariance
-    return heading_to_velocity(bank, track.mode_probabilities, track.state, track.covariance)
-
-
 def local_track_report(
     tracker: LocalTracker,
     step: TrackerStep,
@@ -119,28 +110,34 @@ def local_track_report(
     headings = preset is not None and preset.headings
     updated = set(step.updated)
     kept = [
-        track
-        for track in step.tracks
-        if (
-            track.status in KEPT
-            if every
-            else track.status is TrackStatus.CONFIRMED and track.id in updated
+        index
+        for index, (track_id, status) in enumerate(
+            zip(step.columns.ids, step.columns.statuses, strict=True)
         )
+        if (status in KEPT if every else status is TrackStatus.CONFIRMED and track_id in updated)
     ]
     if not kept:
         return ()
-    local = [_in_velocity_convention(tracker.bank, headings, track) for track in kept]
+    tracks = step.columns
+    local_states, local_covariances = tracks.states[kept], tracks.covariances[kept]
+    if headings:  # module Reading: each track's headings turned into velocities
+        local = [
+            heading_to_velocity(tracker.bank, tracks.mode_probabilities[index], state, covariance)
+            for index, state, covariance in zip(kept, local_states, local_covariances, strict=True)
+        ]
+        local_states = np.stack([state for state, _ in local])
+        local_covariances = np.stack([covariance for _, covariance in local])
     # every track placed on the layout at once (copies: no reported array is the tracker's)
     states = np.zeros((len(kept), layout.dim))
     covariances = np.zeros((len(kept), layout.dim, layout.dim))
-    states[:, order] = np.stack([state for state, _ in local])
-    covariances[:, order[:, None], order[None, :]] = np.stack([cov for _, cov in local])
+    states[:, order] = local_states
+    covariances[:, order[:, None], order[None, :]] = local_covariances
     return tuple(
         ReportedTrack(
-            track.id,
+            tracks.ids[index],
             state,
             covariance,
-            class_mass=track.class_mass if classes is not None else None,
+            class_mass=tracks.class_masses[index] if classes is not None else None,
         )
-        for track, state, covariance in zip(kept, states, covariances, strict=True)
+        for index, state, covariance in zip(kept, states, covariances, strict=True)
     )

@@ -51,7 +51,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections import Counter
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
@@ -69,6 +69,7 @@ from core.fusion.reorder import ReorderBuffer
 from core.fusion.reports import (
     AssociationView,
     DetectionReport,
+    FusedTracks,
     FusedTrackView,
     ReportedTrack,
     StepResult,
@@ -953,38 +954,28 @@ class SessionEngine:
             track.row = row
         self.tracks = tracks
 
-    def _views(
-        self, rows: IntArray, states: FloatArray, covariances: FloatArray
-    ) -> tuple[FusedTrackView, ...]:
-        """The tracks ``rows`` as a step shows them, with their fused states at a time; a
-        track held only by a phantom of the central tracker is shown a phantom
-        (:meth:`_unseen`)."""
+    def _views(self, rows: IntArray, states: FloatArray, covariances: FloatArray) -> FusedTracks:
+        """The tracks ``rows`` as a step shows them, with their fused states at a time, as
+        columns (no per-track view); a track held only by a phantom of the central tracker is
+        shown a phantom (:meth:`_unseen`)."""
         life = self._rows.rows.life.select(rows)
         times = self._table.times[rows].tolist()
         statuses, reasons = life.statuses(), life.reasons()
         for at, reason in self._unseen(rows).items():
             statuses[at], reasons[at] = TrackStatus.PHANTOM, reason
-        return tuple(
-            FusedTrackView(
-                id=track.id,
-                status=status,
-                reason=reason,
-                state=state,
-                covariance=covariance,
-                sources=track.sources(report_times),
-                classification=self._classify(track),
-                score=score,
-            )
-            for track, status, reason, score, report_times, state, covariance in zip(
-                [self.tracks[row] for row in rows.tolist()],
-                statuses,
-                reasons,
-                life.score.tolist(),
-                times,
-                states,
-                covariances,
-                strict=True,
-            )
+        tracks = [self.tracks[row] for row in rows.tolist()]
+        return FusedTracks(
+            ids=tuple(track.id for track in tracks),
+            statuses=tuple(statuses),
+            reasons=tuple(reasons),
+            states=states,
+            covariances=covariances,
+            sources=tuple(
+                track.sources(report_times)
+                for track, report_times in zip(tracks, times, strict=True)
+            ),
+            classifications=tuple(self._classify(track) for track in tracks),
+            scores=tuple(life.score.tolist()),
         )
 
     def _unseen(self, rows: IntArray) -> dict[int, StatusReason]:
@@ -1001,7 +992,7 @@ class SessionEngine:
         shown = established(self._rows.rows.life.status[rows]) & ~others
         return {at: reason for at, reason in held.items() if shown[at]}
 
-    def picture(self, time: float | None = None) -> tuple[FusedTrackView, ...]:
+    def picture(self, time: float | None = None) -> Sequence[FusedTrackView]:
         """The live fused tracks at ``time`` (default: the fusion time); changes nothing.
 
         The service's ``GET …/tracks``: each track's sensor estimates are

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
+from typing import overload
+
+import numpy as np
 
 from core.arrays import FloatArray
 from core.belief import MassFunction
@@ -101,6 +105,74 @@ class FusedTrackView:
     score: float
 
 
+@dataclass(frozen=True, eq=False)
+class FusedTracks(Sequence[FusedTrackView]):
+    """Fused tracks as columns, a row per track (what a step shows): the writers read the
+    columns (one array of states, one of covariances); a :class:`FusedTrackView` is made only
+    when a track is asked for by index or iteration. ``states`` (n, d) and ``covariances``
+    (n, d, d) are the fused estimates, ``scores`` the SPRT scores, the others a value per
+    track."""
+
+    ids: tuple[str, ...]
+    statuses: tuple[TrackStatus, ...]
+    reasons: tuple[StatusReason, ...]
+    states: FloatArray
+    covariances: FloatArray
+    sources: tuple[tuple[Source, ...], ...]
+    classifications: tuple[ClassAssessment | None, ...]
+    scores: tuple[float, ...]
+
+    @classmethod
+    def of(cls, views: Sequence[FusedTrackView]) -> FusedTracks:
+        """The columns of ``views`` (themselves when they are columns already)."""
+        if isinstance(views, FusedTracks):
+            return views
+        dim = len(views[0].state) if views else 0
+        shape = (len(views), dim)
+        return cls(
+            ids=tuple(view.id for view in views),
+            statuses=tuple(view.status for view in views),
+            reasons=tuple(view.reason for view in views),
+            states=np.array([view.state for view in views], dtype=np.float64).reshape(shape),
+            covariances=np.array([view.covariance for view in views], dtype=np.float64).reshape(
+                (*shape, dim)
+            ),
+            sources=tuple(view.sources for view in views),
+            classifications=tuple(view.classification for view in views),
+            scores=tuple(view.score for view in views),
+        )
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def view(self, index: int) -> FusedTrackView:
+        """Track ``index`` as a :class:`FusedTrackView` (its arrays are rows of the columns)."""
+        return FusedTrackView(
+            id=self.ids[index],
+            status=self.statuses[index],
+            reason=self.reasons[index],
+            state=self.states[index],
+            covariance=self.covariances[index],
+            sources=self.sources[index],
+            classification=self.classifications[index],
+            score=self.scores[index],
+        )
+
+    @overload
+    def __getitem__(self, index: int) -> FusedTrackView: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> tuple[FusedTrackView, ...]: ...
+
+    def __getitem__(self, index: int | slice) -> FusedTrackView | tuple[FusedTrackView, ...]:
+        if isinstance(index, slice):
+            return tuple(self.view(at) for at in range(len(self))[index])
+        return self.view(range(len(self))[index])
+
+    def __iter__(self) -> Iterator[FusedTrackView]:
+        return (self.view(index) for index in range(len(self)))
+
+
 @dataclass(frozen=True)
 class AssociationView:
     """The association decision of a step, by ids.
@@ -123,10 +195,11 @@ class AssociationView:
 
 @dataclass(frozen=True)
 class StepResult:
-    """The result of applying one input: every live fused track at ``time``."""
+    """The result of applying one input: every live fused track at ``time`` (the engine gives
+    them as :class:`FusedTracks`)."""
 
     seq: int
     time: float
     sensor: str
-    tracks: tuple[FusedTrackView, ...]
+    tracks: Sequence[FusedTrackView]
     association: AssociationView

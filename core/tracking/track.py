@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -94,6 +95,43 @@ class LocalTrack:
         }
 
 
+@dataclass(frozen=True, eq=False)
+class LocalTracks:
+    """A scan's local tracks as columns, a row per track in id-number order: what the fusion
+    step reads (:func:`core.fusion.detections.local_track_report`) without a
+    :class:`LocalTrack` per track. ``states`` (n, s), ``covariances`` (n, s, s) and
+    ``mode_probabilities`` (n, r) are arrays; the others hold a value per track."""
+
+    ids: tuple[str, ...]
+    statuses: tuple[TrackStatus, ...]
+    reasons: tuple[StatusReason, ...]
+    states: FloatArray
+    covariances: FloatArray
+    mode_probabilities: FloatArray
+    scores: tuple[float, ...]
+    hits: tuple[int, ...]
+    class_masses: tuple[MassFunction | None, ...]
+    pignistic: tuple[FloatArray | None, ...]
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def track(self, index: int) -> LocalTrack:
+        """Row ``index`` as a :class:`LocalTrack` (its arrays are rows of the columns)."""
+        return LocalTrack(
+            id=self.ids[index],
+            status=self.statuses[index],
+            reason=self.reasons[index],
+            state=self.states[index],
+            covariance=self.covariances[index],
+            mode_probabilities=self.mode_probabilities[index],
+            score=self.scores[index],
+            hits=self.hits[index],
+            class_mass=self.class_masses[index],
+            pignistic=self.pignistic[index],
+        )
+
+
 TALLY_FIELDS = (
     "detections",
     "joined_established",
@@ -165,9 +203,10 @@ class TrackerStep:
     ----------
     time : float
     sensor : str
-    tracks : tuple of LocalTrack
+    columns : LocalTracks
         Every track alive after the scan and every track terminated during
-        it (status ``terminated`` with its reason), by id number.
+        it (status ``terminated`` with its reason), by id number; ``tracks``: the same
+        as :class:`LocalTrack` values (made when first asked for).
     assignment : tuple of (str or None)
         Per detection, in input order: the id of the track it updated or
         started (after any phantom hand-over), or None (a seed of two-point
@@ -176,11 +215,16 @@ class TrackerStep:
 
     time: float
     sensor: str
-    tracks: tuple[LocalTrack, ...]
+    columns: LocalTracks
     assignment: tuple[str | None, ...]
     tally: ScanTally = field(default_factory=lambda: ScanTally())
     clutter_density: float = math.nan
     updated: tuple[str, ...] = ()
+
+    @cached_property
+    def tracks(self) -> tuple[LocalTrack, ...]:
+        """Every track of :attr:`columns` as a :class:`LocalTrack`."""
+        return tuple(self.columns.track(index) for index in range(len(self.columns)))
 
     def track(self, track_id: str) -> LocalTrack:
         """The track with that id (KeyError when absent)."""

@@ -111,7 +111,7 @@ from core.tracking.initiator import pair_seeds, single_point_initiation, two_poi
 from core.tracking.presets import VELOCITY, TrackingPreset, VelocityConvention
 from core.tracking.range_rate import range_rate_update, require_velocities
 from core.tracking.track import (
-    LocalTrack,
+    LocalTracks,
     ScanTally,
     TrackerStep,
     float_array,
@@ -1010,50 +1010,48 @@ class LocalTracker:
         updated: IntArray,
     ) -> TrackerStep:
         means, covariances = self._state.combined()
-        mu = self._state.mode_probabilities
         own = self._rows.numbers
         order = np.argsort(own, kind="stable")
+        rows = order.tolist()
         classes = self._classes
-        class_masses: list[MassFunction | None] = [None] * len(order)
-        pignistic: list[FloatArray | None] = [None] * len(order)
+        class_masses: tuple[MassFunction | None, ...] = (None,) * len(rows)
+        pignistic: tuple[FloatArray | None, ...] = (None,) * len(rows)
         if self.classifier is not None and classes is not None:
-            class_masses = list(self.classifier.class_mass_functions(classes))
-            pignistic = [
-                row_betp if defined else None
-                for row_betp, defined in zip(
-                    classes.pignistic, classes.defined.tolist(), strict=True
-                )
-            ]
+            masses = self.classifier.class_mass_functions(classes)
+            defined = classes.defined.tolist()
+            class_masses = tuple(masses[row] for row in rows)
+            pignistic = tuple(classes.pignistic[row] if defined[row] else None for row in rows)
         life = self._rows.life
-        # plain ints and floats once for every track, not one numpy scalar per field and track
-        track_numbers, statuses, reasons = own.tolist(), life.status.tolist(), life.reason.tolist()
-        scores, hits = life.score.tolist(), life.hits.tolist()
-        tracks = [
-            LocalTrack(
-                id=self._track_id(track_numbers[row]),
-                status=STATUSES[statuses[row]],
-                reason=REASONS[reasons[row]],
-                state=means[row],
-                covariance=covariances[row],
-                mode_probabilities=mu[row],
-                score=scores[row],
-                hits=hits[row],
-                class_mass=class_masses[row],
-                pignistic=pignistic[row],
-            )
-            for row in order.tolist()
-        ]
+        numbers_in_order = own[order].tolist()
+        ids = {number: self._track_id(number) for number in numbers_in_order}
+        # every track's fields as columns in id order: plain ints and floats once for all
+        tracks = LocalTracks(
+            ids=tuple(ids.values()),
+            statuses=tuple(STATUSES[code] for code in life.status[order].tolist()),
+            reasons=tuple(REASONS[code] for code in life.reason[order].tolist()),
+            states=means[order],
+            covariances=covariances[order],
+            mode_probabilities=self._state.mode_probabilities[order],
+            scores=tuple(life.score[order].tolist()),
+            hits=tuple(life.hits[order].tolist()),
+            class_masses=class_masses,
+            pignistic=pignistic,
+        )
         self._keep(self._rows.alive)
         self.time = time
-        assignment = tuple(None if n < 0 else self._track_id(int(n)) for n in numbers.tolist())
+        # each detection's and each updated track's id (a number the scan's tracks have; the
+        # id is made anew only for one they do not)
+        assignment = tuple(
+            None if n < 0 else ids.get(n) or self._track_id(n) for n in numbers.tolist()
+        )
         return TrackerStep(
             time=time,
             sensor=sensor,
-            tracks=tuple(tracks),
+            columns=tracks,
             assignment=assignment,
             tally=tally,
             clutter_density=clutter,
-            updated=tuple(self._track_id(int(n)) for n in np.unique(updated).tolist()),
+            updated=tuple(ids.get(n) or self._track_id(n) for n in np.unique(updated).tolist()),
         )
 
     def _keep(self, rows: IntArray) -> None:
