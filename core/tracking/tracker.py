@@ -220,6 +220,8 @@ class LocalTracker:
         self._coverage = config.coverage
         self._views = dict(config.fields_of_view)
         self._volumes = dict(config.volumes)
+        # each coverage volume's size, m³: the default birth density (§8.12)
+        self._measures = {name: volume.measure for name, volume in self._volumes.items()}
         # The state: one row per live track.
         self.time: float | None = None
         self.next_number = 1
@@ -400,7 +402,7 @@ class LocalTracker:
             else own_noise
         )
         claimed_any = bool(np.any(established(self._rows.life.status)))
-        score = self._scan_score(sensor_name, z, noises, counted=not claimed_any)
+        score = self._scan_score(sensor_name, time, z, noises, counted=not claimed_any)
         prediction = predict_bank(self.predictor, self._state, elapsed)
         first, latest = self._detection_times.T
         # §8.3: at an instant it was hit at, a tentative track's detections are positions
@@ -527,10 +529,11 @@ class LocalTracker:
         return self._result(time, sensor_name, numbers, tally, score.false_target_density, updated)
 
     def _scan_score(
-        self, sensor: str, z: FloatArray, noises: FloatArray, counted: bool
+        self, sensor: str, time: float, z: FloatArray, noises: FloatArray, counted: bool
     ) -> ScoreModel:
         """The SPRT of this scan: its sensor's P_D and β_FT, given or estimated
-        (:mod:`core.tracking.clutter`). ``counted``: no established track could claim a
+        (:mod:`core.tracking.clutter`), and its β_NT (§8.12: of its coverage volume when
+        it has one). ``counted``: no established track could claim a
         detection, so every one counts (and widens the region) before the scan is scored."""
         p_detect, clutter = self.config.physics(sensor)
         if clutter is None:
@@ -539,7 +542,14 @@ class LocalTracker:
             clutter = self.clutter_density(sensor)
             if clutter is None:  # nothing seen yet: the prior of one false alarm per km^q
                 clutter = default_density(self._q)
-        return self.config.life_cycle.scan_score(p_detect, clutter)
+        # the births since the sensor last looked (at its first scan: over the nominal period)
+        latest = float(self._scan_times[self.config.sensors.index(sensor), 1])
+        since = time - latest if math.isfinite(latest) else 0.0
+        if not since > 0.0:
+            since = self.config.time_interval
+        return self.config.life_cycle.scan_score(
+            p_detect, clutter, self._measures.get(sensor), since
+        )
 
     def _counted(self, sensor: str, z: FloatArray, noises: FloatArray) -> ClutterEstimate:
         """The sensor's estimate after a scan's unclaimed detections ``z`` (their noises)."""
