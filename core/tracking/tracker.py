@@ -71,6 +71,7 @@ from core.classification.calibration import (
     sharp_predictions,
 )
 from core.distance.estimates import check_covariances
+from core.distance.pairwise import chi2_quantile
 from core.errors import TrackingError
 from core.lifecycle import (
     CONFIRMED,
@@ -95,7 +96,7 @@ from core.lifecycle import (
 from core.models.measurement import MeasurementModel, Polar
 from core.pipeline.evidence import (
     coasting_misses,
-    coverage_codes,
+    gate_coverage,
     hits,
     seen_by,
     sensor_miss_runs,
@@ -220,6 +221,7 @@ class LocalTracker:
         self._coverage = config.coverage
         self._views = dict(config.fields_of_view)
         self._volumes = dict(config.volumes)
+        self._visibility_gate = chi2_quantile(config.life_cycle.gate_probability, self._q)
         # each coverage volume's size, m³: the default birth density (§8.12)
         self._measures = {name: volume.measure for name, volume in self._volumes.items()}
         # The state: one row per live track.
@@ -415,7 +417,8 @@ class LocalTracker:
         positions, gates = prediction.combined_measurement()
         before = self._rows.life
         status = before.status
-        codes = coverage_codes(self._coverage, positions)
+        # §8.11: a track is in a blind zone when no sensor sees any of its gate
+        codes, gate_seen = gate_coverage(self._coverage, positions, gates, self._visibility_gate)
         seen, hidden = seen_by(
             self._views[sensor_name],
             positions,
@@ -424,6 +427,7 @@ class LocalTracker:
             self._volumes.get(sensor_name),
         )
         column = self._column = self.config.sensors.index(sensor_name)
+        seen = seen | gate_seen[column]
         counted = seen & self._carried(column, status)
         candidates = np.flatnonzero((status != PHANTOM) & self._can_be_hit(prediction, score))
         association = self._associator.associate(
