@@ -108,7 +108,8 @@ def default_birth_density(
     """β_NT when the user gave none: the :data:`BIRTH_RATE` of new targets over the
     ``interval`` (s) since the sensor last looked, spread over its coverage volume V, never
     above β_FT — ``min(β_FT, BIRTH_RATE · interval / V)``; β_FT (prior odds 1) when V is
-    unknown or infinite (docs/algorithms.md §8.12).
+    unknown or infinite, or the interval is (the sensor's first scan: every target in its
+    coverage is new to it) (docs/algorithms.md §8.12).
 
     The start score ``L₀ = ln(β_NT/β_FT)`` is then ``ln(births / false alarms)`` of one scan
     in the coverage: a 12 s radar with 30 false alarms a scan starts at ln(0.2/30) = −5.0,

@@ -546,9 +546,10 @@ class LocalTracker:
             clutter = self.clutter_density(sensor)
             if clutter is None:  # nothing seen yet: the prior of one false alarm per km^q
                 clutter = default_density(self._q)
-        # the births since the sensor last looked (at its first scan: over the nominal period)
+        # the births since the sensor last looked; at its first scan every target is new to
+        # it (no bound: β_FT's cap, prior odds 1)
         latest = float(self._scan_times[self.config.sensors.index(sensor), 1])
-        since = time - latest if math.isfinite(latest) else 0.0
+        since = time - latest if math.isfinite(latest) else math.inf
         if not since > 0.0:
             since = self.config.time_interval
         return self.config.life_cycle.scan_score(

@@ -77,6 +77,8 @@ def test_the_default_birth_density_is_a_new_target_a_minute_in_the_coverage() ->
     assert score.initial == pytest.approx(math.log(0.2 / 30.0))
     # never above β_FT: a quiet sensor (0.01 false alarms a scan) keeps prior odds 1
     assert default_birth_density(0.01 / volume, volume, 12.0) == 0.01 / volume
+    # a sensor's first scan (no previous one): every target is new to it, β_FT
+    assert default_birth_density(clutter, volume, math.inf) == clutter
     # no coverage volume: β_FT, as before; a given birth density wins
     assert LifeCycleConfig().scan_score(0.9, clutter).initial == 0.0
     given = LifeCycleConfig(new_target_density=1e-17).scan_score(0.9, clutter, volume, 12.0)
@@ -138,31 +140,40 @@ def _confirmed(birth_density: float | None, seeds: range) -> int:
     return total
 
 
+def _pairs(clutter: float, start: float, scans: int) -> float:
+    """Expected false alarms, ``scans`` scans after a start of score ``start`` (which missed
+    the scans between), that bring it to L ≥ 0: those in the ellipsoid D ≤ D* = 2(ΔL_max +
+    start), within the 0.999 gate, of S = (2σ² + σ_v²Δt² + qΔt³/3) I, Δt = scans × 12 s
+    (Poisson: β_FT × its volume (4π/3) D*^{3/2} √|S|)."""
+    interval = scans * PERIOD
+    spread = 2 * SIGMA**2 + VELOCITY_STD**2 * interval**2 + interval**3 / 3
+    root_det = spread**1.5
+    best = math.log(0.9 / ((2 * math.pi) ** 1.5 * clutter * root_det))
+    reach = min(max(2 * (best + start), 0.0), chi2.ppf(0.999, 3))
+    return clutter * 4 * math.pi / 3 * reach**1.5 * root_det
+
+
 def test_a_radar_seeing_only_clutter_confirms_what_the_poisson_count_gives() -> None:
     """By hand. β_FT = 30/V, V = 2π/3 (100 km)³ sin 30° = 1.047e15 m³. A start (one
     detection, L₀ = ln(0.2/30) = −5.01) that misses falls to L₀ + ln 0.1 = −7.31, below the
     delete threshold ln(β/(1 − α)) = −6.91: only its next scan's detections can confirm it.
-    Their innovation covariance is S = (2σ² + σ_v²ΔT² + qΔT³/3) I (σ 200 m, σ_v 50 m/s,
-    ΔT 12 s, q 1): s = 440 576 m², √|S| = s^{3/2}; a hit adds ΔL = ln[P_D / ((2π)^{3/2} β_FT
-    √|S|)] − D/2, so min_points (two hits, L ≥ 0) confirms the pairs at D ≤ D* = 2(ΔL_max +
-    L₀) = 7.6. Each start has a Poisson number of false alarms in that ellipsoid, mean β_FT
-    · (4π/3) D*^{3/2} √|S| ≈ 7.4e-4; 30 starts a scan, 39 scans to a run: 0.87 confirmed a
-    run (pairs that stay under 0 and a third detection in their gate add a few %). With
-    prior odds 1 (β_NT = β_FT, the rule before) a start lives through two misses and its
-    gate grows: several times more."""
-    volume = RADAR.measure
-    clutter = FALSE_ALARMS / volume
+    A hit adds ΔL = ln[P_D / ((2π)^{3/2} β_FT √|S|)] − D/2, so min_points (two hits, L ≥ 0)
+    confirms the pairs at D ≤ D* = 2(ΔL_max + L₀) = 7.6 (:func:`_pairs`): 7.4e-4 a start,
+    30 starts a scan, 39 scans to a run: 0.87 a run. The first scan's starts are at prior
+    odds 1 (everything is new to a sensor's first look): they confirm with a false alarm
+    anywhere in their gate one scan later, or, having missed one or two scans (L = −2.3,
+    −4.6), in their wider gates two or three scans later: 0.34 a run. Pairs that stay under
+    0 and a third detection in their gate add a few %. With prior odds 1 at every scan (the
+    rule before) every start lives through two misses: several times more."""
+    clutter = FALSE_ALARMS / RADAR.measure
     start = math.log(BIRTH_RATE * PERIOD / FALSE_ALARMS)
     assert start + math.log(0.1) < math.log(1e-3 / (1 - 1e-3))
-    spread = 2 * SIGMA**2 + VELOCITY_STD**2 * PERIOD**2 + PERIOD**3 / 3
-    root_det = spread**1.5
-    best = math.log(0.9 / ((2 * math.pi) ** 1.5 * clutter * root_det))
-    reach = 2 * (best + start)
-    assert 7.5 < reach < chi2.ppf(0.999, 3)
-    per_start = clutter * 4 * math.pi / 3 * reach**1.5 * root_det
+    per_run = FALSE_ALARMS * (SCANS - 1) * _pairs(clutter, start, 1)
+    assert per_run == pytest.approx(0.87, rel=0.05)
+    first = FALSE_ALARMS * sum(_pairs(clutter, k * math.log(0.1), k + 1) for k in range(3))
+    assert first == pytest.approx(0.34, rel=0.05)
     runs = range(6)
-    expected = len(runs) * FALSE_ALARMS * (SCANS - 1) * per_start
-    assert expected == pytest.approx(6 * 0.87, rel=0.05)
+    expected = len(runs) * (per_run + first)
     found = _confirmed(None, runs)
     low, high = poisson.ppf([0.001, 0.999], expected * 1.1)
     assert low <= found <= high
