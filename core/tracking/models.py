@@ -160,8 +160,7 @@ class MotionMatrices:
 def _structure(
     speeds: FloatArray, accelerations: FloatArray, intensities: FloatArray, forms: Sequence[str]
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Coefficients of the closed forms (module docstring) of r models at once;
-    ``intensities`` (r, axes): q of each model's each axis.
+    """Coefficients of the closed forms (module docstring) of r models at once.
 
     Returns ``E`` (r, n, n) with ``F = I + Δt E``; ``b1, b2`` (r, n) with
     ``B u = Δt b1 + Δt² b2``; ``C`` (r, 4, n, n) with ``Q = Σ_k Δt^{k+1} C_k``.
@@ -177,7 +176,7 @@ def _structure(
     b2[:, pos] = accelerations / 2.0
     noise = np.zeros((models, 4, n, n))
     for j, form in enumerate(forms):
-        q = intensities[j]  # one per axis
+        q = intensities[j]
         # (power of Δt) − 1 of the pp, pv, vv terms, and their coefficients
         if form == "discrete":  # q [[Δt⁴/4, Δt³/2], [Δt³/2, Δt²]]
             terms = ((3, q / 4.0), (2, q / 2.0), (1, q))
@@ -224,8 +223,6 @@ class MotionModel:
         q (module docstring).
     noise : "discrete" | "continuous"
         The form of Q(Δt) (module docstring).
-    vertical_noise_intensity : float or None
-        q of the third (vertical) axis of a 3-D model; None: ``noise_intensity``.
     """
 
     name: str
@@ -234,7 +231,6 @@ class MotionModel:
     speeds: tuple[float, ...]
     noise_intensity: float
     noise: NoiseForm = "discrete"
-    vertical_noise_intensity: float | None = None
 
     def __post_init__(self) -> None:
         _check_positive(self.time_interval, f"model {self.name!r} time_interval")
@@ -247,10 +243,6 @@ class MotionModel:
         if not all(math.isfinite(v) for v in (*self.acceleration, *self.speeds)):
             raise ModelConfigError(f"model {self.name!r}: accelerations and speeds must be finite")
         _check_noise_intensity(self.noise_intensity, self.name)
-        if self.vertical_noise_intensity is not None:
-            _check_noise_intensity(self.vertical_noise_intensity, self.name)
-            if axes != 3:
-                raise ModelConfigError(f"model {self.name!r}: a vertical noise needs 3 axes")
         if self.noise not in NOISE_FORMS:
             raise ModelConfigError(f"model {self.name!r}: noise must be one of {NOISE_FORMS}")
 
@@ -264,20 +256,12 @@ class MotionModel:
         """State dimension n = 2 × axes."""
         return 2 * self.axes
 
-    @property
-    def axis_noise(self) -> tuple[float, ...]:
-        """q of each axis."""
-        plain = (self.noise_intensity,) * self.axes
-        if self.vertical_noise_intensity is None:
-            return plain
-        return (*plain[:2], self.vertical_noise_intensity)
-
     @cached_property
     def _structure(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         return _structure(
             np.array([self.speeds], dtype=np.float64),
             np.array([self.acceleration], dtype=np.float64),
-            np.array([self.axis_noise], dtype=np.float64),
+            np.array([self.noise_intensity], dtype=np.float64),
             [self.noise],
         )
 
@@ -337,7 +321,6 @@ def acceleration_input(
     noise_intensity: float,
     name: str,
     noise: NoiseForm = "discrete",
-    vertical_noise_intensity: float | None = None,
 ) -> MotionModel:
     """Constant velocity driven by a constant acceleration input ([MTT] eq 24).
 
@@ -351,7 +334,6 @@ def acceleration_input(
         q ([MTT] §6.1.1 uses 0.005 in ``Q = q B Bᵀ``).
     name : str
     noise : the form of Q(Δt) (module docstring).
-    vertical_noise_intensity : q of the third axis (3-D), None: ``noise_intensity``.
     """
     _check_positive(time_interval, "time_interval")
     values = _finite_axes(acceleration, f"model {name!r} acceleration")
@@ -362,7 +344,6 @@ def acceleration_input(
         speeds=(1.0,) * len(values),
         noise_intensity=_check_noise_intensity(noise_intensity, name),
         noise=noise,
-        vertical_noise_intensity=vertical_noise_intensity,
     )
 
 
@@ -453,7 +434,7 @@ class _BankCore:
         self.structure = _structure(
             np.array([m.speeds for m in models], dtype=np.float64),
             np.array([m.acceleration for m in models], dtype=np.float64),
-            np.array([m.axis_noise for m in models], dtype=np.float64),
+            np.array([m.noise_intensity for m in models], dtype=np.float64),
             [m.noise for m in models],
         )
         self.mode_transition = transition
@@ -548,7 +529,7 @@ class ModelBank:
         if np.any(transition < 0.0) or np.any(np.abs(transition.sum(axis=1) - 1.0) > 1e-9):
             raise ModelConfigError("mode transition rows must be non-negative and sum to 1")
         parameters = np.array(
-            [(m.time_interval, *m.axis_noise, *m.acceleration, *m.speeds) for m in self.models],
+            [(m.time_interval, m.noise_intensity, *m.acceleration, *m.speeds) for m in self.models],
             dtype=np.float64,
         )
         # the parameters' bytes keep apart what == would not (0.0 and −0.0)

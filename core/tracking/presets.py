@@ -25,9 +25,7 @@ the rest spread evenly (option ``stay``), per nominal scan ΔT
 **3-D** (option ``axes=3``, a session whose state has three positions): the
 papers' banks are planar, so each model keeps its horizontal part and adds a
 vertical constant-velocity axis ``[z, ż]`` with no input, speed factor 1 (ż is
-a velocity, in both presets) and ``Q = q B Bᵀ`` on that axis — the preset's q
-(pedestrian), or :data:`VERTICAL_ACCELERATION` ² (aircraft: climbs, level-offs
-and flares are not the papers' planar cruise);
+a velocity, in both presets) and the preset's ``Q = q B Bᵀ`` on that axis;
 H picks x, y, z with the same R variance. The behaviours and classes are
 those of the horizontal motion.
 
@@ -57,12 +55,6 @@ from core.tracking.models import (
 
 GRAVITY = 9.81
 """g in m/s² ([MTT] §6.1.1)."""
-
-VERTICAL_ACCELERATION = 0.1 * GRAVITY
-"""σ (m/s²) of the 3-D aircraft bank's vertical white-noise acceleration, ``q = σ²`` on that
-axis: the papers' 0.005 (σ 0.07 m/s²) is planar cruise; an airliner's level-off, flare or
-go-around pull-up changes its vertical speed by 10–20 m/s in 5–15 s (docs/algorithms.md
-§8.13)."""
 
 VelocityConvention = Literal["velocity", "heading"]
 VELOCITY: VelocityConvention = "velocity"
@@ -175,14 +167,9 @@ def aircraft(
 ) -> TrackingPreset:
     """The 13-model aircraft preset of [MTT] §6.1 (see the module docstring)."""
     vertical = (0.0,) * (_check_axes(axes) - 2)
-    climbing = VERTICAL_ACCELERATION**2 if vertical else None
     models = tuple(
         acceleration_input(
-            time_interval,
-            (ax * GRAVITY, ay * GRAVITY, *vertical),
-            noise_intensity,
-            f"m{i + 1}",
-            vertical_noise_intensity=climbing,
+            time_interval, (ax * GRAVITY, ay * GRAVITY, *vertical), noise_intensity, f"m{i + 1}"
         )
         for i, (ax, ay) in enumerate(AIRCRAFT_ACCELERATIONS)
     )

@@ -242,15 +242,14 @@ def test_a_moderate_gap_keeps_the_tracks() -> None:
 
 @pytest.mark.parametrize("factory", [aircraft, pedestrian])
 def test_3d_presets_add_a_vertical_constant_velocity_axis(factory: object) -> None:
-    """Horizontal blocks as in 2-D; z: F = [[1, Δt], [0, 1]], no input, q B Bᵀ (the aircraft's
-    q = (0.1 g)² = 0.981², docs/algorithms.md §8.13; the pedestrian's its own); H picks x, y, z."""
+    """Horizontal blocks as in 2-D; z: F = [[1, Δt], [0, 1]], no input, q B Bᵀ; H picks x, y, z."""
     flat, spatial = factory(), factory(axes=3)  # type: ignore[operator]
     dt = 1.7
     planar, full = flat.bank.at(dt), spatial.bank.at(dt)
     np.testing.assert_array_equal(full.transition[:, :4, :4], planar.transition)
     np.testing.assert_array_equal(full.process_noise[:, :4, :4], planar.process_noise)
     np.testing.assert_array_equal(full.input_offset[:, :4], planar.input_offset)
-    q = 0.981**2 if factory is aircraft else spatial.bank.models[0].noise_intensity
+    q = spatial.bank.models[0].noise_intensity
     b = np.array([dt**2 / 2, dt])
     for j in range(spatial.bank.n_models):
         np.testing.assert_array_equal(full.transition[j, 4:, 4:], [[1, dt], [0, 1]])
