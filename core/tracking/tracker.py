@@ -71,6 +71,7 @@ from core.classification.calibration import (
     sharp_predictions,
 )
 from core.distance.estimates import check_covariances
+from core.distance.pairwise import chi2_quantile
 from core.errors import TrackingError
 from core.lifecycle import (
     CONFIRMED,
@@ -95,7 +96,7 @@ from core.lifecycle import (
 from core.models.measurement import MeasurementModel, Polar
 from core.pipeline.evidence import (
     coasting_misses,
-    coverage_codes,
+    gate_coverage,
     hits,
     seen_by,
     sensor_miss_runs,
@@ -222,6 +223,9 @@ class LocalTracker:
         self._coverage = config.coverage
         self._views = dict(config.fields_of_view)
         self._volumes = dict(config.volumes)
+        self._visibility_gate = chi2_quantile(config.life_cycle.gate_probability, self._q)
+        # each coverage volume's size, m³: the default birth density (§8.12)
+        self._measures = {name: volume.measure for name, volume in self._volumes.items()}
         # The state: one row per live track.
         self.time: float | None = None
         self.next_number = 1
@@ -402,7 +406,7 @@ class LocalTracker:
             else own_noise
         )
         claimed_any = bool(np.any(established(self._rows.life.status)))
-        score = self._scan_score(sensor_name, z, noises, counted=not claimed_any)
+        score = self._scan_score(sensor_name, time, z, noises, counted=not claimed_any)
         prediction = predict_bank(self.predictor, self._state, elapsed)
         first, latest = self._detection_times.T
         # §8.3: at an instant it was hit at, a tentative track's detections are positions
@@ -415,7 +419,8 @@ class LocalTracker:
         positions, gates = prediction.combined_measurement()
         before = self._rows.life
         status = before.status
-        codes = coverage_codes(self._coverage, positions)
+        # §8.11: a track is in a blind zone when no sensor sees any of its gate
+        codes, gate_seen = gate_coverage(self._coverage, positions, gates, self._visibility_gate)
         seen, hidden = seen_by(
             self._views[sensor_name],
             positions,
@@ -424,6 +429,7 @@ class LocalTracker:
             self._volumes.get(sensor_name),
         )
         column = self._column = self.config.sensors.index(sensor_name)
+        seen = seen | gate_seen[column]
         counted = seen & self._carried(column, status)
         candidates = np.flatnonzero((status != PHANTOM) & self._can_be_hit(prediction, score))
         association = self._associator.associate(
@@ -529,10 +535,11 @@ class LocalTracker:
         return self._result(time, sensor_name, numbers, tally, score.false_target_density, updated)
 
     def _scan_score(
-        self, sensor: str, z: FloatArray, noises: FloatArray, counted: bool
+        self, sensor: str, time: float, z: FloatArray, noises: FloatArray, counted: bool
     ) -> ScoreModel:
         """The SPRT of this scan: its sensor's P_D and β_FT, given or estimated
-        (:mod:`core.tracking.clutter`). ``counted``: no established track could claim a
+        (:mod:`core.tracking.clutter`), and its β_NT (§8.12: of its coverage volume when
+        it has one). ``counted``: no established track could claim a
         detection, so every one counts (and widens the region) before the scan is scored."""
         p_detect, clutter = self.config.physics(sensor)
         if clutter is None:
@@ -541,7 +548,15 @@ class LocalTracker:
             clutter = self.clutter_density(sensor)
             if clutter is None:  # nothing seen yet: the prior of one false alarm per km^q
                 clutter = default_density(self._q)
-        return self.config.life_cycle.scan_score(p_detect, clutter)
+        # the births since the sensor last looked; at its first scan every target is new to
+        # it (no bound: β_FT's cap, prior odds 1)
+        latest = float(self._scan_times[self.config.sensors.index(sensor), 1])
+        since = time - latest if math.isfinite(latest) else math.inf
+        if not since > 0.0:
+            since = self.config.time_interval
+        return self.config.life_cycle.scan_score(
+            p_detect, clutter, self._measures.get(sensor), since
+        )
 
     def _counted(self, sensor: str, z: FloatArray, noises: FloatArray) -> ClutterEstimate:
         """The sensor's estimate after a scan's unclaimed detections ``z`` (their noises)."""
