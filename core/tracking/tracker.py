@@ -564,18 +564,19 @@ class LocalTracker:
     ) -> FloatArray:
         """ln of each detection's share of β_NT (docs/algorithms.md §8.9): 0 (all of it, at
         every scan: the SPRT of one sensor) unless the sensors share the births, then the
-        undetected targets' intensity where it lies that this scan detects.
+        part of the undetected targets' intensity where it lies that this scan detects.
 
-        The intensity is one number per coverage cell — the sensors whose coverage contains
-        a place (:func:`seen_by`, no occlusion) — in units of β_NT ([PMBM] the undetected
-        targets' Poisson intensity): births of β_NT per ΔT (``time_interval``) everywhere,
-        each scan thins the cells its sensor covers by 1 − P_D and detects P_D of it. A
-        detection's cell has its own sensor in any case (it saw there). A cell starts at
-        1/P_D at the first detection in it (a sensor alone's β_NT at its first scan), so
-        a cell that one sensor scans every ΔT (the papers' sensors of fields of view that
-        do not overlap) detects β_NT at every scan, as before. A sensor whose coverage is
-        not given (no field of view, no volume) shares nothing: where it looks is unknown,
-        so its scans neither thin the cells nor take a share; they keep all of β_NT."""
+        The intensity (the undetected targets' Poisson intensity of the PMBM filter
+        [Williams 2015]) is one number per coverage cell — the sensors whose coverage
+        contains a place (:func:`seen_by`, no occlusion) — in units of β_NT: births of
+        β_NT per ΔT (``time_interval``) everywhere, and each scan thins the cells its
+        sensor covers by 1 − P_D and detects P_D of it. A detection's cell has its own
+        sensor in any case (it saw there). A cell starts at 1/P_D at the first detection
+        in it (a sensor alone's β_NT at its first scan), so a cell that one sensor scans
+        every ΔT (the papers' sensors of fields of view that do not overlap) detects β_NT
+        at every scan, as before. A sensor whose coverage is not given (no field of view,
+        no volume) shares nothing: where it looks is unknown, so its scans neither thin
+        the cells nor take a share; they keep all of β_NT."""
         shares = np.zeros(len(z))
         step = elapsed / self.config.time_interval
         cells = {cell: share + step for cell, share in self._births.items()}

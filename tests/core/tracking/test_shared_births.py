@@ -35,7 +35,10 @@ def box(x0: float, x1: float) -> PolygonView:
     return PolygonView(((x0, 0.0), (x1, 0.0), (x1, 2000.0), (x0, 2000.0)))
 
 
-def central(b_view: PolygonView | None = box(1000.0, 3000.0)) -> LocalTracker:
+B_VIEW = box(1000.0, 3000.0)
+
+
+def central(b_view: PolygonView | None = B_VIEW) -> LocalTracker:
     """The central tracker of ``a`` and ``b`` (module docstring; ``b_view`` None: b's
     coverage not given)."""
     bank = ModelBank(
