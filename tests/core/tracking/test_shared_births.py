@@ -154,3 +154,29 @@ def test_a_sensors_silence_outside_its_view_does_not_count() -> None:
     assert scores == pytest.approx([L0, L0 + math.log(1.0 - P_B)], abs=1e-12)
     later = tracker.step(1.0, [[500.0, 1500.0]], sensor="a")
     assert started(later) == pytest.approx([L0], abs=1e-12)
+
+
+def test_the_births_export_and_restore_exactly() -> None:
+    """The cells' intensities ride with the export (``births``): a tracker restored from
+    it continues as the one exported, bit for bit; an export without them (an older
+    one) restores with none."""
+    scans = [
+        (0.0, "a", [[500.0, 500.0], [1500.0, 500.0]]),
+        (0.5, "b", [[1500.0, 1500.0], [2500.0, 500.0]]),
+        (1.0, "a", [[500.0, 1500.0], [1200.0, 1000.0]]),
+        (1.5, "b", [[2200.0, 1200.0], [1700.0, 300.0]]),
+    ]
+    whole = central()
+    for time, sensor, z in scans:
+        whole.step(time, z, sensor=sensor)
+    half = central()
+    for time, sensor, z in scans[:2]:
+        half.step(time, z, sensor=sensor)
+    plain = half.export()
+    assert sorted(cell for cell, _ in plain["births"]) == [["a"], ["a", "b"], ["b"]]
+    restored = LocalTracker.restore(half.config, plain)
+    for time, sensor, z in scans[2:]:
+        restored.step(time, z, sensor=sensor)
+    assert restored.export() == whole.export()
+    del plain["births"]
+    assert LocalTracker.restore(half.config, plain).export()["births"] == []
