@@ -642,8 +642,10 @@ class TrackingConfig(WireModel):
         default=None,
         description=(
             "new targets per unit of position space (m² in 2-D, m³ in 3-D) per scan: β_NT of "
-            "the track score and of gate-emptiness termination (default null: equal to each "
-            "sensor's clutter density, prior odds 1; paper profile: one per km² or km³)"
+            "the track score and of gate-emptiness termination (default null: for a sensor "
+            "with a `coverage`, one new target a minute in its coverage volume, at most its "
+            "clutter density; for the others equal to each sensor's clutter density, prior "
+            "odds 1; paper profile: one per km² or km³; docs/algorithms.md §8.12)"
         ),
     )
     initiation: Initiation = Field(default_factory=SinglePointInitiation)

@@ -97,6 +97,30 @@ def default_density(dim: int) -> float:
     return float(10.0 ** (-3 * dim))
 
 
+BIRTH_RATE = 1.0 / 60.0
+"""New targets per second in a sensor's coverage volume of the default birth density: one a
+minute (docs/algorithms.md §8.12)."""
+
+
+def default_birth_density(
+    clutter_density: float, coverage_volume: float | None, interval: float
+) -> float:
+    """β_NT when the user gave none: the :data:`BIRTH_RATE` of new targets over the
+    ``interval`` (s) since the sensor last looked, spread over its coverage volume V, never
+    above β_FT — ``min(β_FT, BIRTH_RATE · interval / V)``; β_FT (prior odds 1) when V is
+    unknown or infinite, or the interval is (the sensor's first scan: every target in its
+    coverage is new to it) (docs/algorithms.md §8.12).
+
+    The start score ``L₀ = ln(β_NT/β_FT)`` is then ``ln(births / false alarms)`` of one scan
+    in the coverage: a 12 s radar with 30 false alarms a scan starts at ln(0.2/30) = −5.0,
+    so a pair of its clutter detections reaches L ≥ 0 (min_points) only where they fit each
+    other at D ≲ 6 instead of anywhere in the gate.
+    """
+    if coverage_volume is None or not math.isfinite(coverage_volume) or coverage_volume <= 0.0:
+        return clutter_density
+    return min(clutter_density, BIRTH_RATE * interval / coverage_volume)
+
+
 def confirm_threshold(false_confirmation: float, true_deletion: float) -> float:
     """The SPRT's confirm threshold ``ln((1 − β) / α)`` ([MTT] §4.3; Wald)."""
     return math.log((1.0 - true_deletion) / false_confirmation)
@@ -247,7 +271,9 @@ class LifeCycleConfig:
         detections (``core.tracking.clutter``); the fused layer takes
         :func:`default_density` of its dimension (:meth:`for_dimension`).
     new_target_density : β_NT (= ρ_NT), new targets per unit of position space per scan;
-        None (the default): equal to the scan's β_FT (prior odds 1, L₀ = 0).
+        None (the default): :func:`default_birth_density` of the scan's β_FT and its
+        sensor's coverage volume (one new target a minute in it, at most β_FT), β_FT
+        (prior odds 1, L₀ = 0) for a sensor without one.
     termination_probability : gate-emptiness threshold ([HZ] §4.2) in [0, 1); 0 turns it off.
     termination_misses : the gate-emptiness test runs only on a track that has missed at
         least this many scans in a row (default :data:`PLAIN_MISSES` + 1: one or two plain
@@ -395,10 +421,22 @@ class LifeCycleConfig:
             return score
         return dataclasses.replace(score, false_target_density=source_clutter)
 
-    def scan_score(self, p_detect: float, clutter_density: float) -> ScoreModel:
+    def scan_score(
+        self,
+        p_detect: float,
+        clutter_density: float,
+        coverage_volume: float | None = None,
+        interval: float = 1.0,
+    ) -> ScoreModel:
         """The SPRT score of one scan of a sensor with its own P_D and β_FT (given or
-        estimated); β_NT is the configured one, or that β_FT when unset."""
-        birth = clutter_density if self.new_target_density is None else self.new_target_density
+        estimated); β_NT is the configured one, or when unset :func:`default_birth_density`
+        of that β_FT, the sensor's ``coverage_volume`` (m^q; None: unknown) and the
+        ``interval`` (s) since its previous scan."""
+        birth = (
+            default_birth_density(clutter_density, coverage_volume, interval)
+            if self.new_target_density is None
+            else self.new_target_density
+        )
         return ScoreModel(
             p_detect=p_detect,
             false_target_density=clutter_density,

@@ -76,3 +76,36 @@ def coverage_codes(coverage: Coverage, positions: FloatArray) -> IntArray:
     if positions.shape[1] < 2 or count == 0:
         return np.full(count, int(Visibility.VISIBLE), dtype=np.int64)
     return np.asarray(coverage.visibility(positions), dtype=np.int64)
+
+
+def gate_coverage(
+    coverage: Coverage, positions: FloatArray, gates: FloatArray, gate: float
+) -> tuple[IntArray, BoolArray]:
+    """Coverage codes of rows seen by their gate, where the coverage has 3-D radar volumes
+    (docs/algorithms.md §8.11).
+
+    A row whose predicted position no sensor sees is visible when a sensor sees its gate —
+    one of the 2q ends of the gate's principal axes ``ν = ±√(gate λ_i) e_i`` (``gates``: S
+    on the positions, n × q × q; ``gate``: the gate on D) — and not only in a blind zone
+    or out of range: a track predicted a σ under a radar's horizon while the target is above
+    it is not hidden. Returns the codes (:func:`coverage_codes` elsewhere) and
+    ``sees[s, i]``: sensor ``s`` sees row ``i``'s gate where no sensor sees its position
+    (False elsewhere), so that a sensor that sees its gate and does not detect it misses
+    it: a track is seen, missed, or hidden, never none of the three.
+    """
+    codes = coverage_codes(coverage, positions)
+    sees = np.zeros((len(coverage.views), len(positions)), dtype=np.bool_)
+    hidden = codes != Visibility.VISIBLE
+    if positions.shape[1] != 3 or not hidden.any():
+        return codes, sees
+    if all(volume is None for volume in coverage.volumes):
+        return codes, sees
+    rows = np.flatnonzero(hidden)
+    values, vectors = np.linalg.eigh(gates[rows])  # (k, q), (k, q, q): columns e_i
+    reach = vectors * np.sqrt(gate * np.maximum(values, 0.0))[:, None, :]
+    ends = np.concatenate([reach, -reach], axis=2).transpose(0, 2, 1)  # (k, 2q, q)
+    points = (positions[rows][:, None, :] + ends).reshape(-1, 3)
+    seen = coverage.sees(points).reshape(len(coverage.views), len(rows), -1).any(axis=2)
+    sees[:, rows] = seen
+    codes[rows[seen.any(axis=0)]] = int(Visibility.VISIBLE)
+    return codes, sees

@@ -71,6 +71,7 @@ from core.classification.calibration import (
     sharp_predictions,
 )
 from core.distance.estimates import check_covariances
+from core.distance.pairwise import chi2_quantile
 from core.errors import TrackingError
 from core.lifecycle import (
     CONFIRMED,
@@ -95,7 +96,7 @@ from core.lifecycle import (
 from core.models.measurement import MeasurementModel, Polar
 from core.pipeline.evidence import (
     coasting_misses,
-    coverage_codes,
+    gate_coverage,
     hits,
     seen_by,
     sensor_miss_runs,
@@ -122,7 +123,8 @@ from core.tracking.track import (
 EXPORT_VERSION = 4
 """4: each track's misses in a row of every sensor (``sensor_misses``) and whether each
 sensor's latest scan detected it (``sensor_detected_last``), each
-sensor's last two scan times (``scan_times``); 3: each track's ``misses`` in a row, each sensor's clutter estimate and tally;
+sensor's last two scan times (``scan_times``), and a central tracker's undetected births
+per coverage cell (``births``; absent in an older one: none yet); 3: each track's ``misses`` in a row, each sensor's clutter estimate and tally;
 2: the seeds' covariances (``seed_covariances``). An older export restores with no
 misses, empty estimates and tallies, and (version 1) its seeds with the bank's R, the R
 they were started with then."""
@@ -131,6 +133,9 @@ VOUCH_REVISITS = 1.5
 have passed (its next scan is overdue: a sensor that stopped scanning vouches for nothing)."""
 SEED_NOISE_GATE = 0.999
 """Gate probability of the measurement-noise part of the seed distance bound."""
+STEADY_ROUNDING = 1e-12
+"""A cell's share of β_NT this close to 1 is 1: one sensor scanning its cell every ΔT
+detects P_D · (1/P_D) of it, which rounding would leave a bit off the sensor alone's."""
 
 
 def _select_prediction(prediction: IMMPrediction, rows: IntArray) -> IMMPrediction:
@@ -222,6 +227,9 @@ class LocalTracker:
         self._coverage = config.coverage
         self._views = dict(config.fields_of_view)
         self._volumes = dict(config.volumes)
+        self._visibility_gate = chi2_quantile(config.life_cycle.gate_probability, self._q)
+        # each coverage volume's size, m³: the default birth density (§8.12)
+        self._measures = {name: volume.measure for name, volume in self._volumes.items()}
         # The state: one row per live track.
         self.time: float | None = None
         self.next_number = 1
@@ -260,6 +268,19 @@ class LocalTracker:
         self.tallies: dict[str, ScanTally] = {name: ScanTally() for name in config.sensors}
         """Per sensor, what its detections did, summed over its scans (:class:`ScanTally`)."""
         self._sigma = float(np.sqrt(np.linalg.eigvalsh(self._noise)[-1]))
+        # §8.9: the sensors whose coverage is given share the births (with a given β_NT);
+        # each coverage cell (the sensors whose coverage contains it, by column) → its
+        # undetected targets' intensity in units of β_NT
+        self._sharing = np.array(
+            [
+                config.life_cycle.new_target_density is not None
+                and len(config.sensors) >= 2
+                and (self._views[name] is not None or name in self._volumes)
+                for name in config.sensors
+            ],
+            dtype=bool,
+        )
+        self._births: dict[tuple[int, ...], float] = {}
 
     # ------------------------------------------------------------------ api
     @property
@@ -402,7 +423,7 @@ class LocalTracker:
             else own_noise
         )
         claimed_any = bool(np.any(established(self._rows.life.status)))
-        score = self._scan_score(sensor_name, z, noises, counted=not claimed_any)
+        score = self._scan_score(sensor_name, time, z, noises, counted=not claimed_any)
         prediction = predict_bank(self.predictor, self._state, elapsed)
         first, latest = self._detection_times.T
         # §8.3: at an instant it was hit at, a tentative track's detections are positions
@@ -415,7 +436,8 @@ class LocalTracker:
         positions, gates = prediction.combined_measurement()
         before = self._rows.life
         status = before.status
-        codes = coverage_codes(self._coverage, positions)
+        # §8.11: a track is in a blind zone when no sensor sees any of its gate
+        codes, gate_seen = gate_coverage(self._coverage, positions, gates, self._visibility_gate)
         seen, hidden = seen_by(
             self._views[sensor_name],
             positions,
@@ -424,6 +446,8 @@ class LocalTracker:
             self._volumes.get(sensor_name),
         )
         column = self._column = self.config.sensors.index(sensor_name)
+        seen = seen | gate_seen[column]
+        births = self._shared_births(column, z, elapsed, score.p_detect)
         counted = seen & self._carried(column, status)
         candidates = np.flatnonzero((status != PHANTOM) & self._can_be_hit(prediction, score))
         association = self._associator.associate(
@@ -435,6 +459,7 @@ class LocalTracker:
             passes[candidates],
             score,
             branching=START_PASS if self._branching else None,
+            repeated=refined[candidates],
         )
         if doppler is not None and range_rate is not None and len(association.rows):
             measured = np.isfinite(doppler[association.cols])
@@ -523,16 +548,17 @@ class LocalTracker:
                 ),
             )
         free[repeated] = False
-        started = self._initiate(time, sensor_name, z, noises, free, numbers, score)
+        started = self._initiate(time, sensor_name, z, noises, free, numbers, score, births)
         tally = self._tally(before, life, len(z), joined, started, newly_confirmed)
         self._count(sensor_name, tally, z[~claimed], noises[~claimed], counted=not claimed_any)
         return self._result(time, sensor_name, numbers, tally, score.false_target_density, updated)
 
     def _scan_score(
-        self, sensor: str, z: FloatArray, noises: FloatArray, counted: bool
+        self, sensor: str, time: float, z: FloatArray, noises: FloatArray, counted: bool
     ) -> ScoreModel:
         """The SPRT of this scan: its sensor's P_D and β_FT, given or estimated
-        (:mod:`core.tracking.clutter`). ``counted``: no established track could claim a
+        (:mod:`core.tracking.clutter`), and its β_NT (§8.12: of its coverage volume when
+        it has one). ``counted``: no established track could claim a
         detection, so every one counts (and widens the region) before the scan is scored."""
         p_detect, clutter = self.config.physics(sensor)
         if clutter is None:
@@ -541,7 +567,64 @@ class LocalTracker:
             clutter = self.clutter_density(sensor)
             if clutter is None:  # nothing seen yet: the prior of one false alarm per km^q
                 clutter = default_density(self._q)
-        return self.config.life_cycle.scan_score(p_detect, clutter)
+        # the births since the sensor last looked; at its first scan every target is new to
+        # it (no bound: β_FT's cap, prior odds 1)
+        latest = float(self._scan_times[self.config.sensors.index(sensor), 1])
+        since = time - latest if math.isfinite(latest) else math.inf
+        if not since > 0.0:
+            since = self.config.time_interval
+        return self.config.life_cycle.scan_score(
+            p_detect, clutter, self._measures.get(sensor), since
+        )
+
+    def _shared_births(
+        self, column: int, z: FloatArray, elapsed: float, p_detect: float
+    ) -> FloatArray:
+        """ln of each detection's share of β_NT (docs/algorithms.md §8.9): 0 (all of it, at
+        every scan: the SPRT of one sensor) unless the sensors share the births, then the
+        part of the undetected targets' intensity where it lies that this scan detects.
+
+        The intensity (the undetected targets' Poisson intensity of the PMBM filter
+        [Williams 2015]) is one number per coverage cell — the sensors whose coverage
+        contains a place (:func:`seen_by`, no occlusion) — in units of β_NT: births of
+        β_NT per ΔT (``time_interval``) everywhere, and each scan thins the cells its
+        sensor covers by 1 − P_D and detects P_D of it. A detection's cell has its own
+        sensor in any case (it saw there). A cell starts at 1/P_D at the first detection
+        in it (a sensor alone's β_NT at its first scan), so a cell that one sensor scans
+        every ΔT (the papers' sensors of fields of view that do not overlap) detects β_NT
+        at every scan, as before. A sensor whose coverage is not given (no field of view,
+        no volume) shares nothing: where it looks is unknown, so its scans neither thin
+        the cells nor take a share; they keep all of β_NT."""
+        shares = np.zeros(len(z))
+        step = elapsed / self.config.time_interval
+        cells = {cell: share + step for cell, share in self._births.items()}
+        if not self._sharing[column]:
+            self._births = cells
+            return shares
+        covered = np.zeros((len(z), len(self._sharing)), dtype=bool)
+        for other, name in enumerate(self.config.sensors):
+            if self._sharing[other] and len(z):
+                covered[:, other], _ = seen_by(
+                    self._views[name],
+                    z,
+                    np.zeros(len(z), dtype=np.int64),
+                    0.0,
+                    self._volumes.get(name),
+                )
+        covered[:, column] = True
+        kinds, which = np.unique(covered, axis=0, return_inverse=True)
+        keys = [tuple(np.flatnonzero(kind).tolist()) for kind in kinds]
+        for key in keys:
+            cells.setdefault(key, 1.0 / p_detect)
+        detected = np.array([p_detect * cells[key] for key in keys])
+        detected = np.where(np.abs(detected - 1.0) <= STEADY_ROUNDING, 1.0, detected)
+        self._births = {
+            cell: (1.0 - p_detect) * share if column in cell else share
+            for cell, share in cells.items()
+        }
+        if len(z):
+            shares = np.log(detected)[np.asarray(which).reshape(-1)]
+        return shares
 
     def _counted(self, sensor: str, z: FloatArray, noises: FloatArray) -> ClutterEstimate:
         """The sensor's estimate after a scan's unclaimed detections ``z`` (their noises)."""
@@ -866,10 +949,12 @@ class LocalTracker:
         free: BoolArray,
         numbers: IntArray,
         score: ScoreModel,
+        births: FloatArray,
     ) -> int:
         """New tentative tracks from the detections nobody used (config Readings), each
-        started and scored with its detections' own covariances ``noises`` (m, q, q);
-        returns how many detections started one."""
+        started and scored with its detections' own covariances ``noises`` (m, q, q) and
+        its share of the births (``births``, ln: :meth:`_shared_births`); returns how many
+        detections started one."""
         detections = np.flatnonzero(free)
         if self.config.initiation == "single_point":
             starts = detections
@@ -880,7 +965,7 @@ class LocalTracker:
                 state,
                 starts,
                 numbers,
-                score.initial,
+                score.initial + births[starts],
                 times=(time, time),
                 recent=None
                 if self._recent is None
@@ -912,6 +997,7 @@ class LocalTracker:
                 spread = self.config.velocity_std**2 * interval**2
                 pair_covariance = first_noises + noises[starts] + spread * np.eye(self._q)
                 start_score = score.two_point_initial(z[starts] - first, pair_covariance)
+                start_score = start_score + births[starts]
                 alive = start_score > self.config.life_cycle.delete_threshold
                 starts, first, start_score = starts[alive], first[alive], start_score[alive]
                 state = two_point_initiation(
@@ -1112,6 +1198,10 @@ class LocalTracker:
             "clutter": {name: estimate.to_plain() for name, estimate in self._clutter.items()},
             "tallies": {name: tally.to_plain() for name, tally in self.tallies.items()},
             "scan_times": plain_floats(self._scan_times),
+            "births": [
+                [[self.config.sensors[column] for column in cell], share]
+                for cell, share in self._births.items()
+            ],
             "tracks": tracks,
         }
 
@@ -1165,6 +1255,10 @@ class LocalTracker:
         ).reshape(-1, sensors)
         if "scan_times" in plain:
             tracker._scan_times = float_array(plain["scan_times"]).reshape(sensors, 2)
+        tracker._births = {  # an older export: none yet
+            tuple(config.sensors.index(name) for name in cell): float(share)
+            for cell, share in plain.get("births", [])
+        }
         # an export without them: each track's detections span two instants, or (a start of
         # one detection) are of the export's time
         tracker._detection_times = float_array(

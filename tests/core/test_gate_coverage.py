@@ -1,0 +1,70 @@
+"""A track is in a blind zone only when no sensor sees any of its gate (docs/algorithms.md
+§8.11): a 3-D track predicted a little under a radar's horizon, its gate reaching above it,
+is visible — and then a miss of the radar that sees its gate — not a phantom.
+
+Oracle: the 4/3-Earth horizon worked by hand. An antenna 150 m up sees a target at ground
+distance d when d ≤ 4121.81 m (√150 + √h_t), h_t the target's height above the sphere
+(radius 6371 km) tangent below the antenna: at d = 60 km it needs h_t ≥ (60000/4121.81 −
+12.2474)² = 5.33 m.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.stats import chi2
+
+from core.geometry import Coverage, Sector, Visibility
+from core.pipeline.evidence import gate_coverage
+from core.volume import RadarVolume
+
+EARTH, HEIGHT, DISTANCE = 6_371_000.0, 150.0, 60_000.0
+NEEDED = (DISTANCE / 4121.81 - math.sqrt(HEIGHT)) ** 2
+GATE = float(chi2.ppf(0.999, 3))
+
+
+def _at_height(height: float) -> np.ndarray:
+    """The point 60 km east of the antenna at ``height`` above the sphere below it."""
+    up = math.sqrt((EARTH + height) ** 2 - DISTANCE**2) - EARTH - HEIGHT
+    return np.array([[DISTANCE, 0.0, up]])
+
+
+def _coverage() -> Coverage:
+    radar = RadarVolume(site=(0.0, 0.0, 0.0), range_max=150_000.0, antenna_height=HEIGHT)
+    return Coverage((None,), volumes=(radar,))
+
+
+def test_the_hand_worked_height_the_horizon_needs_at_60_km() -> None:
+    assert 5.2 < NEEDED < 5.5
+    radar = _coverage().volumes[0]
+    assert radar is not None
+    assert radar.contains(_at_height(NEEDED + 0.1))[0]
+    assert not radar.contains(_at_height(NEEDED - 0.1))[0]
+
+
+def test_a_track_whose_gate_reaches_over_the_horizon_is_seen_not_hidden() -> None:
+    # at the surface (h_t = 0), under the horizon; σ_z 30 m: its gate reaches 4.03 σ = 121 m up
+    position = _at_height(0.0)
+    wide = np.diag([200.0**2, 200.0**2, 30.0**2])[None]
+    codes, sees = gate_coverage(_coverage(), position, wide, GATE)
+    assert codes.tolist() == [int(Visibility.VISIBLE)] and sees.tolist() == [[True]]
+    # σ 1 m: its gate stays within 4 m of the surface, under the 5.33 m the horizon needs
+    narrow = np.eye(3)[None]
+    codes, sees = gate_coverage(_coverage(), position, narrow, GATE)
+    assert codes.tolist() == [int(Visibility.BLIND_ZONE)] and sees.tolist() == [[False]]
+    # a position the radar sees is left to the plain test (no gate looked at)
+    codes, sees = gate_coverage(_coverage(), _at_height(50.0), narrow, GATE)
+    assert codes.tolist() == [int(Visibility.VISIBLE)] and sees.tolist() == [[False]]
+
+
+def test_planar_coverages_are_the_plain_test() -> None:
+    """Fields of view without volumes (the papers' 2-D scenes) keep the test at the
+    predicted position: a blind zone's edge there is the paper's."""
+    sector = Sector(
+        origin=(0.0, 0.0), heading_deg=0.0, half_angle_deg=30.0, range_min=0.0, range_max=1000.0
+    )
+    coverage = Coverage((sector,))
+    outside = np.array([[1200.0, 0.0, 0.0]])  # 3 coordinates, planar views: no gate test
+    codes, sees = gate_coverage(coverage, outside, (1e8 * np.eye(3))[None], GATE)
+    assert codes.tolist() != [int(Visibility.VISIBLE)] and not sees.any()
