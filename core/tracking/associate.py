@@ -128,7 +128,6 @@ class DetectionAssociator:
         self.updater = IMMUpdater(bank)
         self._score = score
         self._scan = score
-        self._repeated: BoolArray = np.zeros(0, dtype=bool)
         self._branch_gate = float(chi2.ppf(BRANCH_GATE_PROBABILITY, bank.measurement.dim))
         # no velocity prior: a start's second detection is scored under a scale mixture
         self._velocity_scales: tuple[tuple[float, float], ...] = (
@@ -182,7 +181,6 @@ class DetectionAssociator:
         first: BoolArray | IntArray,
         score: ScoreModel | None = None,
         branching: int | None = None,
-        repeated: BoolArray | None = None,
     ) -> Association:
         """Associate and update the tracks of ``sub`` with the detections ``z`` (own R or None),
         in passes: the ``first`` tracks (the established ones) before the others, or, given
@@ -190,11 +188,8 @@ class DetectionAssociator:
         over all); hits are scored by ``score`` (the scan's sensor's; default the
         configuration's). The tracks of rank ``branching`` (single-point starts) are not
         assigned: each takes its closest gated detection of those left, and each other
-        one makes a branch (:class:`Branches`); their detections stay free. ``repeated``:
-        the tracks hit at this scan's instant already, whose detection is one more position
-        (no velocity: updated plainly, not under the velocity prior's mixture, §8.3)."""
+        one makes a branch (:class:`Branches`); their detections stay free."""
         self._scan = self._score if score is None else score
-        self._repeated = np.zeros(len(sub.means), dtype=bool) if repeated is None else repeated
         if self._spec.soft:
             return self._jpda(sub, z, own_noise)
         return self._method_and_update(sub, z, own_noise, first, branching)
@@ -267,17 +262,14 @@ class DetectionAssociator:
             noises = np.broadcast_to(self._noise, (tracks, self._q, self._q)).copy()
             noises[rows] = own_noise[cols]
         update = self.updater.update(sub, assigned, detected, noises)
-        if split is not None and self._velocity_scales:
-            # the starts' own hits (the branching pass, last) that measure a velocity
-            timed = ~self._repeated[found_rows[-1]]
-            starts, own_cols = found_rows[-1][timed], found_cols[-1][timed]
-            if len(starts):
-                mixed = self._mixture_state(
-                    _rows_of(sub, starts),
-                    z_rows(gating.measurements, own_cols),
-                    None if noises is None else noises[starts],
-                )
-                update = replace(update, state=_with_rows(update.state, starts, mixed))
+        if split is not None and self._velocity_scales and len(found_rows[-1]):
+            starts = found_rows[-1]  # the starts' own hits (the branching pass, last)
+            mixed = self._mixture_state(
+                _rows_of(sub, starts),
+                z_rows(gating.measurements, found_cols[-1]),
+                None if noises is None else noises[starts],
+            )
+            update = replace(update, state=_with_rows(update.state, starts, mixed))
         return Association(update, rows, cols, hit_gain, used, split)
 
     def _branch(
@@ -313,15 +305,11 @@ class DetectionAssociator:
         )
         noises = None if own_noise is None else own_noise[branch_cols]
         measured = z_rows(gating.measurements, branch_cols)
-        state = self.updater.update(copies, measured, None, noises).state
-        timed = np.flatnonzero(~self._repeated[branch_rows])
-        if self._velocity_scales and len(timed):
-            mixed = self._mixture_state(
-                _rows_of(copies, timed),
-                measured[timed],
-                None if noises is None else noises[timed],
-            )
-            state = _with_rows(state, timed, mixed)
+        state = (
+            self._mixture_state(copies, measured, noises)
+            if self._velocity_scales
+            else self.updater.update(copies, measured, None, noises).state
+        )
         branches = Branches(branch_rows, branch_cols, gain[extra], state)
         return (rows[own], cols[own], gain[own]), branches
 

@@ -459,7 +459,6 @@ class LocalTracker:
             passes[candidates],
             score,
             branching=START_PASS if self._branching else None,
-            repeated=refined[candidates],
         )
         if doppler is not None and range_rate is not None and len(association.rows):
             measured = np.isfinite(doppler[association.cols])
