@@ -91,28 +91,6 @@ def z_rows(measurements: FloatArray, cols: IntArray) -> FloatArray:
     )
 
 
-def _rows_of(prediction: IMMPrediction, rows: IntArray) -> IMMPrediction:
-    return IMMPrediction(
-        prediction.means[rows],
-        prediction.covariances[rows],
-        prediction.log_mode_probabilities[rows],
-        prediction.measurement_means[rows],
-        prediction.innovation_covariances[rows],
-    )
-
-
-def _with_rows(state: IMMState, rows: IntArray, by: IMMState) -> IMMState:
-    """``state`` with ``rows`` replaced by the rows of ``by`` (new arrays)."""
-    means, covariances = state.means.copy(), state.covariances.copy()
-    log_mu = state.log_mode_probabilities.copy()
-    means[rows], covariances[rows], log_mu[rows] = (
-        by.means,
-        by.covariances,
-        by.log_mode_probabilities,
-    )
-    return IMMState(means, covariances, log_mu)
-
-
 class DetectionAssociator:
     """The association method of a :class:`LocalTrackerConfig`, parsed once."""
 
@@ -262,14 +240,6 @@ class DetectionAssociator:
             noises = np.broadcast_to(self._noise, (tracks, self._q, self._q)).copy()
             noises[rows] = own_noise[cols]
         update = self.updater.update(sub, assigned, detected, noises)
-        if split is not None and self._velocity_scales and len(found_rows[-1]):
-            starts = found_rows[-1]  # the starts' own hits (the branching pass, last)
-            mixed = self._mixture_state(
-                _rows_of(sub, starts),
-                z_rows(gating.measurements, found_cols[-1]),
-                None if noises is None else noises[starts],
-            )
-            update = replace(update, state=_with_rows(update.state, starts, mixed))
         return Association(update, rows, cols, hit_gain, used, split)
 
     def _branch(
@@ -304,13 +274,10 @@ class DetectionAssociator:
             sub.innovation_covariances[branch_rows],
         )
         noises = None if own_noise is None else own_noise[branch_cols]
-        measured = z_rows(gating.measurements, branch_cols)
-        state = (
-            self._mixture_state(copies, measured, noises)
-            if self._velocity_scales
-            else self.updater.update(copies, measured, None, noises).state
+        updated = self.updater.update(
+            copies, z_rows(gating.measurements, branch_cols), None, noises
         )
-        branches = Branches(branch_rows, branch_cols, gain[extra], state)
+        branches = Branches(branch_rows, branch_cols, gain[extra], updated.state)
         return (rows[own], cols[own], gain[own]), branches
 
     def _mixture_gain(
@@ -350,48 +317,6 @@ class DetectionAssociator:
             math.log(score.p_detect) - math.log(score.false_target_density) + mixed,
             dtype=np.float64,
         )
-
-    def _mixture_state(
-        self, sub: IMMPrediction, z: FloatArray, noises: FloatArray | None
-    ) -> IMMState:
-        """The state of starts updated with their second detection ``z`` under the scale
-        mixture of their velocity prior (``core.tracking.config`` Readings), the prior
-        :meth:`_mixture_gain` scores them with: per model j and scale k, the Kalman update
-        of the prediction whose velocity-prior part is scaled by s_k²,
-        ``P_jk = P_j − (1 − s_k²) P_j,·v P_j,vv⁻¹ P_j,v·``, weighted by
-        ``w_k N(ν_j; 0, S_jk)`` and moment-matched (the mixture's mean and covariance,
-        its spread included); the mode probabilities are the plain update's. A pair
-        that moved as a 1 m/s target keeps a velocity near the 1 m/s component's, not
-        the two-point difference of a 1/3 s pair of noisy detections."""
-        velocity = list(self._velocities)
-        covariances = sub.covariances  # (p, r, n, n)
-        cross = covariances[..., :, velocity]  # (p, r, n, v)
-        spread = cross @ np.linalg.solve(
-            covariances[..., velocity, :][..., :, velocity], np.swapaxes(cross, -1, -2)
-        )
-        shrink, log_weight = self._mixture_terms
-        h = self._h
-        means, mixed, log_terms = [], [], []
-        for k in range(len(shrink)):
-            scaled = covariances - shrink[k] * spread
-            s_k = h @ scaled @ h.T + self._noise
-            prediction = replace(sub, covariances=scaled, innovation_covariances=s_k)
-            update = self.updater.update(prediction, z, None, noises)
-            means.append(update.state.means)
-            mixed.append(update.state.covariances)
-            log_terms.append(log_weight[k] + update.log_likelihoods)
-        weights = np.exp(
-            np.stack(log_terms) - np.logaddexp.reduce(np.stack(log_terms), axis=0)
-        )  # (k, p, r)
-        stacked = np.stack(means)  # (k, p, r, n)
-        mean = np.einsum("kpr,kprn->prn", weights, stacked)
-        offset = stacked - mean
-        covariance = np.einsum("kpr,kprnm->prnm", weights, np.stack(mixed)) + np.einsum(
-            "kpr,kprn,kprm->prnm", weights, offset, offset
-        )
-        covariance = 0.5 * (covariance + np.swapaxes(covariance, -1, -2))
-        plain = self.updater.update(sub, z, None, noises).state
-        return IMMState(mean, covariance, plain.log_mode_probabilities)
 
     def _assign(
         self, gating: ScanGating, tracks: IntArray, detections: IntArray
