@@ -600,4 +600,4 @@ def test_a_central_phantom_is_no_report_of_the_object() -> None:
     assert ended[0][2] == pytest.approx(3 * math.log(0.1), abs=1e-12)
     # nor does the phantom, still reported by the central tracker, start a fused track again
     assert central.phantoms
-    assert steps[silent_from + 3].tracks == ()
+    assert len(steps[silent_from + 3].tracks) == 0
