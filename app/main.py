@@ -169,6 +169,7 @@ def create_app(settings: Settings | None = None, workers: WorkerGroup | None = N
             refused=service_metrics.refused_at_door,
             held=service_metrics.held_at_door,
             cors_origins=settings.cors_origin_list(),
+            anonymous_served=settings.open_access(),
         )
 
     app.build_middleware_stack = behind_the_front_door  # type: ignore[method-assign]

@@ -13,7 +13,8 @@ and WebSocket upgrade once its head is read (the transport limits of
 4. **keyed tenants first**: while a tenant with an API key is being served —
    an HTTP request of it in flight here, or answered less than :data:`KEYED_GRACE_S` ago, or
    an input of it in flight in the pipeline (REST or WebSocket) — a client *without* a key
-   (an address tenant of ``CREDAL_ACCESS=open``; the admin is neither) sending a body larger than
+   (an address tenant of ``CREDAL_ACCESS=open``; the admin is neither; without open access a
+   request without a valid token is the application's to refuse) sending a body larger than
    :data:`~app.http.requests.OFFLOAD_BYTES` (a body whose parsing and validation cost
    milliseconds of CPU: 10-15 ms for a 2 000-track list) is refused ``503 overloaded``
    (``limit: "keyed_tenants_first"``, ``Retry-After: 1``) before its body is read. Small
@@ -158,8 +159,15 @@ class FrontDoor:
         refused: Counter | None = None,
         held: Counter | None = None,
         cors_origins: list[str] | None = None,
+        anonymous_served: bool = True,
     ) -> None:
         self.app = app
+        self.anonymous_served = anonymous_served
+        """Whether a client without a key is one the service serves (``CREDAL_ACCESS=open``):
+        only then does its large body wait for the keyed tenants. Without open access an
+        address tenant is a request without a valid token (none, a typo, an ended session's):
+        the application answers it (401, 404) as before; a 503 "send it again after
+        Retry-After" would have it retry for ever, and tell it keyed tenants are active."""
         self.held = held
         self.cors_origins = frozenset(cors_origins or ())
         """The browser origins allowed (``CREDAL_CORS_ORIGINS``): the door's answers to them
@@ -205,7 +213,12 @@ class FrontDoor:
                 return
         tenant = key.removeprefix("tenant:")
         size = body_size(scope, self.max_body)
-        if size > OFFLOAD_BYTES and is_anonymous(tenant) and self.keyed_served(scope):
+        if (
+            size > OFFLOAD_BYTES
+            and self.anonymous_served
+            and is_anonymous(tenant)
+            and self.keyed_served(scope)
+        ):
             await self._wait_your_turn(tenant)
             await send_answer(send, _keyed_first_answer(private), extra)
             return

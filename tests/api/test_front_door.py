@@ -209,3 +209,24 @@ def held_at_door(client: httpx.Client) -> float:
         r"^credal_requests_held_at_door_total (\S+)$", client.get("/metrics").text, re.M
     )
     return float(found.group(1)) if found else 0.0
+
+
+def test_without_open_access_a_request_without_a_valid_token_is_not_told_to_wait(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """With ``CREDAL_ACCESS=keys`` an address tenant is a request whose token is missing or
+    unknown (a typo, an ended session's): the application refuses it (401 without a token,
+    404 for a session the token does not open, as when no keyed tenant is served), never the
+    door's 503 ``keyed_tenants_first`` with ``Retry-After``, which would have the client retry
+    for ever and tell it a keyed tenant is active."""
+    monkeypatch.setattr(front, "KEYED_GRACE_S", 3600.0)  # the keyed tenant stays "being served"
+    settings = make_settings(access="keys", api_keys=f"alpha:{KEY}")
+    with serving(settings) as live, httpx.Client(base_url=live.url, timeout=30) as client:
+        keyed, _ = session(client, KEY)
+        wrong = {"Authorization": "Bearer not-a-token-of-this-service-0123456789"}
+        unknown = client.post(f"{keyed}/tracks", json=LARGE, headers=wrong)
+        assert unknown.status_code == 404, unknown.text
+        assert unknown.json()["type"] == "urn:credal-fusion:problem:session-not-found"
+        missing = client.post(f"{keyed}/tracks", json=LARGE)
+        assert missing.status_code == 401, missing.text
+        assert "retry-after" not in missing.headers
