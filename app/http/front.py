@@ -147,6 +147,14 @@ async def send_answer(send: Send, answer: Answer, extra: list[tuple[bytes, bytes
     await send({"type": "http.response.body", "body": body})
 
 
+def _is_preflight(scope: Scope) -> bool:
+    """A browser's CORS preflight: ``OPTIONS`` with ``Origin`` and
+    ``Access-Control-Request-Method`` (what :class:`~starlette.middleware.cors.CORSMiddleware`
+    answers itself); any other ``OPTIONS`` request goes through the door as every request."""
+    names = {name for name, _ in scope.get("headers", ())}
+    return b"origin" in names and b"access-control-request-method" in names
+
+
 class FrontDoor:
     """ASGI layer: the checks of the module docstring, before every other layer."""
 
@@ -172,7 +180,8 @@ class FrontDoor:
         self.cors_origins = frozenset(cors_origins or ())
         """The browser origins allowed (``CREDAL_CORS_ORIGINS``): the door's answers to them
         carry the headers :class:`~starlette.middleware.cors.CORSMiddleware` would add, and
-        their preflight requests (``OPTIONS``) are that middleware's alone."""
+        their preflight requests (``OPTIONS`` with ``Origin`` and
+        ``Access-Control-Request-Method``) are that middleware's alone."""
         self.rates = rates
         self.body_rate = RateLimitItemPerSecond(body_bytes_per_second)
         self.max_body = max_body
@@ -194,7 +203,7 @@ class FrontDoor:
             return
         path = scope.get("path", "")
         method = scope.get("method")
-        if self.cors_origins and method == "OPTIONS":
+        if self.cors_origins and method == "OPTIONS" and _is_preflight(scope):
             await self.app(scope, receive, send)
             return
         extra = self._cors_headers(scope)

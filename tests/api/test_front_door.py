@@ -230,3 +230,20 @@ def test_without_open_access_a_request_without_a_valid_token_is_not_told_to_wait
         missing = client.post(f"{keyed}/tracks", json=LARGE)
         assert missing.status_code == 401, missing.text
         assert "retry-after" not in missing.headers
+
+
+def test_with_cors_an_options_request_that_is_no_preflight_is_rate_limited() -> None:
+    """Only a browser's preflight (``Origin`` and ``Access-Control-Request-Method``) is CORS's
+    alone; any other ``OPTIONS`` request counts against the rate limit as on main, where the
+    limit ran behind the CORS middleware (2 per minute here: the third is refused)."""
+    settings = make_settings(access="open", rate_limit="2/minute", cors_origins="https://a.test")
+    with serving(settings) as live, httpx.Client(base_url=live.url, timeout=30) as client:
+        statuses = [client.options("/v1/sessions").status_code for _ in range(3)]
+        assert statuses[:2] != [429, 429] and statuses[2] == 429, statuses
+        preflight = {
+            "Origin": "https://a.test",
+            "Access-Control-Request-Method": "POST",
+        }
+        answered = client.options("/v1/sessions", headers=preflight)
+        assert answered.status_code == 200, answered.text
+        assert answered.headers["access-control-allow-origin"] == "https://a.test"
