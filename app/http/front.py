@@ -22,7 +22,10 @@ and WebSocket upgrade once its head is read (the transport limits of
    client that sends its next large body before the ``Retry-After`` it was given has passed
    waits it out: that refusal is answered when the time is up (``credal_requests_held_at_door``
    counts them), so one address's refusals come at most one per second per connection
-   (``max_connections_per_client`` of them), whatever it sends;
+   (``max_connections_per_client`` of them), whatever it sends. A WebSocket ``stream``
+   message of such a client over that size is answered the same refusal (an ``error``
+   message, the connection kept) before it is parsed (:func:`app.routes.streams.stream_session`
+   asks :meth:`FrontDoor.waits`): the stream is no way around the door;
 5. the tenant's request-body bytes (``tenant_body_bytes_per_second``, on ``Content-Length``).
 
 Every refusal here is a problem+json answer written once per server and kept (an
@@ -222,12 +225,7 @@ class FrontDoor:
                 return
         tenant = key.removeprefix("tenant:")
         size = body_size(scope, self.max_body)
-        if (
-            size > OFFLOAD_BYTES
-            and self.anonymous_served
-            and is_anonymous(tenant)
-            and self.keyed_served(scope)
-        ):
+        if self.waits(tenant, size, scope):
             await self._wait_your_turn(tenant)
             await send_answer(send, _keyed_first_answer(private), extra)
             return
@@ -245,6 +243,16 @@ class FrontDoor:
         finally:
             self.keyed_in_flight -= 1
             self.keyed_answered = time.monotonic()
+
+    def waits(self, tenant: str, size: int, scope: Scope) -> bool:
+        """Whether a body (or a WebSocket message) of ``size`` bytes of ``tenant`` waits for
+        the keyed tenants (module docstring, 4)."""
+        return (
+            size > OFFLOAD_BYTES
+            and self.anonymous_served
+            and is_anonymous(tenant)
+            and self.keyed_served(scope)
+        )
 
     def keyed_served(self, scope: Scope) -> bool:
         """Whether a keyed tenant is being served (module docstring, 4)."""

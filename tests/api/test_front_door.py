@@ -247,3 +247,34 @@ def test_with_cors_an_options_request_that_is_no_preflight_is_rate_limited() -> 
         answered = client.options("/v1/sessions", headers=preflight)
         assert answered.status_code == 200, answered.text
         assert answered.headers["access-control-allow-origin"] == "https://a.test"
+
+
+def test_without_a_key_a_large_stream_message_waits_as_a_large_body_does(
+    server: LiveServer, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The ``stream`` WebSocket is no way around keyed tenants first: a message over 32 KiB
+    of a client without a key is answered the door's refusal before it is parsed (nothing
+    applied, the connection kept), a small one is applied; with no keyed tenant served the
+    large one is taken."""
+    from websockets.sync.client import connect
+
+    monkeypatch.setattr(front, "KEYED_GRACE_S", 3600.0)  # the keyed tenant stays "being served"
+    with httpx.Client(base_url=server.url, timeout=30) as client:
+        anonymous, token = session(client)
+        session(client, KEY)
+        url = server.url.replace("http://", "ws://") + f"{anonymous}/stream"
+        with connect(url, additional_headers=token, max_size=None) as ws:
+            assert json.loads(ws.recv(timeout=10))["type"] == "ack"
+            ws.send(json.dumps({"type": "tracks", "ref": "large", **LARGE}))
+            refused = json.loads(ws.recv(timeout=30))
+            assert refused["type"] == "error", refused
+            assert refused["problem"]["status"] == 503
+            assert refused["problem"]["limit"] == "keyed_tenants_first"
+            ws.send(json.dumps({"type": "tracks", "ref": "small", **SMALL}))
+            small = json.loads(ws.recv(timeout=30))
+            assert small["type"] == "result" and small["ref"] == "small"
+            assert len(small["result"]["tracks"]) == 3  # the large one was not applied
+            monkeypatch.setattr(front, "KEYED_GRACE_S", 0.0)
+            ws.send(json.dumps({"type": "tracks", "ref": "later", **tracks(400, time=2.0)}))
+            taken = json.loads(ws.recv(timeout=30))
+            assert taken["type"] == "result" and taken["ref"] == "later", taken
