@@ -47,6 +47,7 @@ from __future__ import annotations
 import asyncio
 import functools
 import math
+import re
 import time
 from collections.abc import Callable
 from http import HTTPStatus
@@ -62,6 +63,7 @@ from app.http.errors import problem_for, problem_response
 from app.http.rate_limit import (
     BODY_RATE,
     RATE_LIMIT,
+    bearer_token,
     body_size,
     client_key,
     deny_websocket,
@@ -70,9 +72,12 @@ from app.http.rate_limit import (
 )
 from app.http.requests import OFFLOAD_BYTES
 from app.http.responses import dumps
+from app.http.security import token_matches
 from app.tenants import is_anonymous, is_keyed
 
 HEALTH_PATH = "/healthz"
+SESSION_PATH = re.compile(r"^/v1/sessions/([^/]+)/")
+"""A path under a session's (its id the group)."""
 KEYED_FIRST = "keyed_tenants_first"
 MAX_WAITING_ADDRESSES = 4096
 """Addresses whose keyed-first ``Retry-After`` is remembered before those past it are dropped."""
@@ -225,7 +230,7 @@ class FrontDoor:
                 return
         tenant = key.removeprefix("tenant:")
         size = body_size(scope, self.max_body)
-        if self.waits(tenant, size, scope):
+        if self.waits(tenant, size, scope) and await self._stored_waits(scope, size):
             await self._wait_your_turn(tenant)
             await send_answer(send, _keyed_first_answer(private), extra)
             return
@@ -253,6 +258,26 @@ class FrontDoor:
             and is_anonymous(tenant)
             and self.keyed_served(scope)
         )
+
+    async def _stored_waits(self, scope: Scope, size: int) -> bool:
+        """Whether a request the door took for an address tenant's still waits once its
+        session's stored record is read: the token of a session not held in memory (evicted
+        after a failed write, held by another instance, not yet restored) is unknown to
+        :func:`~app.http.rate_limit.client_key`, and a keyed tenant's sensor posting to it
+        would be refused for ever while other keyed tenants are served. Only a large body of a
+        bearer token on a session's path reaches this (one record read, as the route's own)."""
+        found = SESSION_PATH.match(scope.get("path", ""))
+        token = bearer_token(scope)
+        registry = getattr(getattr(scope.get("app"), "state", None), "registry", None)
+        if found is None or token is None or registry is None:
+            return True
+        try:
+            record = await registry.record(found.group(1))
+        except ServiceError:  # unavailable, unreadable: the address's, as the door took it
+            return True
+        if record is None or not token_matches(token, record.token_hash):
+            return True
+        return self.waits(record.tenant, size, scope)
 
     def keyed_served(self, scope: Scope) -> bool:
         """Whether a keyed tenant is being served (module docstring, 4)."""

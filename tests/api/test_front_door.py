@@ -278,3 +278,28 @@ def test_without_a_key_a_large_stream_message_waits_as_a_large_body_does(
             ws.send(json.dumps({"type": "tracks", "ref": "later", **tracks(400, time=2.0)}))
             taken = json.loads(ws.recv(timeout=30))
             assert taken["type"] == "result" and taken["ref"] == "later", taken
+
+
+def test_a_keyed_session_not_held_in_memory_is_still_keyed(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A keyed tenant's session the registry no longer holds (evicted after a failed write,
+    held by another instance, not yet restored) is its tenant's all the same: its token is
+    read against the stored record, and its large body is taken while other keyed tenants
+    are served. A token that opens no session stays an address's and waits."""
+    monkeypatch.setattr(front, "KEYED_GRACE_S", 3600.0)  # the keyed tenants stay "being served"
+    settings = make_settings(access="open", api_keys=f"alpha:{KEY}")
+    app = create_app(settings)
+    with serving(settings, app) as live, httpx.Client(base_url=live.url, timeout=30) as client:
+        keyed, keyed_token = session(client, KEY)
+        anonymous, anonymous_token = session(client)
+        for path in (keyed, anonymous):
+            app.state.registry.discard(path.rsplit("/", 1)[1])  # in the store only
+        taken = client.post(f"{keyed}/tracks", json=LARGE, headers=keyed_token)
+        assert taken.status_code == 200, taken.text
+        assert len(taken.json()["tracks"]) == 400
+        refused = client.post(f"{anonymous}/tracks", json=LARGE, headers=anonymous_token)
+        assert refused.status_code == 503 and refused.json()["limit"] == "keyed_tenants_first"
+        wrong = {"Authorization": "Bearer not-this-session-token-0123456789abcdef"}
+        refused = client.post(f"{keyed}/tracks", json=LARGE, headers=wrong)
+        assert refused.status_code == 503 and refused.json()["limit"] == "keyed_tenants_first"
