@@ -49,6 +49,7 @@ import functools
 import math
 import re
 import time
+from collections import OrderedDict
 from collections.abc import Callable
 from http import HTTPStatus
 
@@ -80,7 +81,7 @@ SESSION_PATH = re.compile(r"^/v1/sessions/([^/]+)/")
 """A path under a session's (its id the group)."""
 KEYED_FIRST = "keyed_tenants_first"
 MAX_WAITING_ADDRESSES = 4096
-"""Addresses whose keyed-first ``Retry-After`` is remembered before those past it are dropped."""
+"""Addresses whose keyed-first ``Retry-After`` is remembered, at most (the oldest forgotten)."""
 KEYED_GRACE_S = 1.0
 """A keyed tenant answered less than this long ago is still being served (its next request,
 a sensor's next scan, is on its way)."""
@@ -200,9 +201,10 @@ class FrontDoor:
         """Requests of keyed tenants being answered here."""
         self.keyed_answered = -math.inf
         """When (``time.monotonic()``) a keyed tenant's request was last answered here."""
-        self.waiting_until: dict[str, float] = {}
+        self.waiting_until: OrderedDict[str, float] = OrderedDict()
         """Address tenant → when (``time.monotonic()``) the ``Retry-After`` of its latest
-        keyed-first refusal ends."""
+        keyed-first refusal ends, the earliest end first; at most
+        :data:`MAX_WAITING_ADDRESSES`."""
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         kind = scope["type"]
@@ -298,9 +300,16 @@ class FrontDoor:
                 self.held.inc()
             await asyncio.sleep(until - now)
             now = time.monotonic()
-        if len(self.waiting_until) >= MAX_WAITING_ADDRESSES:  # forget the ones past their time
-            self.waiting_until = {t: u for t, u in self.waiting_until.items() if u > now}
-        self.waiting_until[tenant] = now + KeyedFirst.retry_after_s
+        # in the order of their ends (each is now + Retry-After, written at its time): the
+        # ones past their time are the first; at the bound the oldest live one is forgotten too
+        # (its next refusal is answered at once), never a walk of them all
+        waiting = self.waiting_until
+        waiting.pop(tenant, None)
+        while waiting and (
+            len(waiting) >= MAX_WAITING_ADDRESSES or next(iter(waiting.values())) <= now
+        ):
+            waiting.popitem(last=False)
+        waiting[tenant] = now + KeyedFirst.retry_after_s
 
     def _count(self, limit: str) -> None:
         if self.refused is not None:
