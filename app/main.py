@@ -161,7 +161,7 @@ def create_app(settings: Settings | None = None, workers: WorkerGroup | None = N
     build_stack = app.build_middleware_stack
 
     def behind_the_front_door() -> ASGIApp:
-        return FrontDoor(
+        door = FrontDoor(
             build_stack(),
             rates=parse_rates(settings.rate_limit),
             body_bytes_per_second=settings.tenant_body_bytes_per_second,
@@ -169,7 +169,10 @@ def create_app(settings: Settings | None = None, workers: WorkerGroup | None = N
             refused=service_metrics.refused_at_door,
             held=service_metrics.held_at_door,
             cors_origins=settings.cors_origin_list(),
+            anonymous_served=settings.open_access(),
         )
+        app.state.front_door = door  # the streams ask it about a message (keyed tenants first)
+        return door
 
     app.build_middleware_stack = behind_the_front_door  # type: ignore[method-assign]
     return app

@@ -13,7 +13,8 @@ and WebSocket upgrade once its head is read (the transport limits of
 4. **keyed tenants first**: while a tenant with an API key is being served —
    an HTTP request of it in flight here, or answered less than :data:`KEYED_GRACE_S` ago, or
    an input of it in flight in the pipeline (REST or WebSocket) — a client *without* a key
-   (an address tenant of ``CREDAL_ACCESS=open``; the admin is neither) sending a body larger than
+   (an address tenant of ``CREDAL_ACCESS=open``; the admin is neither; without open access a
+   request without a valid token is the application's to refuse) sending a body larger than
    :data:`~app.http.requests.OFFLOAD_BYTES` (a body whose parsing and validation cost
    milliseconds of CPU: 10-15 ms for a 2 000-track list) is refused ``503 overloaded``
    (``limit: "keyed_tenants_first"``, ``Retry-After: 1``) before its body is read. Small
@@ -21,7 +22,10 @@ and WebSocket upgrade once its head is read (the transport limits of
    client that sends its next large body before the ``Retry-After`` it was given has passed
    waits it out: that refusal is answered when the time is up (``credal_requests_held_at_door``
    counts them), so one address's refusals come at most one per second per connection
-   (``max_connections_per_client`` of them), whatever it sends;
+   (``max_connections_per_client`` of them), whatever it sends. A WebSocket ``stream``
+   message of such a client over that size is answered the same refusal (an ``error``
+   message, the connection kept) before it is parsed (:func:`app.routes.streams.stream_session`
+   asks :meth:`FrontDoor.waits`): the stream is no way around the door;
 5. the tenant's request-body bytes (``tenant_body_bytes_per_second``, on ``Content-Length``).
 
 Every refusal here is a problem+json answer written once per server and kept (an
@@ -43,7 +47,9 @@ from __future__ import annotations
 import asyncio
 import functools
 import math
+import re
 import time
+from collections import OrderedDict
 from collections.abc import Callable
 from http import HTTPStatus
 
@@ -58,6 +64,7 @@ from app.http.errors import problem_for, problem_response
 from app.http.rate_limit import (
     BODY_RATE,
     RATE_LIMIT,
+    bearer_token,
     body_size,
     client_key,
     deny_websocket,
@@ -66,12 +73,15 @@ from app.http.rate_limit import (
 )
 from app.http.requests import OFFLOAD_BYTES
 from app.http.responses import dumps
+from app.http.security import token_matches
 from app.tenants import is_anonymous, is_keyed
 
 HEALTH_PATH = "/healthz"
+SESSION_PATH = re.compile(r"^/v1/sessions/([^/]+)/")
+"""A path under a session's (its id the group)."""
 KEYED_FIRST = "keyed_tenants_first"
 MAX_WAITING_ADDRESSES = 4096
-"""Addresses whose keyed-first ``Retry-After`` is remembered before those past it are dropped."""
+"""Addresses whose keyed-first ``Retry-After`` is remembered, at most (the oldest forgotten)."""
 KEYED_GRACE_S = 1.0
 """A keyed tenant answered less than this long ago is still being served (its next request,
 a sensor's next scan, is on its way)."""
@@ -146,6 +156,14 @@ async def send_answer(send: Send, answer: Answer, extra: list[tuple[bytes, bytes
     await send({"type": "http.response.body", "body": body})
 
 
+def _is_preflight(scope: Scope) -> bool:
+    """A browser's CORS preflight: ``OPTIONS`` with ``Origin`` and
+    ``Access-Control-Request-Method`` (what :class:`~starlette.middleware.cors.CORSMiddleware`
+    answers itself); any other ``OPTIONS`` request goes through the door as every request."""
+    names = {name for name, _ in scope.get("headers", ())}
+    return b"origin" in names and b"access-control-request-method" in names
+
+
 class FrontDoor:
     """ASGI layer: the checks of the module docstring, before every other layer."""
 
@@ -158,13 +176,21 @@ class FrontDoor:
         refused: Counter | None = None,
         held: Counter | None = None,
         cors_origins: list[str] | None = None,
+        anonymous_served: bool = True,
     ) -> None:
         self.app = app
+        self.anonymous_served = anonymous_served
+        """Whether a client without a key is one the service serves (``CREDAL_ACCESS=open``):
+        only then does its large body wait for the keyed tenants. Without open access an
+        address tenant is a request without a valid token (none, a typo, an ended session's):
+        the application answers it (401, 404) as before; a 503 "send it again after
+        Retry-After" would have it retry for ever, and tell it keyed tenants are active."""
         self.held = held
         self.cors_origins = frozenset(cors_origins or ())
         """The browser origins allowed (``CREDAL_CORS_ORIGINS``): the door's answers to them
         carry the headers :class:`~starlette.middleware.cors.CORSMiddleware` would add, and
-        their preflight requests (``OPTIONS``) are that middleware's alone."""
+        their preflight requests (``OPTIONS`` with ``Origin`` and
+        ``Access-Control-Request-Method``) are that middleware's alone."""
         self.rates = rates
         self.body_rate = RateLimitItemPerSecond(body_bytes_per_second)
         self.max_body = max_body
@@ -175,9 +201,10 @@ class FrontDoor:
         """Requests of keyed tenants being answered here."""
         self.keyed_answered = -math.inf
         """When (``time.monotonic()``) a keyed tenant's request was last answered here."""
-        self.waiting_until: dict[str, float] = {}
+        self.waiting_until: OrderedDict[str, float] = OrderedDict()
         """Address tenant → when (``time.monotonic()``) the ``Retry-After`` of its latest
-        keyed-first refusal ends."""
+        keyed-first refusal ends, the earliest end first; at most
+        :data:`MAX_WAITING_ADDRESSES`."""
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         kind = scope["type"]
@@ -186,7 +213,7 @@ class FrontDoor:
             return
         path = scope.get("path", "")
         method = scope.get("method")
-        if self.cors_origins and method == "OPTIONS":
+        if self.cors_origins and method == "OPTIONS" and _is_preflight(scope):
             await self.app(scope, receive, send)
             return
         extra = self._cors_headers(scope)
@@ -205,7 +232,7 @@ class FrontDoor:
                 return
         tenant = key.removeprefix("tenant:")
         size = body_size(scope, self.max_body)
-        if size > OFFLOAD_BYTES and is_anonymous(tenant) and self.keyed_served(scope):
+        if self.waits(tenant, size, scope) and await self._stored_waits(scope, size):
             await self._wait_your_turn(tenant)
             await send_answer(send, _keyed_first_answer(private), extra)
             return
@@ -223,6 +250,36 @@ class FrontDoor:
         finally:
             self.keyed_in_flight -= 1
             self.keyed_answered = time.monotonic()
+
+    def waits(self, tenant: str, size: int, scope: Scope) -> bool:
+        """Whether a body (or a WebSocket message) of ``size`` bytes of ``tenant`` waits for
+        the keyed tenants (module docstring, 4)."""
+        return (
+            size > OFFLOAD_BYTES
+            and self.anonymous_served
+            and is_anonymous(tenant)
+            and self.keyed_served(scope)
+        )
+
+    async def _stored_waits(self, scope: Scope, size: int) -> bool:
+        """Whether a request the door took for an address tenant's still waits once its
+        session's stored record is read: the token of a session not held in memory (evicted
+        after a failed write, held by another instance, not yet restored) is unknown to
+        :func:`~app.http.rate_limit.client_key`, and a keyed tenant's sensor posting to it
+        would be refused for ever while other keyed tenants are served. Only a large body of a
+        bearer token on a session's path reaches this (one record read, as the route's own)."""
+        found = SESSION_PATH.match(scope.get("path", ""))
+        token = bearer_token(scope)
+        registry = getattr(getattr(scope.get("app"), "state", None), "registry", None)
+        if found is None or token is None or registry is None:
+            return True
+        try:
+            record = await registry.record(found.group(1))
+        except ServiceError:  # unavailable, unreadable: the address's, as the door took it
+            return True
+        if record is None or not token_matches(token, record.token_hash):
+            return True
+        return self.waits(record.tenant, size, scope)
 
     def keyed_served(self, scope: Scope) -> bool:
         """Whether a keyed tenant is being served (module docstring, 4)."""
@@ -243,9 +300,16 @@ class FrontDoor:
                 self.held.inc()
             await asyncio.sleep(until - now)
             now = time.monotonic()
-        if len(self.waiting_until) >= MAX_WAITING_ADDRESSES:  # forget the ones past their time
-            self.waiting_until = {t: u for t, u in self.waiting_until.items() if u > now}
-        self.waiting_until[tenant] = now + KeyedFirst.retry_after_s
+        # in the order of their ends (each is now + Retry-After, written at its time): the
+        # ones past their time are the first; at the bound the oldest live one is forgotten too
+        # (its next refusal is answered at once), never a walk of them all
+        waiting = self.waiting_until
+        waiting.pop(tenant, None)
+        while waiting and (
+            len(waiting) >= MAX_WAITING_ADDRESSES or next(iter(waiting.values())) <= now
+        ):
+            waiting.popitem(last=False)
+        waiting[tenant] = now + KeyedFirst.retry_after_s
 
     def _count(self, limit: str) -> None:
         if self.refused is not None:

@@ -53,18 +53,23 @@ def rate_text(item: RateLimitItem) -> str:
     return f"{item.amount} per {item.multiples} {item.GRANULARITY.name}"
 
 
-def client_key(scope: Scope, tenant_of: Callable[[str], str | None]) -> str:
-    """Whom a request counts against: the tenant of its token (a live session's, an API key,
-    the admin token) if ``tenant_of`` knows it, else its client address's tenant."""
+def bearer_token(scope: Scope) -> str | None:
+    """The bearer token of a request's first ``Authorization`` header, if it has one."""
     for name, value in scope.get("headers", ()):
         if name == b"authorization":
             scheme, _, token = value.partition(b" ")
             token = token.strip()
-            if scheme.lower() == b"bearer" and token:
-                tenant = tenant_of(token.decode("latin-1"))
-                if tenant is not None:
-                    return "tenant:" + tenant
-            break
+            return token.decode("latin-1") if scheme.lower() == b"bearer" and token else None
+    return None
+
+
+def client_key(scope: Scope, tenant_of: Callable[[str], str | None]) -> str:
+    """Whom a request counts against: the tenant of its token (a live session's, an API key,
+    the admin token) if ``tenant_of`` knows it, else its client address's tenant."""
+    token = bearer_token(scope)
+    tenant = None if token is None else tenant_of(token)
+    if tenant is not None:
+        return "tenant:" + tenant
     client = scope.get("client")
     return "tenant:" + address_tenant(client[0] if client else None)
 

@@ -59,6 +59,7 @@ from app.http.errors import (
     problem_for,
     problem_response,
 )
+from app.http.front import FrontDoor, KeyedFirst
 from app.http.rate_limit import MessageRate
 from app.http.requests import OFFLOAD_BYTES, WireRoute, json_error, parse_json
 from app.inputs import DECODED_KINDS, INPUT_KINDS, client_messages, message_input
@@ -325,6 +326,8 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
 
     settings = registry.settings
     rate = MessageRate(settings.ws_messages_per_second)
+    door: FrontDoor | None = getattr(websocket.app.state, "front_door", None)
+    tenant = session.record.tenant
 
     async def reader() -> None:
         async with send:
@@ -359,6 +362,8 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
                         ),
                         path,
                     )
+                elif door is not None and door.waits(tenant, size, websocket.scope):
+                    answer = _refusal(KeyedFirst(), path)  # as the door answers a large body
                 elif text is None:
                     answer = await _decoded_answer(websocket, session, data, path, output, received)
                 else:

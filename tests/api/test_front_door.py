@@ -209,3 +209,118 @@ def held_at_door(client: httpx.Client) -> float:
         r"^credal_requests_held_at_door_total (\S+)$", client.get("/metrics").text, re.M
     )
     return float(found.group(1)) if found else 0.0
+
+
+def test_without_open_access_a_request_without_a_valid_token_is_not_told_to_wait(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """With ``CREDAL_ACCESS=keys`` an address tenant is a request whose token is missing or
+    unknown (a typo, an ended session's): the application refuses it (401 without a token,
+    404 for a session the token does not open, as when no keyed tenant is served), never the
+    door's 503 ``keyed_tenants_first`` with ``Retry-After``, which would have the client retry
+    for ever and tell it a keyed tenant is active."""
+    monkeypatch.setattr(front, "KEYED_GRACE_S", 3600.0)  # the keyed tenant stays "being served"
+    settings = make_settings(access="keys", api_keys=f"alpha:{KEY}")
+    with serving(settings) as live, httpx.Client(base_url=live.url, timeout=30) as client:
+        keyed, _ = session(client, KEY)
+        wrong = {"Authorization": "Bearer not-a-token-of-this-service-0123456789"}
+        unknown = client.post(f"{keyed}/tracks", json=LARGE, headers=wrong)
+        assert unknown.status_code == 404, unknown.text
+        assert unknown.json()["type"] == "urn:credal-fusion:problem:session-not-found"
+        missing = client.post(f"{keyed}/tracks", json=LARGE)
+        assert missing.status_code == 401, missing.text
+        assert "retry-after" not in missing.headers
+
+
+def test_with_cors_an_options_request_that_is_no_preflight_is_rate_limited() -> None:
+    """Only a browser's preflight (``Origin`` and ``Access-Control-Request-Method``) is CORS's
+    alone; any other ``OPTIONS`` request counts against the rate limit as on main, where the
+    limit ran behind the CORS middleware (2 per minute here: the third is refused)."""
+    settings = make_settings(access="open", rate_limit="2/minute", cors_origins="https://a.test")
+    with serving(settings) as live, httpx.Client(base_url=live.url, timeout=30) as client:
+        statuses = [client.options("/v1/sessions").status_code for _ in range(3)]
+        assert statuses[:2] != [429, 429] and statuses[2] == 429, statuses
+        preflight = {
+            "Origin": "https://a.test",
+            "Access-Control-Request-Method": "POST",
+        }
+        answered = client.options("/v1/sessions", headers=preflight)
+        assert answered.status_code == 200, answered.text
+        assert answered.headers["access-control-allow-origin"] == "https://a.test"
+
+
+def test_without_a_key_a_large_stream_message_waits_as_a_large_body_does(
+    server: LiveServer, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The ``stream`` WebSocket is no way around keyed tenants first: a message over 32 KiB
+    of a client without a key is answered the door's refusal before it is parsed (nothing
+    applied, the connection kept), a small one is applied; with no keyed tenant served the
+    large one is taken."""
+    from websockets.sync.client import connect
+
+    monkeypatch.setattr(front, "KEYED_GRACE_S", 3600.0)  # the keyed tenant stays "being served"
+    with httpx.Client(base_url=server.url, timeout=30) as client:
+        anonymous, token = session(client)
+        session(client, KEY)
+        url = server.url.replace("http://", "ws://") + f"{anonymous}/stream"
+        with connect(url, additional_headers=token, max_size=None) as ws:
+            assert json.loads(ws.recv(timeout=10))["type"] == "ack"
+            ws.send(json.dumps({"type": "tracks", "ref": "large", **LARGE}))
+            refused = json.loads(ws.recv(timeout=30))
+            assert refused["type"] == "error", refused
+            assert refused["problem"]["status"] == 503
+            assert refused["problem"]["limit"] == "keyed_tenants_first"
+            ws.send(json.dumps({"type": "tracks", "ref": "small", **SMALL}))
+            small = json.loads(ws.recv(timeout=30))
+            assert small["type"] == "result" and small["ref"] == "small"
+            assert len(small["result"]["tracks"]) == 3  # the large one was not applied
+            monkeypatch.setattr(front, "KEYED_GRACE_S", 0.0)
+            ws.send(json.dumps({"type": "tracks", "ref": "later", **tracks(400, time=2.0)}))
+            taken = json.loads(ws.recv(timeout=30))
+            assert taken["type"] == "result" and taken["ref"] == "later", taken
+
+
+def test_a_keyed_session_not_held_in_memory_is_still_keyed(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A keyed tenant's session the registry no longer holds (evicted after a failed write,
+    held by another instance, not yet restored) is its tenant's all the same: its token is
+    read against the stored record, and its large body is taken while other keyed tenants
+    are served. A token that opens no session stays an address's and waits."""
+    monkeypatch.setattr(front, "KEYED_GRACE_S", 3600.0)  # the keyed tenants stay "being served"
+    settings = make_settings(access="open", api_keys=f"alpha:{KEY}")
+    app = create_app(settings)
+    with serving(settings, app) as live, httpx.Client(base_url=live.url, timeout=30) as client:
+        keyed, keyed_token = session(client, KEY)
+        anonymous, anonymous_token = session(client)
+        for path in (keyed, anonymous):
+            app.state.registry.discard(path.rsplit("/", 1)[1])  # in the store only
+        taken = client.post(f"{keyed}/tracks", json=LARGE, headers=keyed_token)
+        assert taken.status_code == 200, taken.text
+        assert len(taken.json()["tracks"]) == 400
+        refused = client.post(f"{anonymous}/tracks", json=LARGE, headers=anonymous_token)
+        assert refused.status_code == 503 and refused.json()["limit"] == "keyed_tenants_first"
+        wrong = {"Authorization": "Bearer not-this-session-token-0123456789abcdef"}
+        refused = client.post(f"{keyed}/tracks", json=LARGE, headers=wrong)
+        assert refused.status_code == 503 and refused.json()["limit"] == "keyed_tenants_first"
+
+
+def test_the_door_remembers_at_most_max_waiting_addresses(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The held refusals' memory is bounded whatever the crowd (every entry live here: a
+    Retry-After of an hour), the oldest forgotten first: a crowd of more addresses than the
+    bound (an IPv6 /48 holds 65 536 /64 tenants) made the door walk every live entry at each
+    refusal (0.6 -> 120-180 µs per refusal beyond 4 096 live addresses) and keep them all."""
+    import asyncio
+
+    monkeypatch.setattr(front, "MAX_WAITING_ADDRESSES", 4)
+    monkeypatch.setattr(front.KeyedFirst, "retry_after_s", 3600)
+    door = front.FrontDoor(create_app(make_settings()), [], 1, 1)
+
+    async def refuse_each() -> None:
+        for k in range(6):
+            await door._wait_your_turn(f"address:10.0.0.{k}")
+
+    asyncio.run(refuse_each())
+    assert list(door.waiting_until) == [f"address:10.0.0.{k}" for k in (2, 3, 4, 5)]
