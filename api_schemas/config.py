@@ -33,7 +33,7 @@ from api_schemas.base import (
 )
 from api_schemas.issues import FieldIssue, raise_issues
 from api_schemas.limits import MAX_SENSORS, bounded
-from api_schemas.linalg import check_covariance
+from api_schemas.linalg import R_DESCRIPTION, check_covariance
 from core.models import TRANSITION_MODELS
 from core.numerics import MAX_MAGNITUDE
 
@@ -240,12 +240,12 @@ class CartesianMeasurement(WireModel):
     detections are ``{"z": [...]}`` (``kind: "cartesian"`` is the default)."""
 
     kind: Literal["cartesian"] = "cartesian"
-    r: Matrix = Field(description="R over the positions")
+    r: Matrix = Field(description=R_DESCRIPTION)
 
     @model_validator(mode="after")
     def _r_is_covariance(self) -> Self:
         try:
-            check_covariance(self.r, name="r")
+            check_covariance(self.r, name="r", noise=True)
         except ValueError as error:
             raise_issues("CartesianMeasurement", [FieldIssue(("r",), str(error), self.r)])
         return self

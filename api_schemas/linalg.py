@@ -6,6 +6,7 @@ pydantic turns it into a validation error located at the field being checked.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from itertools import chain
 
@@ -16,6 +17,15 @@ from core.distance.estimates import covariance_problems as covariance_problems_o
 
 SYMMETRY_TOLERANCE = estimates.SYMMETRY_TOLERANCE
 """Relative tolerance on ``|P - Pᵀ|`` (the core's: one check, one tolerance)."""
+NOISE_VARIANCE_BOUNDS_M2 = (1e-6, 1e10)
+"""A cartesian measurement noise R's eigenvalues (m²: the variance along each of its axes),
+bounds included: (1 mm)² to (100 km)², a polar sensor's ``sigma_range`` bounds squared. No
+sensor measures a position outside them; below them a detection's clutter box ``z ± 3σ``
+rounds back to ``z`` (1e-60 m² did: a box of volume 0)."""
+R_DESCRIPTION = (
+    "R over the positions (m²): symmetric positive definite, every eigenvalue (the variance "
+    "along one of its axes) from 1e-06 (1 mm)² to 1e+10 (100 km)²"
+)
 
 
 def check_square(
@@ -53,14 +63,19 @@ def _rows(count: int) -> str:
 
 
 def check_covariance(
-    matrix: Sequence[Sequence[float]], size: int | None = None, *, name: str = "matrix"
+    matrix: Sequence[Sequence[float]],
+    size: int | None = None,
+    *,
+    name: str = "matrix",
+    noise: bool = False,
 ) -> None:
-    """Check that ``matrix`` is a square, symmetric, positive-definite covariance.
+    """Check that ``matrix`` is a square, symmetric, positive-definite covariance (and, as a
+    measurement ``noise``, of variances within :data:`NOISE_VARIANCE_BOUNDS_M2`).
 
     For the many matrices of one input use :func:`covariance_problems` (one batch).
     """
     check_square(matrix, size, name=name)
-    problem = covariance_problems([matrix]).get(0)
+    problem = (noise_problems if noise else covariance_problems)([matrix]).get(0)
     if problem is not None:
         raise ValueError(problem)
 
@@ -84,17 +99,53 @@ def covariance_problems(matrices: Sequence[Sequence[Sequence[float]]]) -> dict[i
         Index in ``matrices`` → the problem (the message :func:`check_covariance`
         raises); empty when every matrix is a covariance.
     """
-    by_size: dict[int, list[int]] = {}
-    for index, matrix in enumerate(matrices):
-        by_size.setdefault(len(matrix), []).append(index)
     problems: dict[int, str] = {}
-    for size, indices in by_size.items():
+    for size, indices in _by_size(matrices).items():
         group = matrices if len(indices) == len(matrices) else [matrices[i] for i in indices]
         entries = chain.from_iterable(chain.from_iterable(group))
         stack = np.fromiter(entries, dtype=float, count=len(indices) * size * size)
         for position, problem in _stack_problems(stack.reshape(len(indices), size, size)).items():
             problems[indices[position]] = problem
     return dict(sorted(problems.items()))
+
+
+def noise_problems(matrices: Sequence[Sequence[Sequence[float]]]) -> dict[int, str]:
+    """What is wrong with each matrix that is no measurement noise R: :func:`covariance_problems`,
+    then an eigenvalue outside :data:`NOISE_VARIANCE_BOUNDS_M2` (one ``eigvalsh`` per size).
+
+    The matrices must already be square; index in ``matrices`` → the problem, in index order.
+    """
+    problems = covariance_problems(matrices)
+    low, high = NOISE_VARIANCE_BOUNDS_M2
+    bounds = f"every variance of R (an eigenvalue, m²) must be from {low:g} to {high:g}"
+    for size, indices in _by_size(matrices).items():
+        kept = [index for index in indices if index not in problems]
+        if not kept:
+            continue
+        stack = np.array([matrices[index] for index in kept], dtype=float).reshape(-1, size, size)
+        eigenvalues = np.linalg.eigvalsh(stack)
+        for index, smallest, largest in zip(
+            kept, eigenvalues[:, 0].tolist(), eigenvalues[:, -1].tolist(), strict=True
+        ):
+            if smallest < low:
+                problems[index] = (
+                    f"{bounds} ((1 mm)² to (100 km)²): its smallest, {smallest:.3g} m² "
+                    f"(σ {math.sqrt(smallest):.3g} m along that axis), is below {low:g}"
+                )
+            elif largest > high:
+                problems[index] = (
+                    f"{bounds} ((1 mm)² to (100 km)²): its largest, {largest:.3g} m² "
+                    f"(σ {math.sqrt(largest):.3g} m along that axis), is above {high:g}"
+                )
+    return dict(sorted(problems.items()))
+
+
+def _by_size(matrices: Sequence[Sequence[Sequence[float]]]) -> dict[int, list[int]]:
+    """The indices of the matrices of each size, in input order."""
+    by_size: dict[int, list[int]] = {}
+    for index, matrix in enumerate(matrices):
+        by_size.setdefault(len(matrix), []).append(index)
+    return by_size
 
 
 def _stack_problems(stack: np.ndarray) -> dict[int, str]:

@@ -22,7 +22,7 @@ from api_schemas.base import FiniteFloat, Identifier, Matrix, Vector, WireModel
 from api_schemas.classification import ClassEvidence
 from api_schemas.issues import FieldIssue, raise_issues
 from api_schemas.limits import MAX_ITEMS, bounded
-from api_schemas.linalg import check_square, covariance_problems
+from api_schemas.linalg import R_DESCRIPTION, check_square, covariance_problems, noise_problems
 from api_schemas.timing import SessionTime
 
 StateVector = Annotated[Vector, Field(min_length=1, max_length=64)]
@@ -119,12 +119,15 @@ class CartesianDetection(WireModel):
     ``r`` (default: its sensor's ``measurement.r``) and class evidence."""
 
     z: Annotated[Vector, Field(min_length=1, max_length=3)]
-    r: Matrix | None = None
+    r: Matrix | None = Field(
+        default=None, description=f"{R_DESCRIPTION} (default: its sensor's measurement.r)"
+    )
     classification: ClassEvidence | None = None
 
     @model_validator(mode="after")
     def _r_matches_z(self) -> Self:
-        """Square and of ``z``'s size; symmetric positive definite is checked by the report."""
+        """Square and of ``z``'s size; a noise (:func:`~api_schemas.linalg.noise_problems`) is
+        checked by the report."""
         if self.r is not None:
             try:
                 check_square(self.r, len(self.z), name="r", vector="z")
@@ -174,13 +177,14 @@ class DetectionReport(WireModel):
 
     @model_validator(mode="after")
     def _noise_is_covariance(self) -> Self:
-        """Every detection's own ``r`` symmetric positive definite (one batch)."""
+        """Every detection's own ``r`` symmetric positive definite, of bounded variances (one
+        batch: :func:`~api_schemas.linalg.noise_problems`)."""
         noisy = [
             (index, detection.r)
             for index, detection in enumerate(self.detections)
             if isinstance(detection, CartesianDetection) and detection.r is not None
         ]
-        bad_noise = covariance_problems([r for _, r in noisy])
+        bad_noise = noise_problems([r for _, r in noisy])
         if bad_noise:
             raise_issues(
                 "DetectionReport",

@@ -667,7 +667,10 @@ class SessionEngine:
         one that left it long ago (a radar whose horizon the aircraft went below).
         Once every source of the track has left it for :data:`STALE_REVISITS` of its
         revisits (a source that stopped reporting at all), any sensor's silence
-        counts again, so that the track still ends.
+        counts again, so that the track still ends. A central phantom keeps nothing up to
+        date (``others``, :meth:`_reporting`) but is still reported: the central source
+        carries its track, and the track is not stale — an ADS-B station that never reported
+        a radar-only aircraft does not delete it in a blind zone (§8.11).
         """
         slot = self._table.slot(sensor)
         current = self._reporting(rows)

@@ -15,7 +15,8 @@ estimates it per sensor, scan by scan:
   an exponential forgetting of time constant τ = :data:`TIME_CONSTANT` scans; the
   prior is one false alarm per scan over the region grown by the first gate of a
   new track (λ₀ = 1 / V₀, V₀ the box grown by ``3 √(σ_v² ΔT² + σ²)`` on each side),
-  weighted as n₀ = :data:`PRIOR_SCANS` scan, so that the first scans behave.
+  weighted as n₀ = :data:`PRIOR_SCANS` scan, so that the first scans behave; a box of
+  no volume (its detections' σ below the spacing of the doubles at them) gives λ₀ alone.
 
 The detections of a target before its track is confirmed count as clutter
 (a bias up by about births × scans to confirm, a few per cent on the peer
@@ -88,7 +89,11 @@ class ClutterEstimate:
             raise ValueError("no detection yet: the region is unknown")
         volume = float(np.prod(sides))
         prior = 1.0 / float(np.prod(sides + 2.0 * gate))
-        data = self.false_alarms / volume
+        data = self.false_alarms / volume if volume > 0.0 else math.inf
+        if not math.isfinite(data):
+            # A degenerate box (``z ± 3σ`` rounded back to ``z``: a σ below the spacing of
+            # the doubles at z) has no volume to spread the count over: the prior alone.
+            return prior
         return (PRIOR_SCANS * prior + data) / (PRIOR_SCANS + self.scans)
 
     def to_plain(self) -> dict[str, Any]:

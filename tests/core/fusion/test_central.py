@@ -601,3 +601,64 @@ def test_a_central_phantom_is_no_report_of_the_object() -> None:
     # nor does the phantom, still reported by the central tracker, start a fused track again
     assert central.phantoms
     assert list(steps[silent_from + 3].tracks) == []
+
+
+def test_a_source_that_never_carried_a_central_phantom_does_not_delete_it() -> None:
+    """The blind zone of the test above, with a track-list source ``lists`` (P_D 0.9, sees
+    everywhere) that never reports the target (an ADS-B station and an unequipped aircraft):
+    its empty lists say nothing about it (§8.2: a source that never carried a track), while
+    the radars' tracker holds it. The central tracker still reports its phantom at every step:
+    it carries the track, which is not stale (every source left it), so the fused track keeps
+    its id and its score through the gap (§8.11), shown ``phantom``. Were the phantom no
+    report at all (``_reporting`` in place of ``_current`` for the stale rule), the track
+    would be stale from its first phantom step and lists' third silence would delete it,
+    3 ln(1 − 0.9) = −6.908 ≤ ln(1e-3/0.999) = −6.907 (by hand). The phantom keeps nothing up to
+    date either way (``others``, tested above)."""
+    a = Sector(
+        origin=(0.0, 0.0), heading_deg=0.0, half_angle_deg=45.0, range_min=0.0, range_max=1000.0
+    )
+    b = Sector(
+        origin=(3000.0, 0.0),
+        heading_deg=180.0,
+        half_angle_deg=45.0,
+        range_min=0.0,
+        range_max=1000.0,
+    )
+    region = PolygonView(((-500.0, -1500.0), (3500.0, -1500.0), (3500.0, 1500.0), (-500.0, 1500.0)))
+    config = FusionConfig(
+        motion=MotionModel(LAYOUT, q=100.0),
+        sensors=(
+            SensorSpec("a", tracker=tracker("a", fov=a)),
+            SensorSpec("b", tracker=tracker("b", fov=b)),
+            SensorSpec("lists", p_detect=0.9),
+        ),
+        region=region,
+    )
+    engine = SessionEngine(config)
+    central = engine.central
+    assert central is not None
+    rng = np.random.default_rng(3)
+    start, velocity = np.array([500.0, 0.0]), np.array([50.0, 0.0])
+    phantom_from, steps = None, []
+    for k in range(30):
+        truth = start + velocity * k
+        seen = np.hypot(*truth) <= 1000.0
+        z = truth[None] + rng.normal(0.0, SIGMA, (1, 2)) if seen else np.zeros((0, 2))
+        engine.apply_detections(DetectionReport("a", float(k), z))
+        engine.apply_detections(DetectionReport("b", k + 0.5, np.zeros((0, 2))))
+        if phantom_from is None and central.phantoms:
+            phantom_from = k
+        steps.append(engine.apply(TrackReport("lists", k + 0.75, ())))
+        if phantom_from is not None and k >= phantom_from + 5:
+            break
+    assert phantom_from is not None, "the central track never became a phantom"
+    (first,) = steps[phantom_from - 1].tracks.ids  # the one fused track, confirmed
+    history = [
+        [(track.status, track.score) for track in step.tracks if track.id == first]
+        for step in steps
+    ]
+    before = history[phantom_from - 1]
+    assert len(before) == 1 and before[0][0] == TrackStatus.CONFIRMED
+    # lists' six silences in the gap: no miss, the same score, the track held as a phantom
+    for m in range(6):
+        assert history[phantom_from + m] == [(TrackStatus.PHANTOM, before[0][1])]
