@@ -146,6 +146,19 @@ def get(path: str, **params: str) -> Callable[[Scene], list[Answer]]:
     return send
 
 
+def _whole(received: bytes) -> bool:
+    """Whether ``received`` holds an answer's head and all the body its Content-Length
+    declares (the head and the body may come in separate segments)."""
+    head, found, body = received.partition(b"\r\n\r\n")
+    if not found:
+        return False
+    for line in head.split(b"\r\n")[1:]:
+        name, _, value = line.partition(b":")
+        if name.strip().lower() == b"content-length":
+            return len(body) >= int(value.strip())
+    return True
+
+
 def raw_http(request: bytes, *, wait: float = 2.0) -> Callable[[Scene], list[Answer]]:
     """Bytes written on a raw socket; the status line read back (or a closed connection)."""
 
@@ -155,7 +168,7 @@ def raw_http(request: bytes, *, wait: float = 2.0) -> Callable[[Scene], list[Ans
             connection.sendall(request.replace(b"{sid}", scene.sid.encode()))
             received = b""
             deadline = time.monotonic() + wait + 5.0
-            while b"\r\n\r\n" not in received and time.monotonic() < deadline:
+            while not _whole(received) and time.monotonic() < deadline:
                 chunk = connection.recv(65536)
                 if not chunk:
                     break
