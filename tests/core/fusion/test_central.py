@@ -534,15 +534,9 @@ def test_a_track_hits_count_the_instants_it_was_detected_at() -> None:
     assert statuses == ["tentative", "tentative", "confirmed"]
 
 
-def test_a_central_phantom_is_no_report_of_the_object() -> None:
-    """A target leaves radar a's sector for the gap before radar b's (inside the session's
-    region: a blind zone, docs/algorithms.md §8.9): the central tracker keeps it as a
-    phantom, reported at every step. A track-list source ``lists`` (P_D 0.9, sees
-    everywhere) that carried it and now sends empty lists is the only source that could
-    see it: its silence is a miss (§8.2), ln(1 − 0.9) from the score ceiling 0 each, and
-    the third crosses the delete threshold ln(β/(1 − α)) = ln(1e-3/0.999) (3 × −2.3026 =
-    −6.908 ≤ −6.907, by hand). The phantom, a prediction, does not hold the track, nor
-    start another one."""
+def _blind_zone_session() -> SessionEngine:
+    """Two radars ``a`` and ``b`` (sectors of 1 km, 3 km apart, facing each other: a blind
+    zone between them) and a track-list source ``lists`` (P_D 0.9) that sees everywhere."""
     a = Sector(
         origin=(0.0, 0.0), heading_deg=0.0, half_angle_deg=45.0, range_min=0.0, range_max=1000.0
     )
@@ -554,16 +548,29 @@ def test_a_central_phantom_is_no_report_of_the_object() -> None:
         range_max=1000.0,
     )
     region = PolygonView(((-500.0, -1500.0), (3500.0, -1500.0), (3500.0, 1500.0), (-500.0, 1500.0)))
-    config = FusionConfig(
-        motion=MotionModel(LAYOUT, q=100.0),
-        sensors=(
-            SensorSpec("a", tracker=tracker("a", fov=a)),
-            SensorSpec("b", tracker=tracker("b", fov=b)),
-            SensorSpec("lists", p_detect=0.9),
-        ),
-        region=region,
+    return SessionEngine(
+        FusionConfig(
+            motion=MotionModel(LAYOUT, q=100.0),
+            sensors=(
+                SensorSpec("a", tracker=tracker("a", fov=a)),
+                SensorSpec("b", tracker=tracker("b", fov=b)),
+                SensorSpec("lists", p_detect=0.9),
+            ),
+            region=region,
+        )
     )
-    engine = SessionEngine(config)
+
+
+def test_a_central_phantom_is_no_report_of_the_object() -> None:
+    """A target leaves radar a's sector for the gap before radar b's (inside the session's
+    region: a blind zone, docs/algorithms.md §8.9): the central tracker keeps it as a
+    phantom, reported at every step. A track-list source ``lists`` (P_D 0.9, sees
+    everywhere) that carried it and now sends empty lists is the only source that could
+    see it: its silence is a miss (§8.2), ln(1 − 0.9) from the score ceiling 0 each, and
+    the third crosses the delete threshold ln(β/(1 − α)) = ln(1e-3/0.999) (3 × −2.3026 =
+    −6.908 ≤ −6.907, by hand). The phantom, a prediction, does not hold the track, nor
+    start another one."""
+    engine = _blind_zone_session()
     central = engine.central
     assert central is not None
     rng = np.random.default_rng(3)
@@ -614,27 +621,7 @@ def test_a_source_that_never_carried_a_central_phantom_does_not_delete_it() -> N
     would be stale from its first phantom step and lists' third silence would delete it,
     3 ln(1 − 0.9) = −6.908 ≤ ln(1e-3/0.999) = −6.907 (by hand). The phantom keeps nothing up to
     date either way (``others``, tested above)."""
-    a = Sector(
-        origin=(0.0, 0.0), heading_deg=0.0, half_angle_deg=45.0, range_min=0.0, range_max=1000.0
-    )
-    b = Sector(
-        origin=(3000.0, 0.0),
-        heading_deg=180.0,
-        half_angle_deg=45.0,
-        range_min=0.0,
-        range_max=1000.0,
-    )
-    region = PolygonView(((-500.0, -1500.0), (3500.0, -1500.0), (3500.0, 1500.0), (-500.0, 1500.0)))
-    config = FusionConfig(
-        motion=MotionModel(LAYOUT, q=100.0),
-        sensors=(
-            SensorSpec("a", tracker=tracker("a", fov=a)),
-            SensorSpec("b", tracker=tracker("b", fov=b)),
-            SensorSpec("lists", p_detect=0.9),
-        ),
-        region=region,
-    )
-    engine = SessionEngine(config)
+    engine = _blind_zone_session()
     central = engine.central
     assert central is not None
     rng = np.random.default_rng(3)
