@@ -81,13 +81,26 @@ class GatedPairs:
         detection_at[detections] = np.arange(len(detections))
         rows, cols = track_at[pairs.rows], detection_at[pairs.cols]
         keep = (rows >= 0) & (cols >= 0)
+        return self._subset(keep, rows, cols, len(tracks), len(detections))
+
+    def kept(self, keep: BoolArray) -> GatedPairs:
+        """The pairs where ``keep`` is True, numbered as before."""
+        pairs = self.pairs
+        return self._subset(keep, pairs.rows, pairs.cols, pairs.n_known, pairs.n_incoming)
+
+    def _subset(
+        self, keep: BoolArray, rows: IntArray, cols: IntArray, n_known: int, n_incoming: int
+    ) -> GatedPairs:
+        """The pairs where ``keep`` is True, with ``rows``/``cols`` as their indices among
+        ``n_known`` tracks and ``n_incoming`` detections."""
+        pairs = self.pairs
         reduced = CandidatePairs(
             rows[keep],
             cols[keep],
             pairs.distance[keep],
             pairs.log_det[keep],
-            len(tracks),
-            len(detections),
+            n_known,
+            n_incoming,
             pairs.dimension,
             self.plain_distance[keep],
         )
@@ -126,20 +139,8 @@ def gate_pairs(
     )
     if floors is None or not np.any(np.isfinite(floors[found.pairs.rows])):
         return found
-    keep = _explained(prediction, measurements, measurement_covariances, noise, found, floors)
-    pairs = found.pairs
-    return GatedPairs(
-        CandidatePairs(
-            pairs.rows[keep],
-            pairs.cols[keep],
-            pairs.distance[keep],
-            pairs.log_det[keep],
-            pairs.n_known,
-            pairs.n_incoming,
-            pairs.dimension,
-            found.plain_distance[keep],
-        ),
-        found.models[keep],
+    return found.kept(
+        _explained(prediction, measurements, measurement_covariances, noise, found, floors)
     )
 
 
