@@ -194,3 +194,24 @@ def test_a_drift_between_phases_is_not_read_as_the_attackers(bench: ModuleType) 
         new += not bench.p99_verdict(interval)[0]
     assert old >= 3
     assert new == 0
+
+
+def test_the_attacker_is_pinned_only_with_more_than_two_cores(
+    bench: ModuleType, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Four usable cores: the attacker gets the last alone, the server and this process the
+    other three; two cores: nothing is pinned, and the line says so."""
+    pinned: dict[int, set[int]] = {}
+    monkeypatch.setattr(
+        bench.os, "sched_setaffinity", lambda pid, cores: pinned.update({pid: cores})
+    )
+    monkeypatch.setattr(bench.os, "sched_getaffinity", lambda pid: {0, 1, 2, 3})
+    core, line = bench.attacker_core(4242)
+    assert core == 3
+    assert pinned == {4242: {0, 1, 2}, 0: {0, 1, 2}}
+    assert "pinned to core 3" in line
+    pinned.clear()
+    monkeypatch.setattr(bench.os, "sched_getaffinity", lambda pid: {0, 1})
+    core, line = bench.attacker_core(4242)
+    assert core is None and pinned == {}
+    assert line.startswith("2 cores usable: the attacker is not pinned")

@@ -29,7 +29,12 @@ and WebSocket upgrade once its head is read (the transport limits of
    are no work here: they hold no anonymous input back. A WebSocket ``stream``
    message of such a client over that size is answered the same refusal (an ``error``
    message, the connection kept) before it is parsed (:func:`app.routes.streams.stream_session`
-   asks :meth:`FrontDoor.waits`): the stream is no way around the door;
+   asks :meth:`FrontDoor.waits`): the stream is no way around the door. The refusal tells a
+   client without a key that a keyed tenant sent work in the last second; it is not disguised
+   as the pipeline's load shedding (``overload_delay_ms``, ``max_queue_ms``): those refuse
+   inputs of every size after their parsing, this one only large bodies, unread, so a client
+   sending one large and one small input tells them apart whatever the answer says, and
+   ``/metrics``, open to every client, counts every input (``credal_inputs_total``) anyway;
 5. the tenant's request-body bytes (``tenant_body_bytes_per_second``, on ``Content-Length``).
 
 Every refusal here is a problem+json answer written once per server and kept (an
