@@ -26,27 +26,37 @@ Speed is not measured here (``bench/service.py`` does that).
 
 ``--crowd`` (``make soak`` runs it after the stores): on the sqlite store, the
 same honest load (its sessions created with an API key, :data:`HONEST_KEY`, as
-a client of a service on a network must) for :data:`CROWD_SECONDS` alone, then
-as long again with an anonymous attacker process (no key: open access on
-loopback lets it create sessions and send inputs) beside it (:func:`attack`, from other loopback
-addresses: slowloris connections, 16 MB headers, a session flood, floods of
-the heaviest legal inputs and of explained ones). The honest sensors' p99
-latency must stay within 10 % of their run alone, and the honest error rate
-(failed requests of every kind, each printed with its status and problem type)
-must not be higher beside the attacker: errors are a few in a thousand, so "within
-10 %" of one error is no test; the rates are compared by a one-sided Fisher exact
-test at 5 % (an increase fails only when significant), and the 95 % upper bound of
-the increase (Newcombe's interval) is printed as what the run can rule out (exit 1
-if either rule fails). The two kinds of phase alternate (:data:`CROWD_PHASES` of each), so a
-drift of the machine's other load falls on both. Both processes share the
-machine's cores with the server: each phase prints the CPU seconds of the
-server, the honest load and the attacker, and how long the server's event
-loop waited runnable for a CPU (the machine's share of the latency).
+a client of a service on a network must) alone, then beside an anonymous attacker
+process (no key: open access on loopback lets it create sessions and send inputs;
+:func:`attack`, from other loopback addresses: slowloris connections, 16 MB headers, a
+session flood, floods of the heaviest legal inputs and of explained ones), in
+:data:`CROWD_PHASES` pairs of phases (alone, attacked, alone, attacked, …;
+:data:`CROWD_SECONDS` of each kind in all), so a drift of the machine's other load
+falls on both kinds. Two rules (exit 1 if either fails):
+
+* the honest p99 beside the attacker "unchanged within 10 %": the ratio of the honest
+  sensors' p99 attacked / alone with its 95 % interval, a BCa bootstrap over the pairs of
+  phases (:func:`pair_bootstrap` says why pairs and not requests), expanded for so few
+  pairs (:func:`expanded_level`). It fails only when the
+  ratio is significantly above 1.10 (the interval's low end above it), holds when the whole
+  interval is at or below 1.10, and says "inconclusive" (printing the interval) otherwise;
+* the honest error rate (failed requests of every kind, each printed with its status and
+  problem type) not higher beside the attacker: errors are a few in a thousand, so "within
+  10 %" of one error is no test; the rates are compared by a one-sided Fisher exact test at
+  5 % (an increase fails only when significant), and the 95 % upper bound of the increase
+  (Newcombe's interval) is printed as what the run can rule out.
+
+The processes share the machine's cores (with more than two, the attacker is pinned to one
+of its own: :func:`attacker_core`): each phase prints the CPU seconds of the server, the
+honest load and the attacker, and how long the server's event loop waited runnable for a
+CPU (the machine's share of the latency). What the server controls is its own CPU per
+honest input: printed alone and attacked, with the ratio's interval (reported, not judged).
 """
 
 from __future__ import annotations
 
 import asyncio
+import math
 import os
 import re
 import statistics
@@ -54,14 +64,16 @@ import sys
 import tempfile
 import time
 import uuid
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import httpx
+import numpy as np
 import redis
-from scipy import stats
+from scipy import special, stats
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
@@ -69,7 +81,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from machine import describe_machine
 from service import config, free_port, process_cpu_s, running, service_command, track_list
 
-from evaluation.intervals import rate_difference
+from evaluation.intervals import Interval, rate_difference
 
 SOAK_SECONDS = float(os.environ.get("SOAK_SECONDS", "100"))
 REDIS_URL = os.environ.get("CREDAL_SOAK_REDIS_URL", "redis://127.0.0.1:6379/0")
@@ -277,7 +289,8 @@ def report(name: str, samples: list[Sample]) -> bool:
     return ok
 
 
-CROWD_SECONDS = float(os.environ.get("CROWD_SECONDS", "60"))
+CROWD_SECONDS = float(os.environ.get("CROWD_SECONDS", "80"))
+"""Seconds of each kind of phase (alone, attacked), split into :data:`CROWD_PHASES` phases."""
 HONEST_KEY = "honest-soak-key-0123456789abcdefghijklmnop"
 """The honest client's API key (``CREDAL_API_KEYS``): its tenant is ``key:honest``. The server
 listens on loopback, so access stays open (``auto``): the attacker needs no key to create
@@ -287,19 +300,24 @@ ATTACKER = "127.0.0.77"
 connections also come from 50 others."""
 
 
-def attack(url: str, seconds: float) -> None:
-    """An anonymous client spending what it can for ``seconds`` (run in its own process)."""
+def attack(url: str, seconds: float, ready: Any = None, core: int | None = None) -> None:
+    """An anonymous client spending what it can for ``seconds`` (run in its own process):
+    pinned to ``core`` if one is given; ``ready`` (an event) is set when it starts."""
     import contextlib
     import socket
 
+    if core is not None:
+        os.sched_setaffinity(0, {core})
     port = int(url.rsplit(":", 1)[1])
-    deadline = time.monotonic() + seconds
     transport = httpx.HTTPTransport(local_address=ATTACKER)
     heavy = track_list("a", 1.0, 2000)
     header = b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Pad: " + b"a" * (16 << 20) + b"\r\n\r\n"
     held: list[socket.socket] = []
     tokens: list[tuple[str, dict[str, str]]] = []
     with httpx.Client(base_url=url, transport=transport, timeout=30) as client:
+        if ready is not None:
+            ready.set()
+        deadline = time.monotonic() + seconds
         round_number = 0
         while time.monotonic() < deadline:
             round_number += 1
@@ -335,9 +353,17 @@ def attack(url: str, seconds: float) -> None:
         connection.close()
 
 
-CROWD_PHASES = 2
-"""Phases of each kind, alternating (alone, attacked, alone, attacked): the machine's other
-load drifts over minutes, and alternating shares the drift between the two kinds."""
+CROWD_PHASES = 10
+"""Pairs of phases (alone, then attacked), one after the other: the machine's other load
+drifts over minutes (two honest-alone phases of one run had p99s 30 % apart), and each
+pair's two phases share their minute of it. Pairs, not requests, are what the intervals
+resample (:func:`pair_bootstrap`); 10 of 8 s by default."""
+BOOTSTRAP_RESAMPLES = 4000
+BOOTSTRAP_SEED = 28
+"""The resamples' seed: the same phases give the same interval."""
+P99_BOUND = 1.10
+"""The honest p99 beside the attacker "unchanged within 10 %": at most 1.10 × alone."""
+INTERVAL = "95 %, BCa bootstrap over the pairs of phases, expanded for few pairs"
 
 
 @dataclass
@@ -365,15 +391,38 @@ def loop_thread_wait_s(pid: int) -> float:
         return float("nan")
 
 
-def crowd_phase(url: str, pid: int, attacked: bool, seconds: float) -> Phase:
-    """The honest load for ``seconds``, beside :func:`attack` if ``attacked``."""
+def attacker_core(server_pid: int) -> tuple[int | None, str]:
+    """With more than two cores usable here: one of them the attacker's alone (the server and
+    this process, the honest load, keep the others); with two or fewer none is pinned. The
+    core (or None) and a line saying which."""
+    cores = sorted(os.sched_getaffinity(0))
+    if len(cores) <= 2:
+        return None, (
+            f"{len(cores)} cores usable: the attacker is not pinned (it would leave the server "
+            "and the honest load one core); all three processes share them"
+        )
+    core, others = cores[-1], set(cores[:-1])
+    os.sched_setaffinity(server_pid, others)
+    os.sched_setaffinity(0, others)
+    return core, (
+        f"{len(cores)} cores usable: the attacker pinned to core {core}, the server and the "
+        f"honest load to cores {sorted(others)}"
+    )
+
+
+def crowd_phase(url: str, pid: int, attacked: bool, seconds: float, core: int | None) -> Phase:
+    """The honest load for ``seconds``, beside :func:`attack` if ``attacked`` (started, and
+    ready, before the honest load starts)."""
     import multiprocessing
 
     attacker = None
     if attacked:
         spawn = multiprocessing.get_context("spawn")
-        attacker = spawn.Process(target=attack, args=(url, seconds))
+        ready = spawn.Event()
+        attacker = spawn.Process(target=attack, args=(url, seconds, ready, core))
         attacker.start()
+        if not ready.wait(60):
+            raise RuntimeError("the attacker process did not start within 60 s")
     server_cpu, server_wait = process_cpu_s(pid), loop_thread_wait_s(pid)
     honest_cpu = time.process_time()
     load = Load(url, time.monotonic() + seconds, HONEST_KEY)
@@ -398,11 +447,88 @@ def crowd_phase(url: str, pid: int, attacked: bool, seconds: float) -> Phase:
     )
 
 
+def p99(latencies: np.ndarray) -> float:
+    """The 99th percentile as the crowd soak prints it: the sorted value at
+    ``int(0.99 * (n - 1))`` (numpy's ``lower`` quantile)."""
+    return float(np.quantile(latencies, 0.99, method="lower"))
+
+
+def expanded_level(pairs: int, confidence: float = 0.95) -> float:
+    """The level at which a bootstrap over ``pairs`` units is computed for a ``confidence``
+    interval: Hesterberg's expansion for small samples (Hesterberg 2015, "What teachers should
+    know about the bootstrap", Am Stat 69:371: the two tails at
+    ``Φ(−√(n/(n−1)) t_{n−1})`` instead of ``(1 − confidence) / 2``). A plain bootstrap of 8
+    pairs is too narrow: on simulated runs at the 1.10 bound (8 pairs of 400 lognormal
+    latencies, each phase drifting by 5 or 15 %; 100 runs each, the phases of
+    ``test_soak_bench``) the 95 % BCa interval of the pooled p99 ratio put its low end above
+    1.10 in 4-7 % of them (2.5 % is its one-sided level), the expanded one in 3-5 % (12
+    pairs: 2 %); a t interval of the pairs' log ratios, 1-3 %."""
+    t = float(stats.t.ppf((1 + confidence) / 2, pairs - 1))
+    return 1 - 2 * float(special.ndtr(-math.sqrt(pairs / (pairs - 1)) * t))
+
+
+def pair_bootstrap(
+    statistic: Callable[[np.ndarray], float],
+    pairs: int,
+    resamples: int = BOOTSTRAP_RESAMPLES,
+    seed: int = BOOTSTRAP_SEED,
+    level: float = 0.95,
+) -> Interval:
+    """``statistic`` of the pairs of phases (given their indices, repeats allowed) over all
+    ``pairs``, with its bias-corrected and accelerated (BCa) bootstrap interval at ``level``
+    (Efron & Tibshirani 1993, 14.3: ``z0`` from the resamples below the estimate, ties counted
+    half; the acceleration from the jackknife over pairs; the resamples' quantiles linear) —
+    what ``scipy.stats.bootstrap(method="BCa")`` computes, over pairs. The crowd soak asks
+    it at :func:`expanded_level` for a 95 % interval.
+
+    Why pairs of phases and not requests: the honest latencies of one phase are not
+    independent draws — the machine's other load of that minute moves all of them (one
+    run's two alone phases: p99 41.2 and 53.7 ms) — so resampling requests, even within
+    their phases, takes each phase's machine as fixed and gives an interval as narrow as if
+    there were no drift: a drift falling more on the attacked phases would read as the
+    attacker's. A pair (an alone phase and the attacked one after it) is the unit the run
+    repeats; resampling pairs carries the phase-to-phase spread into the interval, and keeps
+    each attacked phase with the alone phase of its minute."""
+    rng = np.random.default_rng(seed)
+    everything = np.arange(pairs)
+    estimate = statistic(everything)
+    resampled = np.array(
+        [statistic(rng.integers(0, pairs, pairs)) for _ in range(resamples)], dtype=np.float64
+    )
+    below = np.count_nonzero(resampled < estimate) + np.count_nonzero(resampled <= estimate)
+    z0 = float(special.ndtri(below / (2 * resamples)))
+    jackknife = np.array([statistic(np.delete(everything, left)) for left in everything])
+    spread = jackknife.mean() - jackknife
+    squares = float(np.sum(spread**2))
+    acceleration = float(np.sum(spread**3)) / (6 * squares**1.5) if squares > 0 else 0.0
+    levels = []
+    for z in (special.ndtri((1 - level) / 2), special.ndtri((1 + level) / 2)):
+        levels.append(float(special.ndtr(z0 + (z0 + z) / (1 - acceleration * (z0 + z)))))
+    low, high = np.quantile(resampled, levels)
+    return Interval(float(estimate), float(low), float(high))
+
+
+def p99_verdict(ratio: Interval, bound: float = P99_BOUND) -> tuple[bool, str]:
+    """Is the honest p99 beside the attacker "unchanged within 10 %"? It fails only when the
+    ratio is significantly above ``bound`` (the interval's low end above it); it holds when
+    the whole interval is at or below it; otherwise the run cannot tell (inconclusive, not a
+    failure: the interval says how wide)."""
+    interval = f"[{ratio.low:.2f}, {ratio.high:.2f}]"
+    if ratio.low > bound:
+        word, ok = "FAILED (significantly above", False
+    elif ratio.high <= bound:
+        word, ok = "ok (within", True
+    else:
+        word, ok = "inconclusive (the interval holds", True
+    return ok, f"honest p99 × {ratio.estimate:.2f} {interval} ({INTERVAL}): {word} {bound:.2f})"
+
+
 def crowd() -> int:
-    """Honest load alone, then beside :func:`attack`, alternating (:data:`CROWD_PHASES` each):
-    the honest p99 and error rate compared, with the CPU seconds the server, the honest load
-    and the attacker spent in each phase, and the seconds the server's event loop waited for
-    a CPU (the machine's: 2 cores shared by every process here and any other)."""
+    """Pairs of phases, the honest load alone then beside :func:`attack` (:data:`CROWD_PHASES`
+    pairs): the honest p99 and error rate compared, with the CPU seconds the server, the honest
+    load and the attacker spent in each phase, the seconds the server's event loop waited for
+    a CPU (the machine's: 2 cores shared by every process here and any other), and the
+    server's CPU per honest input alone and attacked (the part the server controls)."""
     print(describe_machine())
     phases: list[Phase] = []
     seconds = CROWD_SECONDS / CROWD_PHASES
@@ -410,47 +536,68 @@ def crowd() -> int:
         database = Path(directory) / "crowd.db"
         settings = {"CREDAL_RATE_LIMIT": "1000/second", "CREDAL_API_KEYS": f"honest:{HONEST_KEY}"}
         with serving(f"sqlite:{database}", settings) as (url, pid):
+            core, pinning = attacker_core(pid)
+            print(pinning)
             for _ in range(CROWD_PHASES):
                 for attacked in (False, True):
-                    phases.append(crowd_phase(url, pid, attacked, seconds))
+                    phases.append(crowd_phase(url, pid, attacked, seconds, core))
     print(
-        f"{CROWD_PHASES} phases of {seconds:.0f} s of each kind, alternating; CPU seconds per "
-        "phase (the server's, the honest load's, the attacker's) and the seconds the server's "
-        "event loop waited runnable for a CPU"
+        f"{CROWD_PHASES} pairs of {seconds:.0f} s phases (alone, attacked); per phase: the honest "
+        "inputs and p99, the server's CPU per honest input, the CPU seconds of the server, the "
+        "honest load and the attacker, and the seconds the server's event loop waited runnable "
+        "for a CPU"
     )
-    rows = []
-    for attacked in (False, True):
-        mine = [phase for phase in phases if phase.attacked == attacked]
-        who = "honest + anonymous attacker" if attacked else "honest alone"
-        for phase in mine:
-            latencies = sorted(phase.latencies)
+    alone = [phase for phase in phases if not phase.attacked]
+    attacked_phases = [phase for phase in phases if phase.attacked]
+    for number, pair in enumerate(zip(alone, attacked_phases, strict=True), 1):
+        for phase in pair:
+            who = "attacked" if phase.attacked else "alone"
             print(
-                f"  {who:28} {len(latencies):6d} inputs  p99 "
-                f"{latencies[int(0.99 * (len(latencies) - 1))] * 1000:7.1f} ms  CPU: server "
+                f"  {number:2d} {who:8} {len(phase.latencies):5d} inputs  p99 "
+                f"{p99(np.array(phase.latencies)) * 1000:7.1f} ms  server "
+                f"{phase.server_cpu / max(phase.sent, 1) * 1000:5.2f} ms CPU/input; CPU: server "
                 f"{phase.server_cpu:5.1f} s, honest {phase.honest_cpu:5.1f} s, attacker "
-                f"{phase.attacker_cpu:5.1f} s; server loop waiting for a CPU "
-                f"{phase.server_wait:5.1f} s"
+                f"{phase.attacker_cpu:5.1f} s; loop waiting for a CPU {phase.server_wait:5.1f} s"
             )
             for failure in phase.failed:
-                print(f"    failed: {failure}")
-        latencies = sorted(latency for phase in mine for latency in phase.latencies)
+                print(f"     failed: {failure}")
+    rows = []
+    for who, mine in (("honest alone", alone), ("honest + anonymous attacker", attacked_phases)):
+        latencies = np.sort(np.concatenate([np.array(phase.latencies) for phase in mine]))
         requests = sum(phase.requests for phase in mine)
         failures = sum(phase.failures for phase in mine)
-        p50 = latencies[len(latencies) // 2]
-        p99 = latencies[int(0.99 * (len(latencies) - 1))]
-        rows.append((failures, requests, p99))
+        cpu = sum(phase.server_cpu for phase in mine) / sum(phase.sent for phase in mine)
+        rows.append((failures, requests))
         print(
             f"{who:30} {len(latencies):6d} inputs  errors {failures}/{requests} requests  "
-            f"p50 {p50 * 1000:6.1f} ms  p99 {p99 * 1000:6.1f} ms"
+            f"p50 {latencies[len(latencies) // 2] * 1000:6.1f} ms  p99 "
+            f"{p99(latencies) * 1000:6.1f} ms  server CPU {cpu * 1000:5.2f} ms per input"
         )
-    (
-        (failed_alone, requests_alone, p99_alone),
-        (failed_attacked, requests_attacked, p99_attacked),
-    ) = rows
-    p99_ok = p99_attacked <= 1.1 * p99_alone
+    lone = [np.array(phase.latencies) for phase in alone]
+    beside = [np.array(phase.latencies) for phase in attacked_phases]
+
+    def p99_ratio(pairs: np.ndarray) -> float:
+        return p99(np.concatenate([beside[k] for k in pairs])) / p99(
+            np.concatenate([lone[k] for k in pairs])
+        )
+
+    def cpu_ratio(pairs: np.ndarray) -> float:
+        def per_input(mine: list[Phase]) -> float:
+            chosen = [mine[k] for k in pairs]
+            return float(sum(p.server_cpu for p in chosen) / sum(p.sent for p in chosen))
+
+        return per_input(attacked_phases) / per_input(alone)
+
+    level = expanded_level(CROWD_PHASES)
+    p99_ok, verdict = p99_verdict(pair_bootstrap(p99_ratio, CROWD_PHASES, level=level))
+    print(verdict)
+    cost = pair_bootstrap(cpu_ratio, CROWD_PHASES, level=level)
     print(
-        f"honest p99 × {p99_attacked / p99_alone:.2f}: {'ok' if p99_ok else 'FAILED'} (within 10 %)"
+        f"server CPU per honest input × {cost.estimate:.2f} [{cost.low:.2f}, {cost.high:.2f}] "
+        f"({INTERVAL}): what the attacker's refused and served requests cost the server, per "
+        "honest input (reported, not judged)"
     )
+    ((failed_alone, requests_alone), (failed_attacked, requests_attacked)) = rows
     errors_ok, verdict = error_verdict(
         failed_alone, requests_alone, failed_attacked, requests_attacked
     )

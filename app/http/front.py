@@ -11,8 +11,10 @@ and WebSocket upgrade once its head is read (the transport limits of
    tenant of its verified token, else its client address's);
 3. the rate limit (``CREDAL_RATE_LIMIT``) per tenant;
 4. **keyed tenants first**: while a tenant with an API key is being served —
-   an HTTP request of it in flight here, or answered less than :data:`KEYED_GRACE_S` ago, or
-   an input of it in flight in the pipeline (REST or WebSocket) — a client *without* a key
+   a request of its *work* (an input, ``POST`` under a session's path, or an association,
+   ``POST /v1/associate``: :func:`is_work`) in flight here, or answered less than
+   :data:`KEYED_GRACE_S` ago, or an input of it in flight in the pipeline (REST or
+   WebSocket) — a client *without* a key
    (an address tenant of ``CREDAL_ACCESS=open``; the admin is neither; without open access a
    request without a valid token is the application's to refuse) sending a body larger than
    :data:`~app.http.requests.OFFLOAD_BYTES` (a body whose parsing and validation cost
@@ -22,10 +24,17 @@ and WebSocket upgrade once its head is read (the transport limits of
    client that sends its next large body before the ``Retry-After`` it was given has passed
    waits it out: that refusal is answered when the time is up (``credal_requests_held_at_door``
    counts them), so one address's refusals come at most one per second per connection
-   (``max_connections_per_client`` of them), whatever it sends. A WebSocket ``stream``
+   (``max_connections_per_client`` of them), whatever it sends. A keyed tenant's reads
+   (a dashboard polling its tracks, its sessions) and its session creations and deletions
+   are no work here: they hold no anonymous input back. A WebSocket ``stream``
    message of such a client over that size is answered the same refusal (an ``error``
    message, the connection kept) before it is parsed (:func:`app.routes.streams.stream_session`
-   asks :meth:`FrontDoor.waits`): the stream is no way around the door;
+   asks :meth:`FrontDoor.waits`): the stream is no way around the door. The refusal tells a
+   client without a key that a keyed tenant sent work in the last second; it is not disguised
+   as the pipeline's load shedding (``overload_delay_ms``, ``max_queue_ms``): those refuse
+   inputs of every size after their parsing, this one only large bodies, unread, so a client
+   sending one large and one small input tells them apart whatever the answer says, and
+   ``/metrics``, open to every client, counts every input (``credal_inputs_total``) anyway;
 5. the tenant's request-body bytes (``tenant_body_bytes_per_second``, on ``Content-Length``).
 
 Every refusal here is a problem+json answer written once per server and kept (an
@@ -79,12 +88,20 @@ from app.tenants import is_anonymous, is_keyed
 HEALTH_PATH = "/healthz"
 SESSION_PATH = re.compile(r"^/v1/sessions/([^/]+)/")
 """A path under a session's (its id the group)."""
+ASSOCIATE_PATH = "/v1/associate"
 KEYED_FIRST = "keyed_tenants_first"
 MAX_WAITING_ADDRESSES = 4096
 """Addresses whose keyed-first ``Retry-After`` is remembered, at most (the oldest forgotten)."""
 KEYED_GRACE_S = 1.0
 """A keyed tenant answered less than this long ago is still being served (its next request,
 a sensor's next scan, is on its way)."""
+
+
+def is_work(method: str | None, path: str) -> bool:
+    """Whether an HTTP request is work a keyed tenant is served (module docstring, 4): an input
+    (``POST /v1/sessions/{sid}/{kind}``) or an association (``POST /v1/associate``); not a
+    read, a session's creation or deletion."""
+    return method == "POST" and (SESSION_PATH.match(path) is not None or path == ASSOCIATE_PATH)
 
 
 class KeyedFirst(Overload):
@@ -198,9 +215,9 @@ class FrontDoor:
         self.refused = refused
         self._tenant_of: Callable[[str], str | None] | None = None
         self.keyed_in_flight = 0
-        """Requests of keyed tenants being answered here."""
+        """Requests of keyed tenants' work (:func:`is_work`) being answered here."""
         self.keyed_answered = -math.inf
-        """When (``time.monotonic()``) a keyed tenant's request was last answered here."""
+        """When (``time.monotonic()``) a keyed tenant's work was last answered here."""
         self.waiting_until: OrderedDict[str, float] = OrderedDict()
         """Address tenant → when (``time.monotonic()``) the ``Retry-After`` of its latest
         keyed-first refusal ends, the earliest end first; at most
@@ -241,8 +258,8 @@ class FrontDoor:
             answer = (BODY_RATE, self.body_rate, key, reset, private)
             await self._refuse(scope, receive, send, extra, *answer)
             return
-        if kind != "http" or not is_keyed(tenant):  # a keyed stream is served by its inputs
-            await self.app(scope, receive, send)
+        if kind != "http" or not is_keyed(tenant) or not is_work(method, path):
+            await self.app(scope, receive, send)  # a keyed stream is served by its inputs
             return
         self.keyed_in_flight += 1
         try:

@@ -69,6 +69,15 @@ def session(client: httpx.Client, key: str | None = None) -> tuple[str, dict[str
     return f"/v1/sessions/{body['id']}", {"Authorization": f"Bearer {body['token']}"}
 
 
+def keyed_working(client: httpx.Client) -> tuple[str, dict[str, str]]:
+    """A keyed tenant's session, after one (small) input of it: the keyed tenant is served
+    (its reads and the session's creation would not make it so)."""
+    path, token = session(client, KEY)
+    answer = client.post(f"{path}/tracks", json=SMALL, headers=token)
+    assert answer.status_code == 200, answer.text
+    return path, token
+
+
 def refused_at_door(client: httpx.Client, limit: str) -> float:
     metrics = client.get("/metrics").text
     found = re.search(
@@ -83,7 +92,7 @@ def test_without_a_key_a_large_body_waits_while_keyed_tenants_are_served(
     monkeypatch.setattr(front, "KEYED_GRACE_S", 3600.0)  # the keyed tenant stays "being served"
     with httpx.Client(base_url=server.url, timeout=30) as client:
         anonymous, anonymous_token = session(client)
-        keyed, keyed_token = session(client, KEY)  # a keyed tenant's request: being served
+        keyed, keyed_token = keyed_working(client)  # a keyed tenant's input: being served
         before = refused_at_door(client, "keyed_tenants_first")
 
         refused = client.post(f"{anonymous}/tracks", json=LARGE, headers=anonymous_token)
@@ -106,7 +115,7 @@ def test_without_a_key_a_large_body_waits_while_keyed_tenants_are_served(
         small = client.post(f"{anonymous}/tracks", json=SMALL, headers=anonymous_token)
         assert small.status_code == 200, small.text
         assert len(small.json()["tracks"]) == 3
-        large = client.post(f"{keyed}/tracks", json=LARGE, headers=keyed_token)
+        large = client.post(f"{keyed}/tracks", json=tracks(400, 2.0), headers=keyed_token)
         assert large.status_code == 200, large.text
         assert len(large.json()["tracks"]) == 400
         # the operator's own session is no anonymous client's
@@ -192,7 +201,7 @@ def test_a_large_body_sent_again_before_retry_after_waits_it_out(
         httpx.Client(base_url=live.url, timeout=30) as client,
     ):
         anonymous, anonymous_token = session(client)
-        session(client, KEY)
+        keyed_working(client)
         door = application.middleware_stack
         assert isinstance(door, front.FrontDoor)
         door.waiting_until["address:127.0.0.1"] = time.monotonic() + 2.0
@@ -261,7 +270,7 @@ def test_without_a_key_a_large_stream_message_waits_as_a_large_body_does(
     monkeypatch.setattr(front, "KEYED_GRACE_S", 3600.0)  # the keyed tenant stays "being served"
     with httpx.Client(base_url=server.url, timeout=30) as client:
         anonymous, token = session(client)
-        session(client, KEY)
+        keyed_working(client)
         url = server.url.replace("http://", "ws://") + f"{anonymous}/stream"
         with connect(url, additional_headers=token, max_size=None) as ws:
             assert json.loads(ws.recv(timeout=10))["type"] == "ack"
@@ -291,6 +300,7 @@ def test_a_keyed_session_not_held_in_memory_is_still_keyed(
     settings = make_settings(access="open", api_keys=f"alpha:{KEY}")
     app = create_app(settings)
     with serving(settings, app) as live, httpx.Client(base_url=live.url, timeout=30) as client:
+        keyed_working(client)  # another keyed session's input: keyed tenants are served
         keyed, keyed_token = session(client, KEY)
         anonymous, anonymous_token = session(client)
         for path in (keyed, anonymous):
@@ -324,3 +334,49 @@ def test_the_door_remembers_at_most_max_waiting_addresses(
 
     asyncio.run(refuse_each())
     assert list(door.waiting_until) == [f"address:10.0.0.{k}" for k in (2, 3, 4, 5)]
+
+
+def test_a_keyed_tenants_reads_hold_no_anonymous_input_back(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Only a keyed tenant's work counts as its being served: a keyed dashboard polling its
+    session (reads, however often; its session's creation too) leaves an anonymous client's
+    large body taken; one keyed input, and the same body waits (503 keyed_tenants_first).
+    The grace is an hour here: on main the polls alone kept every large anonymous body
+    refused for as long as they came less than a second apart."""
+    monkeypatch.setattr(front, "KEYED_GRACE_S", 3600.0)
+    settings = make_settings(access="open", api_keys=f"alpha:{KEY}")
+    with serving(settings) as live, httpx.Client(base_url=live.url, timeout=30) as client:
+        keyed, keyed_token = session(client, KEY)
+        anonymous, anonymous_token = session(client)
+        for _ in range(3):  # the dashboard
+            for read in (f"{keyed}/tracks", f"{keyed}/events", keyed):
+                assert client.get(read, headers=keyed_token).status_code == 200
+        taken = client.post(f"{anonymous}/tracks", json=LARGE, headers=anonymous_token)
+        assert taken.status_code == 200, taken.text
+        assert len(taken.json()["tracks"]) == 400
+
+        work = client.post(f"{keyed}/tracks", json=SMALL, headers=keyed_token)
+        assert work.status_code == 200, work.text
+        refused = client.post(f"{anonymous}/tracks", json=tracks(400, 2.0), headers=anonymous_token)
+        assert refused.status_code == 503, refused.text
+        assert refused.json()["limit"] == "keyed_tenants_first"
+
+
+@pytest.mark.parametrize(
+    ("method", "path", "work"),
+    [
+        ("POST", "/v1/sessions/abc/tracks", True),
+        ("POST", "/v1/sessions/abc/detections", True),
+        ("POST", "/v1/sessions/abc/asterix", True),
+        ("POST", "/v1/associate", True),
+        ("POST", "/v1/sessions", False),  # a session's creation
+        ("GET", "/v1/sessions/abc/tracks", False),
+        ("GET", "/v1/sessions/abc/events", False),
+        ("DELETE", "/v1/sessions/abc", False),
+        ("GET", "/metrics", False),
+    ],
+)
+def test_what_counts_as_a_keyed_tenants_work(method: str, path: str, work: bool) -> None:
+    """Every ``POST`` of openapi.json but the session's creation is work (listed by hand)."""
+    assert front.is_work(method, path) is work
