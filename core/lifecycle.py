@@ -749,12 +749,13 @@ def advance(
        undetected in a blind zone, tentative   terminated     blind_zone
        occluded, established                   phantom        occluded
        occluded, tentative                     terminated     occluded
-       score ≤ delete threshold (not a start  terminated     score_deleted
-       hit with ≤ initiation_hits hits, not
-       vouched for)
+       score ≤ delete threshold (+ the        terminated     score_deleted
+       track's ``deletion_shift``; not a
+       start hit with ≤ initiation_hits
+       hits, not vouched for)
        coasting, empty gate < termination p.,  terminated     gate_emptiness
-       ≥ termination_misses misses in a row,
-       not vouched for
+       ≥ termination_misses misses in a row
+       (+ the shift's misses), not vouched for
        (the confirmations: only of a track whose velocity is measured, when given)
        tentative, reported by ≥ 2 sensors      confirmed      second_sensor
        tentative, min_points hits and L ≥ 0    confirmed      min_points
