@@ -242,6 +242,35 @@ def gate_emptiness_factor(
     return np.asarray(np.clip(1.0 - (clutter_density + new_target_density) * volume, 0.0, 1.0))
 
 
+def several_sensors_shift(revisits: FloatArray) -> FloatArray:
+    """The shift ``ln(T_c / T_max) = −ln Σ_i T_max / T_i`` (≤ 0) of each track's delete
+    threshold, ``revisits`` (n, sensors) the revisit T_i of each sensor that looks at the
+    track (carries it and sees it, docs/algorithms.md §8.14), +inf where one does not.
+
+    A run of misses of probability p under "the target is there" starts by chance at a
+    rate p Σ_i 1/T_i = p / T_c (the track's combined scans); alone, its slowest sensor
+    reaches β at the rate β / T_max. Deleting at ``p ≤ β T_c / T_max`` keeps a true
+    track's false deletions per second at most those of any one of its sensors alone,
+    however many sensors add scans. 0 where fewer than two sensors look.
+    """
+    revisits = np.asarray(revisits, dtype=np.float64)
+    if revisits.size == 0:
+        return np.zeros(len(revisits))
+    looking = np.isfinite(revisits)
+    slowest = np.max(np.where(looking, revisits, 0.0), axis=1)
+    ratio = np.where(looking, slowest[:, None] / np.where(looking, revisits, 1.0), 0.0).sum(axis=1)
+    several = looking.sum(axis=1) >= 2
+    return np.asarray(np.where(several, -np.log(np.where(several, ratio, 1.0)), 0.0))
+
+
+def misses_to_delete(drop: FloatArray, miss_increment: float) -> IntArray:
+    """Misses in a row that lower a score by ``drop`` (≥ 0): ⌈drop / −ln(1 − P_D)⌉."""
+    per_miss = -miss_increment
+    if not (math.isfinite(per_miss) and per_miss > 0.0):
+        return np.zeros(np.shape(drop), dtype=np.int64)
+    return np.asarray(np.ceil(np.asarray(drop) / per_miss - 1e-9), dtype=np.int64)
+
+
 # ------------------------------------------------------------------ configuration
 MAX_MIN_POINTS = 100
 """Largest ``min_points`` (the wire's bound too)."""
@@ -631,6 +660,10 @@ class Evidence:
     repeated : tracks detected at this instant already (another sensor's detection of one
         instant, docs/algorithms.md §8.3): the hit adds nothing to their ``hits``, which
         count the instants a track was detected at; None: none.
+    deletion_shift : per track, ``ln(T_c / T_max)`` ≤ 0 of the sensors that look at it
+        (:func:`several_sensors_shift`, docs/algorithms.md §8.14): an established track's
+        delete threshold is lowered by it, and its gate-emptiness test waits for as many
+        more misses as its score then tolerates; None: 0 for every track.
     """
 
     time: float
@@ -647,6 +680,7 @@ class Evidence:
     velocity_measured: BoolArray | None = None
     vouched: BoolArray | None = None
     repeated: BoolArray | None = None
+    deletion_shift: FloatArray | None = None
 
 
 # ------------------------------------------------------------------ visibility
@@ -715,12 +749,13 @@ def advance(
        undetected in a blind zone, tentative   terminated     blind_zone
        occluded, established                   phantom        occluded
        occluded, tentative                     terminated     occluded
-       score ≤ delete threshold (not a start  terminated     score_deleted
-       hit with ≤ initiation_hits hits, not
-       vouched for)
+       score ≤ delete threshold (+ the        terminated     score_deleted
+       track's ``deletion_shift``; not a
+       start hit with ≤ initiation_hits
+       hits, not vouched for)
        coasting, empty gate < termination p.,  terminated     gate_emptiness
-       ≥ termination_misses misses in a row,
-       not vouched for
+       ≥ termination_misses misses in a row
+       (+ the shift's misses), not vouched for
        (the confirmations: only of a track whose velocity is measured, when given)
        tentative, reported by ≥ 2 sensors      confirmed      second_sensor
        tentative, min_points hits and L ≥ 0    confirmed      min_points
@@ -743,10 +778,23 @@ def advance(
         config.ceiling,
     )
     score = np.minimum(score + np.where(missed, evidence.miss_increment, 0.0), ceiling)
+    # §8.14: an established track that several sensors look at is deleted at a lower
+    # threshold (its false deletions per second those of one of its sensors alone), and its
+    # gate-emptiness test waits as many more misses as its score then tolerates
+    threshold: float | FloatArray = config.delete_threshold
+    later: int | IntArray = 0
+    if evidence.deletion_shift is not None and np.any(evidence.deletion_shift < 0.0):
+        shift = np.where(established(status), evidence.deletion_shift, 0.0)
+        threshold = config.delete_threshold + shift
+        if math.isfinite(config.ceiling):
+            drop = config.ceiling - config.delete_threshold
+            later = misses_to_delete(drop - shift, evidence.miss_increment) - misses_to_delete(
+                np.full(len(status), drop), evidence.miss_increment
+            )
     held = np.zeros(len(status), dtype=bool)
     if evidence.vouched is not None:
         held = evidence.vouched & established(status)
-        score = np.where(held, np.maximum(score, config.delete_threshold), score)
+        score = np.where(held, np.maximum(score, threshold), score)
     # a track's hits are the instants it was detected at (§8.3)
     counted = detected if evidence.repeated is None else detected & ~evidence.repeated
     hits = state.hits + counted.astype(np.int64)
@@ -798,7 +846,7 @@ def advance(
     # a start hit in this scan is tested by its next detections, not deleted (§8.3)
     starting = (status == TENTATIVE) & detected & (hits <= config.initiation_hits)
     decide(
-        (score <= config.delete_threshold) & ~starting & ~held,
+        (score <= threshold) & ~starting & ~held,
         TERMINATED,
         StatusReason.SCORE_DELETED,
     )
@@ -806,7 +854,7 @@ def advance(
         decide(
             (status == COASTING)
             & (empty_gate < config.termination_probability)
-            & (misses >= config.termination_misses)
+            & (misses >= config.termination_misses + later)
             & ~held,
             TERMINATED,
             StatusReason.GATE_EMPTINESS,

@@ -71,8 +71,30 @@ DURATION = 1800.0
 FEET = 0.3048
 MAX_SPEED = 400.0
 """A record implying more than this horizontal speed (m/s) from the last kept one is a glitch."""
-MAX_CLIMB = 60.0
-"""… or more than this vertical speed (m/s)."""
+MAX_CLIMB = 6000.0 * FEET / 60.0
+"""… or more than this vertical speed (m/s): 6000 ft/min, 30.48 m/s.
+
+A steady climb's rate is the specific excess power ``w = V (T − D) / W`` (the
+climb equation; ``V`` true airspeed, ``T`` thrust, ``D`` drag, ``W`` weight).
+A twin-jet airliner (A320, B737: thrust-to-weight ``T/W`` ≈ 0.3 at take-off thrust
+and sea level, lift-to-drag ``L/D`` ≈ 17) at the 250 kt (129 m/s) limit below FL100
+gets ``w = V (T/W − 1/(L/D)) ≈ 129 × (0.30 − 0.06) ≈ 31 m/s`` at full take-off
+thrust at sea level, and less higher up, where the thrust lapses, or slower, where
+the climb is flown; airline climbs and descents are 5–20 m/s and
+the kept truth of the twenty flights never exceeds 19 m/s (``VLJ432T``, a
+business jet). The light aircraft climb at a few m/s.
+
+It was 60 m/s, and let in ``RYR43ZU``'s records after its approach to
+Beauvais–Tillé: its position stops changing at 898 s (750 ft, on the final
+approach to runway 30 six kilometres out; an ADS-B state vector repeats the last
+position it decoded), the altitude jumps to 25 375 ft at 918 s and then descends
+slowly. The filter compares a record with the last one it kept (917 s, 750 ft),
+so the allowance grows with the time since: the record of 1032 s (23 350 ft,
+59.9 m/s over 115 s) was kept — a 7 km "climb" in two minutes without any
+horizontal movement, which became the truth. With 30.48 m/s the first record kept
+after 917 s is that of 1109 s (19 450 ft, 29.7 m/s over 192 s), after a gap
+longer than :data:`MAX_GAP`: the flight ends at 917 s, where its records stop
+being an aircraft's."""
 MAX_GAP = 120.0
 """Gaps in a flight's records up to this (s) are bridged; longer ones end the flight there."""
 SMOOTHING = 21

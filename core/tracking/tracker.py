@@ -92,6 +92,7 @@ from core.lifecycle import (
     established,
     hand_over,
     initiated,
+    several_sensors_shift,
 )
 from core.models.measurement import MeasurementModel, Polar
 from core.pipeline.evidence import (
@@ -449,7 +450,10 @@ class LocalTracker:
         seen = seen | gate_seen[column]
         births = self._shared_births(column, z, elapsed, score.p_detect)
         counted = seen & self._carried(column, status)
-        candidates = np.flatnonzero((status != PHANTOM) & self._can_be_hit(prediction, score))
+        shift = self._deletion_shift(time, positions, status, gate_seen)
+        candidates = np.flatnonzero(
+            (status != PHANTOM) & self._can_be_hit(prediction, score, shift)
+        )
         association = self._associator.associate(
             prediction
             if len(candidates) == len(status)  # every track, in order: no copy
@@ -508,6 +512,7 @@ class LocalTracker:
                 velocity_measured=latest > first,
                 vouched=self._vouched(column, time),
                 repeated=again,
+                deletion_shift=shift,
             ),
         )
         self._rows = self._rows.living(life)
@@ -802,12 +807,52 @@ class LocalTracker:
         fresh[column] = False
         return np.asarray((self._vouching & fresh).any(axis=1), dtype=np.bool_)
 
+    def _deletion_shift(
+        self, time: float, positions: FloatArray, status: IntArray, gate_seen: BoolArray
+    ) -> FloatArray:
+        """Each row's shift of its delete threshold, ``ln(T_c / T_max)`` of the sensors that
+        look at it (:func:`~core.lifecycle.several_sensors_shift`, docs/algorithms.md
+        §8.14): established, carried by the sensor (:meth:`_carried`), inside its view and
+        volume or its gate seen (§8.11), the sensor's revisit known and its latest scan not
+        overdue (:data:`VOUCH_REVISITS`). 0 for the other rows, and for every row of a
+        single sensor's tracker."""
+        shift = np.zeros(len(status))
+        rows = np.flatnonzero(established(status))
+        if len(self.config.sensors) < 2 or len(rows) == 0:
+            return shift
+        previous, latest = self._scan_times[:, 0], self._scan_times[:, 1]
+        revisit = latest - previous
+        revisits = np.full((len(rows), len(self.config.sensors)), np.inf)
+        for column, name in enumerate(self.config.sensors):
+            period = float(revisit[column])
+            if not (math.isfinite(period) and period > 0.0):
+                continue
+            if time - float(latest[column]) > VOUCH_REVISITS * period:
+                continue  # a sensor that stopped scanning looks at nothing
+            carried = self._counting[column] | (
+                self._sensor_misses[rows, column] < self._miss_limits[column]
+            )
+            seen, _ = seen_by(
+                self._views[name],
+                positions[rows],
+                status[rows],
+                self.config.life_cycle.occlusion_radius,
+                self._volumes.get(name),
+            )
+            revisits[:, column] = np.where(
+                carried & (seen | gate_seen[column, rows]), period, np.inf
+            )
+        shift[rows] = several_sensors_shift(revisits)
+        return shift
+
     # ---------------------------------------------------------- predict
-    def _can_be_hit(self, prediction: IMMPrediction, scan: ScoreModel) -> BoolArray:
+    def _can_be_hit(
+        self, prediction: IMMPrediction, scan: ScoreModel, shift: FloatArray
+    ) -> BoolArray:
         """Tracks a detection could keep alive: the largest hit increment they could get
         (distance 0, their most certain model, no measurement noise: ``log |H P_j Hᵀ|``)
-        leaves their score above the delete threshold, or a start that a hit keeps
-        (``initiation_hits``).
+        leaves their score above the delete threshold (lowered by ``shift``, §8.14), or a
+        start that a hit keeps (``initiation_hits``).
 
         A prediction so uncertain that no detection can (a scan after a long gap)
         is not associated: the track misses, its gate empties ([HZ] §4.2) and
@@ -822,7 +867,7 @@ class LocalTracker:
         log_det = np.where(sign > 0.0, log_det, -np.inf).min(axis=1)
         best = scan.hit_increment(np.zeros_like(log_det), log_det, self._q)
         starting = (life.status == TENTATIVE) & (life.hits < self.config.life_cycle.initiation_hits)
-        return np.asarray((score + best > scan.delete_threshold) | starting, dtype=np.bool_)
+        return np.asarray((score + best > scan.delete_threshold + shift) | starting, dtype=np.bool_)
 
     # ------------------------------------------------------------ update
     def _update(

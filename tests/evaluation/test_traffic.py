@@ -14,6 +14,9 @@ from pyproj import Transformer
 from evaluation.service import live_service
 from evaluation.traffic import (
     EARTH_RADIUS,
+    EXTRACT,
+    FEET,
+    MAX_GAP,
     ORIGIN,
     Radar,
     assess,
@@ -56,6 +59,47 @@ def test_a_glitch_is_dropped(tmp_path: Path) -> None:
     (flight,) = load_flights(path)
     assert np.max(np.abs(np.diff(flight.enu[:, 1]) - 100.0)) < 1.0
     assert flight.kind == "airliner"
+
+
+def test_an_altitude_jump_that_persists_ends_the_flight(tmp_path: Path) -> None:
+    """At 100 m/s north and 3000 ft, the altitude jumps to 18 000 ft at 50 s and stays: the
+    first record within 6000 ft/min (30.48 m/s) of the last good one (49 s) is the one
+    150 s later (15 000 ft = 4572 m = 30.48 m/s × 150 s), past the 120 s bridged. At 60 m/s
+    the record of 126 s (4572 m ≤ 60 × 77 m) was kept and the truth climbed at 59 m/s."""
+    rows = ["t,icao24,callsign,lat,lon,alt_ft"]
+    for k in range(300):
+        lat = 48.9 + 100.0 * k / 111_200.0
+        rows.append(f"{k},abc123,AFR1,{lat:.6f},2.45,{3000 if k < 50 else 18000}")
+    path = tmp_path / "jump.csv.gz"
+    path.write_bytes(gzip.compress("\n".join(rows).encode()))
+    (flight,) = load_flights(path)
+    assert flight.times[-1] == 49.0
+    assert np.max(np.abs(flight.velocity[:, 2])) < 1.0  # ENU up bends with the Earth: 0.2
+
+
+def test_ryr43zu_ends_where_its_records_stop_being_an_aircrafts() -> None:
+    """The extract by brute force: RYR43ZU's latitude and longitude stop changing at 898 s
+    (750 ft, on final to Beauvais), its altitude jumps to 25 375 ft at 918 s; the first
+    record after 917 s within 6000 ft/min of 750 ft comes more than MAX_GAP later, so the
+    truth ends at 917 s. No aircraft of the truth climbs or descends faster than 20 m/s
+    (the fastest airline climbs; a business jet's 19 m/s is the scene's fastest)."""
+    import csv
+    import io
+
+    text = gzip.decompress(EXTRACT.read_bytes()).decode()
+    rows = [r for r in csv.DictReader(io.StringIO(text)) if r["callsign"] == "RYR43ZU"]
+    records = {int(r["t"]): (r["lat"], r["lon"], int(r["alt_ft"])) for r in rows}
+    assert all(records[t][:2] == records[898][:2] for t in range(898, 1202) if t in records)
+    assert records[917][2] == 750 and records[918][2] == 25_375
+    after = [t for t in sorted(records) if t > 917]
+    within = [t for t in after if abs(records[t][2] - 750) <= 100.0 * (t - 917)]  # ft/s
+    assert within[0] == 1109 and within[0] - 917 > MAX_GAP
+    # 60 m/s (196.85 ft/s) let the record of 1032 s in, 115 s after
+    assert next(t for t in after if abs(records[t][2] - 750) * FEET <= 60.0 * (t - 917)) == 1032
+    flights = {f.callsign: f for f in load_flights()}
+    assert flights["RYR43ZU"].times[-1] == 917.0
+    for flight in flights.values():
+        assert np.max(np.abs(flight.velocity[:, 2])) < 20.0, flight.callsign
 
 
 def test_the_radar_horizon_has_a_four_thirds_earth() -> None:

@@ -455,30 +455,36 @@ def test_a_sensor_that_never_detected_a_track_says_nothing_about_it_once_it_is_h
 
 
 def test_a_track_another_sensor_just_detected_waits_for_its_next_scan() -> None:
-    """Sensor e (a slow radar: scans at 0.5 and 3.5 s) detected the target at its latest
-    scan; sensor a (1 s) then misses it three times: 3 ln(1 − 0.9) = −6.908 is below the
-    delete threshold ln(β/(1 − α)) = −6.907, which ends a track a alone carries
-    ([MTT] §4.3), but this one waits at the threshold for e's next scan, whose miss ends
-    it (§8.9)."""
+    """Sensor e (a slow radar: scans at 0.5 and 4.5 s, revisit 4 s) detected the target at
+    its latest scan; sensor a (1 s) then misses it. Both look at the track, so its delete
+    threshold is ln(β/(1 − α)) + ln(T_c/T_max) (§8.14; T_c = 1/(1 + 1/4) = 0.8 s, T_max =
+    4 s): −6.907 − 1.609 = −8.517. a's three misses, 3 ln(1 − 0.9) = −6.908, end a track a
+    alone carries ([MTT] §4.3), not this one. a's fourth is no miss (a run of three, a's
+    limit, says a does not see the target, §8.9); e alone looks at the track then, its
+    threshold is −6.907 again, which −6.908 passes, but e detected it at its latest scan:
+    the score waits at the threshold (§8.9) for e's next scan, whose miss ends it."""
     engine = SessionEngine(session(detecting("a"), detecting("e")))
     engine.apply_detections(on_target("a", 0.0))
     engine.apply_detections(on_target("e", 0.5))
-    for k in range(1, 4):
+    for k in range(1, 5):
         engine.apply_detections(on_target("a", float(k)))
-    engine.apply_detections(on_target("e", 3.5))
+    engine.apply_detections(on_target("e", 4.5))
     number = central_target(engine)["number"]
-    for k in range(4, 7):
+    base = math.log(1e-3 / (1.0 - 1e-3))
+    assert base + math.log(0.8 / 4.0) < 3 * math.log(0.1) < base
+    scores = []
+    for k in range(5, 9):
         engine.apply_detections(DetectionReport("a", float(k), np.zeros((0, 2))))
+        scores.append(central_target(engine)["score"])
+    assert scores == pytest.approx([*(k * math.log(0.1) for k in (1, 2, 3)), base], abs=1e-12)
     waiting = central_target(engine)
-    threshold = math.log(1e-3 / (1.0 - 1e-3))
-    assert 3 * math.log(0.1) < threshold
     assert waiting["number"] == number and waiting["status"] == "coasting"
-    assert waiting["score"] == pytest.approx(threshold, abs=1e-12)
+    assert waiting["sensor_misses"] == [4, 0]  # a run of 4 scans, past its limit 3
     assert engine.central is not None
-    engine.apply_detections(DetectionReport("e", 6.5, np.zeros((0, 2))))
+    engine.apply_detections(DetectionReport("e", 8.5, np.zeros((0, 2))))
     assert number not in [t["number"] for t in engine.central.export()["tracks"]]
     assert engine.central.tallies["e"].ended_reasons == {"score_deleted": 1}
-    # a alone: the third miss ends it
+    # a alone (e never detected it, so e does not carry it): the third miss ends it
     alone = SessionEngine(session(detecting("a"), detecting("e")))
     for k in range(4):
         alone.apply_detections(on_target("a", float(k)))
