@@ -108,7 +108,7 @@ from core.lifecycle import (
 from core.numerics import MAX_TIME, check_magnitudes
 from core.pipeline.evidence import coasting_misses, coverage_codes, hits, seen_by
 from core.pipeline.gate import position_distances
-from core.pipeline.handover import hand_over_pairs
+from core.pipeline.handover import ended_hand_over_pairs, hand_over_pairs
 from core.pipeline.rows import TrackRows, ended
 from core.tracking.tracker import LocalTracker
 
@@ -862,27 +862,22 @@ class SessionEngine:
         gates (:meth:`_hand_over_ended`); returns the positions of the ended tracks taken."""
         assert self.time is not None
         time = self.time
-        motion = self.config.motion
-        ended_states = np.array([entry.state for entry, _ in remembered])
-        ended_covariances = np.array([entry.covariance for entry, _ in remembered])
-        gaps = np.array([time - entry.time for entry, _ in remembered])
-        predicted, predicted_cov = motion.predict(ended_states, ended_covariances, gaps)
         status = self._rows.rows.life.status
         others = np.flatnonzero(established(status) & alive)
         others = others[~np.isin(others, newcomers)]
-        rows = np.concatenate([newcomers, others])
-        states, covariances = self._table.fused_at(rows, time)
-        known, incoming = hand_over_pairs(
+        states, covariances = self._table.fused_at(np.concatenate([newcomers, others]), time)
+        split = len(newcomers)
+        known, incoming = ended_hand_over_pairs(
             (
-                np.concatenate([predicted, states[len(newcomers) :]]),
-                np.concatenate([predicted_cov, covariances[len(newcomers) :]]),
+                np.array([entry.state for entry, _ in remembered]),
+                np.array([entry.covariance for entry, _ in remembered]),
             ),
-            (states, covariances),
+            np.array([time - entry.time for entry, _ in remembered]),
+            self.config.motion,
+            (states[:split], covariances[:split]),
+            (states[split:], covariances[split:]),
             self.config.management.gate_probability,
-            unique=True,
         )
-        take = (known < len(remembered)) & (incoming < len(newcomers))
-        known, incoming = known[take], incoming[take]
         if len(known) == 0:
             return set()
         numbers = self._rows.rows.numbers.copy()

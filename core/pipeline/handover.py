@@ -22,6 +22,7 @@ import numpy as np
 
 from core.arrays import BoolArray, FloatArray, IntArray
 from core.association import associate
+from core.models import MappedMotion
 
 
 def hand_over_pairs(
@@ -53,3 +54,32 @@ def unique_gated(rows: IntArray, cols: IntArray, n_rows: int, n_cols: int) -> Bo
     row_count = np.bincount(rows, minlength=n_rows)
     col_count = np.bincount(cols, minlength=n_cols)
     return np.asarray((row_count[rows] == 1) & (col_count[cols] == 1), dtype=bool)
+
+
+def ended_hand_over_pairs(
+    ended: tuple[FloatArray, FloatArray],
+    gaps: FloatArray,
+    motion: MappedMotion,
+    newcomers: tuple[FloatArray, FloatArray],
+    others: tuple[FloatArray, FloatArray],
+    gate_probability: float,
+) -> tuple[IntArray, IntArray]:
+    """(ended index, newcomer index) of each unambiguous restart (docs/algorithms.md §8.14).
+
+    ``ended``: the ended tracks' estimates when they ended, ``gaps`` (s) since; each is
+    predicted over its gap (x ← F x, P ← F P Fᵀ + Q of ``motion``) and gated against the
+    ``newcomers`` (tracks just confirmed) and the ``others`` (the live established
+    tracks), all (means, covariances) at one time. A pair is kept only if it is its
+    newcomer's only gated pair — no other ended track and no live track gates it (it may
+    be a live track's duplicate) — and its ended track's — no other newcomer and no live
+    track lies in its grown gate (:func:`hand_over_pairs` with ``unique``)."""
+    predicted, predicted_cov = motion.predict(ended[0], ended[1], gaps)
+    n_ended, n_new = len(predicted), len(newcomers[0])
+    known, incoming = hand_over_pairs(
+        (np.concatenate([predicted, others[0]]), np.concatenate([predicted_cov, others[1]])),
+        (np.concatenate([newcomers[0], others[0]]), np.concatenate([newcomers[1], others[1]])),
+        gate_probability,
+        unique=True,
+    )
+    take = (known < n_ended) & (incoming < n_new)
+    return known[take], incoming[take]
