@@ -1205,7 +1205,7 @@ class SessionEngine:
                 table.write(np.array([row]), sensor, state_[None], covariance[None], time)
             tracks.append(track)
         engine.tracks = tracks
-        engine.ended = tuple(EndedTrack.from_plain(plain) for plain in state.get("ended", []))
+        engine.ended = _plain_ended(state.get("ended", []), config.dim)
         engine._rows.rows = TrackRows(
             np.array([track.number for track in tracks], dtype=np.int64),
             _plain_lives(plain_tracks),
@@ -1262,6 +1262,20 @@ def _is_live(status: IntArray) -> BoolArray:
     for code in _LIVE_CODES:
         live |= status == code
     return live
+
+
+def _plain_ended(plain: list[dict[str, Any]], dim: int) -> tuple[EndedTrack, ...]:
+    """The remembered ended tracks of an export (§8.14), each estimate checked."""
+    ended = tuple(EndedTrack.from_plain(entry) for entry in plain)
+    for entry in ended:
+        shapes = entry.state.shape == (dim,) and entry.covariance.shape == (dim, dim)
+        finite = shapes and np.isfinite(entry.state).all() and np.isfinite(entry.covariance).all()
+        if not (finite and math.isfinite(entry.time) and entry.id[1:].isdigit()):
+            raise InvalidInput(
+                f"exported ended track {entry.id!r}: needs an id F<n>, a finite time, state "
+                f"({dim},) and covariance ({dim}, {dim})"
+            )
+    return ended
 
 
 def _replaced_life(life: LifeState, rows: IntArray, by: LifeState) -> LifeState:

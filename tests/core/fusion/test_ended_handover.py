@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
+from core.errors import InvalidInput
 from core.fusion.engine import RESTART_REVISITS, SessionEngine
 from core.fusion.motion import MotionModel
 from core.fusion.reports import DetectionReport, StepResult
@@ -230,3 +231,13 @@ def test_a_version_3_export_restores_with_nothing_remembered() -> None:
     again = restored.export()
     assert again.pop("ended") == [] and again.pop("version") == 4
     assert again == {key: value for key, value in older.items() if key != "version"}
+
+
+def test_a_bad_ended_track_in_an_export_is_refused_by_name() -> None:
+    config = session(detecting("a"), detecting("b"))
+    exported = json.loads(json.dumps(SessionEngine(config).export()))
+    entry = {"id": "F3", "time": 1.0, "state": [0.0] * 3, "covariance": [], "history": []}
+    with pytest.raises(InvalidInput, match="ended track 'F3'"):
+        SessionEngine.restore(config, exported | {"ended": [entry]})
+    good = entry | {"state": [0.0] * 4, "covariance": np.eye(4).tolist()}
+    assert SessionEngine.restore(config, exported | {"ended": [good]}).ended[0].number == 3
