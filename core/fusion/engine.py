@@ -835,7 +835,7 @@ class SessionEngine:
             (established(before[terminated]) | (before[terminated] == PHANTOM))
             & ~np.isin(reason[terminated], _MERGED)
         ]
-        ending = np.sort(ending)
+        ending = np.unique(ending)  # sorted, each row once
         memory = self.memory()
         kept = [entry for entry in self.ended if time - entry.time <= memory]
         remembered: list[tuple[EndedTrack, int]] = [(entry, -1) for entry in kept]
