@@ -20,8 +20,9 @@ from core.fusion.motion import MotionModel
 from core.fusion.reports import DetectionReport, StepResult
 from core.pipeline.handover import ended_hand_over_pairs, hand_over_pairs, unique_gated
 
-from .engine_helpers import LAYOUT
+from .engine_helpers import LAYOUT, make_config
 from .test_central import STARTS, VELOCITIES, detecting, scans, session
+from .test_engine import moving, report
 
 GATE = 0.999
 MOTION = MotionModel(LAYOUT, q=1.0)  # state [x, ẋ, y, ẏ]
@@ -241,3 +242,27 @@ def test_a_bad_ended_track_in_an_export_is_refused_by_name() -> None:
         SessionEngine.restore(config, exported | {"ended": [entry]})
     good = entry | {"state": [0.0] * 4, "covariance": np.eye(4).tolist()}
     assert SessionEngine.restore(config, exported | {"ended": [good]}).ended[0].number == 3
+
+
+def test_track_lists_restarting_after_a_silence_keep_the_fused_id() -> None:
+    """Two track-list sources every second (0.5 s apart), one target at 10 m/s; both fall
+    silent from 10 s to 15 s and come back under new track ids. The fused track coasts once
+    both are overdue (§8.6), is deleted at 13.5 s, a tentative track starts at 15 s and is
+    confirmed by the second source at 15.5 s, 2 s after the end (the memory: 3 revisits of
+    1 s): it takes the ended track's id."""
+    engine = SessionEngine(make_config(["s1", "s2"]))
+    seen: list[tuple[float, str, str]] = []
+    for step in range(40):
+        t = step / 2
+        sensor = "s1" if step % 2 == 0 else "s2"
+        name = ("a" if sensor == "s1" else "x") + ("" if t < 10.0 else "-again")
+        tracks = [] if 10.0 <= t < 15.0 else [(name, moving(0.0, t))]
+        result = engine.apply(report(sensor, t, *tracks))
+        seen += [(t, view.id, view.status.value) for view in result.tracks]
+    assert engine.memory() == 3.0
+    ended = [t for t, _, status in seen if status == "terminated"]
+    assert ended == [13.5]
+    confirmed = {track for t, track, status in seen if status == "confirmed"}
+    assert confirmed == {"F1"}, seen
+    # the newcomer was shown tentative under its own id before it took the old one
+    assert (15.0, "F2", "tentative") in seen and (15.5, "F1", "confirmed") in seen
