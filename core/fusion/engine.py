@@ -28,7 +28,9 @@ lives (:class:`~core.fusion.track.FusedRows`):
    occluded, termination (score, gate emptiness, out of range, phantom
    expiry); a newly confirmed track that matches a phantom hands its
    estimates to the phantom, which keeps its id ([HZ] §5.1,
-   :func:`core.lifecycle.hand_over`);
+   :func:`core.lifecycle.hand_over`); one that is the only track confirmed where a
+   recently ended track is predicted takes that track's id (§8.14,
+   :meth:`SessionEngine._hand_over_ended`);
 6. class fusion per track from the sensors' latest class evidence.
 
 **Transactions.** A step checkpoints the tracks' fields (their containers
@@ -76,7 +78,14 @@ from core.fusion.reports import (
     TrackReport,
 )
 from core.fusion.table import EstimateTable
-from core.fusion.track import FusedRows, FusedTrack, Kinematics, SensorEstimate
+from core.fusion.track import (
+    HISTORY_LENGTH,
+    EndedTrack,
+    FusedRows,
+    FusedTrack,
+    Kinematics,
+    SensorEstimate,
+)
 from core.lifecycle import (
     COASTING,
     CONFIRMED,
@@ -99,12 +108,13 @@ from core.lifecycle import (
 from core.numerics import MAX_TIME, check_magnitudes
 from core.pipeline.evidence import coasting_misses, coverage_codes, hits, seen_by
 from core.pipeline.gate import position_distances
-from core.pipeline.handover import hand_over_pairs
+from core.pipeline.handover import ended_hand_over_pairs, hand_over_pairs
 from core.pipeline.rows import TrackRows, ended
 from core.tracking.tracker import LocalTracker
 
-EXPORT_VERSION = 3
-"""3: the central tracker's reorder buffer (``central`` is its state before the oldest
+EXPORT_VERSION = 4
+"""4: the recently ended fused tracks (``ended``, §8.14), which an older export restores
+without; 3: the central tracker's reorder buffer (``central`` is its state before the oldest
 buffered scan and the buffered scans, :meth:`ReorderBuffer.export`); 2: the central tracker's
 state (``central``, §8.9), which restores with an empty buffer. A version-1 export restores
 with an empty central tracker (its sessions' detecting sensors were tracked one by one: their
@@ -115,6 +125,16 @@ one ordinary miss (P_D 0.9: one scan in ten) never makes a track coast (§8.6)."
 STALE_REVISITS = 5.0
 """After this many revisits of every source of a fused track without an update, any sensor's
 silence about it is a miss (§8.2: a track whose sources all stopped reporting still ends)."""
+RESTART_REVISITS = 3.0
+"""An ended fused track is remembered for this many revisits of the session's slowest sensor
+(§8.14): a restart of its target is one detection that starts a track and one that confirms
+it (single-point starts, ``min_points`` 2), with one ordinary miss before either, at most
+three scans of the slowest sensor that sees it (fewer of a faster one)."""
+_MERGED = (
+    reason_code(StatusReason.MERGED_INTO_PHANTOM),
+    reason_code(StatusReason.DUPLICATE),
+)
+"""Reasons of a termination that is no end: the track lives on in the one it joined."""
 LIVE = (TrackStatus.TENTATIVE, TrackStatus.CONFIRMED, TrackStatus.COASTING)
 _LIVE_CODES = tuple(STATUS_CODES[status] for status in LIVE)
 
@@ -143,6 +163,8 @@ class SessionEngine:
         """The central tracker over the detections of several sensors (§8.9), or None."""
         self.reorder = ReorderBuffer()
         """The central tracker's recent scans, to put a late one in its place (§8.9)."""
+        self.ended: tuple[EndedTrack, ...] = ()
+        """The fused tracks ended within the memory (§8.14), in the order they ended."""
         layout = config.motion.layout
         self._position = np.asarray(layout.position, dtype=np.int64)
         self._coverage = config.coverage
@@ -312,7 +334,7 @@ class SessionEngine:
         last_report, tracks, revisits = dict(self.last_report), self.tracks, dict(self.revisits)
         checkpoint, rows = self._table.checkpoint(), self._rows.rows
         saved = None if tracker is None else tracker.checkpoint()
-        buffered = self.reorder.scans
+        buffered, ended = self.reorder.scans, self.ended
         fields = [track.checkpoint() for track in tracks]
         self.tracks = list(tracks)
         try:
@@ -327,6 +349,7 @@ class SessionEngine:
             if tracker is not None and saved is not None:
                 tracker.rollback(saved)
             self.reorder.scans = buffered
+            self.ended = ended
             raise
 
     def _apply(self, report: TrackReport, explain: bool) -> StepResult:
@@ -334,6 +357,7 @@ class SessionEngine:
         ``core.pipeline`` over the table's rows."""
         sensor, incoming = self._check(report)
         t = float(report.time)
+        status_before = self._rows.rows.life.status
         live = np.flatnonzero(_is_live(self._rows.rows.life.status))
         states, covariances = self._table.fused_at(live, t)  # predict
         decision = associate_report(
@@ -377,6 +401,7 @@ class SessionEngine:
         terminated = self._hand_over_to_phantoms(fresh, terminated)  # hand-over
         terminated = self._absorb_duplicates(terminated, created)
         terminated = self._join_duplicates(terminated, live[rows], report.sensor)
+        terminated = self._hand_over_ended(fresh, terminated, status_before)
         return self._result(report, decision, live, terminated, explain)  # and keep the rows
 
     # ------------------------------------------------------------ checks
@@ -781,6 +806,104 @@ class SessionEngine:
             older_keeps=True,
         )
 
+    def _hand_over_ended(
+        self, fresh: IntArray, terminated: IntArray, status_before: IntArray
+    ) -> IntArray:
+        """A track confirmed in this step where a recently ended track is predicted takes
+        that track's id, when the match is unambiguous (§8.14); returns ``terminated``
+        without the tracks ended in this step whose id a newcomer took (they go on).
+
+        The tracks this step ended that were established before it (not merged into
+        another) are remembered with their fused estimate; those ended longer ago than
+        :meth:`memory` are forgotten. Each remembered track is predicted over its gap
+        (F P Fᵀ + Q of the session's motion) and gated (``sum`` distance of the full state,
+        ``gate_probability``) against the newcomers and the live established tracks; a
+        pair is handed over only if it is its newcomer's only gated pair and its ended
+        track's: a newcomer that could be either of two ended tracks (or a live track's
+        duplicate), an ended track that two newcomers could be (or whose grown gate holds
+        a live track), keeps its new id.
+        """
+        assert self.time is not None
+        time = self.time
+        life = self._rows.rows.life
+        status, reason = life.status, life.reason
+        alive = np.ones(len(status), dtype=bool)
+        alive[terminated] = False
+        before = np.full(len(status), TENTATIVE, dtype=np.int64)
+        before[: len(status_before)] = status_before
+        ending = terminated[
+            (established(before[terminated]) | (before[terminated] == PHANTOM))
+            & ~np.isin(reason[terminated], _MERGED)
+        ]
+        ending = np.unique(ending)  # sorted, each row once
+        memory = self.memory()
+        kept = [entry for entry in self.ended if time - entry.time <= memory]
+        remembered: list[tuple[EndedTrack, int]] = [(entry, -1) for entry in kept]
+        if len(ending):
+            states, covariances = self._table.fused_at(ending, time)
+            for k, row in enumerate(ending.tolist()):
+                track = self.tracks[row]
+                entry = EndedTrack(track.id, time, states[k], covariances[k], tuple(track.history))
+                remembered.append((entry, row))
+        newcomers = np.unique(fresh[alive[fresh]])
+        matched: set[int] = set()
+        if len(remembered) and len(newcomers):
+            matched = self._take_ended_ids(remembered, newcomers, alive)
+        self.ended = tuple(
+            entry for k, (entry, _) in enumerate(remembered) if k not in matched and memory > 0.0
+        )
+        continued = [remembered[k][1] for k in sorted(matched) if remembered[k][1] >= 0]
+        return terminated[~np.isin(terminated, continued)] if continued else terminated
+
+    def _take_ended_ids(
+        self, remembered: list[tuple[EndedTrack, int]], newcomers: IntArray, alive: BoolArray
+    ) -> set[int]:
+        """Hand the ids of ``remembered`` ended tracks to the ``newcomers`` each uniquely
+        gates (:meth:`_hand_over_ended`); returns the positions of the ended tracks taken."""
+        assert self.time is not None
+        time = self.time
+        status = self._rows.rows.life.status
+        others = np.flatnonzero(established(status) & alive)
+        others = others[~np.isin(others, newcomers)]
+        states, covariances = self._table.fused_at(np.concatenate([newcomers, others]), time)
+        split = len(newcomers)
+        known, incoming = ended_hand_over_pairs(
+            (
+                np.array([entry.state for entry, _ in remembered]),
+                np.array([entry.covariance for entry, _ in remembered]),
+            ),
+            np.array([time - entry.time for entry, _ in remembered]),
+            self.config.motion,
+            (states[:split], covariances[:split]),
+            (states[split:], covariances[split:]),
+            self.config.management.gate_probability,
+        )
+        if len(known) == 0:
+            return set()
+        numbers = self._rows.rows.numbers.copy()
+        reasons = self._rows.rows.life.reason.copy()
+        for position, row in zip(known.tolist(), newcomers[incoming].tolist(), strict=True):
+            entry = remembered[position][0]
+            track = self.tracks[row]
+            since = track.history[0][0] if track.history else math.inf
+            history = [item for item in entry.history if item[0] < since] + track.history
+            track.id, track.number = entry.id, entry.number
+            track.history = history[-HISTORY_LENGTH:]
+            numbers[row] = entry.number
+            reasons[row] = reason_code(StatusReason.REACQUIRED)
+        life = dataclasses.replace(self._rows.rows.life, reason=reasons)
+        self._rows.rows = TrackRows(numbers, life)
+        return set(known.tolist())
+
+    def memory(self) -> float:
+        """How long an ended fused track is remembered (§8.14): :data:`RESTART_REVISITS` of
+        the longest revisit of the session's sources and centrally tracked sensors (0 while
+        no revisit is known)."""
+        revisits = [value for value in self.revisits.values() if math.isfinite(value)]
+        if self.central is not None:
+            revisits += [float(v) for v in self.central.revisits.tolist() if math.isfinite(v)]
+        return RESTART_REVISITS * max(revisits) if revisits else 0.0
+
     def _absorb_duplicates(self, terminated: IntArray, created: IntArray) -> IntArray:
         """A tentative track that duplicates an established track of other sensors joins it.
 
@@ -1024,6 +1147,7 @@ class SessionEngine:
                 sensor: tracker.export() for sensor, tracker in sorted(self.local_trackers.items())
             },
             "central": None if self.central is None else self.reorder.export(self.central),
+            "ended": [entry.to_plain() for entry in self.ended],
         }
 
     def _kinematics(self, track: FusedTrack) -> Kinematics:
@@ -1040,10 +1164,10 @@ class SessionEngine:
     def restore(cls, config: FusionConfig, state: dict[str, Any]) -> SessionEngine:
         """Rebuild an engine from :meth:`export`'s output and the same configuration.
 
-        Version 1 has no central tracker, version 2 no reorder buffer (:data:`EXPORT_VERSION`);
-        an unknown version is refused.
+        Version 1 has no central tracker, version 2 no reorder buffer, version 3 no ended
+        tracks (:data:`EXPORT_VERSION`); an unknown version is refused.
         """
-        if state.get("version") not in (1, 2, EXPORT_VERSION):
+        if state.get("version") not in (1, 2, 3, EXPORT_VERSION):
             raise InvalidInput(f"unknown engine export version {state.get('version')!r}")
         engine = cls(config)
         engine.seq = int(state["seq"])
@@ -1081,6 +1205,7 @@ class SessionEngine:
                 table.write(np.array([row]), sensor, state_[None], covariance[None], time)
             tracks.append(track)
         engine.tracks = tracks
+        engine.ended = _plain_ended(state.get("ended", []), config.dim)
         engine._rows.rows = TrackRows(
             np.array([track.number for track in tracks], dtype=np.int64),
             _plain_lives(plain_tracks),
@@ -1137,6 +1262,20 @@ def _is_live(status: IntArray) -> BoolArray:
     for code in _LIVE_CODES:
         live |= status == code
     return live
+
+
+def _plain_ended(plain: list[dict[str, Any]], dim: int) -> tuple[EndedTrack, ...]:
+    """The remembered ended tracks of an export (§8.14), each estimate checked."""
+    ended = tuple(EndedTrack.from_plain(entry) for entry in plain)
+    for entry in ended:
+        shapes = entry.state.shape == (dim,) and entry.covariance.shape == (dim, dim)
+        finite = shapes and np.isfinite(entry.state).all() and np.isfinite(entry.covariance).all()
+        if not (finite and math.isfinite(entry.time) and entry.id[1:].isdigit()):
+            raise InvalidInput(
+                f"exported ended track {entry.id!r}: needs an id F<n>, a finite time, state "
+                f"({dim},) and covariance ({dim}, {dim})"
+            )
+    return ended
 
 
 def _replaced_life(life: LifeState, rows: IntArray, by: LifeState) -> LifeState:

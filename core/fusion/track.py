@@ -212,3 +212,49 @@ def mass_from_plain(plain: dict[str, list[Any]], frame: Frame) -> MassFunction:
         np.asarray(plain["masks"], dtype=np.int64),
         np.asarray(plain["masses"], dtype=np.float64),
     )
+
+
+@dataclass(frozen=True, eq=False)
+class EndedTrack:
+    """A fused track the picture ended recently, remembered so that a track confirmed
+    where it is predicted can take its id (docs/algorithms.md §8.14).
+
+    Attributes
+    ----------
+    id : its fused id.
+    time : when it ended (the fusion time of that step).
+    state, covariance : its fused estimate at that time.
+    history : its fused history, oldest first (what ``GET /tracks/{id}`` showed).
+    """
+
+    id: str
+    time: float
+    state: FloatArray
+    covariance: FloatArray
+    history: tuple[tuple[float, list[float]], ...] = ()
+
+    @property
+    def number(self) -> int:
+        """The integer part of the id."""
+        return int(self.id[1:])
+
+    def to_plain(self) -> dict[str, Any]:
+        return {
+            "id": self.id,
+            "time": self.time,
+            "state": self.state.tolist(),
+            "covariance": self.covariance.tolist(),
+            "history": [[time, state] for time, state in self.history],
+        }
+
+    @classmethod
+    def from_plain(cls, plain: dict[str, Any]) -> EndedTrack:
+        return cls(
+            id=str(plain["id"]),
+            time=float(plain["time"]),
+            state=np.asarray(plain["state"], dtype=np.float64),
+            covariance=np.asarray(plain["covariance"], dtype=np.float64),
+            history=tuple(
+                (float(time), [float(x) for x in state]) for time, state in plain["history"]
+            ),
+        )

@@ -23,7 +23,9 @@ evidence      :mod:`core.pipeline.evidence`               hits and their ΔL, mi
 life cycle    :mod:`core.lifecycle`                       :func:`~core.lifecycle.advance`
 hand-over     :mod:`core.pipeline.handover`               newly confirmed rows matched to
                                                           phantoms (or a duplicate to its
-                                                          established track)
+                                                          established track); the fused
+                                                          layer's to recently ended tracks,
+                                                          on a unique match (§8.14)
 rows          :mod:`core.pipeline.rows`                   numbers and lives of the rows:
                                                           start, keep, drop the terminated
 ============  ==========================================  ===============================

@@ -392,6 +392,12 @@ class LocalTracker:
         combined = self.classifier.combine(self._classes.select(rows), dense[detections])
         self._classes = self._classes.replace(rows, combined)
 
+    @property
+    def revisits(self) -> FloatArray:
+        """Each sensor's revisit, in the order of ``config.sensors``: the interval between its
+        last two scans (NaN before its second)."""
+        return np.asarray(self._scan_times[:, 1] - self._scan_times[:, 0], dtype=np.float64)
+
     def checkpoint(self) -> dict[str, Any]:
         """The state as it is, for :meth:`rollback` (references: no array is changed in place)."""
         return dict(self.__dict__)

@@ -208,7 +208,7 @@ def test_central_export_restore_continues_exactly() -> None:
     for k in range(9, 16):
         restored.apply_detections(DetectionReport("ab"[k % 2], float(k), measured[k]))
     assert json.dumps(restored.export()) == json.dumps(uninterrupted.export())
-    assert restored.export()["version"] == 3 and restored.export()["central"] is not None
+    assert restored.export()["version"] == 4 and restored.export()["central"] is not None
 
 
 def test_central_time_order_same_instant_and_refusals() -> None:

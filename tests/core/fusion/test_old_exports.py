@@ -68,10 +68,11 @@ def test_an_old_export_loads_and_continues_like_an_uninterrupted_engine() -> Non
     # since issue 22: each track's misses in a row (none in the old file), and the learned
     # revisits, which start unknown (§8.6); since issue 23 (version 2): the central tracker
     # (none in a session whose detecting sensors are not two or more), and (version 3) its
-    # reorder buffer
+    # reorder buffer; (version 4) the recently ended tracks (§8.14), none in an old export
     assert [track.pop("misses") for track in again["tracks"]] == [0] * len(old["tracks"])
     assert "revisits" not in old
-    assert again.pop("central") is None and again.pop("version") == 3
+    assert again.pop("central") is None and again.pop("version") == 4
+    assert again.pop("ended") == []
     assert json.dumps(again, sort_keys=True) == json.dumps(
         {key: value for key, value in old.items() if key != "version"} | {"revisits": {}},
         sort_keys=True,
@@ -91,5 +92,5 @@ def test_an_old_export_loads_and_continues_like_an_uninterrupted_engine() -> Non
 
 def test_an_export_of_an_unknown_version_is_refused_by_name() -> None:
     old = json.loads(EXPORT.read_text())
-    with pytest.raises(InvalidInput, match="unknown engine export version 4"):
-        SessionEngine.restore(CONFIG, {**old, "version": 4})
+    with pytest.raises(InvalidInput, match="unknown engine export version 5"):
+        SessionEngine.restore(CONFIG, {**old, "version": 5})
