@@ -29,7 +29,7 @@ lives (:class:`~core.fusion.track.FusedRows`):
    expiry); a newly confirmed track that matches a phantom hands its
    estimates to the phantom, which keeps its id ([HZ] §5.1,
    :func:`core.lifecycle.hand_over`); one that is the only track confirmed where a
-   recently ended track is predicted takes that track's id (§8.14,
+   recently ended track is predicted takes that track's id (§8.15,
    :meth:`SessionEngine._hand_over_ended`);
 6. class fusion per track from the sensors' latest class evidence.
 
@@ -113,7 +113,7 @@ from core.pipeline.rows import TrackRows, ended
 from core.tracking.tracker import LocalTracker
 
 EXPORT_VERSION = 4
-"""4: the recently ended fused tracks (``ended``, §8.14), which an older export restores
+"""4: the recently ended fused tracks (``ended``, §8.15), which an older export restores
 without; 3: the central tracker's reorder buffer (``central`` is its state before the oldest
 buffered scan and the buffered scans, :meth:`ReorderBuffer.export`); 2: the central tracker's
 state (``central``, §8.9), which restores with an empty buffer. A version-1 export restores
@@ -127,7 +127,7 @@ STALE_REVISITS = 5.0
 silence about it is a miss (§8.2: a track whose sources all stopped reporting still ends)."""
 RESTART_REVISITS = 3.0
 """An ended fused track is remembered for this many revisits of the session's slowest sensor
-(§8.14): a restart of its target is one detection that starts a track and one that confirms
+(§8.15): a restart of its target is one detection that starts a track and one that confirms
 it (single-point starts, ``min_points`` 2), with one ordinary miss before either, at most
 three scans of the slowest sensor that sees it (fewer of a faster one)."""
 _MERGED = (
@@ -164,7 +164,7 @@ class SessionEngine:
         self.reorder = ReorderBuffer()
         """The central tracker's recent scans, to put a late one in its place (§8.9)."""
         self.ended: tuple[EndedTrack, ...] = ()
-        """The fused tracks ended within the memory (§8.14), in the order they ended."""
+        """The fused tracks ended within the memory (§8.15), in the order they ended."""
         layout = config.motion.layout
         self._position = np.asarray(layout.position, dtype=np.int64)
         self._coverage = config.coverage
@@ -810,7 +810,7 @@ class SessionEngine:
         self, fresh: IntArray, terminated: IntArray, status_before: IntArray
     ) -> IntArray:
         """A track confirmed in this step where a recently ended track is predicted takes
-        that track's id, when the match is unambiguous (§8.14); returns ``terminated``
+        that track's id, when the match is unambiguous (§8.15); returns ``terminated``
         without the tracks ended in this step whose id a newcomer took (they go on).
 
         The tracks this step ended that were established before it (not merged into
@@ -896,7 +896,7 @@ class SessionEngine:
         return set(known.tolist())
 
     def memory(self) -> float:
-        """How long an ended fused track is remembered (§8.14): :data:`RESTART_REVISITS` of
+        """How long an ended fused track is remembered (§8.15): :data:`RESTART_REVISITS` of
         the longest revisit of the session's sources and centrally tracked sensors (0 while
         no revisit is known)."""
         revisits = [value for value in self.revisits.values() if math.isfinite(value)]
@@ -1265,7 +1265,7 @@ def _is_live(status: IntArray) -> BoolArray:
 
 
 def _plain_ended(plain: list[dict[str, Any]], dim: int) -> tuple[EndedTrack, ...]:
-    """The remembered ended tracks of an export (§8.14), each estimate checked."""
+    """The remembered ended tracks of an export (§8.15), each estimate checked."""
     ended = tuple(EndedTrack.from_plain(entry) for entry in plain)
     for entry in ended:
         shapes = entry.state.shape == (dim,) and entry.covariance.shape == (dim, dim)

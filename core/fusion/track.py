@@ -217,7 +217,7 @@ def mass_from_plain(plain: dict[str, list[Any]], frame: Frame) -> MassFunction:
 @dataclass(frozen=True, eq=False)
 class EndedTrack:
     """A fused track the picture ended recently, remembered so that a track confirmed
-    where it is predicted can take its id (docs/algorithms.md §8.14).
+    where it is predicted can take its id (docs/algorithms.md §8.15).
 
     Attributes
     ----------

@@ -25,7 +25,7 @@ hand-over     :mod:`core.pipeline.handover`               newly confirmed rows m
                                                           phantoms (or a duplicate to its
                                                           established track); the fused
                                                           layer's to recently ended tracks,
-                                                          on a unique match (§8.14)
+                                                          on a unique match (§8.15)
 rows          :mod:`core.pipeline.rows`                   numbers and lives of the rows:
                                                           start, keep, drop the terminated
 ============  ==========================================  ===============================

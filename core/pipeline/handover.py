@@ -1,5 +1,5 @@
 """Hand-over: newly confirmed rows matched to the rows that keep their identity
-(docs/algorithms.md §4 "Invisibility", [HZ] §5.1; §8.14 for ended tracks).
+(docs/algorithms.md §4 "Invisibility", [HZ] §5.1; §8.15 for ended tracks).
 
 A track confirmed in this step may be an old target coming out of a blind
 zone or an occlusion: it is compared with the phantoms (the fusion engine
@@ -64,7 +64,7 @@ def ended_hand_over_pairs(
     others: tuple[FloatArray, FloatArray],
     gate_probability: float,
 ) -> tuple[IntArray, IntArray]:
-    """(ended index, newcomer index) of each unambiguous restart (docs/algorithms.md §8.14).
+    """(ended index, newcomer index) of each unambiguous restart (docs/algorithms.md §8.15).
 
     ``ended``: the ended tracks' estimates when they ended, ``gaps`` (s) since; each is
     predicted over its gap (x ← F x, P ← F P Fᵀ + Q of ``motion``) and gated against the

@@ -1,5 +1,5 @@
 """Over the API: a target every sensor misses for a few scans keeps its fused id
-(docs/algorithms.md §8.14).
+(docs/algorithms.md §8.15).
 
 Two detecting sensors of the same physics (tracked centrally, §8.9) take turns every
 second on one aircraft flying 200 m/s along x, with two false alarms per scan. Both miss it

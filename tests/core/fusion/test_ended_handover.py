@@ -1,4 +1,4 @@
-"""Fused ids survive a deletion and a restart at the same place (docs/algorithms.md §8.14).
+"""Fused ids survive a deletion and a restart at the same place (docs/algorithms.md §8.15).
 
 The gate and uniqueness cases are worked by hand (the gate's χ² quantile from scipy); the
 prediction over the gap is checked against F P Fᵀ + Q written out; the engine cases run the

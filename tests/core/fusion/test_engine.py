@@ -215,7 +215,7 @@ def test_a_source_that_left_a_track_long_ago_says_nothing_about_it() -> None:
     assert ids == {"F1"} and not ended
     # control: the radar's last update at 54 s; at 64 s (5 revisits later) its silence is a
     # third miss in a row (ADS-B at 60.5 and 62.5: ln 0.1 × 3 ≤ the delete threshold): the
-    # track ends (and its restart at ADS-B's next list takes its id back, §8.14)
+    # track ends (and its restart at ADS-B's next list takes its id back, §8.15)
     _, _, ended = run(lost_at=56.0)
     assert ended
 

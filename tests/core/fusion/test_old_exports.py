@@ -68,7 +68,7 @@ def test_an_old_export_loads_and_continues_like_an_uninterrupted_engine() -> Non
     # since issue 22: each track's misses in a row (none in the old file), and the learned
     # revisits, which start unknown (§8.6); since issue 23 (version 2): the central tracker
     # (none in a session whose detecting sensors are not two or more), and (version 3) its
-    # reorder buffer; (version 4) the recently ended tracks (§8.14), none in an old export
+    # reorder buffer; (version 4) the recently ended tracks (§8.15), none in an old export
     assert [track.pop("misses") for track in again["tracks"]] == [0] * len(old["tracks"])
     assert "revisits" not in old
     assert again.pop("central") is None and again.pop("version") == 4
