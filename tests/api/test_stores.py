@@ -468,6 +468,94 @@ def test_sqlite_group_commits_lose_no_acknowledged_input_after_sigkill(tmp_path:
     reopened.close()
 
 
+QUEUED_WRITERS = textwrap.dedent(
+    """
+    import asyncio, sys, threading
+    from datetime import UTC, datetime
+    from app.stores import SessionRecord, SqliteStore
+
+    store = SqliteStore(sys.argv[1])
+    sessions, hold_after = int(sys.argv[2]), int(sys.argv[3])
+    for index in range(sessions):
+        store.create_session(SessionRecord(f"s{index}", {}, f"sha256:{index}", datetime.now(UTC)))
+    acknowledged = 0
+
+    def trace(sql):  # the committer's thread: a batch of several is inserted, COMMIT is next
+        if sql == "COMMIT" and acknowledged >= hold_after:
+            print("held", flush=True)
+            threading.Event().wait()  # until the SIGKILL
+
+    store._writer().set_trace_callback(trace)
+
+    async def write(index):
+        global acknowledged
+        loop = asyncio.get_running_loop()
+        for seq in range(1, 100_001):
+            logged = loop.create_future()
+            store.append_queued(
+                f"s{index}", seq, {"n": seq, "w": index}, datetime.now(UTC),
+                lambda listened, error, logged=logged: loop.call_soon_threadsafe(
+                    logged.set_result, error
+                ),
+            )
+            error = await logged
+            if error is not None:
+                raise error
+            acknowledged += 1
+            print(index, seq, flush=True)
+
+    async def main():
+        await asyncio.gather(*(write(index) for index in range(sessions)))
+
+    asyncio.run(main())
+    """
+)
+
+
+def test_sqlite_queued_batch_killed_before_its_commit_loses_no_acknowledged_input(
+    tmp_path: Path,
+) -> None:
+    """Several sessions' inputs queued from one event loop (``append_queued``, as the service
+    logs them) share the committer's transactions; the process is SIGKILLed while a batch of
+    several is inserted but not committed. Reopened, each session's log is exactly what the
+    client was told is logged (its own record of acks): every acknowledged input, as sent and
+    in order, and none of the killed batch's (never acknowledged)."""
+    path, sessions = tmp_path / "queued.db", 6
+    child = subprocess.Popen(
+        [sys.executable, "-c", QUEUED_WRITERS, str(path), str(sessions), "300"],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert child.stdout is not None
+    acknowledged = dict.fromkeys(range(sessions), 0)
+    held = False
+    try:
+        for line in child.stdout:
+            if line.strip() == "held":
+                held = True
+                break
+            index, seq = map(int, line.split())
+            assert seq == acknowledged[index] + 1  # each session's acks in order
+            acknowledged[index] = seq
+    finally:
+        os.kill(child.pid, signal.SIGKILL)
+        child.wait()
+        child.stdout.close()
+    assert held, "no batch of several inputs was committed"
+    assert child.returncode == -signal.SIGKILL
+    assert sum(acknowledged.values()) >= 300
+    reopened = SqliteStore(path)
+    for index in range(sessions):
+        entries = reopened.entries(f"s{index}")
+        assert [entry.seq for entry in entries] == list(range(1, acknowledged[index] + 1))
+        assert [entry.input for entry in entries] == [
+            {"n": seq, "w": index} for seq in range(1, acknowledged[index] + 1)
+        ]
+    reopened.append("s0", acknowledged[0] + 1, {"n": "after restart"}, now())
+    reopened.close()
+
+
 def test_sqlite_appends_waiting_for_a_commit_share_the_next_one(tmp_path: Path) -> None:
     """Appends queued while the write lock is held are logged by one transaction; one whose seq
     is wrong, or whose session is deleted, is refused alone, the others of its batch are logged."""
