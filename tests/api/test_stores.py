@@ -470,7 +470,7 @@ def test_sqlite_group_commits_lose_no_acknowledged_input_after_sigkill(tmp_path:
 
 QUEUED_WRITERS = textwrap.dedent(
     """
-    import asyncio, sys, threading
+    import asyncio, os, re, sys, threading
     from datetime import UTC, datetime
     from app.stores import SessionRecord, SqliteStore
 
@@ -479,10 +479,18 @@ QUEUED_WRITERS = textwrap.dedent(
     for index in range(sessions):
         store.create_session(SessionRecord(f"s{index}", {}, f"sha256:{index}", datetime.now(UTC)))
     acknowledged = 0
+    batch = []
 
-    def trace(sql):  # the committer's thread: a batch of several is inserted, COMMIT is next
-        if sql == "COMMIT" and acknowledged >= hold_after:
-            print("held", flush=True)
+    def say(line):  # one write(2) a line: the two threads' lines never interleave
+        os.write(1, (line + "\\n").encode())
+
+    def trace(sql):  # the committer's thread, expanded statements of the batch's transaction
+        if sql.startswith("BEGIN"):
+            batch.clear()
+        elif "INSERT INTO inputs" in sql:
+            batch.append("%s:%s" % re.search(r"SELECT '(s[0-9]+)', ([0-9]+),", sql).groups())
+        elif sql == "COMMIT" and acknowledged >= hold_after:
+            say("held " + " ".join(batch))  # inserted, not committed
             threading.Event().wait()  # until the SIGKILL
 
     store._writer().set_trace_callback(trace)
@@ -502,7 +510,7 @@ QUEUED_WRITERS = textwrap.dedent(
             if error is not None:
                 raise error
             acknowledged += 1
-            print(index, seq, flush=True)
+            say(f"{index} {seq}")
 
     async def main():
         await asyncio.gather(*(write(index) for index in range(sessions)))
@@ -517,9 +525,9 @@ def test_sqlite_queued_batch_killed_before_its_commit_loses_no_acknowledged_inpu
 ) -> None:
     """Several sessions' inputs queued from one event loop (``append_queued``, as the service
     logs them) share the committer's transactions; the process is SIGKILLed while a batch of
-    several is inserted but not committed. Reopened, each session's log is exactly what the
-    client was told is logged (its own record of acks): every acknowledged input, as sent and
-    in order, and none of the killed batch's (never acknowledged)."""
+    several is inserted but not committed. Reopened, each session's log holds every input the
+    client was told is logged (its own record of acks), as sent and in order, and none of the
+    killed batch (never acknowledged: rolled back)."""
     path, sessions = tmp_path / "queued.db", 6
     child = subprocess.Popen(
         [sys.executable, "-c", QUEUED_WRITERS, str(path), str(sessions), "300"],
@@ -529,11 +537,14 @@ def test_sqlite_queued_batch_killed_before_its_commit_loses_no_acknowledged_inpu
     )
     assert child.stdout is not None
     acknowledged = dict.fromkeys(range(sessions), 0)
-    held = False
+    held: list[tuple[int, int]] = []
     try:
         for line in child.stdout:
-            if line.strip() == "held":
-                held = True
+            if line.startswith("held"):
+                held = [
+                    (int(name[1:]), int(seq))
+                    for name, seq in (item.split(":") for item in line.split()[1:])
+                ]
                 break
             index, seq = map(int, line.split())
             assert seq == acknowledged[index] + 1  # each session's acks in order
@@ -542,17 +553,22 @@ def test_sqlite_queued_batch_killed_before_its_commit_loses_no_acknowledged_inpu
         os.kill(child.pid, signal.SIGKILL)
         child.wait()
         child.stdout.close()
-    assert held, "no batch of several inputs was committed"
+    assert len(held) >= 2, "no batch of several inputs was held"
     assert child.returncode == -signal.SIGKILL
     assert sum(acknowledged.values()) >= 300
     reopened = SqliteStore(path)
+    logged = {}
     for index in range(sessions):
         entries = reopened.entries(f"s{index}")
-        assert [entry.seq for entry in entries] == list(range(1, acknowledged[index] + 1))
+        logged[index] = len(entries)
+        assert [entry.seq for entry in entries] == list(range(1, len(entries) + 1))
         assert [entry.input for entry in entries] == [
-            {"n": seq, "w": index} for seq in range(1, acknowledged[index] + 1)
+            {"n": seq, "w": index} for seq in range(1, len(entries) + 1)
         ]
-    reopened.append("s0", acknowledged[0] + 1, {"n": "after restart"}, now())
+        assert len(entries) >= acknowledged[index]
+    for index, seq in held:
+        assert logged[index] == seq - 1  # the batch killed before its COMMIT: none of it
+    reopened.append("s0", logged[0] + 1, {"n": "after restart"}, now())
     reopened.close()
 
 
