@@ -21,6 +21,7 @@ import pytest
 
 from app.errors import StoreUnavailable
 from app.http.errors import SessionNotFound
+from app.settings import Settings
 from app.stores import (
     MemoryStore,
     RedisStore,
@@ -474,7 +475,7 @@ QUEUED_WRITERS = textwrap.dedent(
     from datetime import UTC, datetime
     from app.stores import SessionRecord, SqliteStore
 
-    store = SqliteStore(sys.argv[1])
+    store = SqliteStore(sys.argv[1], sys.argv[4])
     sessions, hold_after = int(sys.argv[2]), int(sys.argv[3])
     for index in range(sessions):
         store.create_session(SessionRecord(f"s{index}", {}, f"sha256:{index}", datetime.now(UTC)))
@@ -520,17 +521,20 @@ QUEUED_WRITERS = textwrap.dedent(
 )
 
 
+@pytest.mark.parametrize("synchronous", ["FULL", "NORMAL"])
 def test_sqlite_queued_batch_killed_before_its_commit_loses_no_acknowledged_input(
-    tmp_path: Path,
+    tmp_path: Path, synchronous: str
 ) -> None:
     """Several sessions' inputs queued from one event loop (``append_queued``, as the service
     logs them) share the committer's transactions; the process is SIGKILLed while a batch of
     several is inserted but not committed. Reopened, each session's log holds every input the
     client was told is logged (its own record of acks), as sent and in order, and none of the
-    killed batch (never acknowledged: rolled back)."""
+    killed batch (never acknowledged: rolled back). ``NORMAL`` (no fsync at commit) keeps
+    this guarantee too: a process's death leaves its writes in the kernel's cache (a power
+    loss does not, which no test here can show)."""
     path, sessions = tmp_path / "queued.db", 6
     child = subprocess.Popen(
-        [sys.executable, "-c", QUEUED_WRITERS, str(path), str(sessions), "300"],
+        [sys.executable, "-c", QUEUED_WRITERS, str(path), str(sessions), "300", synchronous],
         cwd=ROOT,
         stdout=subprocess.PIPE,
         text=True,
@@ -570,6 +574,26 @@ def test_sqlite_queued_batch_killed_before_its_commit_loses_no_acknowledged_inpu
         assert logged[index] == seq - 1  # the batch killed before its COMMIT: none of it
     reopened.append("s0", logged[0] + 1, {"n": "after restart"}, now())
     reopened.close()
+
+
+@pytest.mark.parametrize(("setting", "pragma"), [(None, 2), ("FULL", 2), ("NORMAL", 1)])
+def test_the_sqlite_synchronous_setting_reaches_the_write_connection(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, setting: str | None, pragma: int
+) -> None:
+    """``CREDAL_SQLITE_SYNCHRONOUS`` (default FULL) is the synchronous mode of the connection
+    that commits (sqlite's numbers: FULL 2, NORMAL 1); anything else is refused."""
+    if setting is not None:
+        monkeypatch.setenv("CREDAL_SQLITE_SYNCHRONOUS", setting)
+    settings = Settings()
+    store = open_store(
+        f"sqlite:{tmp_path / 'sync.db'}", sqlite_synchronous=settings.sqlite_synchronous
+    )
+    assert isinstance(store, SqliteStore)
+    assert store._writer().execute("PRAGMA synchronous").fetchone()[0] == pragma
+    store.close()
+    monkeypatch.setenv("CREDAL_SQLITE_SYNCHRONOUS", "OFF")
+    with pytest.raises(ValueError, match="sqlite_synchronous"):
+        Settings()
 
 
 def test_sqlite_appends_waiting_for_a_commit_share_the_next_one(tmp_path: Path) -> None:
