@@ -1,11 +1,14 @@
 """The ``sqlite`` store: one file (``./data`` by default), WAL journal, durable commits.
 
-Durability: the database runs in WAL mode with ``synchronous=FULL``, so
+Durability: the database runs in WAL mode with ``synchronous=FULL`` by default, so
 every commit fsyncs the write-ahead log before ``COMMIT`` returns; an input
-is acknowledged only after :meth:`SqliteStore.append` has returned, hence a
+is acknowledged only once the transaction holding it has committed, hence a
 crash — of the process or of the machine — loses no acknowledged input.
-(``NORMAL`` would survive a process crash but could lose the last commits
-on power loss; one fsync per input is the price of the guarantee.)
+``synchronous=NORMAL`` (``CREDAL_SQLITE_SYNCHRONOUS``) commits without the
+fsync: the WAL frames are in the kernel's page cache when ``COMMIT`` returns,
+so an acknowledged input survives the process's death (SIGKILL, a crash of
+the service) but the last commits may be lost if the machine itself stops
+(power loss, kernel crash); it costs less CPU per input (no fsync).
 
 Retention: a deleted session's rows are deleted, and :meth:`SqliteStore.compact`
 deletes the inputs behind a snapshot; sqlite reuses the freed pages, so the
@@ -27,17 +30,22 @@ own transaction), and the sequence-number check is part of the statement that
 logs an input (``_APPEND``), so it holds whichever process writes.
 
 Group commit: the fsync is most of an append's cost, so inputs that arrive
-while a commit is under way share the next one. :meth:`SqliteStore.append`
-queues its input, then takes the write lock; the thread that gets it (the
-leader) logs every input queued by then in one ``BEGIN IMMEDIATE`` … ``COMMIT``
-(one fsync) and marks them done; the others, when they get the lock in turn,
-find their input committed and return. So an append still returns only after
-the transaction holding its input is durable, and an input is acknowledged
-only after that: a crash loses no acknowledged input, however many writers
-share a commit. With one writer at a time nothing waits: a batch of one, which
-is a single statement (its own transaction, committed and fsynced before it
-returns) — each sqlite call lets the event loop's thread take the GIL, which
-the writing thread then waits to get back, so the fewer calls the better.
+while a commit is under way share the next one. Every append is queued; whoever
+holds the write lock next (the leader) logs every input queued by then in one
+``BEGIN IMMEDIATE`` … ``COMMIT`` (one fsync) and marks them done. The service's
+event loop queues its inputs with :meth:`SqliteStore.append_queued` and does not
+wait in a thread: the store's committer thread (started on first use) is the
+leader, and tells each input's caller once its batch has ended (committed or
+not); a thread calling :meth:`SqliteStore.append` queues its input, then takes
+the write lock, and returns once its input is done, committed by itself or by
+another leader. Either way an input is acknowledged only once the transaction
+holding it is durable: a crash loses no acknowledged input, however many share
+a commit. A batch of one is a single statement (its own transaction, committed
+and fsynced before it returns) — each sqlite call lets the event loop's thread
+take the GIL, which the committing thread then waits to get back (a forced
+switch each), so the fewer calls the better: per batch, the committer is woken
+once, runs its statement(s) and settles the batch; the event loop pays no
+worker-thread hop per input.
 """
 
 from __future__ import annotations
