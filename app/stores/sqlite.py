@@ -441,7 +441,7 @@ class SqliteStore:
                 pending.error = RuntimeError("the store is closed")
             else:
                 self._queue.append(pending)
-                if self._committer is None:
+                if self._committer is None or not self._committer.is_alive():
                     self._committer = threading.Thread(
                         target=self._commit_loop, name="sqlite-committer", daemon=True
                     )

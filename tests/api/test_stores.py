@@ -10,7 +10,7 @@ import subprocess
 import sys
 import textwrap
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import ExitStack
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -573,6 +573,49 @@ def test_sqlite_queued_batch_killed_before_its_commit_loses_no_acknowledged_inpu
     for index, seq in held:
         assert logged[index] == seq - 1  # the batch killed before its COMMIT: none of it
     reopened.append("s0", logged[0] + 1, {"n": "after restart"}, now())
+    reopened.close()
+
+
+def test_sqlite_queued_appends_are_settled_as_append_answers(tmp_path: Path) -> None:
+    """``append_queued`` settles each input with what ``append`` would answer: logged (False:
+    not shared), its own refusal (a wrong seq, a deleted session, data that is not plain)
+    without the others of its batch; after ``close`` nothing more is logged."""
+    store = SqliteStore(tmp_path / "queued.db")
+    for session_id in ("a", "gone"):
+        store.create_session(record(session_id))
+    store.delete_session("gone")
+    answers: dict[str, tuple[bool, Exception | None]] = {}
+    settled = threading.Event()
+    calls = [
+        ("a", 1, {"n": 1}),
+        ("a", 5, {"n": 5}),
+        ("gone", 1, {"n": 1}),
+        ("a", 2, {"n": object()}),
+    ]
+
+    def answer(name: str) -> Callable[[bool, Exception | None], None]:
+        def settle(listened: bool, error: Exception | None) -> None:
+            answers[name] = (listened, error)
+            if len(answers) == len(calls):
+                settled.set()
+
+        return settle
+
+    with store._write_lock:  # a commit under way: all four share the committer's next batch
+        for session_id, seq, entry in calls:
+            store.append_queued(session_id, seq, entry, now(), answer(f"{session_id}{seq}"))
+    assert settled.wait(30)
+    assert answers["a1"] == (False, None)
+    assert isinstance(answers["a5"][1], SequenceConflict)
+    assert isinstance(answers["gone1"][1], SessionNotFound)
+    assert isinstance(answers["a2"][1], TypeError)
+    assert [entry.input for entry in store.entries("a")] == [{"n": 1}]
+    store.close()
+    late: list[Exception | None] = []
+    store.append_queued("a", 2, {"n": 2}, now(), lambda _, error: late.append(error))
+    assert len(late) == 1 and late[0] is not None
+    reopened = SqliteStore(tmp_path / "queued.db")
+    assert [entry.seq for entry in reopened.entries("a")] == [1]
     reopened.close()
 
 
