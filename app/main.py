@@ -71,7 +71,11 @@ def create_app(settings: Settings | None = None, workers: WorkerGroup | None = N
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         sys.setswitchinterval(GIL_SWITCH_INTERVAL_S)
         app.openapi()  # built before serving: the first GET /openapi.json held the loop 250 ms
-        store = open_store(settings.store, redis_prefix=settings.redis_prefix)
+        store = open_store(
+            settings.store,
+            redis_prefix=settings.redis_prefix,
+            sqlite_synchronous=settings.sqlite_synchronous,
+        )
         app.state.store = store
         loop_lag = LoopLag(service_metrics.loop_lag, ceiling=2e-3 * settings.overload_delay_ms)
         shared = {} if workers is None else await workers.join(store, settings)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Literal
 
 from limits import RateLimitItem, parse_many
 from pydantic import Field, SecretStr, field_validator
@@ -55,6 +56,12 @@ class Settings(BaseSettings):
         ge=0,
         description="worker processes of `serve`, sharing the sessions through the store "
         "(sqlite or redis; the memory store is one process's): 0 is one per usable core",
+    )
+    sqlite_synchronous: Literal["FULL", "NORMAL"] = Field(
+        "FULL",
+        description="sqlite store: FULL fsyncs each commit (an acknowledged input survives a "
+        "power loss); NORMAL does not (it survives the process's death, SIGKILL included, "
+        "not the machine's) and costs less CPU per input",
     )
     redis_prefix: str = Field(
         DEFAULT_PREFIX, min_length=1, description="start of every Redis key and channel name"

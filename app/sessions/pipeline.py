@@ -509,8 +509,8 @@ class InputPipeline:
             record = idempotency_record(once.key, once.fingerprint, step.written[output])
             logged = {**logged, IDEMPOTENCY_FIELD: record}
         try:
-            step.listened = await self.registry.io(
-                self.registry.store.append, session.id, seq, logged, received_at, size=size
+            step.listened = await self.registry.append(
+                session.id, seq, logged, received_at, size=size
             )
         except SequenceConflict:
             if not self.registry.shared:

@@ -115,6 +115,32 @@ class SessionRegistry:
             return await anyio.to_thread.run_sync(call) if self.store.blocking else call()
         return await anyio.to_thread.run_sync(without_collection(call))
 
+    async def append(
+        self,
+        session_id: str,
+        seq: int,
+        entry_input: PlainObject,
+        received_at: datetime,
+        size: int = 0,
+    ) -> bool:
+        """Log an input (:meth:`~app.stores.base.Store.append`): returns once it is durable.
+        A store that commits on a thread of its own (sqlite's ``append_queued``: group
+        commit) is handed the input and awaited, without a worker thread per input; any
+        other store's ``append`` is a store call (:meth:`io`)."""
+        queued = getattr(self.store, "append_queued", None)
+        if queued is None:
+            return await self.io(
+                self.store.append, session_id, seq, entry_input, received_at, size=size
+            )
+        loop = asyncio.get_running_loop()
+        logged: asyncio.Future[bool] = loop.create_future()
+
+        def settled(listened: bool, error: Exception | None) -> None:  # the committer's thread
+            loop.call_soon_threadsafe(_settle, logged, listened, error)
+
+        queued(session_id, seq, entry_input, received_at, settled)
+        return await logged
+
     def add(self, session: LiveSession) -> LiveSession:
         """Register a session just created in the store (:func:`~app.sessions.live.new_session`)."""
         self._sessions[session.id] = session
@@ -347,3 +373,13 @@ class SessionRegistry:
     async def run_expiry(self) -> None:
         """:meth:`SessionExpiry.run`."""
         await self.expiry.run()
+
+
+def _settle(future: asyncio.Future[bool], listened: bool, error: Exception | None) -> None:
+    """Resolve an append's future on the event loop (unless its waiter has gone)."""
+    if future.done():
+        return
+    if error is not None:
+        future.set_exception(error)
+    else:
+        future.set_result(listened)

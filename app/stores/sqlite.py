@@ -1,11 +1,14 @@
 """The ``sqlite`` store: one file (``./data`` by default), WAL journal, durable commits.
 
-Durability: the database runs in WAL mode with ``synchronous=FULL``, so
+Durability: the database runs in WAL mode with ``synchronous=FULL`` by default, so
 every commit fsyncs the write-ahead log before ``COMMIT`` returns; an input
-is acknowledged only after :meth:`SqliteStore.append` has returned, hence a
+is acknowledged only once the transaction holding it has committed, hence a
 crash — of the process or of the machine — loses no acknowledged input.
-(``NORMAL`` would survive a process crash but could lose the last commits
-on power loss; one fsync per input is the price of the guarantee.)
+``synchronous=NORMAL`` (``CREDAL_SQLITE_SYNCHRONOUS``) commits without the
+fsync: the WAL frames are in the kernel's page cache when ``COMMIT`` returns,
+so an acknowledged input survives the process's death (SIGKILL, a crash of
+the service) but the last commits may be lost if the machine itself stops
+(power loss, kernel crash); it costs less CPU per input (no fsync).
 
 Retention: a deleted session's rows are deleted, and :meth:`SqliteStore.compact`
 deletes the inputs behind a snapshot; sqlite reuses the freed pages, so the
@@ -27,22 +30,28 @@ own transaction), and the sequence-number check is part of the statement that
 logs an input (``_APPEND``), so it holds whichever process writes.
 
 Group commit: the fsync is most of an append's cost, so inputs that arrive
-while a commit is under way share the next one. :meth:`SqliteStore.append`
-queues its input, then takes the write lock; the thread that gets it (the
-leader) logs every input queued by then in one ``BEGIN IMMEDIATE`` … ``COMMIT``
-(one fsync) and marks them done; the others, when they get the lock in turn,
-find their input committed and return. So an append still returns only after
-the transaction holding its input is durable, and an input is acknowledged
-only after that: a crash loses no acknowledged input, however many writers
-share a commit. With one writer at a time nothing waits: a batch of one, which
-is a single statement (its own transaction, committed and fsynced before it
-returns) — each sqlite call lets the event loop's thread take the GIL, which
-the writing thread then waits to get back, so the fewer calls the better.
+while a commit is under way share the next one. Every append is queued; whoever
+holds the write lock next (the leader) logs every input queued by then in one
+``BEGIN IMMEDIATE`` … ``COMMIT`` (one fsync) and marks them done. The service's
+event loop queues its inputs with :meth:`SqliteStore.append_queued` and does not
+wait in a thread: the store's committer thread (started on first use) is the
+leader, and tells each input's caller once its batch has ended (committed or
+not); a thread calling :meth:`SqliteStore.append` queues its input, then takes
+the write lock, and returns once its input is done, committed by itself or by
+another leader. Either way an input is acknowledged only once the transaction
+holding it is durable: a crash loses no acknowledged input, however many share
+a commit. A batch of one is a single statement (its own transaction, committed
+and fsynced before it returns) — each sqlite call lets the event loop's thread
+take the GIL, which the committing thread then waits to get back (a forced
+switch each), so the fewer calls the better: per batch, the committer is woken
+once, runs its statement(s) and settles the batch; the event loop pays no
+worker-thread hop per input.
 """
 
 from __future__ import annotations
 
 import contextlib
+import logging
 import sqlite3
 import threading
 from collections.abc import Callable, Iterator, Mapping
@@ -77,6 +86,7 @@ BUSY_TIMEOUT_MS = 30_000
 JOURNAL_SIZE_LIMIT = 16 * 1024 * 1024
 """Bytes the WAL file is truncated to after a checkpoint."""
 T = TypeVar("T")
+logger = logging.getLogger("credal_fusion.stores")
 Synchronous = Literal["FULL", "NORMAL"]
 
 SCHEMA = """
@@ -161,14 +171,22 @@ def _faults() -> Iterator[None]:
         raise StoreUnavailable("sqlite", reason) from error
 
 
+Settled = Callable[[bool, Exception | None], None]
+"""What :meth:`SqliteStore.append_queued` calls once its input's batch has ended: with what
+:meth:`SqliteStore.append` would return, and the error it would raise (``None``: logged)."""
+
+
 @dataclass(eq=False)
 class _Append:
-    """An input waiting in :meth:`SqliteStore.append` for the commit that logs it."""
+    """An input waiting in :meth:`SqliteStore.append` (or queued by
+    :meth:`SqliteStore.append_queued`) for the commit that logs it."""
 
     session_id: str
     seq: int
-    received_at: str
-    text: str
+    received_at: datetime
+    entry_input: Mapping[str, Any]
+    settled: Settled | None = None
+    """Called by whoever commits its batch (:meth:`SqliteStore.append_queued`)."""
     done: bool = False
     """Its batch's transaction has ended (committed, or rolled back: then ``error`` is set)."""
     error: Exception | None = None
@@ -195,7 +213,11 @@ class SqliteStore:
         """One connection for every write (:meth:`_writer`): its page cache stays warm."""
         self._queue_lock = threading.Lock()
         self._queue: list[_Append] = []
-        """Appends waiting for the next group commit (:meth:`append`)."""
+        """Appends waiting for the next group commit (:meth:`append`, :meth:`append_queued`)."""
+        self._queued = threading.Condition(self._queue_lock)
+        """Notified when :meth:`append_queued` queues an input (the committer waits on it)."""
+        self._committer: threading.Thread | None = None
+        """The thread committing what :meth:`append_queued` queues, started on its first call."""
         self._closed = False
         with contextlib.suppress(StoreCorrupt):  # a damaged file: every use says so (/readyz)
             self._create_schema()
@@ -387,7 +409,7 @@ class SqliteStore:
         """Log an input; returns once the transaction holding it is committed (group commit:
         module docstring). Its own refusal (:class:`SequenceConflict`, 404) is raised to it
         alone; a failed commit to every input of the batch, none of which is then logged."""
-        pending = _Append(session_id, seq, received_at.isoformat(), dumps(entry_input))
+        pending = _Append(session_id, seq, received_at, entry_input)
         with self._queue_lock:
             self._queue.append(pending)
         with self._write_lock:  # the leader commits every queued append, its own included
@@ -398,6 +420,47 @@ class SqliteStore:
         # shared by the worker processes of one serve (app.cluster.peers), the file cannot
         # count their subscribers: every result goes to the other workers
         return self.shared
+
+    def append_queued(
+        self,
+        session_id: str,
+        seq: int,
+        entry_input: Mapping[str, Any],
+        received_at: datetime,
+        settled: Settled,
+    ) -> None:
+        """Queue an input for the store's committer thread and return at once; ``settled`` is
+        called (on that thread) once the transaction holding it has ended: what
+        :meth:`append` would have returned or raised. So the event loop logs an input without
+        a worker thread of its own: encoding, statements and commit run on the committer,
+        which commits everything queued meanwhile in one transaction (one fsync) and settles
+        it all; the input is to be acknowledged only when ``settled`` says it is logged."""
+        pending = _Append(session_id, seq, received_at, entry_input, settled)
+        with self._queued:
+            if self._closed:
+                pending.error = RuntimeError("the store is closed")
+            else:
+                self._queue.append(pending)
+                if self._committer is None or not self._committer.is_alive():
+                    self._committer = threading.Thread(
+                        target=self._commit_loop, name="sqlite-committer", daemon=True
+                    )
+                    self._committer.start()
+                self._queued.notify()
+                return
+        self._settle(pending)
+
+    def _commit_loop(self) -> None:
+        """The committer: waits for queued inputs, commits each batch (:meth:`_commit_queued`)."""
+        while True:
+            with self._queued:
+                while not self._queue and not self._closed:
+                    self._queued.wait()
+                if self._closed:
+                    return
+            with self._write_lock:
+                if not self._closed:
+                    self._commit_queued()
 
     def _commit_queued(self) -> None:
         """One commit (one fsync) for every append queued now (under the write lock): a lone
@@ -428,11 +491,27 @@ class SqliteStore:
                 if not committed and pending.error is None:  # interrupted: not logged either
                     pending.error = StoreUnavailable("sqlite", "the commit was interrupted")
                 pending.done = True
+            for pending in batch:
+                self._settle(pending)
+
+    def _settle(self, pending: _Append) -> None:
+        """Tell :meth:`append_queued`'s caller how its input's batch ended (never raises: the
+        committer thread goes on whatever a caller's callback does)."""
+        if pending.settled is not None:
+            try:
+                pending.settled(self.shared, pending.error)
+            except Exception:
+                logger.exception("sqlite: an append's callback failed")
 
     def _insert(self, connection: sqlite3.Connection, pending: _Append) -> None:
         """Log ``pending`` if its session is live and its seq the next one (one statement: the
         check and the insert), else set its refusal."""
-        row = (pending.session_id, pending.seq, pending.received_at, pending.text)
+        try:
+            text = dumps(pending.entry_input)
+        except (TypeError, ValueError) as error:  # not plain data: refused alone
+            pending.error = error
+            return
+        row = (pending.session_id, pending.seq, pending.received_at.isoformat(), text)
         if connection.execute(_APPEND, row).rowcount != 1:
             pending.error = self._refusal(connection, pending.session_id, pending.seq)
 
@@ -545,9 +624,19 @@ class SqliteStore:
         self._read(lambda connection: connection.execute("SELECT 1").fetchone())
 
     def close(self) -> None:
+        with self._queued:
+            self._closed = True
+            self._queued.notify_all()
+            left, self._queue = self._queue, []
+        committer = self._committer
+        if committer is not None and committer is not threading.current_thread():
+            committer.join()
+        for pending in left:  # queued, never committed: not logged
+            pending.error = StoreUnavailable("sqlite", "the store was closed")
+            pending.done = True
+            self._settle(pending)
         # under the write lock: never close the shared writer inside another thread's write
         with self._write_lock, self._connections_lock:
-            self._closed = True
             for connection in self._connections:
                 connection.close()
             self._connections.clear()

@@ -11,7 +11,7 @@ from app.stores.base import Store
 from app.stores.memory import MemoryStore
 from app.stores.redis import RedisStore
 from app.stores.redis_keys import DEFAULT_PREFIX
-from app.stores.sqlite import SqliteStore
+from app.stores.sqlite import SqliteStore, Synchronous
 
 DEFAULT_SQLITE_PATH = Path("data") / "credal-fusion.db"
 DEFAULT_REDIS_URL = "redis://127.0.0.1:6379/0"
@@ -68,8 +68,11 @@ def parse_store_url(url: str) -> StoreSpec:
     raise ValueError(f"store {url!r}: {EXPECTED}")
 
 
-def open_store(url: str, redis_prefix: str = DEFAULT_PREFIX) -> Store:
-    """Open the store named by ``url`` (``redis_prefix``: ``CREDAL_REDIS_PREFIX``)."""
+def open_store(
+    url: str, redis_prefix: str = DEFAULT_PREFIX, sqlite_synchronous: Synchronous = "FULL"
+) -> Store:
+    """Open the store named by ``url`` (``redis_prefix``: ``CREDAL_REDIS_PREFIX``;
+    ``sqlite_synchronous``: ``CREDAL_SQLITE_SYNCHRONOUS``)."""
     spec = parse_store_url(url)
     if spec.kind == "memory":
         return MemoryStore()
@@ -77,4 +80,4 @@ def open_store(url: str, redis_prefix: str = DEFAULT_PREFIX) -> Store:
         assert spec.url is not None
         return RedisStore(spec.url, prefix=redis_prefix)
     assert spec.path is not None
-    return SqliteStore(spec.path)
+    return SqliteStore(spec.path, sqlite_synchronous)

@@ -10,7 +10,7 @@ import subprocess
 import sys
 import textwrap
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import ExitStack
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -21,6 +21,7 @@ import pytest
 
 from app.errors import StoreUnavailable
 from app.http.errors import SessionNotFound
+from app.settings import Settings
 from app.stores import (
     MemoryStore,
     RedisStore,
@@ -466,6 +467,176 @@ def test_sqlite_group_commits_lose_no_acknowledged_input_after_sigkill(tmp_path:
         assert len(seqs) >= acknowledged[writer]
         assert all(entry.input == {"n": entry.seq, "w": writer} for entry in entries)
     reopened.close()
+
+
+QUEUED_WRITERS = textwrap.dedent(
+    """
+    import asyncio, os, re, sys, threading
+    from datetime import UTC, datetime
+    from app.stores import SessionRecord, SqliteStore
+
+    store = SqliteStore(sys.argv[1], sys.argv[4])
+    sessions, hold_after = int(sys.argv[2]), int(sys.argv[3])
+    for index in range(sessions):
+        store.create_session(SessionRecord(f"s{index}", {}, f"sha256:{index}", datetime.now(UTC)))
+    acknowledged = 0
+    batch = []
+
+    def say(line):  # one write(2) a line: the two threads' lines never interleave
+        os.write(1, (line + "\\n").encode())
+
+    def trace(sql):  # the committer's thread, expanded statements of the batch's transaction
+        if sql.startswith("BEGIN"):
+            batch.clear()
+        elif "INSERT INTO inputs" in sql:
+            batch.append("%s:%s" % re.search(r"SELECT '(s[0-9]+)', ([0-9]+),", sql).groups())
+        elif sql == "COMMIT" and acknowledged >= hold_after:
+            say("held " + " ".join(batch))  # inserted, not committed
+            threading.Event().wait()  # until the SIGKILL
+
+    store._writer().set_trace_callback(trace)
+
+    async def write(index):
+        global acknowledged
+        loop = asyncio.get_running_loop()
+        for seq in range(1, 100_001):
+            logged = loop.create_future()
+            store.append_queued(
+                f"s{index}", seq, {"n": seq, "w": index}, datetime.now(UTC),
+                lambda listened, error, logged=logged: loop.call_soon_threadsafe(
+                    logged.set_result, error
+                ),
+            )
+            error = await logged
+            if error is not None:
+                raise error
+            acknowledged += 1
+            say(f"{index} {seq}")
+
+    async def main():
+        await asyncio.gather(*(write(index) for index in range(sessions)))
+
+    asyncio.run(main())
+    """
+)
+
+
+@pytest.mark.parametrize("synchronous", ["FULL", "NORMAL"])
+def test_sqlite_queued_batch_killed_before_its_commit_loses_no_acknowledged_input(
+    tmp_path: Path, synchronous: str
+) -> None:
+    """Several sessions' inputs queued from one event loop (``append_queued``, as the service
+    logs them) share the committer's transactions; the process is SIGKILLed while a batch of
+    several is inserted but not committed. Reopened, each session's log holds every input the
+    client was told is logged (its own record of acks), as sent and in order, and none of the
+    killed batch (never acknowledged: rolled back). ``NORMAL`` (no fsync at commit) keeps
+    this guarantee too: a process's death leaves its writes in the kernel's cache (a power
+    loss does not, which no test here can show)."""
+    path, sessions = tmp_path / "queued.db", 6
+    child = subprocess.Popen(
+        [sys.executable, "-c", QUEUED_WRITERS, str(path), str(sessions), "300", synchronous],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert child.stdout is not None
+    acknowledged = dict.fromkeys(range(sessions), 0)
+    held: list[tuple[int, int]] = []
+    try:
+        for line in child.stdout:
+            if line.startswith("held"):
+                held = [
+                    (int(name[1:]), int(seq))
+                    for name, seq in (item.split(":") for item in line.split()[1:])
+                ]
+                break
+            index, seq = map(int, line.split())
+            assert seq == acknowledged[index] + 1  # each session's acks in order
+            acknowledged[index] = seq
+    finally:
+        os.kill(child.pid, signal.SIGKILL)
+        child.wait()
+        child.stdout.close()
+    assert len(held) >= 2, "no batch of several inputs was held"
+    assert child.returncode == -signal.SIGKILL
+    assert sum(acknowledged.values()) >= 300
+    reopened = SqliteStore(path)
+    logged = {}
+    for index in range(sessions):
+        entries = reopened.entries(f"s{index}")
+        logged[index] = len(entries)
+        assert [entry.seq for entry in entries] == list(range(1, len(entries) + 1))
+        assert [entry.input for entry in entries] == [
+            {"n": seq, "w": index} for seq in range(1, len(entries) + 1)
+        ]
+        assert len(entries) >= acknowledged[index]
+    for index, seq in held:
+        assert logged[index] == seq - 1  # the batch killed before its COMMIT: none of it
+    reopened.append("s0", logged[0] + 1, {"n": "after restart"}, now())
+    reopened.close()
+
+
+def test_sqlite_queued_appends_are_settled_as_append_answers(tmp_path: Path) -> None:
+    """``append_queued`` settles each input with what ``append`` would answer: logged (False:
+    not shared), its own refusal (a wrong seq, a deleted session, data that is not plain)
+    without the others of its batch; after ``close`` nothing more is logged."""
+    store = SqliteStore(tmp_path / "queued.db")
+    for session_id in ("a", "gone"):
+        store.create_session(record(session_id))
+    store.delete_session("gone")
+    answers: dict[str, tuple[bool, Exception | None]] = {}
+    settled = threading.Event()
+    calls = [
+        ("a", 1, {"n": 1}),
+        ("a", 5, {"n": 5}),
+        ("gone", 1, {"n": 1}),
+        ("a", 2, {"n": object()}),
+    ]
+
+    def answer(name: str) -> Callable[[bool, Exception | None], None]:
+        def settle(listened: bool, error: Exception | None) -> None:
+            answers[name] = (listened, error)
+            if len(answers) == len(calls):
+                settled.set()
+
+        return settle
+
+    with store._write_lock:  # a commit under way: all four share the committer's next batch
+        for session_id, seq, entry in calls:
+            store.append_queued(session_id, seq, entry, now(), answer(f"{session_id}{seq}"))
+    assert settled.wait(30)
+    assert answers["a1"] == (False, None)
+    assert isinstance(answers["a5"][1], SequenceConflict)
+    assert isinstance(answers["gone1"][1], SessionNotFound)
+    assert isinstance(answers["a2"][1], TypeError)
+    assert [entry.input for entry in store.entries("a")] == [{"n": 1}]
+    store.close()
+    late: list[Exception | None] = []
+    store.append_queued("a", 2, {"n": 2}, now(), lambda _, error: late.append(error))
+    assert len(late) == 1 and late[0] is not None
+    reopened = SqliteStore(tmp_path / "queued.db")
+    assert [entry.seq for entry in reopened.entries("a")] == [1]
+    reopened.close()
+
+
+@pytest.mark.parametrize(("setting", "pragma"), [(None, 2), ("FULL", 2), ("NORMAL", 1)])
+def test_the_sqlite_synchronous_setting_reaches_the_write_connection(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, setting: str | None, pragma: int
+) -> None:
+    """``CREDAL_SQLITE_SYNCHRONOUS`` (default FULL) is the synchronous mode of the connection
+    that commits (sqlite's numbers: FULL 2, NORMAL 1); anything else is refused."""
+    if setting is not None:
+        monkeypatch.setenv("CREDAL_SQLITE_SYNCHRONOUS", setting)
+    settings = Settings()
+    store = open_store(
+        f"sqlite:{tmp_path / 'sync.db'}", sqlite_synchronous=settings.sqlite_synchronous
+    )
+    assert isinstance(store, SqliteStore)
+    assert store._writer().execute("PRAGMA synchronous").fetchone()[0] == pragma
+    store.close()
+    monkeypatch.setenv("CREDAL_SQLITE_SYNCHRONOUS", "OFF")
+    with pytest.raises(ValueError, match="sqlite_synchronous"):
+        Settings()
 
 
 def test_sqlite_appends_waiting_for_a_commit_share_the_next_one(tmp_path: Path) -> None:
