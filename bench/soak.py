@@ -508,6 +508,8 @@ def pair_bootstrap(
     )
     below = np.count_nonzero(resampled < estimate) + np.count_nonzero(resampled <= estimate)
     z0 = float(special.ndtri(below / (2 * resamples)))
+    if not math.isfinite(z0):  # every resample on one side of the estimate: no BCa interval
+        return Interval(float(estimate), math.nan, math.nan)  # (scipy's NaN too): inconclusive
     jackknife = np.array([statistic(np.delete(everything, left)) for left in everything])
     spread = jackknife.mean() - jackknife
     squares = float(np.sum(spread**2))

@@ -272,3 +272,24 @@ def test_every_thread_of_the_server_is_pinned_not_only_its_first(
     finally:
         child.kill()
         child.wait()
+
+
+def test_a_statistic_outside_all_its_resamples_has_no_interval_and_is_inconclusive(
+    bench: ModuleType,
+) -> None:
+    """Minus the number of distinct pairs drawn: the whole sample's (−10) is below every
+    resample but the ~4000 · 10!/10¹⁰ ≈ 1.5 that draw each pair once, so z0 = Φ⁻¹(0) = −∞
+    whenever none does — BCa is undefined (scipy's interval is NaN, checked here). The soak
+    says so ("inconclusive", NaN ends), rather than stopping on a NaN quantile level."""
+
+    def distinct(pairs: Any) -> float:
+        return -float(len(np.unique(pairs)))
+
+    with pytest.warns(Warning):
+        low, high = scipy_bca(distinct, 10, 500, 0.95)
+    assert math.isnan(low) and math.isnan(high)
+    interval = bench.pair_bootstrap(distinct, 10, resamples=500)
+    assert interval.estimate == -10.0
+    assert math.isnan(interval.low) and math.isnan(interval.high)
+    ok, line = bench.p99_verdict(interval)
+    assert ok and "inconclusive" in line and "[nan, nan]" in line
