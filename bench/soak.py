@@ -391,6 +391,17 @@ def loop_thread_wait_s(pid: int) -> float:
         return float("nan")
 
 
+def pin_threads(pid: int, cores: set[int]) -> None:
+    """Every thread of process ``pid`` to ``cores``: Linux's ``sched_setaffinity(pid)`` sets
+    the one thread whose id is ``pid`` (a server ready has several: the store's, the thread
+    pool's), and only threads created after it by that thread inherit its cores."""
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        try:
+            os.sched_setaffinity(int(task.name), cores)
+        except ProcessLookupError:  # ended since it was listed
+            continue
+
+
 def attacker_core(server_pid: int) -> tuple[int | None, str]:
     """With more than two cores usable here: one of them the attacker's alone (the server and
     this process, the honest load, keep the others); with two or fewer none is pinned. The
@@ -402,8 +413,8 @@ def attacker_core(server_pid: int) -> tuple[int | None, str]:
             "and the honest load one core); all three processes share them"
         )
     core, others = cores[-1], set(cores[:-1])
-    os.sched_setaffinity(server_pid, others)
-    os.sched_setaffinity(0, others)
+    pin_threads(server_pid, others)
+    pin_threads(os.getpid(), others)
     return core, (
         f"{len(cores)} cores usable: the attacker pinned to core {core}, the server and the "
         f"honest load to cores {sorted(others)}"
@@ -497,6 +508,8 @@ def pair_bootstrap(
     )
     below = np.count_nonzero(resampled < estimate) + np.count_nonzero(resampled <= estimate)
     z0 = float(special.ndtri(below / (2 * resamples)))
+    if not math.isfinite(z0):  # every resample on one side of the estimate: no BCa interval
+        return Interval(float(estimate), math.nan, math.nan)  # (scipy's NaN too): inconclusive
     jackknife = np.array([statistic(np.delete(everything, left)) for left in everything])
     spread = jackknife.mean() - jackknife
     squares = float(np.sum(spread**2))

@@ -257,10 +257,16 @@ def several_sensors_shift(revisits: FloatArray) -> FloatArray:
     if revisits.size == 0:
         return np.zeros(len(revisits))
     looking = np.isfinite(revisits)
-    slowest = np.max(np.where(looking, revisits, 0.0), axis=1)
-    ratio = np.where(looking, slowest[:, None] / np.where(looking, revisits, 1.0), 0.0).sum(axis=1)
     several = looking.sum(axis=1) >= 2
-    return np.asarray(np.where(several, -np.log(np.where(several, ratio, 1.0)), 0.0))
+    # ln Σ_i T_max/T_i summed in logs: the ratio of a fast and a slow sensor's revisits may
+    # overflow a float (1e300 / 1e-10), its log does not (a −∞ shift would never delete)
+    logs = np.log(np.where(looking, revisits, 1.0))
+    top = np.where(several, np.max(np.where(looking, logs, -np.inf), axis=1), 0.0)
+    bottom = np.where(several, np.min(np.where(looking, logs, np.inf), axis=1), 0.0)
+    # ln Σ_i e^(ln T_max − ln T_i) = ln(T_max/T_min) + ln Σ_i T_min/T_i, each term ≤ 1
+    fractions = np.where(looking, np.exp(np.minimum(bottom[:, None] - logs, 0.0)), 0.0)
+    ratio = top - bottom + np.log(np.maximum(fractions.sum(axis=1), 1.0))
+    return np.asarray(np.where(several, -ratio, 0.0))
 
 
 def misses_to_delete(drop: FloatArray, miss_increment: float) -> IntArray:

@@ -8,8 +8,12 @@ when the interval is above 1.10. No timing is asserted (the load itself is ``mak
 from __future__ import annotations
 
 import math
+import os
 import re
+import subprocess
+import sys
 from collections.abc import Callable
+from pathlib import Path
 from types import ModuleType
 from typing import Any
 
@@ -202,16 +206,90 @@ def test_the_attacker_is_pinned_only_with_more_than_two_cores(
     """Four usable cores: the attacker gets the last alone, the server and this process the
     other three; two cores: nothing is pinned, and the line says so."""
     pinned: dict[int, set[int]] = {}
-    monkeypatch.setattr(
-        bench.os, "sched_setaffinity", lambda pid, cores: pinned.update({pid: cores})
-    )
+    monkeypatch.setattr(bench, "pin_threads", lambda pid, cores: pinned.update({pid: cores}))
     monkeypatch.setattr(bench.os, "sched_getaffinity", lambda pid: {0, 1, 2, 3})
     core, line = bench.attacker_core(4242)
     assert core == 3
-    assert pinned == {4242: {0, 1, 2}, 0: {0, 1, 2}}
+    assert pinned == {4242: {0, 1, 2}, os.getpid(): {0, 1, 2}}
     assert "pinned to core 3" in line
     pinned.clear()
     monkeypatch.setattr(bench.os, "sched_getaffinity", lambda pid: {0, 1})
     core, line = bench.attacker_core(4242)
     assert core is None and pinned == {}
     assert line.startswith("2 cores usable: the attacker is not pinned")
+
+
+def allowed_cores(pid: int) -> dict[int, frozenset[int]]:
+    """Each thread of ``pid`` → the cores the kernel lets it run on (``/proc``'s own list,
+    e.g. ``0-1,3``)."""
+    found = {}
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        listed = re.search(r"^Cpus_allowed_list:\s*(\S+)", (task / "status").read_text(), re.M)
+        assert listed is not None
+        cores: set[int] = set()
+        for part in listed[1].split(","):
+            low, _, high = part.partition("-")
+            cores.update(range(int(low), int(high or low) + 1))
+        found[int(task.name)] = frozenset(cores)
+    return found
+
+
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="needs two usable cores")
+def test_every_thread_of_the_server_is_pinned_not_only_its_first(
+    bench: ModuleType, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Linux's sched_setaffinity(pid) sets the thread whose id is pid, not its process: the
+    server has threads already when it is ready (4 on this machine: the loop's, the store's,
+    the thread pool's), and each must leave the attacker's core. A child with a second
+    thread, both held to core 1 first; ``attacker_core`` on cores {0, 1, 7} (the attacker on
+    7) must let both run on 0-1 — read back from /proc/<pid>/task/*/status."""
+    child = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import threading, time\n"
+            "threading.Thread(target=time.sleep, args=(60,), daemon=True).start()\n"
+            "print('ready', flush=True)\n"
+            "time.sleep(60)\n",
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert child.stdout is not None and child.stdout.readline().strip() == "ready"
+        first, second = sorted(os.sched_getaffinity(0))[:2]
+        for thread in allowed_cores(child.pid):
+            os.sched_setaffinity(thread, {second})
+        assert len(allowed_cores(child.pid)) == 2
+        mine = os.sched_getaffinity(0)
+        monkeypatch.setattr(bench.os, "sched_getaffinity", lambda pid: {first, second, 7})
+        try:
+            core, _ = bench.attacker_core(child.pid)
+        finally:
+            os.sched_setaffinity(0, mine)
+        assert core == 7
+        assert set(allowed_cores(child.pid).values()) == {frozenset({first, second})}
+    finally:
+        child.kill()
+        child.wait()
+
+
+def test_a_statistic_outside_all_its_resamples_has_no_interval_and_is_inconclusive(
+    bench: ModuleType,
+) -> None:
+    """Minus the number of distinct pairs drawn: the whole sample's (−10) is below every
+    resample but the ~4000 · 10!/10¹⁰ ≈ 1.5 that draw each pair once, so z0 = Φ⁻¹(0) = −∞
+    whenever none does — BCa is undefined (scipy's interval is NaN, checked here). The soak
+    says so ("inconclusive", NaN ends), rather than stopping on a NaN quantile level."""
+
+    def distinct(pairs: Any) -> float:
+        return -float(len(np.unique(pairs)))
+
+    with pytest.warns(Warning):
+        low, high = scipy_bca(distinct, 10, 500, 0.95)
+    assert math.isnan(low) and math.isnan(high)
+    interval = bench.pair_bootstrap(distinct, 10, resamples=500)
+    assert interval.estimate == -10.0
+    assert math.isnan(interval.low) and math.isnan(interval.high)
+    ok, line = bench.p99_verdict(interval)
+    assert ok and "inconclusive" in line and "[nan, nan]" in line

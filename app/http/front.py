@@ -14,7 +14,8 @@ and WebSocket upgrade once its head is read (the transport limits of
    a request of its *work* (an input, ``POST`` under a session's path, or an association,
    ``POST /v1/associate``: :func:`is_work`) in flight here, or answered less than
    :data:`KEYED_GRACE_S` ago, or an input of it in flight in the pipeline (REST or
-   WebSocket) — a client *without* a key
+   WebSocket), or a ``stream`` message of it answered less than :data:`KEYED_GRACE_S` ago
+   (:meth:`FrontDoor.worked`) — a client *without* a key
    (an address tenant of ``CREDAL_ACCESS=open``; the admin is neither; without open access a
    request without a valid token is the application's to refuse) sending a body larger than
    :data:`~app.http.requests.OFFLOAD_BYTES` (a body whose parsing and validation cost
@@ -266,6 +267,13 @@ class FrontDoor:
             await self.app(scope, receive, send)
         finally:
             self.keyed_in_flight -= 1
+            self.keyed_answered = time.monotonic()
+
+    def worked(self, tenant: str) -> None:
+        """A message of ``tenant``'s ``stream`` WebSocket was answered: an input, work as a
+        ``POST`` of it is (:func:`is_work`), so a keyed tenant's is served as long after it
+        (:data:`KEYED_GRACE_S`: its sensor's next scan is on its way)."""
+        if is_keyed(tenant):
             self.keyed_answered = time.monotonic()
 
     def waits(self, tenant: str, size: int, scope: Scope) -> bool:

@@ -364,10 +364,15 @@ async def stream_session(websocket: WebSocket, sid: str) -> None:
                     )
                 elif door is not None and door.waits(tenant, size, websocket.scope):
                     answer = _refusal(KeyedFirst(), path)  # as the door answers a large body
-                elif text is None:
-                    answer = await _decoded_answer(websocket, session, data, path, output, received)
                 else:
-                    answer = await _answer(session, registry, text, path, output, received)
+                    if text is None:
+                        answer = await _decoded_answer(
+                            websocket, session, data, path, output, received
+                        )
+                    else:
+                        answer = await _answer(session, registry, text, path, output, received)
+                    if door is not None:  # an input, a keyed tenant's work as its POST is
+                        door.worked(tenant)
                 await send.send(answer)
 
     async def writer() -> None:

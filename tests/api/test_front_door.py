@@ -380,3 +380,30 @@ def test_a_keyed_tenants_reads_hold_no_anonymous_input_back(
 def test_what_counts_as_a_keyed_tenants_work(method: str, path: str, work: bool) -> None:
     """Every ``POST`` of openapi.json but the session's creation is work (listed by hand)."""
     assert front.is_work(method, path) is work
+
+
+def test_a_keyed_tenants_stream_input_is_work_as_its_rest_input_is(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A keyed sensor sending its scans over the ``stream`` WebSocket is served as one posting
+    them: once its input is answered, an anonymous large body waits for
+    :data:`~app.http.front.KEYED_GRACE_S` (its next scan is on its way), as after a REST
+    input (:func:`test_a_keyed_tenants_reads_hold_no_anonymous_input_back`). Before, only
+    the WebSocket input's time in the pipeline counted: between a keyed stream's scans every
+    anonymous large body was taken."""
+    from websockets.sync.client import connect
+
+    monkeypatch.setattr(front, "KEYED_GRACE_S", 3600.0)
+    settings = make_settings(access="open", api_keys=f"alpha:{KEY}")
+    with serving(settings) as live, httpx.Client(base_url=live.url, timeout=30) as client:
+        keyed, keyed_token = session(client, KEY)
+        anonymous, anonymous_token = session(client)
+        url = live.url.replace("http://", "ws://") + f"{keyed}/stream"
+        with connect(url, additional_headers=keyed_token) as ws:
+            assert json.loads(ws.recv(timeout=10))["type"] == "ack"
+            ws.send(json.dumps({"type": "tracks", "ref": "scan", **SMALL}))
+            answered = json.loads(ws.recv(timeout=30))
+            assert answered["type"] == "result" and answered["ref"] == "scan", answered
+        refused = client.post(f"{anonymous}/tracks", json=LARGE, headers=anonymous_token)
+        assert refused.status_code == 503, refused.text[:200]
+        assert refused.json()["limit"] == "keyed_tenants_first"

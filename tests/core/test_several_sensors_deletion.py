@@ -118,3 +118,17 @@ def test_false_deletions_per_second_are_at_most_the_slowest_sensors_alone() -> N
     allowed = BETA / 12.0 * span  # the 12 s radar alone: β per scan
     assert deletions(3) > 3.0 * allowed
     assert deletions(4) < allowed
+
+
+def test_the_shift_stays_finite_when_the_revisits_ratio_overflows() -> None:
+    """A slow sensor's revisit of 1e300 s and a fast one's of 1e-10 s (finite scan times the
+    tracker takes): Σ T_max/T_i = 1e310 + 1 overflows a float, but its log does not:
+    −ln(1e300/1e-10 + 1) = −310 ln 10 (to 1e-310 relative), worked with math.log of each
+    factor. The threshold, and the misses it tolerates, are finite (no ∞ cast to an int)."""
+    revisits = np.array([[1e-10, 1e300]])
+    expected = -(math.log(1e300) - math.log(1e-10))  # ln(1 + 1e-310) is 0 in float
+    shift = several_sensors_shift(revisits)
+    assert np.all(np.isfinite(shift))
+    assert shift[0] == pytest.approx(expected, rel=1e-12)
+    drop = -BASE - shift  # 6.9068 + 713.8
+    assert misses_to_delete(drop, MISS).tolist() == [math.ceil((-BASE - expected) / -MISS)]
