@@ -136,7 +136,10 @@ def test_a_flooding_tenant_is_refused_and_a_polite_tenant_is_answered_in_full(
         for answer in refusals:
             assert answer.headers["Content-Type"].startswith("application/problem+json")
             assert int(answer.headers["Retry-After"]) >= 1
-            assert answer.json()["limit"] in (limit, "tenant_inputs_per_second"), answer.text
+            # the flood may meet the tenant's other rates first: 8 connections of 11 KB bodies
+            # answered faster than a thread hop per input reach 2 MiB/s
+            tenant_rates = ("tenant_inputs_per_second", "tenant_body_bytes_per_second")
+            assert answer.json()["limit"] in (limit, *tenant_rates), answer.text
         mine = [a for a in refusals if a.json()["limit"] == limit]
         assert mine and {a.status_code for a in mine} == {status}
         for sid, headers in floods:  # a refused input left nothing in the flood's logs either
