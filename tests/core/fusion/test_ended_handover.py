@@ -266,3 +266,30 @@ def test_track_lists_restarting_after_a_silence_keep_the_fused_id() -> None:
     assert confirmed == {"F1"}, seen
     # the newcomer was shown tentative under its own id before it took the old one
     assert (15.0, "F2", "tentative") in seen and (15.5, "F1", "confirmed") in seen
+
+
+def test_a_track_ended_in_the_step_whose_id_is_taken_is_dropped_not_kept_beside_it() -> None:
+    """At 6 s the confirmed F2 (s1's ``s1-1``, stale) ends in the step that confirms the
+    tentative F3 inside its gate: F3 takes the id F2. The ended row must go with the step
+    (it is the step's only termination): afterwards every id is held by one track, and the
+    picture (``GET …/tracks``: live tracks) shows no terminated track — found by a random
+    search of track-list scenarios, reduced by hand to these reports."""
+    engine = SessionEngine(make_config(["s1", "s2"]))
+    reports = [
+        ("s2", 1.5, [("s2-1", [26.5, 13.2, 0.0, 0.0])]),
+        ("s1", 2.0, [("s1-1", [13.0, 9.3, 0.0, 0.0])]),
+        ("s1", 3.0, [("s1-1", [23.0, 4.8, 0.0, 0.0])]),
+        ("s2", 3.5, [("s2-3", [37.6, 7.0, 0.0, 0.0])]),
+        ("s1", 4.0, [("s1-2", [52.4, 6.2, 0.0, 0.0])]),
+        ("s1", 5.0, []),
+        ("s1", 6.0, [("s1-3", [52.5, 8.8, 0.0, 0.0])]),
+    ]
+    for sensor, t, tracks in reports:
+        step = engine.apply(report(sensor, t, *tracks))
+    assert sorted(step.tracks.ids) == ["F1", "F2"]  # F2 handed over: shown once
+    ids = [track.id for track in engine.tracks]
+    assert sorted(ids) == ["F1", "F2"], ids
+    picture = [(view.id, view.status.value) for view in engine.picture()]
+    assert sorted(picture) == [("F1", "confirmed"), ("F2", "confirmed")], picture
+    exported = [track["id"] for track in engine.export()["tracks"]]
+    assert sorted(exported) == ["F1", "F2"], exported
