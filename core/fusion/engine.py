@@ -1040,8 +1040,9 @@ class SessionEngine:
             strict=True,
         ):
             self.tracks[row].remember(self.time, plain)
-        if len(terminated):
-            self._keep(rows.alive)
+        alive = rows.alive
+        if len(alive) < len(status):  # terminated rows, those whose id was handed over included
+            self._keep(alive)
         association = AssociationView(
             method=decision.method,
             pairs=tuple(
