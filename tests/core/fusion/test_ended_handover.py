@@ -293,3 +293,54 @@ def test_a_track_ended_in_the_step_whose_id_is_taken_is_dropped_not_kept_beside_
     assert sorted(picture) == [("F1", "confirmed"), ("F2", "confirmed")], picture
     exported = [track["id"] for track in engine.export()["tracks"]]
     assert sorted(exported) == ["F1", "F2"], exported
+
+
+def _restored_with_ended(ended: object) -> SessionEngine:
+    """The engine of test_export_restore… cut at step 12 (F2 live, F1 ended and remembered,
+    next number 3), its export's ``ended`` replaced by ``ended``."""
+    measured = scans(13, seed=3)
+    for k in range(8, 13):
+        measured[k] = np.delete(measured[k], 0, axis=0)
+    config = session(detecting("a"), detecting("b"))
+    engine = SessionEngine(config)
+    for k, z in enumerate(measured):
+        engine.apply_detections(DetectionReport("ab"[k % 2], float(k), z))
+    exported = json.loads(json.dumps(engine.export()))
+    assert [track["id"] for track in exported["tracks"]] == ["F2"]
+    assert [entry["id"] for entry in exported["ended"]] == ["F1"]
+    assert exported["next_number"] == 3 and exported["time"] == 12.0
+    return SessionEngine.restore(config, exported | {"ended": ended})
+
+
+GOOD = {"id": "F1", "time": 11.0, "state": [0.0] * 4, "covariance": np.eye(4).tolist()}
+
+
+@pytest.mark.parametrize(
+    "entries",
+    [
+        pytest.param([GOOD | {"history": []}, GOOD | {"history": []}], id="the same id twice"),
+        pytest.param([GOOD | {"id": "F2", "history": []}], id="a live track's id"),
+        pytest.param([GOOD | {"id": "F7", "history": []}], id="a number not given yet"),
+        pytest.param([GOOD | {"id": "X1", "history": []}], id="not an F id"),
+        pytest.param([GOOD | {"time": 13.0, "history": []}], id="ended after the fusion time"),
+        pytest.param([GOOD | {"history": [[10.0, [float("nan")] * 4]]}], id="history nan"),
+        pytest.param([GOOD | {"history": [[10.0, [0.0] * 3]]}], id="history dimension"),
+        pytest.param([GOOD | {"history": [[10.0, [0.0] * 4]] * 101}], id="history too long"),
+        pytest.param([GOOD], id="no history"),
+        pytest.param([GOOD | {"history": [], "state": "0"}], id="state a string"),
+        pytest.param([["F1", 11.0]], id="an entry not an object"),
+        pytest.param({"F1": GOOD}, id="not a list"),
+    ],
+)
+def test_a_hostile_ended_entry_is_refused_as_invalid_input(entries: object) -> None:
+    """Each would hand an id out twice, hand out one still in use or one a later track gets
+    (its number not given yet), keep a track forever (ended in the future: never older than
+    the memory), show a NaN or misshapen history, or is not the export's shape at all: an
+    InvalidInput naming the ended tracks, not a KeyError or TypeError (a 500)."""
+    with pytest.raises(InvalidInput, match="ended track"):
+        _restored_with_ended(entries)
+
+
+def test_a_good_ended_entry_still_restores() -> None:
+    engine = _restored_with_ended([GOOD | {"history": [[10.0, [0.0] * 4]]}])
+    assert [entry.id for entry in engine.ended] == ["F1"]
