@@ -241,7 +241,8 @@ def test_a_bad_ended_track_in_an_export_is_refused_by_name() -> None:
     with pytest.raises(InvalidInput, match="ended track 'F3'"):
         SessionEngine.restore(config, exported | {"ended": [entry]})
     good = entry | {"state": [0.0] * 4, "covariance": np.eye(4).tolist()}
-    assert SessionEngine.restore(config, exported | {"ended": [good]}).ended[0].number == 3
+    numbered = exported | {"ended": [good], "next_number": 4}  # F3 was given out
+    assert SessionEngine.restore(config, numbered).ended[0].number == 3
 
 
 def test_track_lists_restarting_after_a_silence_keep_the_fused_id() -> None:
