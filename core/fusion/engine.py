@@ -822,7 +822,8 @@ class SessionEngine:
         pair is handed over only if it is its newcomer's only gated pair and its ended
         track's: a newcomer that could be either of two ended tracks (or a live track's
         duplicate), an ended track that two newcomers could be (or whose grown gate holds
-        a live track), keeps its new id.
+        a live track), keeps its new id; so does a newcomer shown before its ended track
+        ended (another object beside it, no restart).
         """
         assert self.time is not None
         time = self.time
@@ -879,6 +880,16 @@ class SessionEngine:
             (states[split:], covariances[split:]),
             self.config.management.gate_probability,
         )
+        # a newcomer shown before its ended track ended was another object beside it, no
+        # restart of it (its first shown time: none yet for one started in this step)
+        since = np.array(
+            [
+                self.tracks[row].history[0][0] if self.tracks[row].history else math.inf
+                for row in newcomers[incoming].tolist()
+            ]
+        )
+        after = since > np.array([remembered[k][0].time for k in known.tolist()])
+        known, incoming = known[after], incoming[after]
         if len(known) == 0:
             return set()
         numbers = self._rows.rows.numbers.copy()

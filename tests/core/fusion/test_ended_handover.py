@@ -318,7 +318,8 @@ def test_a_newcomer_shown_beside_a_track_while_it_lived_does_not_take_its_id() -
     beside = {track for step in steps[3:6] for track in step.tracks.ids}
     assert beside == {"F1", "F2", "F3"}
     last = steps[-1]
-    shown = dict(zip(last.tracks.ids, (status.value for status in last.tracks.statuses)))
+    statuses = [status.value for status in last.tracks.statuses]
+    shown = dict(zip(last.tracks.ids, statuses, strict=True))
     assert shown == {"F1": "confirmed", "F2": "terminated", "F3": "confirmed"}, shown
     named = [known for known, *_ in last.association.pairs] + list(last.association.missed)
     assert len(named) == len(set(named)), last.association
