@@ -882,13 +882,13 @@ class SessionEngine:
         )
         # a newcomer shown before its ended track ended was another object beside it, no
         # restart of it (its first shown time: none yet for one started in this step)
-        since = np.array(
+        first_shown = np.array(
             [
                 self.tracks[row].history[0][0] if self.tracks[row].history else math.inf
                 for row in newcomers[incoming].tolist()
             ]
         )
-        after = since > np.array([remembered[k][0].time for k in known.tolist()])
+        after = first_shown > np.array([remembered[k][0].time for k in known.tolist()])
         known, incoming = known[after], incoming[after]
         if len(known) == 0:
             return set()
