@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections import Counter
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -821,7 +822,8 @@ class SessionEngine:
         pair is handed over only if it is its newcomer's only gated pair and its ended
         track's: a newcomer that could be either of two ended tracks (or a live track's
         duplicate), an ended track that two newcomers could be (or whose grown gate holds
-        a live track), keeps its new id.
+        a live track), keeps its new id; so does a newcomer shown before its ended track
+        ended (another object beside it, no restart).
         """
         assert self.time is not None
         time = self.time
@@ -878,6 +880,16 @@ class SessionEngine:
             (states[split:], covariances[split:]),
             self.config.management.gate_probability,
         )
+        # a newcomer shown before its ended track ended was another object beside it, no
+        # restart of it (its first shown time: none yet for one started in this step)
+        first_shown = np.array(
+            [
+                self.tracks[row].history[0][0] if self.tracks[row].history else math.inf
+                for row in newcomers[incoming].tolist()
+            ]
+        )
+        after = first_shown > np.array([remembered[k][0].time for k in known.tolist()])
+        known, incoming = known[after], incoming[after]
         if len(known) == 0:
             return set()
         numbers = self._rows.rows.numbers.copy()
@@ -1040,8 +1052,9 @@ class SessionEngine:
             strict=True,
         ):
             self.tracks[row].remember(self.time, plain)
-        if len(terminated):
-            self._keep(rows.alive)
+        alive = rows.alive
+        if len(alive) < len(status):  # terminated rows, those whose id was handed over included
+            self._keep(alive)
         association = AssociationView(
             method=decision.method,
             pairs=tuple(
@@ -1205,7 +1218,13 @@ class SessionEngine:
                 table.write(np.array([row]), sensor, state_[None], covariance[None], time)
             tracks.append(track)
         engine.tracks = tracks
-        engine.ended = _plain_ended(state.get("ended", []), config.dim)
+        engine.ended = _plain_ended(
+            state.get("ended", []),
+            config.dim,
+            {track.id for track in tracks},
+            engine.next_number,
+            engine.time,
+        )
         engine._rows.rows = TrackRows(
             np.array([track.number for track in tracks], dtype=np.int64),
             _plain_lives(plain_tracks),
@@ -1264,18 +1283,49 @@ def _is_live(status: IntArray) -> BoolArray:
     return live
 
 
-def _plain_ended(plain: list[dict[str, Any]], dim: int) -> tuple[EndedTrack, ...]:
-    """The remembered ended tracks of an export (§8.15), each estimate checked."""
-    ended = tuple(EndedTrack.from_plain(entry) for entry in plain)
+def _plain_ended(
+    plain: object, dim: int, live: set[str], next_number: int, time: float | None
+) -> tuple[EndedTrack, ...]:
+    """The remembered ended tracks of an export (§8.15), each checked: its id ``F<n>`` once,
+    not a live track's and numbered below ``next_number`` (never handed out twice, nor an
+    id a track holds or is yet to get), ended at a finite time not after the fusion time,
+    its state (dim,), covariance (dim, dim) and history (at most
+    :data:`~core.fusion.track.HISTORY_LENGTH` states (dim,)) finite."""
+    if not isinstance(plain, list):
+        raise InvalidInput("exported ended tracks: need a list")
+    ended = []
+    for entry_plain in plain:
+        try:
+            entry = EndedTrack.from_plain(entry_plain)
+        except (KeyError, TypeError, ValueError):
+            name = entry_plain.get("id") if isinstance(entry_plain, dict) else None
+            raise InvalidInput(
+                f"exported ended track {name!r}: needs id, time, state, covariance, history"
+            ) from None
+        ended.append(entry)
+    seen: set[str] = set()
     for entry in ended:
         shapes = entry.state.shape == (dim,) and entry.covariance.shape == (dim, dim)
         finite = shapes and np.isfinite(entry.state).all() and np.isfinite(entry.covariance).all()
-        if not (finite and math.isfinite(entry.time) and entry.id[1:].isdigit()):
+        history = len(entry.history) <= HISTORY_LENGTH and all(
+            len(state) == dim and math.isfinite(at) and all(map(math.isfinite, state))
+            for at, state in entry.history
+        )
+        numbered = _ENDED_ID.fullmatch(entry.id) is not None and entry.number < next_number
+        when = math.isfinite(entry.time) and (time is None or entry.time <= time)
+        if not (finite and history and when and numbered) or entry.id in seen | live:
             raise InvalidInput(
-                f"exported ended track {entry.id!r}: needs an id F<n>, a finite time, state "
-                f"({dim},) and covariance ({dim}, {dim})"
+                f"exported ended track {entry.id!r}: needs an id F<n> below next_number, "
+                f"held by no track and no other ended track, a finite time not after the "
+                f"fusion time, state ({dim},), covariance ({dim}, {dim}) and at most "
+                f"{HISTORY_LENGTH} finite history states ({dim},)"
             )
-    return ended
+        seen.add(entry.id)
+    return tuple(ended)
+
+
+_ENDED_ID = re.compile(r"F[1-9][0-9]*", re.ASCII)
+"""A fused id (:meth:`SessionEngine._start` numbers them from 1)."""
 
 
 def _replaced_life(life: LifeState, rows: IntArray, by: LifeState) -> LifeState:
