@@ -663,11 +663,20 @@ def score(scene: Scene, run: Run, with_siap: bool) -> Score:
 
 
 def siap_metrics(scene: Scene, run: Run) -> dict[str, float]:
-    """Stone Soup's SIAP over tracks rebuilt from the run's per-scan estimates."""
-    tracks: dict[str, Track] = {}
-    for (when, _), estimates in zip(scene.scans, run.estimates, strict=True):
+    """Stone Soup's SIAP over tracks rebuilt from the run's per-scan estimates. An id that
+    skips scans (a fused id handed back after a restart, docs/algorithms.md §8.15) is one
+    Stone Soup track per unbroken run of scans: SIAP's accuracy looks a track up at every
+    time of its association interval, gaps included (C, S and PA do not read ids)."""
+    tracks: dict[tuple[str, int], Track] = {}
+    last_scan: dict[str, int] = {}
+    runs: dict[str, int] = {}
+    for scan, ((when, _), estimates) in enumerate(zip(scene.scans, run.estimates, strict=True)):
         for track_id, state in estimates:
-            tracks.setdefault(track_id, Track(id=track_id)).append(
+            if last_scan.get(track_id, scan - 1) != scan - 1:
+                runs[track_id] = runs.get(track_id, 0) + 1
+            last_scan[track_id] = scan
+            key = (track_id, runs.get(track_id, 0))
+            tracks.setdefault(key, Track(id=f"{track_id}#{key[1]}")).append(
                 State(state.reshape(-1, 1), timestamp=when)
             )
     manager = MultiManager(

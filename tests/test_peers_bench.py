@@ -82,3 +82,27 @@ def test_fused_sensors_are_better_than_each_sensor_alone() -> None:
     # Seen: alone 19.9 / 32.7 / 27.6, fused 15.9.
     assert fused.gospa < min(result.gospa for result in alone)
     assert fused.localisation < min(result.localisation for result in alone)
+
+
+def test_siap_of_an_id_that_skips_scans() -> None:
+    """A fused id handed back after a restart (docs/algorithms.md §8.15) skips scans; Stone
+    Soup's SIAP looks a track up at every time of its association, so the bench scores each
+    unbroken run of an id as its own track. Estimates exactly on one truth, its id absent at
+    scans 4 and 5: position accuracy 0, completeness = the scans held / the scans that truth
+    exists among all truths' (worked from the scene's own truth table), no error."""
+    peers = load_bench("peers")
+    scene = peers.simulated_scene("gap", 2, 12, seed=1)
+    path = scene.truths[0]
+    estimates = []
+    held = 0
+    for scan, (when, _) in enumerate(scene.scans):
+        here = path[0].timestamp <= when <= path[-1].timestamp and scan not in (4, 5)
+        state = path[when].state_vector if here else None
+        held += here
+        estimates.append([("F1", state.ravel().astype(float))] if here else [])
+    run = peers.Run("gapped", estimates, [0.0] * len(estimates))
+    siap = peers.siap_metrics(scene, run)
+    assert siap["position"] == pytest.approx(0.0, abs=1e-9)
+    truth_scans = sum(len(scene.truth_states(when)) for when, _ in scene.scans)
+    assert siap["completeness"] == pytest.approx(held / truth_scans)
+    assert siap["spuriousness"] == pytest.approx(0.0)
