@@ -305,6 +305,11 @@ class LifeCycleConfig:
         ``max_distance / min_speed`` seconds ([HZ] §5.1).
     phantoms : the blind-zone strategy on (default) or off (a hidden track then
         coasts and is terminated by score or gate emptiness).
+    gate_visibility : a track is seen by a sensor, and in a blind zone or out of range,
+        by its gate, and its miss scores ``ln(p_region − P_D p)`` with p the probability
+        that the sensor sees its predicted position (docs/algorithms.md §8.14; default).
+        The paper profile: off, [HZ] §2.1's test at the predicted position, a miss
+        ln(1 − P_D).
     """
 
     false_confirmation: float = DEFAULT_ALPHA
@@ -322,6 +327,7 @@ class LifeCycleConfig:
     phantom_max_distance: float = 500.0
     phantom_min_speed: float = 1.0
     phantoms: bool = True
+    gate_visibility: bool = True
 
     @classmethod
     def paper(cls, dim: int = 2, **options: Any) -> LifeCycleConfig:
@@ -337,6 +343,7 @@ class LifeCycleConfig:
             "min_points": None,
             "initiation_hits": 0,
             "hit_evidence": False,
+            "gate_visibility": False,
         }
         settings.update(options)
         if "score_ceiling" not in options:
@@ -611,7 +618,8 @@ class Evidence:
     hit_increment : ΔL of that hit (read only where ``detected``).
     seen : the step's sensor should have seen the track (in its field of view,
         not occluded): not detected, it is a miss.
-    miss_increment : ΔL of a miss, ln(1 − P_D).
+    miss_increment : ΔL of a miss, ln(1 − P_D), or one per track (ln(p_region − P_D p),
+        docs/algorithms.md §8.14).
     gate_log_det : log|S| of each track's gate on the position components (read
         only on a coasting miss, for A_G).
     gate_dim : the number of position components.
@@ -637,7 +645,7 @@ class Evidence:
     detected: BoolArray
     hit_increment: FloatArray
     seen: BoolArray
-    miss_increment: float
+    miss_increment: float | FloatArray
     gate_log_det: FloatArray
     gate_dim: int
     visibility: IntArray

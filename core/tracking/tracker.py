@@ -96,8 +96,8 @@ from core.lifecycle import (
 from core.models.measurement import MeasurementModel, Polar
 from core.pipeline.evidence import (
     coasting_misses,
-    gate_coverage,
     hits,
+    look,
     seen_by,
     sensor_miss_runs,
 )
@@ -391,6 +391,13 @@ class LocalTracker:
         combined = self.classifier.combine(self._classes.select(rows), dense[detections])
         self._classes = self._classes.replace(rows, combined)
 
+    def _position_covariances(self, prediction: IMMPrediction) -> FloatArray:
+        """HPHᵀ of each row's model-combined prediction: the covariance of its predicted
+        position, without the measurement noise (docs/algorithms.md §8.14)."""
+        _, covariance = prediction.combined()
+        matrix = self.bank.measurement.matrix
+        return np.asarray(matrix @ covariance @ matrix.T, dtype=np.float64)
+
     def checkpoint(self) -> dict[str, Any]:
         """The state as it is, for :meth:`rollback` (references: no array is changed in place)."""
         return dict(self.__dict__)
@@ -436,17 +443,23 @@ class LocalTracker:
         positions, gates = prediction.combined_measurement()
         before = self._rows.life
         status = before.status
-        # §8.11: a track is in a blind zone when no sensor sees any of its gate
-        codes, gate_seen = gate_coverage(self._coverage, positions, gates, self._visibility_gate)
-        seen, hidden = seen_by(
+        column = self._column = self.config.sensors.index(sensor_name)
+        # §8.14: seen, missed or hidden by its gate, a miss weighed by the probability that
+        # the sensor sees the predicted position N(x̂, HPHᵀ)
+        sight = look(
+            self._coverage,
             self._views[sensor_name],
+            self._volumes.get(sensor_name),
             positions,
+            self._position_covariances(prediction)
+            if self.config.life_cycle.gate_visibility
+            else None,
             status,
             self.config.life_cycle.occlusion_radius,
-            self._volumes.get(sensor_name),
+            score.p_detect,
+            self._visibility_gate,
         )
-        column = self._column = self.config.sensors.index(sensor_name)
-        seen = seen | gate_seen[column]
+        codes, seen, hidden = sight.codes, sight.seen, sight.hidden
         births = self._shared_births(column, z, elapsed, score.p_detect)
         counted = seen & self._carried(column, status)
         candidates = np.flatnonzero((status != PHANTOM) & self._can_be_hit(prediction, score))
@@ -494,7 +507,7 @@ class LocalTracker:
                 detected=detected,
                 hit_increment=gain,
                 seen=counted,
-                miss_increment=score.miss_increment,
+                miss_increment=sight.miss_increment,
                 # log|S|: A_G of the tracks that coast through a miss
                 gate_log_det=(
                     np.linalg.slogdet(gates)[1]
