@@ -1,6 +1,7 @@
 """A track is in a blind zone only when no sensor sees any of its gate (docs/algorithms.md
-§8.11): a 3-D track predicted a little under a radar's horizon, its gate reaching above it,
-is visible — and then a miss of the radar that sees its gate — not a phantom.
+§8.11, §8.14): a 3-D track predicted a little under a radar's horizon, its gate reaching above
+it, is visible — and then a miss of the radar that sees its gate — not a phantom; planar views
+alike (the papers' profile keeps the test at the predicted position).
 
 Oracle: the 4/3-Earth horizon worked by hand. An antenna 150 m up sees a target at ground
 distance d when d ≤ 4121.81 m (√150 + √h_t), h_t the target's height above the sphere
@@ -16,7 +17,7 @@ import numpy as np
 from scipy.stats import chi2
 
 from core.geometry import Coverage, Sector, Visibility
-from core.pipeline.evidence import gate_coverage
+from core.pipeline.evidence import coverage_look, look
 from core.volume import RadarVolume
 
 EARTH, HEIGHT, DISTANCE = 6_371_000.0, 150.0, 60_000.0
@@ -43,28 +44,42 @@ def test_the_hand_worked_height_the_horizon_needs_at_60_km() -> None:
     assert not radar.contains(_at_height(NEEDED - 0.1))[0]
 
 
+def _sees(coverage: Coverage, position: np.ndarray, spread: np.ndarray) -> tuple[list[int], bool]:
+    codes, _ = coverage_look(coverage, position, spread, GATE)
+    sight = look(
+        coverage, None, coverage.volumes[0], position, spread, np.zeros(1, int), 0.0, 0.9, GATE
+    )
+    return codes.tolist(), bool(sight.seen[0])
+
+
 def test_a_track_whose_gate_reaches_over_the_horizon_is_seen_not_hidden() -> None:
     # at the surface (h_t = 0), under the horizon; σ_z 30 m: its gate reaches 4.03 σ = 121 m up
     position = _at_height(0.0)
     wide = np.diag([200.0**2, 200.0**2, 30.0**2])[None]
-    codes, sees = gate_coverage(_coverage(), position, wide, GATE)
-    assert codes.tolist() == [int(Visibility.VISIBLE)] and sees.tolist() == [[True]]
+    assert _sees(_coverage(), position, wide) == ([int(Visibility.VISIBLE)], True)
     # σ 1 m: its gate stays within 4 m of the surface, under the 5.33 m the horizon needs
     narrow = np.eye(3)[None]
-    codes, sees = gate_coverage(_coverage(), position, narrow, GATE)
-    assert codes.tolist() == [int(Visibility.BLIND_ZONE)] and sees.tolist() == [[False]]
-    # a position the radar sees is left to the plain test (no gate looked at)
-    codes, sees = gate_coverage(_coverage(), _at_height(50.0), narrow, GATE)
-    assert codes.tolist() == [int(Visibility.VISIBLE)] and sees.tolist() == [[False]]
+    assert _sees(_coverage(), position, narrow) == ([int(Visibility.BLIND_ZONE)], False)
+    # a position the radar sees is seen
+    assert _sees(_coverage(), _at_height(50.0), narrow) == ([int(Visibility.VISIBLE)], True)
 
 
-def test_planar_coverages_are_the_plain_test() -> None:
-    """Fields of view without volumes (the papers' 2-D scenes) keep the test at the
-    predicted position: a blind zone's edge there is the paper's."""
+def test_planar_views_are_judged_by_the_gate_too_and_the_papers_at_the_position() -> None:
+    """A sector's range edge: 200 m out with σ 100 m across, the gate (4.03 σ) reaches in:
+    visible and seen; 500 m out it does not: out of range. Without a covariance (the paper
+    profile) the first is out of range already: [HZ]'s test at the predicted position."""
     sector = Sector(
         origin=(0.0, 0.0), heading_deg=0.0, half_angle_deg=30.0, range_min=0.0, range_max=1000.0
     )
     coverage = Coverage((sector,))
-    outside = np.array([[1200.0, 0.0, 0.0]])  # 3 coordinates, planar views: no gate test
-    codes, sees = gate_coverage(coverage, outside, (1e8 * np.eye(3))[None], GATE)
-    assert codes.tolist() != [int(Visibility.VISIBLE)] and not sees.any()
+    spread = (1e4 * np.eye(3))[None]
+    for distance, code, seen in (
+        (1200.0, Visibility.VISIBLE, True),
+        (1500.0, Visibility.OUT_OF_RANGE, False),
+    ):
+        position = np.array([[distance, 0.0, 0.0]])
+        codes, _ = coverage_look(coverage, position, spread, GATE)
+        sight = look(coverage, sector, None, position, spread, np.zeros(1, int), 0.0, 0.9, GATE)
+        assert codes.tolist() == [int(code)] and sight.seen.tolist() == [seen]
+    codes, _ = coverage_look(coverage, np.array([[1200.0, 0.0, 0.0]]), None, GATE)
+    assert codes.tolist() == [int(Visibility.OUT_OF_RANGE)]
