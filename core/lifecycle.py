@@ -705,7 +705,8 @@ def advance(
     """One step of the life cycle of every track; returns the new state and the newly confirmed.
 
     1. score: a hit adds its ΔL, a miss (seen, not detected, not a phantom)
-       ln(1 − P_D) and one to the track's misses in a row; clamped at
+       its ``miss_increment`` (ln(1 − P_D); by default ln(p_region − P_D p),
+       docs/algorithms.md §8.14) and one to the track's misses in a row; clamped at
        :attr:`LifeCycleConfig.score_ceiling`; an established track ``vouched`` for
        by another sensor not below the delete threshold;
     2. a coasting track that is hit is confirmed again (``reacquired``); a

@@ -3,7 +3,8 @@
 A step's assembly hands :func:`core.lifecycle.advance` an
 :class:`~core.lifecycle.Evidence`: which rows were hit and the ΔL of each
 hit ([MTT] §4.3, eq 16), which ones the step's sensor should have seen (in
-its field of view, not occluded: [HZ] §2.1), the coverage code of each
+its field of view, not occluded: [HZ] §2.1; by default by their gate) and
+the ΔL of their miss (ln(p_region − P_D p), §8.14), the coverage code of each
 ([HZ] §5.1), and log|S| of the established rows that miss (their gate
 volume A_G, [HZ] §4.2). Both layers build it with these functions.
 """
