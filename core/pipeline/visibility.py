@@ -87,10 +87,10 @@ def _polygon(polygon: PolygonView, plane: FloatArray, covariances: FloatArray) -
     turn = 1.0 if area > 0.0 else -1.0
     edge = along[closest]
     inward = turn * np.stack([-edge[:, 1], edge[:, 0]], axis=1) / np.sqrt(length2[closest])[:, None]
-    inside = polygon.contains(plane)
-    sign = np.where(inside, 1.0, -1.0)
-    # from x̂ to the boundary's nearest point, turned inward (the edge's normal on it)
-    direction, distance = _unit(-sign[:, None] * away[rows, closest], inward)
+    sign = np.where(polygon.contains(plane), 1.0, -1.0)
+    # across: the line from x̂ to the boundary's nearest point (the edge's normal when x̂ is
+    # on it); only nᵀPn is read, whatever the sense of n
+    direction, distance = _unit(away[rows, closest], inward)
     return _edge(sign * distance, direction, covariances)
 
 
