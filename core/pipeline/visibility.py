@@ -115,6 +115,9 @@ def _volume(
     if volume.range_max is not None:
         probability = np.minimum(probability, _edge(volume.range_max - slant, -radial, turned))
     if reach:
+        if volume.antenna_height is not None:
+            # no target is under the surface the horizon lies on: h_t ≥ 0
+            probability = np.minimum(probability, _surface(volume, local, turned))
         return probability
     east, north, height = local.T
     flat = np.stack([east, north, np.zeros(count)], axis=1)
@@ -134,6 +137,15 @@ def _volume(
     if volume.antenna_height is not None:
         probability = np.minimum(probability, _horizon(volume, local, turned, across, ground))
     return probability
+
+
+def _surface(volume: RadarVolume, local: FloatArray, covariances: FloatArray) -> FloatArray:
+    """The surface ``h_t ≥ 0`` as a limit: Φ(h_t / σ) across it (∇h_t, the local vertical)."""
+    assert volume.antenna_height is not None
+    east, north, up = local.T
+    toward_centre = np.stack([east, north, EARTH_RADIUS + volume.antenna_height + up], axis=1)
+    vertical = toward_centre / np.linalg.norm(toward_centre, axis=1)[:, None]
+    return _edge(volume.height(local), vertical, covariances)
 
 
 def _horizon(

@@ -168,6 +168,22 @@ def test_a_radar_volume_against_monte_carlo(
     assert abs(p - expected) <= _tolerance(expected) + 0.005
 
 
+@pytest.mark.parametrize(("height", "seed"), [(-30.0, 21), (0.0, 22), (25.0, 23), (60.0, 24)])
+def test_a_radars_region_ends_at_the_surface_against_monte_carlo(height: float, seed: int) -> None:
+    """The region a radar contributes (``reach``): its slant range, and above the surface its
+    horizon lies on (h_t ≥ 0: no target flies under it), against Monte Carlo of both tests."""
+
+    def region(points: np.ndarray) -> np.ndarray:
+        local = VOLUME.local(points)
+        return np.asarray(VOLUME.in_range(points) & (VOLUME.height(local) >= 0.0))
+
+    mean = np.array(_at(40_000.0, height))
+    covariance = np.diag([150.0**2, 150.0**2, 40.0**2])
+    expected = _monte_carlo(region, mean, covariance, seed)
+    p = inside_probability(None, VOLUME, mean[None], covariance[None], reach=True)[0]
+    assert abs(p - expected) <= _tolerance(expected) + 0.005
+
+
 def test_on_the_hand_worked_horizon_p_is_one_half() -> None:
     """At 60 km an antenna 150 m up sees down to h_t = (60000/4121.81 − √150)² = 5.33 m (the
     4/3-Earth horizon by hand): a track predicted there is on the edge, p = Φ(0)."""
