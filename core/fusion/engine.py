@@ -569,6 +569,7 @@ class SessionEngine:
                 management.occlusion_radius,
                 sensor.p_detect,
                 gate,
+                life.misses[at] > 0 if by_gate else None,
             )
             seen[at], hidden[at], miss_increment[at] = (
                 sight.seen,
@@ -593,6 +594,7 @@ class SessionEngine:
             fused_states[:, position],
             fused_covariances[:, position][:, :, position] if by_gate else None,
             gate,
+            life.misses > 0 if by_gate else None,
         )
         after, confirmed = advance(
             management,

@@ -100,14 +100,20 @@ class Look:
 
 
 def coverage_look(
-    coverage: Coverage, positions: FloatArray, covariances: FloatArray | None, gate: float
+    coverage: Coverage,
+    positions: FloatArray,
+    covariances: FloatArray | None,
+    gate: float,
+    missed: BoolArray | None = None,
 ) -> tuple[IntArray, FloatArray]:
     """The :class:`~core.geometry.Visibility` code of each row at ``positions`` (n, q), P =
     ``covariances`` on them, and p_region, the probability that it lies in the surveillance
     region (docs/algorithms.md §8.14).
 
     Visible where some sensor sees its gate of ``gate`` (on D: p ≥ Φ(−√γ) for a straight
-    edge), else a blind zone where the region holds its gate, else out of range. p_region:
+    edge), else a blind zone where the region holds its gate, else out of range; a row
+    ``missed`` at its latest scan is judged at p ≥ ½ instead (missed again where no sensor
+    sees it more likely than not, it is more likely hidden, or gone, than missed). p_region:
     the explicit region's p, or the largest of the sensors' ranges' (1 where a sensor sees
     everywhere). ``covariances`` None: the papers' test at the predicted position
     (:meth:`Coverage.visibility <core.geometry.Coverage.visibility>`).
@@ -134,10 +140,13 @@ def coverage_look(
             volume = _volume_of(coverage, index)
             reach = inside_probability(view, volume, positions, covariances, reach=True)
             region = np.maximum(region, reach)
+    # a row missed at its latest scan is judged at p = ½ (for a straight edge: its predicted
+    # position): missed again, it is more likely hidden, or gone, than seen and missed
+    limit = threshold if missed is None else np.where(missed, 0.5, threshold)
     codes = np.where(
-        sees >= threshold,
+        sees >= limit,
         int(Visibility.VISIBLE),
-        np.where(region >= threshold, int(Visibility.BLIND_ZONE), int(Visibility.OUT_OF_RANGE)),
+        np.where(region >= limit, int(Visibility.BLIND_ZONE), int(Visibility.OUT_OF_RANGE)),
     )
     return np.asarray(codes, dtype=np.int64), region
 
@@ -152,6 +161,7 @@ def look(
     radius: float,
     p_detect: float,
     gate: float,
+    missed: BoolArray | None = None,
 ) -> Look:
     """What a step's sensor (its field of view ``view`` and volume ``volume``) sees of each
     row at ``positions`` (n, q), P = ``covariances`` on them (docs/algorithms.md §8.14).
@@ -163,7 +173,9 @@ def look(
     against no target (a false track is never detected). ``covariances`` None: the papers'
     test at the predicted position (p and p_region 0 or 1, a miss ln(1 − P_D)). The
     occluders are the established rows (``status``); planar views look at the first two
-    components; with fewer than two there is no plane and every row is seen.
+    components; with fewer than two there is no plane and every row is seen. ``missed``:
+    the rows missed at their latest scan (:func:`coverage_look`; a row it hides is not
+    seen).
     """
     count = len(positions)
     if positions.shape[1] < 2 or count == 0:
@@ -171,9 +183,9 @@ def look(
         miss = np.full(count, math.log1p(-p_detect))
         return Look(codes, seen, hidden, miss, np.ones(count))
     probability = inside_probability(view, volume, positions, covariances)
-    codes, region = coverage_look(coverage, positions, covariances, gate)
+    codes, region = coverage_look(coverage, positions, covariances, gate, missed)
     region = np.maximum(region, probability)
-    seen = probability >= _threshold(gate)
+    seen = (probability >= _threshold(gate)) & (codes == Visibility.VISIBLE)
     hidden = np.zeros(count, dtype=bool)
     if radius > 0.0 and isinstance(view, Sector):
         plane = positions[:, :2]

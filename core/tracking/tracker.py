@@ -458,6 +458,7 @@ class LocalTracker:
             self.config.life_cycle.occlusion_radius,
             score.p_detect,
             self._visibility_gate,
+            before.misses > 0 if self.config.life_cycle.gate_visibility else None,
         )
         codes, seen, hidden = sight.codes, sight.seen, sight.hidden
         births = self._shared_births(column, z, elapsed, score.p_detect)

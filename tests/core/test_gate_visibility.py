@@ -16,7 +16,7 @@ import math
 import numpy as np
 from scipy.stats import chi2
 
-from core.geometry import Coverage, Sector, Visibility
+from core.geometry import Coverage, PolygonView, Sector, Visibility
 from core.pipeline.evidence import coverage_look, look
 from core.volume import RadarVolume
 
@@ -83,3 +83,31 @@ def test_planar_views_are_judged_by_the_gate_too_and_the_papers_at_the_position(
         assert codes.tolist() == [int(code)] and sight.seen.tolist() == [seen]
     codes, _ = coverage_look(coverage, np.array([[1200.0, 0.0, 0.0]]), None, GATE)
     assert codes.tolist() == [int(Visibility.OUT_OF_RANGE)]
+
+
+def test_a_row_missed_at_its_latest_scan_is_judged_at_one_half() -> None:
+    """View: the half x ≤ 500 of a square region; σ_x 40 m. 21 m outside the half, p =
+    Φ(−21/40) = 0.30 (by hand): its gate reaches in, visible; missed at its latest scan as
+    well, it is more likely hidden than missed again: a blind zone of the square, and out of
+    range when the half is all the region. 21 m inside (p = 0.70) it stays visible."""
+    square = PolygonView(((0.0, 0.0), (1000.0, 0.0), (1000.0, 1000.0), (0.0, 1000.0)))
+    half = PolygonView(((0.0, 0.0), (500.0, 0.0), (500.0, 1000.0), (0.0, 1000.0)))
+    positions = np.array([[521.0, 500.0], [479.0, 500.0]])
+    spread = np.repeat(np.diag([40.0**2, 30.0**2])[None], 2, axis=0)
+    p = 0.5 * (1.0 + math.erf(-21.0 / 40.0 / math.sqrt(2.0)))
+    assert 0.29 < p < 0.31
+    gate = float(chi2.ppf(0.999, 2))
+    visible, blind, out = (
+        int(Visibility.VISIBLE),
+        int(Visibility.BLIND_ZONE),
+        int(Visibility.OUT_OF_RANGE),
+    )
+    region = Coverage((half,), region=square)
+    fresh, missed = np.zeros(2, dtype=bool), np.ones(2, dtype=bool)
+    assert coverage_look(region, positions, spread, gate, fresh)[0].tolist() == [visible] * 2
+    assert coverage_look(region, positions, spread, gate, missed)[0].tolist() == [blind, visible]
+    alone = Coverage((half,))
+    assert coverage_look(alone, positions, spread, gate, missed)[0].tolist() == [out, visible]
+    status = np.zeros(2, dtype=np.int64)
+    sight = look(region, half, None, positions, spread, status, 0.0, 0.9, gate, missed)
+    assert sight.seen.tolist() == [False, True]  # hidden: not a miss
