@@ -458,7 +458,10 @@ class LocalTracker:
             self.config.life_cycle.occlusion_radius,
             score.p_detect,
             self._visibility_gate,
-            before.misses > 0 if self.config.life_cycle.gate_visibility else None,
+            # this sensor's own miss at its previous scan, and none detected it since (§8.14)
+            (self._sensor_misses[:, column] > 0) & (before.misses > 0)
+            if self.config.life_cycle.gate_visibility
+            else None,
         )
         codes, seen, hidden = sight.codes, sight.seen, sight.hidden
         births = self._shared_births(column, z, elapsed, score.p_detect)
