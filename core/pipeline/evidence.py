@@ -112,8 +112,9 @@ def coverage_look(
 
     Visible where some sensor sees its gate of ``gate`` (on D: p ≥ Φ(−√γ) for a straight
     edge), else a blind zone where the region holds its gate, else out of range; a row
-    ``missed`` at its latest scan is judged at p ≥ ½ instead (missed again where no sensor
-    sees it more likely than not, it is more likely hidden, or gone, than missed). p_region:
+    ``missed`` before (the caller's: by the step's sensor at its previous scan) is judged
+    at p ≥ ½ instead (missed again where no sensor sees it more likely than not, it is
+    more likely hidden, or gone, than missed). p_region:
     the explicit region's p, or the largest of the sensors' ranges' (1 where a sensor sees
     everywhere). ``covariances`` None: the papers' test at the predicted position
     (:meth:`Coverage.visibility <core.geometry.Coverage.visibility>`).
@@ -174,8 +175,8 @@ def look(
     test at the predicted position (p and p_region 0 or 1, a miss ln(1 − P_D)). The
     occluders are the established rows (``status``); planar views look at the first two
     components; with fewer than two there is no plane and every row is seen. ``missed``:
-    the rows missed at their latest scan (:func:`coverage_look`; a row it hides is not
-    seen).
+    the rows judged at p ≥ ½ (:func:`coverage_look`; the tracker's: missed by the step's
+    sensor at its previous scan and detected by none since); a row it hides is not seen.
     """
     count = len(positions)
     if positions.shape[1] < 2 or count == 0:
