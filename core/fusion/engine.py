@@ -98,7 +98,7 @@ from core.lifecycle import (
     reason_code,
 )
 from core.numerics import MAX_TIME, check_magnitudes
-from core.pipeline.evidence import coasting_misses, coverage_look, hits, look
+from core.pipeline.evidence import HIDING_MISSES, coasting_misses, coverage_look, hits, look
 from core.pipeline.gate import position_distances
 from core.pipeline.handover import hand_over_pairs
 from core.pipeline.rows import TrackRows, ended
@@ -569,7 +569,7 @@ class SessionEngine:
                 management.occlusion_radius,
                 sensor.p_detect,
                 gate,
-                life.misses[at] > 0 if by_gate else None,
+                life.misses[at] >= HIDING_MISSES - 1 if by_gate else None,
             )
             seen[at], hidden[at], miss_increment[at] = (
                 sight.seen,
@@ -594,7 +594,7 @@ class SessionEngine:
             fused_states[:, position],
             fused_covariances[:, position][:, :, position] if by_gate else None,
             gate,
-            life.misses > 0 if by_gate else None,
+            life.misses >= HIDING_MISSES - 1 if by_gate else None,
         )
         after, confirmed = advance(
             management,

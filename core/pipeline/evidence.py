@@ -23,6 +23,11 @@ from core.lifecycle import established, everywhere, sensor_view
 from core.pipeline.visibility import inside_probability
 from core.volume import RadarVolume
 
+HIDING_MISSES = 3
+"""The misses in a row (the local tracker: of the step's sensor, none detecting the track
+meanwhile) after which a track that no sensor sees with p ≥ ½ is hidden (a phantom) or
+gone rather than missed again (docs/algorithms.md §8.14)."""
+
 
 def hits(count: int, rows: IntArray, increments: FloatArray) -> tuple[BoolArray, FloatArray]:
     """``detected`` and ``hit_increment`` of ``count`` rows, hit at ``rows`` by ΔL ``increments``."""

@@ -95,6 +95,7 @@ from core.lifecycle import (
 )
 from core.models.measurement import MeasurementModel, Polar
 from core.pipeline.evidence import (
+    HIDING_MISSES,
     coasting_misses,
     hits,
     look,
@@ -458,8 +459,8 @@ class LocalTracker:
             self.config.life_cycle.occlusion_radius,
             score.p_detect,
             self._visibility_gate,
-            # this sensor's own miss at its previous scan, and none detected it since (§8.14)
-            (self._sensor_misses[:, column] > 0) & (before.misses > 0)
+            # this sensor's own misses at its previous scans, none detecting it since (§8.14)
+            (self._sensor_misses[:, column] >= HIDING_MISSES - 1) & (before.misses > 0)
             if self.config.life_cycle.gate_visibility
             else None,
         )
