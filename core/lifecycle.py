@@ -340,6 +340,11 @@ class LifeCycleConfig:
         ``max_distance / min_speed`` seconds ([HZ] §5.1).
     phantoms : the blind-zone strategy on (default) or off (a hidden track then
         coasts and is terminated by score or gate emptiness).
+    gate_visibility : a track is seen by a sensor, and in a blind zone or out of range,
+        by its gate, and its miss scores ``ln(p_region − P_D p)`` with p the probability
+        that the sensor sees its predicted position (docs/algorithms.md §8.16; default).
+        The paper profile: off, [HZ] §2.1's test at the predicted position, a miss
+        ln(1 − P_D).
     """
 
     false_confirmation: float = DEFAULT_ALPHA
@@ -357,6 +362,7 @@ class LifeCycleConfig:
     phantom_max_distance: float = 500.0
     phantom_min_speed: float = 1.0
     phantoms: bool = True
+    gate_visibility: bool = True
 
     @classmethod
     def paper(cls, dim: int = 2, **options: Any) -> LifeCycleConfig:
@@ -372,6 +378,7 @@ class LifeCycleConfig:
             "min_points": None,
             "initiation_hits": 0,
             "hit_evidence": False,
+            "gate_visibility": False,
         }
         settings.update(options)
         if "score_ceiling" not in options:
@@ -646,7 +653,8 @@ class Evidence:
     hit_increment : ΔL of that hit (read only where ``detected``).
     seen : the step's sensor should have seen the track (in its field of view,
         not occluded): not detected, it is a miss.
-    miss_increment : ΔL of a miss, ln(1 − P_D).
+    miss_increment : ΔL of a miss, ln(1 − P_D), or one per track (ln(p_region − P_D p),
+        docs/algorithms.md §8.16).
     gate_log_det : log|S| of each track's gate on the position components (read
         only on a coasting miss, for A_G).
     gate_dim : the number of position components.
@@ -676,7 +684,7 @@ class Evidence:
     detected: BoolArray
     hit_increment: FloatArray
     seen: BoolArray
-    miss_increment: float
+    miss_increment: float | FloatArray
     gate_log_det: FloatArray
     gate_dim: int
     visibility: IntArray
@@ -737,7 +745,8 @@ def advance(
     """One step of the life cycle of every track; returns the new state and the newly confirmed.
 
     1. score: a hit adds its ΔL, a miss (seen, not detected, not a phantom)
-       ln(1 − P_D) and one to the track's misses in a row; clamped at
+       its ``miss_increment`` (ln(1 − P_D); by default ln(p_region − P_D p),
+       docs/algorithms.md §8.16) and one to the track's misses in a row; clamped at
        :attr:`LifeCycleConfig.score_ceiling`; an established track ``vouched`` for
        by another sensor not below the delete threshold;
     2. a coasting track that is hit is confirmed again (``reacquired``); a
@@ -794,8 +803,11 @@ def advance(
         threshold = config.delete_threshold + shift
         if math.isfinite(config.ceiling):
             drop = config.ceiling - config.delete_threshold
-            later = misses_to_delete(drop - shift, evidence.miss_increment) - misses_to_delete(
-                np.full(len(status), drop), evidence.miss_increment
+            # counted in full misses (the most negative ΔL, ln(1 − P_D) where p = 1): a
+            # partial miss of §8.16 would stretch the wait without bound as p → 0
+            full_miss = float(np.min(evidence.miss_increment))
+            later = misses_to_delete(drop - shift, full_miss) - misses_to_delete(
+                np.full(len(status), drop), full_miss
             )
     held = np.zeros(len(status), dtype=bool)
     if evidence.vouched is not None:

@@ -63,6 +63,7 @@ import numpy as np
 from core.arrays import BoolArray, FloatArray, IntArray
 from core.belief import MassFunction
 from core.distance import Estimates
+from core.distance.pairwise import chi2_quantile
 from core.errors import InvalidInput, StaleReport, TotalConflict
 from core.fusion.associate import Decision, associate_report
 from core.fusion.classes import ClassAssessment, accumulate_likelihoods, fuse_sensor_classes
@@ -107,7 +108,7 @@ from core.lifecycle import (
     reason_code,
 )
 from core.numerics import MAX_TIME, check_magnitudes
-from core.pipeline.evidence import coasting_misses, coverage_codes, hits, seen_by
+from core.pipeline.evidence import HIDING_MISSES, coasting_misses, coverage_look, hits, look
 from core.pipeline.gate import position_distances
 from core.pipeline.handover import ended_hand_over_pairs, hand_over_pairs
 from core.pipeline.rows import TrackRows, ended
@@ -575,16 +576,31 @@ class SessionEngine:
         at = live if every else np.searchsorted(candidates, live)
         detected, hit_increment = hits(count, at[hit_rows], increments)
         seen, hidden = np.zeros(count, dtype=bool), np.zeros(count, dtype=bool)
+        miss_increment = np.zeros(count)
         gate_log_det = np.zeros(count)
         position = self._position
+        by_gate = management.gate_visibility
+        gate = chi2_quantile(management.gate_probability, len(position))
         if len(live):
             live_status = life.status[at]
-            seen[at], hidden[at] = seen_by(
+            # §8.16: seen by its gate, a miss weighed by the probability that the sensor sees
+            # the fused track's predicted position
+            sight = look(
+                self._coverage,
                 sensor.fov,
+                sensor.volume,
                 states[:, position],
+                covariances[:, position][:, :, position] if by_gate else None,
                 live_status,
                 management.occlusion_radius,
-                sensor.volume,
+                sensor.p_detect,
+                gate,
+                life.misses[at] >= HIDING_MISSES - 1 if by_gate else None,
+            )
+            seen[at], hidden[at], miss_increment[at] = (
+                sight.seen,
+                sight.hidden,
+                sight.miss_increment,
             )
             seen[at] &= self._silence_counts(live, sensor.id) | missed_by_source
             # §8.2: a hit on an established track another source keeps current never lowers
@@ -597,7 +613,15 @@ class SessionEngine:
             missed = np.flatnonzero(coasting_misses(live_status, seen[at], detected[at]))
             if len(missed):
                 gate_log_det[at[missed]] = self._gate_log_dets(live[missed], covariances[missed])
-        fused_states, _ = self._table.fused_at(candidates, self.time)
+        # coverage at the fusion time: the fused estimate, updated by the report where it was
+        fused_states, fused_covariances = self._table.fused_at(candidates, self.time)
+        codes, _ = coverage_look(
+            self._coverage,
+            fused_states[:, position],
+            fused_covariances[:, position][:, :, position] if by_gate else None,
+            gate,
+            life.misses >= HIDING_MISSES - 1 if by_gate else None,
+        )
         after, confirmed = advance(
             management,
             life,
@@ -606,10 +630,10 @@ class SessionEngine:
                 detected=detected,
                 hit_increment=hit_increment,
                 seen=seen,
-                miss_increment=management.score_model(sensor.p_detect).miss_increment,
+                miss_increment=miss_increment,
                 gate_log_det=gate_log_det,
                 gate_dim=len(position),
-                visibility=coverage_codes(self._coverage, fused_states[:, position]),
+                visibility=codes,
                 occluded=hidden,
                 sensors=self._table.present[candidates].sum(axis=1),
             ),

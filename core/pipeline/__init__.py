@@ -17,7 +17,8 @@ associate     :mod:`core.association` (tracker:           one method of §3 on t
               :mod:`core.tracking.associate`, engine:     pairs
               :mod:`core.fusion.associate`)
 evidence      :mod:`core.pipeline.evidence`               hits and their ΔL, misses the
-                                                          sensor should have seen,
+              (p: :mod:`core.pipeline.visibility`)        sensor should have seen (by
+                                                          their gate, scored by p),
                                                           coverage, occlusion: the
                                                           :class:`core.lifecycle.Evidence`
 life cycle    :mod:`core.lifecycle`                       :func:`~core.lifecycle.advance`

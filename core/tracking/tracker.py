@@ -96,9 +96,11 @@ from core.lifecycle import (
 )
 from core.models.measurement import MeasurementModel, Polar
 from core.pipeline.evidence import (
+    HIDING_MISSES,
     coasting_misses,
-    gate_coverage,
+    gates_seen,
     hits,
+    look,
     seen_by,
     sensor_miss_runs,
 )
@@ -398,6 +400,13 @@ class LocalTracker:
         last two scans (NaN before its second)."""
         return np.asarray(self._scan_times[:, 1] - self._scan_times[:, 0], dtype=np.float64)
 
+    def _position_covariances(self, prediction: IMMPrediction) -> FloatArray:
+        """HPHᵀ of each row's model-combined prediction: the covariance of its predicted
+        position, without the measurement noise (docs/algorithms.md §8.16)."""
+        _, covariance = prediction.combined()
+        matrix = self.bank.measurement.matrix
+        return np.asarray(matrix @ covariance @ matrix.T, dtype=np.float64)
+
     def checkpoint(self) -> dict[str, Any]:
         """The state as it is, for :meth:`rollback` (references: no array is changed in place)."""
         return dict(self.__dict__)
@@ -443,20 +452,33 @@ class LocalTracker:
         positions, gates = prediction.combined_measurement()
         before = self._rows.life
         status = before.status
-        # §8.11: a track is in a blind zone when no sensor sees any of its gate
-        codes, gate_seen = gate_coverage(self._coverage, positions, gates, self._visibility_gate)
-        seen, hidden = seen_by(
+        column = self._column = self.config.sensors.index(sensor_name)
+        # §8.16: seen, missed or hidden by its gate, a miss weighed by the probability that
+        # the sensor sees the predicted position N(x̂, HPHᵀ)
+        covariances = (
+            self._position_covariances(prediction)
+            if self.config.life_cycle.gate_visibility
+            else None
+        )
+        sight = look(
+            self._coverage,
             self._views[sensor_name],
+            self._volumes.get(sensor_name),
             positions,
+            covariances,
             status,
             self.config.life_cycle.occlusion_radius,
-            self._volumes.get(sensor_name),
+            score.p_detect,
+            self._visibility_gate,
+            # this sensor's own misses at its previous scans, none detecting it since (§8.16)
+            (self._sensor_misses[:, column] >= HIDING_MISSES - 1) & (before.misses > 0)
+            if self.config.life_cycle.gate_visibility
+            else None,
         )
-        column = self._column = self.config.sensors.index(sensor_name)
-        seen = seen | gate_seen[column]
+        codes, seen, hidden = sight.codes, sight.seen, sight.hidden
         births = self._shared_births(column, z, elapsed, score.p_detect)
         counted = seen & self._carried(column, status)
-        shift = self._deletion_shift(time, positions, status, gate_seen)
+        shift = self._deletion_shift(time, positions, covariances, status)
         candidates = np.flatnonzero(
             (status != PHANTOM) & self._can_be_hit(prediction, score, shift)
         )
@@ -504,7 +526,7 @@ class LocalTracker:
                 detected=detected,
                 hit_increment=gain,
                 seen=counted,
-                miss_increment=score.miss_increment,
+                miss_increment=sight.miss_increment,
                 # log|S|: A_G of the tracks that coast through a miss
                 gate_log_det=(
                     np.linalg.slogdet(gates)[1]
@@ -814,12 +836,17 @@ class LocalTracker:
         return np.asarray((self._vouching & fresh).any(axis=1), dtype=np.bool_)
 
     def _deletion_shift(
-        self, time: float, positions: FloatArray, status: IntArray, gate_seen: BoolArray
+        self,
+        time: float,
+        positions: FloatArray,
+        covariances: FloatArray | None,
+        status: IntArray,
     ) -> FloatArray:
         """Each row's shift of its delete threshold, ``ln(T_c / T_max)`` of the sensors that
         look at it (:func:`~core.lifecycle.several_sensors_shift`, docs/algorithms.md
         §8.14): established, carried by the sensor (:meth:`_carried`), inside its view and
-        volume or its gate seen (§8.11), the sensor's revisit known and its latest scan not
+        volume or its gate seen (§8.16; ``covariances``: HPHᵀ of each row, None for the
+        papers' test at the predicted position), the sensor's revisit known and its latest scan not
         overdue (:data:`VOUCH_REVISITS`). 0 for the other rows, and for every row of a
         single sensor's tracker."""
         shift = np.zeros(len(status))
@@ -829,6 +856,7 @@ class LocalTracker:
         previous, latest = self._scan_times[:, 0], self._scan_times[:, 1]
         revisit = latest - previous
         revisits = np.full((len(rows), len(self.config.sensors)), np.inf)
+        gate_seen = gates_seen(self._coverage, positions, covariances, self._visibility_gate)
         for column, name in enumerate(self.config.sensors):
             period = float(revisit[column])
             if not (math.isfinite(period) and period > 0.0):

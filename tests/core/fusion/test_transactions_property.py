@@ -76,7 +76,7 @@ TRACKER_PARTS: list[tuple[Any, str]] = (
     [(LocalTracker, name) for name in ("_update", "_hand_over", "_initiate", "_result")]
     + [
         (tracker_module, name)
-        for name in ("predict_bank", "gate_coverage", "seen_by", "advance", "hand_over_pairs")
+        for name in ("predict_bank", "look", "seen_by", "advance", "hand_over_pairs")
     ]
     + [(DetectionAssociator, "associate"), (engine_module, "local_track_report")]
 )
