@@ -77,3 +77,56 @@ def test_look_scores_a_row_out_of_the_region_minus_infinity_unseen() -> None:
     assert sight.seen.tolist() == [True, False]
     assert sight.miss_increment[0] == pytest.approx(MISS, abs=1e-9)
     assert sight.miss_increment[1] == -math.inf
+
+
+def _monte_carlo_sector(sector: Sector, mean: np.ndarray, covariance: np.ndarray) -> float:
+    samples = np.random.default_rng(7).multivariate_normal(mean, covariance, size=200_000)
+    return float(np.mean(sector.contains(samples)))
+
+
+@pytest.mark.parametrize(
+    ("half_angle", "mean"),
+    [
+        (170.0, (1000.0, 0.0)),  # on the axis of a wide sector: its sides are rays behind
+        (120.0, (800.0, 300.0)),
+        (150.0, (-500.0, -800.0)),
+        (60.0, (400.0, 650.0)),  # near the +60° side, ahead: the line is the ray
+    ],
+)
+def test_a_sectors_side_is_a_ray_from_the_apex_against_monte_carlo(
+    half_angle: float, mean: tuple[float, float]
+) -> None:
+    """A sector's side is the ray from its apex at heading ± half-angle, not the whole line:
+    past the apex (a wide sector's point ahead, a narrow sector's point behind it) the
+    nearest point of the side is the apex. A wide sector of a half-angle over 90°: on the
+    axis 1000 m ahead with σ 300 m the line through the apex at 170° is 174 m away (p 0.72),
+    while the ray is 1000 m away and nearly every sample is inside (Monte Carlo). (A point
+    near the apex or a non-convex corner is §8.16's approximation, not tested here.)"""
+    sector = Sector((0.0, 0.0), 0.0, half_angle, 0.0, 50_000.0)
+    covariance = np.diag([300.0**2, 300.0**2])
+    expected = _monte_carlo_sector(sector, np.array(mean), covariance)
+    p = inside_probability(sector, None, np.array([mean]), covariance[None])[0]
+    assert abs(p - expected) <= 0.01 + 4.0 * math.sqrt(expected * (1 - expected) / 200_000)
+
+
+def test_a_gate_behind_a_narrow_sectors_apex_is_not_seen() -> None:
+    """Hand-worked: a sector of ±30° at the origin facing +x; a track 1500 m behind it, σ
+    300 m each way. Its gate (γ = 13.82, 2-D 0.999) reaches √γ σ = 1115 m, short of the
+    sector's nearest point (the apex, 1500 m away): the sensor does not see it, and a scan
+    that does not detect it is no miss. The line through the apex at −30° is 750 m away
+    (inside the gate) and would make it seen."""
+    gate = 13.815510557964274
+    assert math.sqrt(gate) * 300.0 < 1500.0 and 1500.0 * math.sin(math.radians(30.0)) < (
+        math.sqrt(gate) * 300.0
+    )
+    sector = Sector((0.0, 0.0), 0.0, 30.0, 0.0, 50_000.0)
+    coverage = Coverage((sector, sector))
+    positions = np.array([[-1500.0, 0.0], [-1500.0, 1.0]])
+    covariances = np.repeat((300.0**2 * np.eye(2))[None], 2, axis=0)
+    sight = look(
+        coverage, sector, None, positions, covariances, np.full(2, COASTING), 0.0, 0.9, gate
+    )
+    assert sight.seen.tolist() == [False, False]
+    assert sight.probability == pytest.approx(
+        [0.5 * math.erfc(1500.0 / 300.0 / math.sqrt(2.0))] * 2, rel=1e-3
+    )
