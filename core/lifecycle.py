@@ -678,6 +678,9 @@ class Evidence:
         (:func:`several_sensors_shift`, docs/algorithms.md §8.14): an established track's
         delete threshold is lowered by it, and its gate-emptiness test waits for as many
         more misses as its score then tolerates; None: 0 for every track.
+    full_miss_increment : ln(1 − P_D), the ΔL of a full miss (p = p_region = 1) that
+        §8.14's extra misses are counted in; None: ``miss_increment`` (its least value where
+        it is one per track).
     """
 
     time: float
@@ -695,6 +698,7 @@ class Evidence:
     vouched: BoolArray | None = None
     repeated: BoolArray | None = None
     deletion_shift: FloatArray | None = None
+    full_miss_increment: float | None = None
 
 
 # ------------------------------------------------------------------ visibility
@@ -803,9 +807,14 @@ def advance(
         threshold = config.delete_threshold + shift
         if math.isfinite(config.ceiling):
             drop = config.ceiling - config.delete_threshold
-            # counted in full misses (the most negative ΔL, ln(1 − P_D) where p = 1): a
-            # partial miss of §8.16 would stretch the wait without bound as p → 0
-            full_miss = float(np.min(evidence.miss_increment))
+            # counted in full misses, ln(1 − P_D) (p = p_region = 1): a partial miss of
+            # §8.16 would stretch the wait without bound as p → 0, and the least ΔL of the
+            # rows is another row's (−inf for one out of the region: no wait at all)
+            full_miss = (
+                float(np.min(evidence.miss_increment))
+                if evidence.full_miss_increment is None
+                else evidence.full_miss_increment
+            )
             later = misses_to_delete(drop - shift, full_miss) - misses_to_delete(
                 np.full(len(status), drop), full_miss
             )

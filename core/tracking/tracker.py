@@ -527,6 +527,7 @@ class LocalTracker:
                 hit_increment=gain,
                 seen=counted,
                 miss_increment=sight.miss_increment,
+                full_miss_increment=score.miss_increment,
                 # log|S|: A_G of the tracks that coast through a miss
                 gate_log_det=(
                     np.linalg.slogdet(gates)[1]
