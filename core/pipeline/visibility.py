@@ -60,14 +60,27 @@ def _sector(sector: Sector, plane: FloatArray, covariances: FloatArray, reach: b
             probability, _edge(distance - sector.range_min, radial, covariances)
         )
     if sector.half_angle_deg < 180.0:
-        # the nearer side: the edge line at heading ± half-angle through the origin, its
-        # normal turned towards the axis; m = ρ sin(half-angle − off-axis angle)
+        # the nearer side: the ray from the origin at heading ± half-angle (its line where x̂
+        # is abreast of it, m = ρ sin(half-angle − off-axis angle); the apex where x̂ is
+        # behind it: a wide sector's point ahead, a narrow sector's point behind)
+        half = math.radians(sector.half_angle_deg)
         bearing = np.arctan2(offset[:, 1], offset[:, 0])
-        side = np.where(((bearing - heading + math.pi) % (2 * math.pi) - math.pi) >= 0.0, 1.0, -1.0)
-        edge = heading + side * math.radians(sector.half_angle_deg)
-        normal = np.stack([side * np.sin(edge), -side * np.cos(edge)], axis=1)
-        margin = np.einsum("ni,ni->n", normal, offset)
-        probability = np.minimum(probability, _edge(margin, normal, covariances))
+        off_axis = np.abs((bearing - heading + math.pi) % (2 * math.pi) - math.pi)
+        inside = np.where(off_axis <= half, 1.0, -1.0)
+        nearest_distance = np.full(len(offset), np.inf)
+        across = np.zeros_like(offset)
+        for side in (1.0, -1.0):
+            edge = heading + side * half
+            along = np.array([math.cos(edge), math.sin(edge)])
+            foot = np.maximum(offset @ along, 0.0)[:, None] * along
+            normal = np.broadcast_to(
+                np.array([side * math.sin(edge), -side * math.cos(edge)]), offset.shape
+            )
+            direction, gap = _unit(offset - foot, normal)
+            nearer = gap < nearest_distance
+            nearest_distance = np.where(nearer, gap, nearest_distance)
+            across = np.where(nearer[:, None], direction, across)
+        probability = np.minimum(probability, _edge(inside * nearest_distance, across, covariances))
     return probability
 
 
