@@ -13,6 +13,7 @@ from core.geometry import Coverage, PolygonView, Sector
 from core.lifecycle import COASTING, Evidence, LifeCycleConfig, LifeState, advance
 from core.pipeline.evidence import look
 from core.pipeline.visibility import inside_probability
+from core.volume import RadarVolume
 
 BASE = math.log(1e-3 / (1.0 - 1e-3))  # the default delete threshold, −6.9068
 MISS = math.log(1.0 - 0.9)  # a full miss at P_D 0.9, −2.3026
@@ -130,3 +131,40 @@ def test_a_gate_behind_a_narrow_sectors_apex_is_not_seen() -> None:
     assert sight.probability == pytest.approx(
         [0.5 * math.erfc(1500.0 / 300.0 / math.sqrt(2.0))] * 2, rel=1e-3
     )
+
+
+EARTH, HEIGHT = 6_371_000.0, 150.0
+ANTENNA_HORIZON = math.sqrt(2.0 * 4.0 / 3.0 * EARTH * HEIGHT)  # a = 50 482 m, by hand
+
+
+def _at(distance: float, height: float) -> tuple[float, float, float]:
+    """The point ``distance`` east of the antenna at ``height`` above the sphere below it."""
+    return (distance, 0.0, math.sqrt((EARTH + height) ** 2 - distance**2) - EARTH - HEIGHT)
+
+
+@pytest.mark.parametrize(
+    ("beyond", "height", "seed"),
+    [(-300.0, 10.0, 21), (-1.0, 10.0, 22), (1.0, 10.0, 23), (300.0, 60.0, 24), (1.0, -5.0, 25)],
+)
+def test_the_horizon_at_the_antennas_own_horizon_distance_against_monte_carlo(
+    beyond: float, height: float, seed: int
+) -> None:
+    """Inside the antenna's own horizon distance a = √(2kR h_a) every height is seen (the
+    horizon there is d ≤ a + √(2kR h_t) with h_t ≥ 0 clamped), beyond it only h_t ≥
+    (d − a)² / 2kR: the limit is the union of the two, which has a corner at (d = a,
+    h_t = 0). A track predicted 10 m up a metre inside a, σ 300 m across and 80 m up, is
+    outside only where it is both beyond a and under the surface: about ½ · Φ(−10/80), p
+    0.78 (Monte Carlo) — not 1 a metre inside a and 0.55 a metre beyond it."""
+    volume = RadarVolume(
+        site=(0.0, 0.0, 0.0),
+        range_max=150_000.0,
+        elevation_min_deg=-2.0,
+        elevation_max_deg=30.0,
+        antenna_height=HEIGHT,
+    )
+    mean = np.array(_at(ANTENNA_HORIZON + beyond, height))
+    covariance = np.diag([300.0**2, 300.0**2, 80.0**2])
+    samples = np.random.default_rng(seed).multivariate_normal(mean, covariance, size=200_000)
+    expected = float(np.mean(volume.contains(samples)))
+    p = inside_probability(None, volume, mean[None], covariance[None])[0]
+    assert abs(p - expected) <= 0.01 + 4.0 * math.sqrt(expected * (1 - expected) / 200_000)
