@@ -168,10 +168,13 @@ def _horizon(
     across: FloatArray,
     ground: FloatArray,
 ) -> FloatArray:
-    """The horizon ``d ≤ √(2kR h_a) + √(2kR h_t)`` as a limit. Beyond the antenna's own
-    horizon distance ``a = √(2kR h_a)`` it reads ``f = h_t − (d − a)² / (2kR) ≥ 0``
-    (smooth, its gradient ``∇h_t − (d − a)/(kR) ∇d``); within it the limit is the
-    horizon distance at the target's height, straight across in ground range."""
+    """The horizon ``d ≤ √(2kR h_a) + √(2kR h_t)`` as a limit: the union of ``d ≤ a``
+    (``a = √(2kR h_a)``, the antenna's own horizon distance: every height is seen within
+    it) and, beyond it, ``f = h_t − (d − a)² / (2kR) ≥ 0`` (smooth, its gradient
+    ``∇h_t − (d − a)/(kR) ∇d``). Each is its straight edge; the target is outside only
+    where it is outside both, taken as independent (the ground range across and the
+    height up): ``p = 1 − (1 − p_a)(1 − p_f)`` — p_f beyond a by a few σ, 1 within it, and
+    no jump at the corner ``(d = a, h_t = 0)``."""
     assert volume.antenna_height is not None
     effective = REFRACTION * EARTH_RADIUS
     reach = math.sqrt(2.0 * effective * volume.antenna_height)
@@ -179,14 +182,14 @@ def _horizon(
     east, north, up = local.T
     toward_centre = np.stack([east, north, EARTH_RADIUS + volume.antenna_height + up], axis=1)
     gradient_height = toward_centre / np.linalg.norm(toward_centre, axis=1)[:, None]
-    beyond = ground - reach
-    far = _edge(
-        height - np.maximum(beyond, 0.0) ** 2 / (2.0 * effective),
-        gradient_height - (np.maximum(beyond, 0.0) / effective)[:, None] * across,
+    beyond = np.maximum(ground - reach, 0.0)
+    above = _edge(
+        height - beyond**2 / (2.0 * effective),
+        gradient_height - (beyond / effective)[:, None] * across,
         covariances,
     )
-    near = _edge(volume.horizon(local) - ground, -across, covariances)
-    return np.asarray(np.where(beyond > 0.0, far, near), dtype=np.float64)
+    within = _edge(reach - ground, -across, covariances)
+    return np.asarray(1.0 - (1.0 - within) * (1.0 - above), dtype=np.float64)
 
 
 def inside_probability(
