@@ -10,9 +10,12 @@ import numpy as np
 import pytest
 
 from core.geometry import Coverage, PolygonView, Sector
-from core.lifecycle import COASTING, Evidence, LifeCycleConfig, LifeState, advance
+from core.lifecycle import COASTING, Evidence, LifeCycleConfig, LifeState, TrackStatus, advance
 from core.pipeline.evidence import look
 from core.pipeline.visibility import inside_probability
+from core.tracking.config import LocalTrackerConfig, SensorPhysics
+from core.tracking.models import LinearMeasurementModel, ModelBank, constant_velocity
+from core.tracking.tracker import LocalTracker
 from core.volume import RadarVolume
 
 BASE = math.log(1e-3 / (1.0 - 1e-3))  # the default delete threshold, −6.9068
@@ -168,3 +171,49 @@ def test_the_horizon_at_the_antennas_own_horizon_distance_against_monte_carlo(
     expected = float(np.mean(volume.contains(samples)))
     p = inside_probability(None, volume, mean[None], covariance[None])[0]
     assert abs(p - expected) <= 0.01 + 4.0 * math.sqrt(expected * (1 - expected) / 200_000)
+
+
+def _box(x0: float, x1: float) -> PolygonView:
+    return PolygonView(((x0, 0.0), (x1, 0.0), (x1, 2000.0), (x0, 2000.0)))
+
+
+def test_a_sensor_hides_a_track_only_after_two_misses_none_detecting_it_since() -> None:
+    """§8.16's hiding rule, by hand: two sensors ``a`` and ``b`` see x ≤ 3000 m of a region
+    reaching x = 6000 m; a track held 4 m past that edge (p ≈ 0.02–0.07: seen by its gate,
+    each miss tiny). ``a`` misses it at t = 4 and 5, but ``b`` detects it at t = 4.5 and
+    misses it at 5.5: since the latest detection ``a`` has missed it once, not twice, so its
+    scan at t = 6 judges it at p ≥ Φ(−√γ), not ½ — it is missed again (coasting), not
+    hidden (a phantom, which no detection could take again)."""
+    bank = ModelBank(
+        models=(constant_velocity(1.0, 0.05, axes=2, noise="continuous"),),
+        measurement=LinearMeasurementModel.position(3.0**2, 4),
+        mode_transition=np.ones((1, 1)),
+    )
+    tracker = LocalTracker(
+        LocalTrackerConfig(
+            bank=bank,
+            time_interval=1.0,
+            life_cycle=LifeCycleConfig(new_target_density=1e-6),
+            initial_velocity_std=1.0,
+            sensor_physics={
+                "a": SensorPhysics(0.9, 1e-5, None),
+                "b": SensorPhysics(0.9, 1e-5, None),
+            },
+            fields_of_view={"a": _box(0.0, 3000.0), "b": _box(0.0, 3000.0)},
+            region=_box(0.0, 6000.0),
+            classification=None,
+            id_prefix="C",
+        )
+    )
+    seen, unseen = np.array([[3004.0, 1000.0]]), np.zeros((0, 2))
+    scans = [("a", seen), ("b", seen)] * 4 + [
+        ("a", unseen),  # t = 4: a's first miss
+        ("b", seen),  # t = 4.5: b detects it
+        ("a", unseen),  # t = 5: a's first miss since
+        ("b", unseen),  # t = 5.5
+        ("a", unseen),  # t = 6: a's second miss since
+    ]
+    for index, (sensor, detections) in enumerate(scans):
+        step = tracker.step(0.5 * index, detections, sensor=sensor)
+    track = step.track("C1")
+    assert track.status == TrackStatus.COASTING
