@@ -26,7 +26,8 @@ from core.volume import RadarVolume
 HIDING_MISSES = 3
 """The misses in a row (the local tracker: of the step's sensor, none detecting the track
 meanwhile) after which a track that no sensor sees with p ≥ ½ is hidden (a phantom) or
-gone rather than missed again (docs/algorithms.md §8.16)."""
+gone rather than missed again (docs/algorithms.md §8.16). The local tracker reads the
+two latest scans of each sensor for it (``LocalTracker._scan_times``): 3 is built in there."""
 
 
 def hits(count: int, rows: IntArray, increments: FloatArray) -> tuple[BoolArray, FloatArray]:

@@ -470,8 +470,12 @@ class LocalTracker:
             self.config.life_cycle.occlusion_radius,
             score.p_detect,
             self._visibility_gate,
-            # this sensor's own misses at its previous scans, none detecting it since (§8.16)
-            (self._sensor_misses[:, column] >= HIDING_MISSES - 1) & (before.misses > 0)
+            # this sensor's own misses at its previous scans, none detecting it since (§8.16):
+            # its run of HIDING_MISSES − 1 = 2 (which another sensor's detection does not
+            # end), both after the row's latest detection (its two latest scans)
+            (self._sensor_misses[:, column] >= HIDING_MISSES - 1)
+            & (before.misses > 0)
+            & (latest < self._scan_times[column, 0])
             if self.config.life_cycle.gate_visibility
             else None,
         )
