@@ -1818,7 +1818,8 @@ def _peer_table(study: PeerScene) -> str:
             return "–"
         if len(values) < 2:  # one draw: no interval
             return f"{float(values[0]):.{digits}f}"
-        interval = count_interval(values) if count else mean_interval(values)
+        # every column is a GOSPA term, a count, a time, a share or a ratio: none below 0
+        interval = count_interval(values) if count else mean_interval(values, floor=0.0)
         return f"{interval.estimate:.{digits}f} [{interval.low:.{digits}f}, {interval.high:.{digits}f}]"
 
     lines = [

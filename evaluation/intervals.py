@@ -135,13 +135,17 @@ def rate_interval(per_run: ArrayLike, decisions_per_run: ArrayLike) -> Interval:
     return Interval(estimate, max(0.0, min(t_low, w_low)), min(1.0, max(t_high, w_high)))
 
 
-def mean_interval(per_run: ArrayLike) -> Interval:
-    """The mean of a continuous per-run quantity (an error) with its t interval.
+def mean_interval(per_run: ArrayLike, *, floor: float | None = None) -> Interval:
+    """The mean of a continuous per-run quantity (an error) with its t interval; ``floor``:
+    the least value the quantity can take (0 for an error, a GOSPA term, a time), where the
+    interval is cut (the t interval of a mean near it reaches below what the mean can be).
 
     Not for counts or rates (module docstring): :func:`count_interval`, :func:`rate_interval`.
     """
     values = np.asarray(per_run, dtype=np.float64).ravel()
     low, high = _t_interval(values)
+    if floor is not None:
+        low, high = max(low, floor), max(high, floor)
     return Interval(float(values.mean()), low, high)
 
 

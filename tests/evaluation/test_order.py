@@ -88,6 +88,19 @@ def test_rate_interval_is_never_zero_wide_and_mean_interval_is_student() -> None
     assert (values.low, values.high) == pytest.approx((2.0 - half, 2.0 + half), rel=1e-9)
 
 
+def test_mean_interval_of_a_quantity_that_cannot_go_below_its_floor() -> None:
+    """A GOSPA false term of 0, 0, 0.3 over three seeds: Student's interval is
+    0.1 ± t(0.975, 2)·s/√3 (s = 0.1√3, worked by hand), reaching below 0 where the mean of
+    a term ≥ 0 cannot be; with ``floor=0`` it is cut there, its upper end unchanged."""
+    values = [0.0, 0.0, 0.3]
+    half = 4.302652729911275 * 0.1 * math.sqrt(3.0) / math.sqrt(3.0)
+    plain = mean_interval(values)
+    assert (plain.low, plain.high) == pytest.approx((0.1 - half, 0.1 + half), rel=1e-9)
+    assert plain.low < 0.0
+    cut = mean_interval(values, floor=0.0)
+    assert (cut.estimate, cut.low, cut.high) == pytest.approx((0.1, 0.0, 0.1 + half), rel=1e-9)
+
+
 def test_paired_difference_by_hand() -> None:
     result = paired_difference([2.0, 4.0, 6.0], [1.0, 2.0, 3.0])  # differences 1, 2, 3
     assert result.difference.estimate == pytest.approx(2.0)
