@@ -39,8 +39,18 @@ T = TypeVar("T")
 
 YOUNG_THRESHOLD = 20_000
 """Allocations (minus deallocations) of container objects before a young collection."""
-MIDDLE_THRESHOLD = 20
-OLD_THRESHOLD = 50
+MIDDLE_THRESHOLD = 2
+"""Young collections before a middle-generation one (CPython collects a generation once its
+count exceeds this: after 3). A middle collection walks every container that survived the
+young collections since the last, all at once and holding the GIL, and most survivors live
+on (sessions' state, logs, caches): at 20 it walked 21 young collections' survivors, a 65 ms
+stall of the event loop in ``bench/soak.py --crowd`` (issue #28; an anonymous client's
+session flood adds live sessions; a young collection took 2-4 ms). At 2 it walks those of 3:
+6-13 ms measured there, seven times as often; the same objects walked, in smaller pieces."""
+OLD_THRESHOLD = 500
+"""Middle-generation collections before a full one (which CPython also defers until the
+objects promoted since the last reach a quarter of the old generation): a full collection
+after ~1 500 young ones, as rare as at (20, 50) (~1 070)."""
 
 
 def tune_garbage_collector() -> None:
