@@ -134,11 +134,7 @@ def coverage_look(
     ):
         return np.full(count, int(Visibility.VISIBLE), dtype=np.int64), np.ones(count)
     threshold = _threshold(gate)
-    sees = np.zeros(count)
-    for index, view in enumerate(views):
-        sees = np.maximum(
-            sees, inside_probability(view, _volume_of(coverage, index), positions, covariances)
-        )
+    sees = sensor_probabilities(coverage, positions, covariances).max(axis=0, initial=0.0)
     if coverage.region is not None:
         region = inside_probability(coverage.region, None, positions, covariances)
     else:
@@ -168,12 +164,21 @@ def gates_seen(
     count, sensors = len(positions), len(coverage.views)
     if count == 0 or positions.shape[1] < 2:
         return np.ones((sensors, count), dtype=bool)
-    threshold = _threshold(gate)
-    seen = [
-        inside_probability(view, _volume_of(coverage, index), positions, covariances) >= threshold
+    seen = sensor_probabilities(coverage, positions, covariances) >= _threshold(gate)
+    return np.asarray(seen, dtype=bool)
+
+
+def sensor_probabilities(
+    coverage: Coverage, positions: FloatArray, covariances: FloatArray | None
+) -> FloatArray:
+    """p of each sensor of ``coverage`` (first axis, in its order) for each row at
+    ``positions`` (second axis), P = ``covariances`` on them
+    (:func:`~core.pipeline.visibility.inside_probability`, docs/algorithms.md §8.16)."""
+    rows = [
+        inside_probability(view, _volume_of(coverage, index), positions, covariances)
         for index, view in enumerate(coverage.views)
     ]
-    return np.asarray(seen, dtype=bool).reshape(sensors, count)
+    return np.asarray(rows, dtype=np.float64).reshape(len(rows), len(positions))
 
 
 def look(
